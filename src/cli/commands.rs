@@ -1,0 +1,89 @@
+//! The file-to-file subcommands: convert, slice, sheet, make, build.
+
+use crate::error::{Error, Result};
+use crate::io::{self, manifest};
+use crate::procedural::{self, Recipe};
+use crate::render::{self, ColourMap};
+use crate::volume::{Axis, Volume};
+use std::path::Path;
+
+fn load(path: &Path) -> Result<Volume> {
+    io::read_volume(path, io::budget_from_env()?)
+}
+
+/// `solidtex convert IN OUT`.
+pub fn convert(input: &Path, output: &Path) -> Result<()> {
+    io::Format::of(output)?;
+    let volume = load(input)?;
+    io::write_volume(output, &volume)?;
+    eprintln!("wrote {}", output.display());
+    Ok(())
+}
+
+/// `solidtex slice FILE --axis A --index N -o out.png`.
+pub fn slice(file: &Path, axis: &str, index: Option<usize>, output: &Path) -> Result<()> {
+    let axis: Axis = axis.parse()?;
+    io::check_folder(output)?;
+    let volume = load(file)?;
+    let index = index.unwrap_or(volume.dims()[axis.index()] / 2);
+    let image = volume.slice(axis, index).map_err(|e| e.in_file(file))?;
+    let picture = render::picture(&image, ColourMap::for_channels(image.channels()), 1);
+    io::write_rgb8(output, &picture)?;
+    eprintln!("wrote {} ({axis} = {index})", output.display());
+    Ok(())
+}
+
+/// `solidtex sheet FILE -o sheet.png`.
+pub fn sheet(file: &Path, output: &Path, title: Option<String>) -> Result<()> {
+    io::check_folder(output)?;
+    let volume = load(file)?;
+    let title = title.unwrap_or_else(|| file.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default());
+    io::write_rgb8(output, &render::sheet(&volume, &title))?;
+    eprintln!("wrote {}", output.display());
+    Ok(())
+}
+
+/// `solidtex make RECIPE --size N --seed S -o out.exr`.
+pub fn make(recipe: &str, size: &str, seed: u64, output: &Path) -> Result<()> {
+    let recipe: Recipe = recipe.parse()?;
+    let dims = parse_size(size)?;
+    io::Format::of(output)?;
+    io::check_folder(output)?;
+    crate::volume::check_size(dims, 4, io::budget_from_env()?)?;
+    let volume = procedural::generate(recipe, dims, seed)?;
+    io::write_volume(output, &volume)?;
+    eprintln!("wrote {}", output.display());
+    Ok(())
+}
+
+/// `64` or `64x64x32` as dims.
+pub fn parse_size(text: &str) -> Result<[usize; 3]> {
+    let dims = match text.parse::<usize>() {
+        Ok(n) => [n; 3],
+        Err(_) => io::parse_dims(text)
+            .map_err(|_| Error::invalid(format!("--size {text:?} is not N or XxYxZ (for example 64 or 64x64x32)")))?,
+    };
+    if dims.contains(&0) {
+        return Err(Error::invalid(format!("--size {text:?} contains a zero; every side must be at least 1")));
+    }
+    Ok(dims)
+}
+
+/// `solidtex build [MANIFEST] -o DIR`: every entry to `DIR/NAME.exr` and `DIR/NAME.sheet.png`.
+pub fn build(manifest_path: &Path, output: &Path) -> Result<()> {
+    let plan = manifest::read_plan(manifest_path)?;
+    std::fs::create_dir_all(output).map_err(|e| Error::io(output, e))?;
+    let total = plan.entries.len();
+    for (k, entry) in plan.entries.iter().enumerate() {
+        let [x, y, z] = entry.dims;
+        eprintln!("[{}/{total}] {} ({}, {x}x{y}x{z}, seed {})", k + 1, entry.name, entry.recipe, entry.seed);
+        let mut volume = procedural::generate(entry.recipe, entry.dims, entry.seed)?;
+        volume.meta.set("name", entry.name.clone());
+        let file = output.join(format!("{}.exr", entry.name));
+        io::write_volume(&file, &volume)?;
+        let sheet = output.join(format!("{}.sheet.png", entry.name));
+        io::write_rgb8(&sheet, &render::sheet(&volume, &entry.name))?;
+    }
+    eprintln!("built {total} exemplar(s) into {}", output.display());
+    Ok(())
+}

@@ -1,0 +1,70 @@
+//! `solidtex info`: what a volume file holds.
+
+use crate::io;
+use crate::volume::{ChannelStats, Volume};
+use serde::Serialize;
+use std::path::Path;
+
+#[derive(Serialize)]
+struct Report<'a> {
+    file: String,
+    dims: [usize; 3],
+    channels: Vec<&'a str>,
+    texture_type: Option<String>,
+    provenance: Vec<(String, String)>,
+    stats: Vec<ChannelStats>,
+}
+
+/// Print the report of `file`, as text or JSON.
+pub fn run(file: &Path, json: bool) -> crate::Result<()> {
+    let volume = io::read_volume(file, io::budget_from_env()?)?;
+    let report = report(file, &volume);
+    if json {
+        let text = serde_json::to_string_pretty(&report).expect("a report always serializes");
+        println!("{text}");
+    } else {
+        print!("{}", text(&report));
+    }
+    Ok(())
+}
+
+fn report<'a>(file: &Path, volume: &'a Volume) -> Report<'a> {
+    Report {
+        file: file.display().to_string(),
+        dims: volume.dims(),
+        channels: volume.channels().iter().map(|c| c.name()).collect(),
+        texture_type: volume.meta.texture_type.map(|t| t.to_string()),
+        provenance: volume.meta.provenance.clone(),
+        stats: volume.channel_stats(16),
+    }
+}
+
+fn text(r: &Report) -> String {
+    let [x, y, z] = r.dims;
+    let mut out = format!("{}\n  dims      {x} x {y} x {z} ({} voxels)\n", r.file, x * y * z);
+    out += &format!("  channels  {}\n", r.channels.join(", "));
+    out += &format!("  type      {}\n", r.texture_type.as_deref().unwrap_or("not set"));
+    for (k, v) in &r.provenance {
+        out += &format!("  {k:<9} {v}\n");
+    }
+    out += "  channel        mean     std     min     max  histogram (16 bins over 0..1)\n";
+    for s in &r.stats {
+        out += &format!(
+            "  {:<12} {:>6.3}  {:>6.3}  {:>6.3}  {:>6.3}  {}\n",
+            s.channel,
+            s.mean,
+            s.std,
+            s.min,
+            s.max,
+            sparkline(&s.histogram)
+        );
+    }
+    out
+}
+
+/// A histogram as block characters.
+fn sparkline(histogram: &[u64]) -> String {
+    const BARS: [char; 8] = ['▁', '▂', '▃', '▄', '▅', '▆', '▇', '█'];
+    let max = histogram.iter().copied().max().unwrap_or(0).max(1);
+    histogram.iter().map(|&c| if c == 0 { ' ' } else { BARS[((c * 7) / max) as usize] }).collect()
+}

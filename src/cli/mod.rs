@@ -1,0 +1,97 @@
+//! The command line: argument definitions and one function per subcommand.
+//! Exit codes: 0 success, 1 failure, 2 usage (clap's own).
+
+mod commands;
+mod info;
+
+use clap::{Parser, Subcommand};
+use std::path::PathBuf;
+
+/// solidtex: author solid texture exemplars and look at them.
+#[derive(Debug, Parser)]
+#[command(name = "solidtex", version, about, long_about = None)]
+pub struct Cli {
+    /// What to do.
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// The subcommands.
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Print dims, channels, texture type, provenance and per-channel statistics.
+    Info {
+        /// A volume file (.exr, .nrrd, .vol, .png atlas, or a folder of PNG slices).
+        file: PathBuf,
+        /// Print JSON instead of text.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Convert a volume between formats, chosen by the extensions.
+    Convert {
+        /// The volume to read.
+        input: PathBuf,
+        /// Where to write it: .exr, .nrrd, .vol, .png (atlas) or a folder (PNG slices).
+        output: PathBuf,
+    },
+    /// Save one axis-aligned slice as a PNG.
+    Slice {
+        /// The volume to read.
+        file: PathBuf,
+        /// The axis the slice is across: x, y or z.
+        #[arg(long, default_value = "z")]
+        axis: String,
+        /// Index along the axis (default: the middle).
+        #[arg(long)]
+        index: Option<usize>,
+        /// The PNG to write.
+        #[arg(short, long)]
+        output: PathBuf,
+    },
+    /// Save a contact sheet: the three central slices and a cut-away corner view.
+    Sheet {
+        /// The volume to read.
+        file: PathBuf,
+        /// The PNG to write.
+        #[arg(short, long)]
+        output: PathBuf,
+        /// Title printed on the sheet (default: the file name).
+        #[arg(long)]
+        title: Option<String>,
+    },
+    /// Make a procedural volume: marble (type 0), strata (1-b) or wood (2-a).
+    Make {
+        /// marble, strata or wood.
+        recipe: String,
+        /// Size: N for a cube, or XxYxZ.
+        #[arg(long, default_value = "64")]
+        size: String,
+        /// Seed for the noise.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// The volume file to write.
+        #[arg(short, long)]
+        output: PathBuf,
+    },
+    /// Build every exemplar a manifest lists: a volume (.exr) and a sheet (.png) each.
+    Build {
+        /// The manifest.
+        #[arg(default_value = "exemplars/library.toml")]
+        manifest: PathBuf,
+        /// Output folder (created if missing).
+        #[arg(short, long, default_value = "out")]
+        output: PathBuf,
+    },
+}
+
+/// Run a parsed command line.
+pub fn run(cli: Cli) -> crate::Result<()> {
+    match cli.command {
+        Command::Info { file, json } => info::run(&file, json),
+        Command::Convert { input, output } => commands::convert(&input, &output),
+        Command::Slice { file, axis, index, output } => commands::slice(&file, &axis, index, &output),
+        Command::Sheet { file, output, title } => commands::sheet(&file, &output, title),
+        Command::Make { recipe, size, seed, output } => commands::make(&recipe, &size, seed, &output),
+        Command::Build { manifest, output } => commands::build(&manifest, &output),
+    }
+}

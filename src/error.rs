@@ -1,0 +1,78 @@
+//! One error type for the whole crate, with a few kinds a caller can act on.
+//!
+//! Every message names the thing that is wrong (a file, a field, a value) and,
+//! where it helps, what is allowed instead.
+
+use std::path::PathBuf;
+
+/// Everything that can go wrong in solidtex.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// The operating system refused a read or a write.
+    #[error("{}: {source}", path.display())]
+    Io {
+        /// The file or folder involved.
+        path: PathBuf,
+        /// What the operating system said.
+        source: std::io::Error,
+    },
+    /// A file exists but its content is corrupt, truncated or unsupported.
+    #[error("{}: {message}", path.display())]
+    File {
+        /// The file involved.
+        path: PathBuf,
+        /// What is wrong with it.
+        message: String,
+    },
+    /// A parameter or value is outside what is allowed.
+    #[error("{0}")]
+    Invalid(String),
+    /// A volume would need more memory than the voxel budget allows.
+    #[error(
+        "a {}x{}x{} volume with {channels} channel(s) needs {needed} bytes, over the voxel budget of {budget} bytes \
+         (raise it with SOLIDTEX_MAX_BYTES or choose smaller dims)",
+        dims[0], dims[1], dims[2]
+    )]
+    Budget {
+        /// The requested dims.
+        dims: [usize; 3],
+        /// The requested channel count.
+        channels: usize,
+        /// Bytes the volume would need (saturating).
+        needed: u128,
+        /// The budget in bytes.
+        budget: u128,
+    },
+    /// Long work was cancelled through [`crate::progress::Progress`].
+    #[error("cancelled")]
+    Cancelled,
+}
+
+/// The crate's result alias.
+pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+impl Error {
+    /// An [`Error::Invalid`] from anything printable.
+    pub fn invalid(message: impl Into<String>) -> Self {
+        Error::Invalid(message.into())
+    }
+
+    /// An [`Error::File`] for `path` with `message`.
+    pub fn file(path: impl Into<PathBuf>, message: impl Into<String>) -> Self {
+        Error::File { path: path.into(), message: message.into() }
+    }
+
+    /// An [`Error::Io`] for `path`.
+    pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
+        Error::Io { path: path.into(), source }
+    }
+
+    /// Prefix the error with the file it came from, when it has none yet.
+    pub fn in_file(self, path: impl Into<PathBuf>) -> Self {
+        match self {
+            Error::Invalid(message) => Error::file(path, message),
+            budget @ Error::Budget { .. } => Error::file(path, budget.to_string()),
+            other => other,
+        }
+    }
+}

@@ -1,0 +1,133 @@
+//! Files: the only module that reads or writes them. Every write is atomic.
+//!
+//! | extension        | format                                            |
+//! |------------------|---------------------------------------------------|
+//! | `.exr`           | native: f32 flipbook atlas + description (lossless) |
+//! | `.nrrd`          | NRRD, raw f32 (3D Slicer, ParaView, ITK)          |
+//! | `.vol`           | Kopf's solid texture format, f32, cubes only      |
+//! | `.png`           | 8-bit flipbook atlas with a description chunk     |
+//! | a folder (no extension, or ending in `/`) | 8-bit PNG slice stack    |
+//!
+//! See `docs/formats.md` for the byte-level layouts.
+
+mod atlas;
+mod atomic;
+mod exr_file;
+mod fields;
+mod kopf_vol;
+pub mod manifest;
+mod nrrd;
+mod png_file;
+
+pub use atlas::layout as atlas_layout;
+pub use atomic::{check_folder, write_bytes};
+pub use fields::parse_dims;
+pub use png_file::{write_image, write_rgb8};
+
+use crate::error::{Error, Result};
+use crate::volume::{Channel, Image2d, Volume};
+use std::path::Path;
+
+/// A volume file format.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Format {
+    /// OpenEXR atlas (native).
+    Exr,
+    /// NRRD.
+    Nrrd,
+    /// Kopf's `.vol`.
+    Vol,
+    /// 8-bit PNG atlas.
+    PngAtlas,
+    /// A folder of 8-bit PNG slices.
+    PngStack,
+}
+
+impl Format {
+    /// The format a path names by its extension; a path without one is a slice folder.
+    pub fn of(path: &Path) -> Result<Format> {
+        let text = path.to_string_lossy();
+        if text.ends_with('/') || path.is_dir() {
+            return Ok(Format::PngStack);
+        }
+        match path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase()) {
+            Some(e) if e == "exr" => Ok(Format::Exr),
+            Some(e) if e == "nrrd" => Ok(Format::Nrrd),
+            Some(e) if e == "vol" => Ok(Format::Vol),
+            Some(e) if e == "png" => Ok(Format::PngAtlas),
+            None => Ok(Format::PngStack),
+            Some(e) => Err(Error::file(
+                path,
+                format!(
+                    "unknown volume extension .{e}; allowed: .exr, .nrrd, .vol, .png, or a folder for a PNG slice stack"
+                ),
+            )),
+        }
+    }
+}
+
+/// The voxel budget in bytes: `SOLIDTEX_MAX_BYTES` if set, else the default.
+pub fn budget_from_env() -> Result<u64> {
+    match std::env::var("SOLIDTEX_MAX_BYTES") {
+        Ok(text) => text
+            .trim()
+            .parse::<u64>()
+            .map_err(|_| Error::invalid(format!("SOLIDTEX_MAX_BYTES={text:?} is not a whole number of bytes"))),
+        Err(_) => Ok(crate::volume::DEFAULT_BUDGET_BYTES),
+    }
+}
+
+/// Read a volume in the format its path names, within `budget` bytes.
+pub fn read_volume(path: &Path, budget: u64) -> Result<Volume> {
+    if !path.exists() {
+        return Err(Error::file(path, "no such file or folder"));
+    }
+    match Format::of(path)? {
+        Format::Exr => exr_file::read(path, budget),
+        Format::Nrrd => nrrd::read(path, budget),
+        Format::Vol => kopf_vol::read(path, budget),
+        Format::PngAtlas => png_file::read_atlas(path, budget),
+        Format::PngStack => png_file::read_stack(path, budget),
+    }
+}
+
+/// Write a volume in the format its path names (atomically).
+pub fn write_volume(path: &Path, volume: &Volume) -> Result<()> {
+    match Format::of(path)? {
+        Format::Exr => exr_file::write(path, volume),
+        Format::Nrrd => nrrd::write(path, volume),
+        Format::Vol => {
+            let stem = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+            kopf_vol::write(path, volume, volume.meta.get("name").unwrap_or(&stem))
+        }
+        Format::PngAtlas => png_file::write_atlas(path, volume),
+        Format::PngStack => png_file::write_stack(path, volume),
+    }
+}
+
+/// Load a 2D image (PNG, JPEG, EXR, TIFF, HDR) as f32 samples in its own channels:
+/// grey -> `[R]`, grey+alpha -> `[R, A]`, RGB, RGBA.
+pub fn read_image(path: &Path) -> Result<Image2d> {
+    let bytes = atomic::read_bytes(path)?;
+    let reader =
+        image::ImageReader::new(std::io::Cursor::new(bytes)).with_guessed_format().map_err(|e| Error::io(path, e))?;
+    let decoded = reader.decode().map_err(|e| {
+        Error::file(path, format!("cannot decode image (corrupt, truncated, or not PNG/JPEG/EXR/TIFF/HDR): {e}"))
+    })?;
+    let (w, h) = (decoded.width() as usize, decoded.height() as usize);
+    let color = decoded.color();
+    let (channels, data) = match (color.has_color(), color.has_alpha()) {
+        (false, false) => (Channel::grey(), decoded.to_luma32f().into_raw()),
+        (false, true) => (vec![Channel::R, Channel::A], decoded.to_luma_alpha32f().into_raw()),
+        (true, false) => (Channel::rgb(), decoded.to_rgb32f().into_raw()),
+        (true, true) => (Channel::rgba(), decoded.to_rgba32f().into_raw()),
+    };
+    let image = Image2d::from_data(w, h, channels, data).map_err(|e| e.in_file(path))?;
+    if let Some([x, y, c]) = image.first_non_finite() {
+        return Err(Error::file(
+            path,
+            format!("pixel ({x}, {y}) channel {c} is not finite; NaN and infinity are not allowed"),
+        ));
+    }
+    Ok(image)
+}

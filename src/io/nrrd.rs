@@ -1,0 +1,249 @@
+//! NRRD (teem's "nearly raw raster data", read by 3D Slicer, ParaView and ITK).
+//!
+//! Written as one attached file: a text header, a blank line, then raw little-endian
+//! f32 samples. A 1-channel volume is 3D (`sizes: X Y Z`); with more channels the
+//! first axis holds the channels (`sizes: C X Y Z`, kind `RGB-color`, `RGBA-color`
+//! or `vector`). Roles, type and provenance ride in `solidtex_*:=` key/value lines.
+//! Reading accepts raw encoding of float, double, uchar, ushort (normalised to
+//! [0, 1] for the integer types), in either endianness.
+
+use super::fields;
+use crate::error::{Error, Result};
+use crate::volume::{Channel, Volume};
+use std::path::Path;
+
+/// Write `volume` as NRRD (atomically).
+pub fn write(path: &Path, volume: &Volume) -> Result<()> {
+    let mut bytes = header(volume).into_bytes();
+    bytes.reserve(volume.data().len() * 4);
+    for v in volume.data() {
+        bytes.extend_from_slice(&v.to_le_bytes());
+    }
+    super::atomic::write_bytes(path, &bytes)
+}
+
+fn header(volume: &Volume) -> String {
+    let [x, y, z] = volume.dims();
+    let n = volume.channel_count();
+    let (dimension, sizes, kinds) = match n {
+        1 => (3, format!("{x} {y} {z}"), "domain domain domain".to_string()),
+        _ => {
+            let kind = match n {
+                3 => "RGB-color",
+                4 => "RGBA-color",
+                _ => "vector",
+            };
+            (4, format!("{n} {x} {y} {z}"), format!("{kind} domain domain domain"))
+        }
+    };
+    let mut text = format!(
+        "NRRD0004\n# written by solidtex {}\ntype: float\ndimension: {dimension}\nsizes: {sizes}\nkinds: {kinds}\nendian: little\nencoding: raw\n",
+        env!("CARGO_PKG_VERSION")
+    );
+    for (k, v) in fields::fields(volume) {
+        text.push_str(&format!("solidtex_{k}:={}\n", v.replace('\n', " ")));
+    }
+    text.push('\n');
+    text
+}
+
+/// Read a NRRD file with attached raw data.
+pub fn read(path: &Path, budget: u64) -> Result<Volume> {
+    let bytes = super::atomic::read_bytes(path)?;
+    parse(&bytes, budget).map_err(|e| e.in_file(path))
+}
+
+struct Header {
+    sizes: Vec<usize>,
+    sample: Sample,
+    big_endian: bool,
+    extra: Vec<(String, String)>,
+}
+
+#[derive(Clone, Copy)]
+enum Sample {
+    F32,
+    F64,
+    U8,
+    U16,
+}
+
+impl Sample {
+    fn bytes(self) -> usize {
+        match self {
+            Sample::U8 => 1,
+            Sample::U16 => 2,
+            Sample::F32 => 4,
+            Sample::F64 => 8,
+        }
+    }
+}
+
+fn parse(bytes: &[u8], budget: u64) -> Result<Volume> {
+    if !bytes.starts_with(b"NRRD000") {
+        return Err(Error::invalid("not a NRRD file: it does not start with \"NRRD000\""));
+    }
+    let end = find_blank_line(bytes).ok_or_else(|| {
+        Error::invalid("NRRD header has no blank line before the data (truncated, or detached data is not supported)")
+    })?;
+    let text = String::from_utf8_lossy(&bytes[..end.0]);
+    let header = parse_header(&text)?;
+    let (dims, channels) = shape(&header)?;
+    crate::volume::check_size(dims, channels.len(), budget)?;
+    let body = &bytes[end.1..];
+    let count = dims.iter().product::<usize>() * channels.len();
+    let need = count * header.sample.bytes();
+    if body.len() < need {
+        return Err(Error::invalid(format!(
+            "NRRD data is truncated: the header promises {need} bytes of samples, the file holds {}",
+            body.len()
+        )));
+    }
+    let data = decode(&body[..need], header.sample, header.big_endian);
+    if let Some(i) = data.iter().position(|v| !v.is_finite()) {
+        return Err(Error::invalid(format!("NRRD sample {i} is {}; NaN and infinity are not allowed", data[i])));
+    }
+    let described = fields::parse(&strip_prefix(&header.extra))?;
+    let channels = described.channels.filter(|c| c.len() == channels.len()).unwrap_or(channels);
+    Ok(Volume::from_data(dims, channels, data)?.with_meta(described.meta))
+}
+
+/// (end of header text, start of data) at the first empty line.
+fn find_blank_line(bytes: &[u8]) -> Option<(usize, usize)> {
+    let lf = bytes.windows(2).position(|w| w == b"\n\n").map(|i| (i, i + 2));
+    let crlf = bytes.windows(4).position(|w| w == b"\r\n\r\n").map(|i| (i, i + 4));
+    match (lf, crlf) {
+        (Some(a), Some(b)) => Some(if a.0 < b.0 { a } else { b }),
+        (a, b) => a.or(b),
+    }
+}
+
+fn parse_header(text: &str) -> Result<Header> {
+    let mut header = Header { sizes: Vec::new(), sample: Sample::F32, big_endian: false, extra: Vec::new() };
+    let mut dimension = None;
+    for line in text.lines().skip(1).map(str::trim).filter(|l| !l.starts_with('#') && !l.is_empty()) {
+        if let Some((k, v)) = line.split_once(":=") {
+            header.extra.push((k.trim().to_string(), v.to_string()));
+            continue;
+        }
+        let Some((key, value)) = line.split_once(':') else {
+            return Err(Error::invalid(format!("NRRD header line {line:?} has no ':'")));
+        };
+        let value = value.trim();
+        match key.trim() {
+            "type" => header.sample = sample_type(value)?,
+            "dimension" => dimension = value.parse::<usize>().ok(),
+            "sizes" => header.sizes = parse_sizes(value)?,
+            "endian" => header.big_endian = value == "big",
+            "encoding" if value != "raw" => {
+                return Err(Error::invalid(format!("NRRD encoding {value:?} is not supported; allowed: raw")));
+            }
+            "data file" | "datafile" => {
+                return Err(Error::invalid("detached NRRD data files are not supported; save with attached raw data"));
+            }
+            _ => {}
+        }
+    }
+    if dimension != Some(header.sizes.len()) {
+        return Err(Error::invalid(format!(
+            "NRRD dimension {dimension:?} does not match the {} sizes given",
+            header.sizes.len()
+        )));
+    }
+    Ok(header)
+}
+
+fn sample_type(value: &str) -> Result<Sample> {
+    Ok(match value {
+        "float" => Sample::F32,
+        "double" => Sample::F64,
+        "uchar" | "unsigned char" | "uint8" | "uint8_t" => Sample::U8,
+        "ushort" | "unsigned short" | "uint16" | "uint16_t" | "unsigned short int" => Sample::U16,
+        other => {
+            return Err(Error::invalid(format!(
+                "NRRD type {other:?} is not supported; allowed: float, double, uchar, ushort"
+            )));
+        }
+    })
+}
+
+fn parse_sizes(value: &str) -> Result<Vec<usize>> {
+    value
+        .split_whitespace()
+        .map(|s| s.parse::<usize>().map_err(|_| Error::invalid(format!("NRRD sizes {value:?} are not whole numbers"))))
+        .collect()
+}
+
+/// Dims and default channel roles from the sizes.
+fn shape(header: &Header) -> Result<([usize; 3], Vec<Channel>)> {
+    let s = &header.sizes;
+    let (dims, n) = match s.len() {
+        3 => ([s[0], s[1], s[2]], 1),
+        4 => ([s[1], s[2], s[3]], s[0]),
+        k => return Err(Error::invalid(format!("NRRD dimension {k} is not supported; allowed: 3 or 4"))),
+    };
+    if dims.contains(&0) || n == 0 {
+        return Err(Error::invalid(format!("NRRD sizes {s:?} contain a zero; every size must be at least 1")));
+    }
+    Ok((dims, default_channels(n)))
+}
+
+/// Roles by position when a file names none: grey, grey+alpha, RGB, RGBA, then extras.
+pub fn default_channels(n: usize) -> Vec<Channel> {
+    match n {
+        1 => Channel::grey(),
+        2 => vec![Channel::R, Channel::A],
+        3 => Channel::rgb(),
+        _ => {
+            let mut list = Channel::rgba();
+            list.extend((4..n).map(|i| Channel::Named(format!("extra{i}"))));
+            list
+        }
+    }
+}
+
+fn decode(body: &[u8], sample: Sample, big: bool) -> Vec<f32> {
+    let chunk = sample.bytes();
+    body.chunks_exact(chunk)
+        .map(|b| {
+            let mut a = [0u8; 8];
+            a[..chunk].copy_from_slice(b);
+            if big {
+                a[..chunk].reverse();
+            }
+            match sample {
+                Sample::U8 => a[0] as f32 / 255.0,
+                Sample::U16 => u16::from_le_bytes([a[0], a[1]]) as f32 / 65535.0,
+                Sample::F32 => f32::from_le_bytes([a[0], a[1], a[2], a[3]]),
+                Sample::F64 => f64::from_le_bytes(a) as f32,
+            }
+        })
+        .collect()
+}
+
+fn strip_prefix(extra: &[(String, String)]) -> Vec<(String, String)> {
+    extra.iter().filter_map(|(k, v)| k.strip_prefix("solidtex_").map(|k| (k.to_string(), v.clone()))).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn reads_a_foreign_uchar_big_endian_file() {
+        let mut bytes =
+            b"NRRD0004\ntype: unsigned char\ndimension: 3\nsizes: 2 1 1\nendian: big\nencoding: raw\n\n".to_vec();
+        bytes.extend_from_slice(&[0, 255]);
+        let v = parse(&bytes, u64::MAX).unwrap();
+        assert_eq!(v.data(), &[0.0, 1.0]);
+        assert_eq!(v.channels(), Channel::grey().as_slice());
+    }
+
+    #[test]
+    fn refuses_gzip_and_bad_dimension() {
+        let gz = b"NRRD0004\ntype: float\ndimension: 3\nsizes: 2 1 1\nencoding: gzip\n\n";
+        assert!(parse(gz, u64::MAX).unwrap_err().to_string().contains("allowed: raw"));
+        let dim = b"NRRD0004\ntype: float\ndimension: 2\nsizes: 2 1 1\nencoding: raw\n\n";
+        assert!(parse(dim, u64::MAX).unwrap_err().to_string().contains("dimension"));
+    }
+}

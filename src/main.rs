@@ -1,0 +1,15 @@
+//! The `solidtex` binary: parse arguments, run, map errors to exit codes.
+
+use clap::Parser;
+use std::process::ExitCode;
+
+fn main() -> ExitCode {
+    let cli = solidtex::cli::Cli::parse();
+    match solidtex::cli::run(cli).map_err(anyhow::Error::from) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(error) => {
+            eprintln!("error: {error:#}");
+            ExitCode::from(1)
+        }
+    }
+}

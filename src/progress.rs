@@ -1,0 +1,20 @@
+//! Progress and cancellation for long work, without tying the core to a terminal.
+
+/// Receives progress from long-running work and may ask it to stop.
+pub trait Progress: Sync {
+    /// `stage` names the step (e.g. `level 2/3`), `fraction` is in [0, 1].
+    fn update(&self, stage: &str, fraction: f32);
+
+    /// Return true to ask the work to stop at the next check.
+    fn cancelled(&self) -> bool {
+        false
+    }
+}
+
+/// Progress that goes nowhere.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct NoProgress;
+
+impl Progress for NoProgress {
+    fn update(&self, _stage: &str, _fraction: f32) {}
+}

@@ -1,0 +1,204 @@
+//! Bad input: one test per kind of mistake. Each must fail with exit code 1, one
+//! clear line naming the file and the problem, and leave no output behind.
+
+use crate::support::{assert_fails, at, listing, random_volume, solidtex, solidtex_env};
+use solidtex::io::{read_image, write_volume};
+use solidtex::volume::{Channel, Volume};
+use std::path::Path;
+
+/// A good 8³ RGB volume written in `format` inside `dir`.
+fn good(dir: &Path, name: &str) -> String {
+    let path = dir.join(name);
+    write_volume(&path, &random_volume([8, 8, 8], Channel::rgb(), 7)).unwrap();
+    path.to_string_lossy().into_owned()
+}
+
+/// Keep the first `keep` bytes of a file.
+fn truncate(path: &str, keep: usize) {
+    let bytes = std::fs::read(path).unwrap();
+    std::fs::write(path, &bytes[..keep.min(bytes.len())]).unwrap();
+}
+
+/// Converting `input` must fail with `needles` and write nothing next to it.
+fn convert_fails(dir: &Path, input: &str, needles: &[&str]) {
+    let before = listing(dir);
+    let out = at(dir, "out.exr");
+    assert_fails(&solidtex(&["convert", input, &out]), needles);
+    assert_eq!(listing(dir), before, "convert left files behind");
+}
+
+#[test]
+fn truncated_png_atlas() {
+    let dir = tempfile::tempdir().unwrap();
+    let png = good(dir.path(), "atlas.png");
+    let len = std::fs::metadata(&png).unwrap().len() as usize;
+    truncate(&png, len / 2);
+    convert_fails(dir.path(), &png, &["atlas.png", "corrupt or truncated"]);
+}
+
+#[test]
+fn truncated_png_exemplar_image() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("photo.png");
+    image::RgbImage::from_pixel(32, 32, image::Rgb([9, 99, 199])).save(&path).unwrap();
+    truncate(&path.to_string_lossy(), 60);
+    let err = read_image(&path).unwrap_err().to_string();
+    assert!(err.contains("photo.png") && err.contains("corrupt, truncated"), "{err}");
+}
+
+#[test]
+fn corrupt_exr() {
+    let dir = tempfile::tempdir().unwrap();
+    let exr = good(dir.path(), "v.exr");
+    let mut bytes = std::fs::read(&exr).unwrap();
+    let mid = bytes.len() / 2;
+    bytes.truncate(mid);
+    bytes[8..40].fill(0xff);
+    std::fs::write(&exr, bytes).unwrap();
+    convert_fails(dir.path(), &exr, &["v.exr", "cannot read EXR"]);
+}
+
+#[test]
+fn truncated_nrrd() {
+    let dir = tempfile::tempdir().unwrap();
+    let nrrd = good(dir.path(), "v.nrrd");
+    let len = std::fs::metadata(&nrrd).unwrap().len() as usize;
+    truncate(&nrrd, len - 100);
+    convert_fails(dir.path(), &nrrd, &["v.nrrd", "truncated", "6144 bytes"]);
+}
+
+#[test]
+fn truncated_vol() {
+    let dir = tempfile::tempdir().unwrap();
+    let vol = good(dir.path(), "v.vol");
+    truncate(&vol, 5000);
+    convert_fails(dir.path(), &vol, &["v.vol", "truncated .vol", "6144 bytes"]);
+    truncate(&vol, 100);
+    convert_fails(dir.path(), &vol, &["v.vol", "shorter than the 4096-byte header"]);
+}
+
+fn exr_with(path: &Path, size: (usize, usize), dims: (i32, i32, i32), tiles: Option<(i32, i32)>) {
+    use exr::prelude::*;
+    let mut attributes = LayerAttributes::named("test");
+    attributes.other.insert(Text::from("solidtexDims"), AttributeValue::IntVec3(dims));
+    if let Some(t) = tiles {
+        attributes.other.insert(Text::from("solidtexTiles"), AttributeValue::IntVec2(Vec2(t.0, t.1)));
+    }
+    let samples = FlatSamples::F32(vec![0.5; size.0 * size.1]);
+    let channels = AnyChannels::sort(SmallVec::from_vec(vec![AnyChannel::new("R", samples)]));
+    Image::from_layer(Layer::new(size, attributes, Encoding::UNCOMPRESSED, channels)).write().to_file(path).unwrap();
+}
+
+#[test]
+fn exr_whose_atlas_attributes_disagree_with_its_size() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("odd.exr");
+    exr_with(&path, (10, 10), (8, 8, 8), None);
+    let p = path.to_string_lossy();
+    convert_fails(dir.path(), &p, &["odd.exr", "atlas is 10x10 pixels", "dims 8x8x8", "24x24"]);
+    exr_with(&path, (24, 24), (8, 8, 8), Some((2, 4)));
+    convert_fails(dir.path(), &p, &["odd.exr", "solidtexTiles says 2x4 tiles", "3x3"]);
+}
+
+#[test]
+fn plain_2d_exr_is_not_a_volume() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("photo.exr");
+    image::Rgb32FImage::from_pixel(4, 4, image::Rgb([0.1, 0.2, 0.3])).save(&path).unwrap();
+    convert_fails(dir.path(), &path.to_string_lossy(), &["photo.exr", "not a solidtex volume atlas"]);
+}
+
+#[test]
+fn nan_in_exr_volume_and_exr_image() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut v = random_volume([4, 4, 4], Channel::rgb(), 1);
+    v.set(1, 2, 0, 1, f32::NAN);
+    let path = dir.path().join("nan.exr");
+    write_volume(&path, &v).unwrap();
+    convert_fails(dir.path(), &path.to_string_lossy(), &["nan.exr", "channel G", "(1, 2)", "not finite"]);
+    let photo = dir.path().join("nan_photo.exr");
+    image::Rgb32FImage::from_fn(3, 3, |x, y| image::Rgb([if (x, y) == (2, 1) { f32::NAN } else { 0.5 }; 3]))
+        .save(&photo)
+        .unwrap();
+    let err = read_image(&photo).unwrap_err().to_string();
+    assert!(err.contains("nan_photo.exr") && err.contains("(2, 1)") && err.contains("not finite"), "{err}");
+}
+
+fn nrrd_header(sizes: &str) -> Vec<u8> {
+    format!("NRRD0004\ntype: float\ndimension: 3\nsizes: {sizes}\nendian: little\nencoding: raw\n\n").into_bytes()
+}
+
+#[test]
+fn zero_dims() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("zero.nrrd");
+    std::fs::write(&path, nrrd_header("8 0 8")).unwrap();
+    convert_fails(dir.path(), &path.to_string_lossy(), &["zero.nrrd", "contain a zero"]);
+    let out = at(dir.path(), "m.exr");
+    assert_fails(&solidtex(&["make", "marble", "--size", "8x0x8", "-o", &out]), &["\"8x0x8\"", "at least 1"]);
+    assert_eq!(listing(dir.path()), ["zero.nrrd"]);
+}
+
+#[test]
+fn dims_over_the_voxel_budget() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("huge.nrrd");
+    std::fs::write(&path, nrrd_header("100000 100000 100000")).unwrap();
+    convert_fails(dir.path(), &path.to_string_lossy(), &["huge.nrrd", "100000x100000x100000", "voxel budget"]);
+    let out = at(dir.path(), "m.exr");
+    let run = solidtex_env(&["make", "wood", "--size", "64", "-o", &out], &[("SOLIDTEX_MAX_BYTES", "100000")]);
+    assert_fails(&run, &["64x64x64", "over the voxel budget of 100000 bytes"]);
+    assert_eq!(listing(dir.path()), ["huge.nrrd"]);
+}
+
+#[test]
+fn a_channel_count_that_does_not_fit_the_format() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut channels = Channel::rgba();
+    channels.push(Channel::Depth);
+    let input = dir.path().join("five.exr");
+    write_volume(&input, &random_volume([4, 4, 4], channels, 1)).unwrap();
+    let out = at(dir.path(), "five.png");
+    assert_fails(
+        &solidtex(&["convert", &input.to_string_lossy(), &out]),
+        &["five.png", "1 to 4 channels", "R,G,B,A,Depth"],
+    );
+    let stack = at(dir.path(), "five_slices");
+    assert_fails(&solidtex(&["convert", &input.to_string_lossy(), &stack]), &["1 to 4 channels"]);
+    let cube = Volume::new([4, 4, 2], Channel::rgb()).unwrap();
+    let err = write_volume(&dir.path().join("flat.vol"), &cube).unwrap_err().to_string();
+    assert!(err.contains("cubes only") && err.contains("4x4x2"), "{err}");
+    assert_eq!(listing(dir.path()), ["five.exr"]);
+}
+
+#[test]
+fn output_in_a_folder_that_does_not_exist() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = good(dir.path(), "v.exr");
+    for out in ["missing/v.nrrd", "missing/v.png", "missing/slices/"] {
+        let target = at(dir.path(), out);
+        assert_fails(&solidtex(&["convert", &input, &target]), &["missing", "does not exist"]);
+    }
+    let sheet = at(dir.path(), "missing/sheet.png");
+    assert_fails(&solidtex(&["sheet", &input, "-o", &sheet]), &["does not exist"]);
+    assert_eq!(listing(dir.path()), ["v.exr"]);
+}
+
+#[test]
+fn unknown_extension_and_missing_input() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = good(dir.path(), "v.exr");
+    assert_fails(
+        &solidtex(&["convert", &input, &at(dir.path(), "v.obj")]),
+        &["v.obj", "allowed: .exr, .nrrd, .vol, .png"],
+    );
+    assert_fails(&solidtex(&["info", &at(dir.path(), "nope.exr")]), &["nope.exr", "no such file"]);
+}
+
+#[test]
+fn usage_errors_exit_with_two() {
+    let out = solidtex(&["slice"]);
+    assert_eq!(out.status.code(), Some(2));
+    let out = solidtex(&["frobnicate"]);
+    assert_eq!(out.status.code(), Some(2));
+}

@@ -1,0 +1,115 @@
+//! The commands a designer runs, checked by their outputs.
+
+use crate::support::{at, listing, random_volume, solidtex, stderr};
+use solidtex::io::{read_volume, write_volume};
+use solidtex::volume::{Axis, Channel};
+
+#[test]
+fn sheet_of_a_64_cube_shows_slices_and_the_cut_away() {
+    let dir = tempfile::tempdir().unwrap();
+    let vol = at(dir.path(), "strata.exr");
+    let run = solidtex(&["make", "strata", "--size", "64", "--seed", "9", "-o", &vol]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let png = at(dir.path(), "sheet.png");
+    let run = solidtex(&["sheet", &vol, "-o", &png]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let sheet = image::open(&png).unwrap().to_rgb8();
+    assert_eq!(sheet.dimensions(), (560, 644));
+    let volume = read_volume(dir.path().join("strata.exr").as_path(), 1 << 30).unwrap();
+    // The XY panel is the z = 32 slice at 4x: its voxel (10, 20) sits at panel pixel (40, 80).
+    let expect = volume.voxel(10, 20, 32);
+    let got = sheet.get_pixel(16 + 40 + 1, 52 + 24 + 80 + 1).0;
+    for c in 0..3 {
+        assert!((got[c] as f32 / 255.0 - expect[c]).abs() <= 0.5 / 255.0 + 1e-6);
+    }
+    // The cut-away panel holds the solid: many non-background pixels of many colours.
+    let mut colours = std::collections::HashSet::new();
+    for y in 52 + 24 + 256 + 16 + 24..644 - 16 {
+        for x in 16 + 256 + 16..560 - 16 {
+            colours.insert(sheet.get_pixel(x, y).0);
+        }
+    }
+    assert!(colours.len() > 500, "{} colours", colours.len());
+}
+
+#[test]
+fn slice_writes_the_requested_cut() {
+    let dir = tempfile::tempdir().unwrap();
+    let v = random_volume([6, 5, 4], Channel::rgb(), 3);
+    let vol = dir.path().join("v.nrrd");
+    write_volume(&vol, &v).unwrap();
+    let png = at(dir.path(), "cut.png");
+    let run = solidtex(&["slice", &vol.to_string_lossy(), "--axis", "y", "--index", "2", "-o", &png]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let img = image::open(&png).unwrap().to_rgb8();
+    assert_eq!(img.dimensions(), (6, 4));
+    let want = v.slice(Axis::Y, 2).unwrap();
+    let got = img.get_pixel(5, 3).0;
+    assert_eq!(got[1], (want.pixel(5, 3)[1] * 255.0).round() as u8);
+    let bad = solidtex(&["slice", &vol.to_string_lossy(), "--axis", "w", "-o", &png]);
+    assert!(stderr(&bad).contains("unknown axis \"w\"; allowed: x, y, z"));
+    let bad = solidtex(&["slice", &vol.to_string_lossy(), "--axis", "z", "--index", "4", "-o", &png]);
+    assert!(stderr(&bad).contains("index 4 is outside axis z"), "{}", stderr(&bad));
+}
+
+#[test]
+fn info_reports_dims_type_and_stats_as_json() {
+    let dir = tempfile::tempdir().unwrap();
+    let vol = at(dir.path(), "m.exr");
+    assert!(solidtex(&["make", "marble", "--size", "16x8x4", "-o", &vol]).status.success());
+    let run = solidtex(&["info", &vol, "--json"]);
+    let json: serde_json::Value = serde_json::from_slice(&run.stdout).unwrap();
+    assert_eq!(json["dims"], serde_json::json!([16, 8, 4]));
+    assert_eq!(json["texture_type"], "0");
+    assert_eq!(json["channels"], serde_json::json!(["R", "G", "B"]));
+    let mean = json["stats"][0]["mean"].as_f64().unwrap();
+    assert!(mean > 0.5 && mean < 1.0, "marble is mostly light: {mean}");
+    let text = String::from_utf8(solidtex(&["info", &vol]).stdout).unwrap();
+    assert!(text.contains("16 x 8 x 4") && text.contains("procedural:marble"), "{text}");
+}
+
+#[test]
+fn convert_chains_keep_the_volume() {
+    let dir = tempfile::tempdir().unwrap();
+    let first = at(dir.path(), "w.exr");
+    assert!(solidtex(&["make", "wood", "--size", "12", "-o", &first]).status.success());
+    let mut previous = first.clone();
+    for next in ["w.nrrd", "w.vol", "w2.exr"] {
+        let target = at(dir.path(), next);
+        let run = solidtex(&["convert", &previous, &target]);
+        assert!(run.status.success(), "{}", stderr(&run));
+        previous = target;
+    }
+    let a = read_volume(std::path::Path::new(&first), 1 << 30).unwrap();
+    let b = read_volume(std::path::Path::new(&previous), 1 << 30).unwrap();
+    assert_eq!(a.data(), b.data());
+}
+
+#[test]
+fn build_makes_the_default_library() {
+    let dir = tempfile::tempdir().unwrap();
+    let manifest = concat!(env!("CARGO_MANIFEST_DIR"), "/exemplars/library.toml");
+    let out = at(dir.path(), "lib");
+    let run = solidtex(&["build", manifest, "-o", &out]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    assert!(stderr(&run).contains("[3/3] wood"), "{}", stderr(&run));
+    let names = listing(&dir.path().join("lib"));
+    assert_eq!(
+        names,
+        ["marble.exr", "marble.sheet.png", "strata.exr", "strata.sheet.png", "wood.exr", "wood.sheet.png"]
+    );
+    let strata = read_volume(&dir.path().join("lib/strata.exr"), 1 << 30).unwrap();
+    assert_eq!(strata.meta.texture_type, Some(solidtex::TextureType::T1b));
+    assert_eq!(strata.meta.get("name"), Some("strata"));
+}
+
+#[test]
+fn build_rejects_a_bad_manifest_by_name() {
+    let dir = tempfile::tempdir().unwrap();
+    let manifest = dir.path().join("lib.toml");
+    std::fs::write(&manifest, "[[exemplar]]\nname = \"x\"\nrecipe = \"procedural:lava\"\nsize = 8\n").unwrap();
+    let out = at(dir.path(), "lib");
+    let run = solidtex(&["build", &manifest.to_string_lossy(), "-o", &out]);
+    crate::support::assert_fails(&run, &["lib.toml", "exemplar[0] (x)", "lava", "allowed"]);
+    assert!(!dir.path().join("lib").exists());
+}

@@ -1,0 +1,184 @@
+//! Round trips through every volume format, and 2D image loading.
+
+use crate::support::random_volume;
+use solidtex::TextureType;
+use solidtex::io::{read_image, read_volume, write_volume};
+use solidtex::volume::{Channel, Meta, Volume};
+use std::path::Path;
+
+const BUDGET: u64 = 1 << 30;
+
+fn with_meta(v: Volume) -> Volume {
+    let mut meta = Meta { texture_type: Some(TextureType::T2b), provenance: Vec::new() };
+    meta.set("recipe", "test:random");
+    meta.set("seed", "42");
+    v.with_meta(meta)
+}
+
+fn round_trip(path: &Path, v: &Volume) -> Volume {
+    write_volume(path, v).unwrap();
+    read_volume(path, BUDGET).unwrap()
+}
+
+fn channel_sets() -> Vec<Vec<Channel>> {
+    let mut five = Channel::rgba();
+    five.push(Channel::Depth);
+    let mut extra = Channel::rgb();
+    extra.push(Channel::Displacement);
+    extra.push(Channel::Named("feature_dist".into()));
+    vec![Channel::grey(), Channel::rgb(), Channel::rgba(), five, extra]
+}
+
+#[test]
+fn exr_round_trip_is_bit_identical_with_roles_and_meta() {
+    let dir = tempfile::tempdir().unwrap();
+    for (k, channels) in channel_sets().into_iter().enumerate() {
+        let v = with_meta(random_volume([7, 5, 11], channels, k as u64));
+        let back = round_trip(&dir.path().join(format!("v{k}.exr")), &v);
+        assert_eq!(back, v, "channel set {k}");
+    }
+}
+
+#[test]
+fn nrrd_round_trip_is_bit_identical_with_roles_and_meta() {
+    let dir = tempfile::tempdir().unwrap();
+    for (k, channels) in channel_sets().into_iter().enumerate() {
+        let v = with_meta(random_volume([6, 9, 4], channels, 10 + k as u64));
+        let back = round_trip(&dir.path().join(format!("v{k}.nrrd")), &v);
+        assert_eq!(back, v, "channel set {k}");
+    }
+}
+
+#[test]
+fn nrrd_header_is_what_other_tools_expect() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("rgb.nrrd");
+    write_volume(&path, &random_volume([4, 3, 2], Channel::rgb(), 1)).unwrap();
+    let bytes = std::fs::read(&path).unwrap();
+    let text = String::from_utf8_lossy(&bytes[..200]);
+    assert!(text.starts_with("NRRD0004\n"));
+    for line in [
+        "type: float",
+        "dimension: 4",
+        "sizes: 3 4 3 2",
+        "kinds: RGB-color domain domain domain",
+        "endian: little",
+        "encoding: raw",
+    ] {
+        assert!(text.contains(line), "missing {line:?} in {text}");
+    }
+    assert!(bytes.len() >= 4 * 3 * 4 * 3 * 2);
+}
+
+#[test]
+fn vol_round_trip_is_bit_identical_for_cubes() {
+    let dir = tempfile::tempdir().unwrap();
+    for (k, channels) in [Channel::grey(), Channel::rgb(), Channel::rgba()].into_iter().enumerate() {
+        let v = random_volume([8, 8, 8], channels, 20 + k as u64);
+        let back = round_trip(&dir.path().join(format!("v{k}.vol")), &v);
+        assert_eq!(back.data(), v.data());
+        assert_eq!(back.channels(), v.channels());
+        assert_eq!(back.meta.get("name"), Some(format!("v{k}").as_str()));
+    }
+}
+
+#[test]
+fn vol_header_layout_matches_kopf() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("kiwi.vol");
+    write_volume(&path, &random_volume([4, 4, 4], Channel::rgb(), 3)).unwrap();
+    let b = std::fs::read(&path).unwrap();
+    let int = |at: usize| i32::from_le_bytes([b[at], b[at + 1], b[at + 2], b[at + 3]]);
+    assert_eq!(&b[0..4], b"VOLU");
+    assert_eq!((int(4), int(268), int(272), int(276)), (4, 4, 3, 4));
+    assert_eq!(&b[8..12], b"kiwi");
+    assert_eq!(b[264], 1);
+    assert_eq!(b.len(), 4096 + 4 * 4 * 4 * 3 * 4);
+}
+
+fn assert_within_a_step(back: &Volume, v: &Volume) {
+    assert_eq!(back.dims(), v.dims());
+    assert_eq!(back.channels(), v.channels());
+    let worst = back.data().iter().zip(v.data()).map(|(a, b)| (a - b).abs()).fold(0.0, f32::max);
+    assert!(worst <= 1.0 / 255.0, "worst error {worst}");
+}
+
+#[test]
+fn png_atlas_round_trip_is_within_one_step() {
+    let dir = tempfile::tempdir().unwrap();
+    for (k, channels) in
+        [Channel::grey(), vec![Channel::R, Channel::A], Channel::rgb(), Channel::rgba()].into_iter().enumerate()
+    {
+        let v = with_meta(random_volume([5, 6, 7], channels, 30 + k as u64));
+        let back = round_trip(&dir.path().join(format!("v{k}.png")), &v);
+        assert_within_a_step(&back, &v);
+        assert_eq!(back.meta, v.meta);
+    }
+}
+
+#[test]
+fn png_atlas_is_a_flipbook_other_tools_can_slice() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("atlas.png");
+    write_volume(&path, &random_volume([8, 4, 5], Channel::rgb(), 2)).unwrap();
+    let img = image::open(&path).unwrap();
+    assert_eq!((img.width(), img.height()), (24, 8)); // 3 columns x 2 rows of 8x4 tiles
+}
+
+#[test]
+fn png_stack_round_trip_is_within_one_step() {
+    let dir = tempfile::tempdir().unwrap();
+    let v = with_meta(random_volume([6, 5, 4], Channel::rgba(), 40));
+    let folder = dir.path().join("slices");
+    let back = round_trip(&folder, &v);
+    assert_within_a_step(&back, &v);
+    assert_eq!(crate::support::listing(&folder), ["z0000.png", "z0001.png", "z0002.png", "z0003.png"]);
+}
+
+#[test]
+fn a_foreign_png_stack_reads_with_default_roles() {
+    let dir = tempfile::tempdir().unwrap();
+    for z in 0..3u8 {
+        let img = image::GrayImage::from_pixel(4, 2, image::Luma([z * 100]));
+        img.save(dir.path().join(format!("slice_{z}.png"))).unwrap();
+    }
+    let v = read_volume(dir.path(), BUDGET).unwrap();
+    assert_eq!(v.dims(), [4, 2, 3]);
+    assert_eq!(v.channels(), Channel::grey().as_slice());
+    assert_eq!(v.get(3, 1, 2, 0), 200.0 / 255.0);
+}
+
+#[test]
+fn writing_replaces_a_file_and_leaves_no_temporary() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("v.exr");
+    write_volume(&path, &random_volume([4, 4, 4], Channel::rgb(), 1)).unwrap();
+    let second = random_volume([4, 4, 4], Channel::rgb(), 2);
+    write_volume(&path, &second).unwrap();
+    assert_eq!(read_volume(&path, BUDGET).unwrap(), second);
+    assert_eq!(crate::support::listing(dir.path()), ["v.exr"]);
+}
+
+#[test]
+fn images_load_in_their_own_channels() {
+    let dir = tempfile::tempdir().unwrap();
+    let grey = dir.path().join("g.png");
+    image::GrayImage::from_fn(3, 2, |x, _| image::Luma([x as u8 * 100])).save(&grey).unwrap();
+    let rgba = dir.path().join("c.png");
+    image::RgbaImage::from_pixel(2, 2, image::Rgba([255, 0, 51, 102])).save(&rgba).unwrap();
+    let jpeg = dir.path().join("c.jpg");
+    image::RgbImage::from_pixel(8, 8, image::Rgb([200, 100, 50])).save(&jpeg).unwrap();
+    let exr = dir.path().join("c.exr");
+    image::Rgb32FImage::from_pixel(2, 3, image::Rgb([0.25, 0.5, 2.0])).save(&exr).unwrap();
+
+    let g = read_image(&grey).unwrap();
+    assert_eq!((g.width(), g.height(), g.channels()), (3, 2, Channel::grey().as_slice()));
+    assert_eq!(g.pixel(2, 1), &[200.0 / 255.0]);
+    let c = read_image(&rgba).unwrap();
+    assert_eq!(c.pixel(1, 1), &[1.0, 0.0, 0.2, 0.4]);
+    let j = read_image(&jpeg).unwrap();
+    assert_eq!(j.channels(), Channel::rgb().as_slice());
+    assert!((j.pixel(4, 4)[0] - 200.0 / 255.0).abs() < 0.03);
+    let e = read_image(&exr).unwrap();
+    assert_eq!(e.pixel(1, 2), &[0.25, 0.5, 2.0]);
+}

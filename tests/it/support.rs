@@ -1,0 +1,61 @@
+//! Shared helpers: random volumes, running the binary, checking folders.
+
+use rand::{RngExt, SeedableRng};
+use rand_pcg::Pcg64;
+use solidtex::{Channel, Volume};
+use std::path::Path;
+use std::process::{Command, Output};
+
+/// A volume of uniform random samples in [0, 1).
+pub fn random_volume(dims: [usize; 3], channels: Vec<Channel>, seed: u64) -> Volume {
+    let mut rng = Pcg64::seed_from_u64(seed);
+    Volume::from_fn(dims, channels, |_, _, _, out| {
+        for v in out.iter_mut() {
+            *v = rng.random::<f32>();
+        }
+    })
+    .unwrap()
+}
+
+/// Run `solidtex` with `args`.
+pub fn solidtex(args: &[&str]) -> Output {
+    solidtex_env(args, &[])
+}
+
+/// Run `solidtex` with `args` and extra environment variables.
+pub fn solidtex_env(args: &[&str], env: &[(&str, &str)]) -> Output {
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_solidtex"));
+    cmd.args(args);
+    for (k, v) in env {
+        cmd.env(k, v);
+    }
+    cmd.output().expect("the solidtex binary runs")
+}
+
+/// Stderr as text.
+pub fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+/// Assert a run failed with exit code 1 and an error line containing every `needle`.
+pub fn assert_fails(out: &Output, needles: &[&str]) {
+    let err = stderr(out);
+    assert_eq!(out.status.code(), Some(1), "expected exit 1, stderr: {err}");
+    let line = err.lines().find(|l| l.starts_with("error:")).unwrap_or_else(|| panic!("no error line in {err:?}"));
+    for n in needles {
+        assert!(line.contains(n), "{line:?} does not mention {n:?}");
+    }
+}
+
+/// The names in a folder, sorted.
+pub fn listing(folder: &Path) -> Vec<String> {
+    let mut names: Vec<String> =
+        std::fs::read_dir(folder).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+    names.sort();
+    names
+}
+
+/// A path inside `dir` as a string.
+pub fn at(dir: &Path, name: &str) -> String {
+    dir.join(name).to_string_lossy().into_owned()
+}
