@@ -41,7 +41,9 @@ pub mod io;
 pub mod noise;
 pub mod procedural;
 pub mod progress;
+pub mod quality;
 pub mod render;
+pub mod synth;
 pub mod texture_type;
 pub mod volume;
 

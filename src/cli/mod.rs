@@ -1,8 +1,11 @@
 //! The command line: argument definitions and one function per subcommand.
 //! Exit codes: 0 success, 1 failure, 2 usage (clap's own).
 
+mod bench;
 mod commands;
 mod info;
+mod quality;
+mod synth;
 
 use clap::{Parser, Subcommand};
 use std::path::PathBuf;
@@ -73,6 +76,12 @@ pub enum Command {
         #[arg(short, long)]
         output: PathBuf,
     },
+    /// Synthesize a solid texture from 2D exemplars (Kopf 2007; --layered for type 1-b).
+    Synth(synth::SynthArgs),
+    /// Measure a volume against its exemplars: slice energy, histograms, layering.
+    Quality(quality::QualityArgs),
+    /// Time the synthesis workloads (median of several runs) on built-in exemplars.
+    Bench(bench::BenchArgs),
     /// Build every exemplar a manifest lists: a volume (.exr) and a sheet (.png) each.
     Build {
         /// The manifest.
@@ -92,6 +101,9 @@ pub fn run(cli: Cli) -> crate::Result<()> {
         Command::Slice { file, axis, index, output } => commands::slice(&file, &axis, index, &output),
         Command::Sheet { file, output, title } => commands::sheet(&file, &output, title),
         Command::Make { recipe, size, seed, output } => commands::make(&recipe, &size, seed, &output),
+        Command::Synth(args) => synth::run(&args),
+        Command::Quality(args) => quality::run(&args),
+        Command::Bench(args) => bench::run(&args),
         Command::Build { manifest, output } => commands::build(&manifest, &output),
     }
 }

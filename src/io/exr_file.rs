@@ -1,28 +1,25 @@
 //! The native volume file: OpenEXR holding the flipbook atlas (see [`super::atlas`]),
 //! f32 samples, ZIP-compressed (lossless), channels named by role, and the volume's
-//! description in custom layer attributes:
+//! description in one custom layer attribute `solidtex` (a `stringvector` of
+//! `key: value` lines, the same description PNG atlases carry):
 //!
-//! | attribute          | type       | value                                   |
-//! |--------------------|------------|-----------------------------------------|
-//! | `solidtexDims`     | v3i        | x, y, z size in voxels                  |
-//! | `solidtexTiles`    | v2i        | atlas columns, rows                     |
-//! | `solidtexChannels` | stringvector | channel names in storage order        |
-//! | `solidtexType`     | string     | LST type (`0`, `1-a` ... `2-d`), optional |
-//! | `solidtexProvenance` | stringvector | `key=value` entries                 |
+//! ```text
+//! dims: 64 64 64          x, y, z size in voxels (required)
+//! tiles: 8 8              atlas columns and rows (must match the layout rule)
+//! channels: R,G,B,Depth   channel names in storage order
+//! type: 1-b               LST type (optional)
+//! provenance.seed: 3      provenance entries (optional)
+//! ```
+//! One attribute, in a fixed order, so the same volume always gives the same bytes.
 
-use super::atlas;
+use super::{atlas, fields};
 use crate::error::{Error, Result};
-use crate::texture_type::TextureType;
-use crate::volume::{Channel, Meta, Volume};
+use crate::volume::{Channel, Volume};
 use exr::prelude::*;
 use std::collections::HashMap;
 use std::path::Path;
 
-const DIMS: &str = "solidtexDims";
-const TILES: &str = "solidtexTiles";
-const CHANNELS: &str = "solidtexChannels";
-const TYPE: &str = "solidtexType";
-const PROVENANCE: &str = "solidtexProvenance";
+const ATTRIBUTE: &str = "solidtex";
 
 /// Write `volume` as an EXR atlas (atomically).
 pub fn write(path: &Path, volume: &Volume) -> Result<()> {
@@ -57,43 +54,29 @@ fn text(path_free: &str) -> Result<Text> {
 }
 
 fn attributes_of(volume: &Volume) -> Result<HashMap<Text, AttributeValue>> {
-    let d = volume.dims();
-    let [columns, rows] = atlas::layout(d[2]);
-    let mut map = HashMap::new();
-    map.insert(text(DIMS)?, AttributeValue::IntVec3((d[0] as i32, d[1] as i32, d[2] as i32)));
-    map.insert(text(TILES)?, AttributeValue::IntVec2(Vec2(columns as i32, rows as i32)));
-    let names = volume.channels().iter().map(|c| text(c.name())).collect::<Result<_>>()?;
-    map.insert(text(CHANNELS)?, AttributeValue::TextVector(names));
-    if let Some(t) = volume.meta.texture_type {
-        map.insert(text(TYPE)?, AttributeValue::Text(text(t.name())?));
-    }
-    let entries: Vec<Text> =
-        volume.meta.provenance.iter().map(|(k, v)| text(&format!("{k}={v}"))).collect::<Result<_>>()?;
-    if !entries.is_empty() {
-        map.insert(text(PROVENANCE)?, AttributeValue::TextVector(entries));
-    }
-    Ok(map)
+    let [columns, rows] = atlas::layout(volume.dims()[2]);
+    let mut lines = fields::fields(volume);
+    lines.insert(1, ("tiles".to_string(), format!("{columns} {rows}")));
+    let list = lines.iter().map(|(k, v)| text(&format!("{k}: {v}"))).collect::<Result<_>>()?;
+    Ok(HashMap::from([(text(ATTRIBUTE)?, AttributeValue::TextVector(list))]))
 }
 
-/// Read an EXR atlas written by [`write`] (or by another tool that sets the same attributes).
+/// Read an EXR atlas written by [`write`] (or by another tool that sets the same attribute).
 pub fn read(path: &Path, budget: u64) -> Result<Volume> {
     let fail = |m: String| Error::file(path, m);
     let image = read_all(path)?;
     let layer = &image.layer_data;
-    let attrs = &layer.attributes.other;
-    let dims = dims_of(attrs)
-        .ok_or_else(|| fail(format!("no {DIMS} attribute: this EXR is a 2D image, not a solidtex volume atlas")))?;
-    let channels = channels_of(attrs, layer).map_err(|e| e.in_file(path))?;
+    let lines = description(&layer.attributes.other).ok_or_else(|| {
+        fail(format!("no {ATTRIBUTE:?} attribute: this EXR is a 2D image, not a solidtex volume atlas"))
+    })?;
+    let described = fields::parse(&lines).map_err(|e| e.in_file(path))?;
+    let dims = described.dims.ok_or_else(|| fail("the solidtex description has no dims".to_string()))?;
+    let channels = match described.channels {
+        Some(list) => list,
+        None => stored_channels(layer).map_err(|e| e.in_file(path))?,
+    };
     crate::volume::check_size(dims, channels.len(), budget).map_err(|e| e.in_file(path))?;
-    if let Some(AttributeValue::IntVec2(t)) = get(attrs, TILES) {
-        let want = atlas::layout(dims[2]);
-        if [t.0 as usize, t.1 as usize] != want {
-            return Err(fail(format!(
-                "{TILES} says {}x{} tiles but {} slices are stored in {}x{}",
-                t.0, t.1, dims[2], want[0], want[1]
-            )));
-        }
-    }
+    check_tiles(&lines, dims).map_err(|e| e.in_file(path))?;
     let (w, h) = (layer.size.0, layer.size.1);
     let data = interleave(layer, &channels, w * h).map_err(|e| e.in_file(path))?;
     if let Some(i) = data.iter().position(|v| !v.is_finite()) {
@@ -107,7 +90,21 @@ pub fn read(path: &Path, budget: u64) -> Result<Volume> {
         )));
     }
     let volume = atlas::from_atlas(dims, channels, w, h, &data).map_err(|e| e.in_file(path))?;
-    Ok(volume.with_meta(meta_of(attrs).map_err(|e| e.in_file(path))?))
+    Ok(volume.with_meta(described.meta))
+}
+
+/// The `tiles` field, if present, must match the layout of `dims`.
+fn check_tiles(lines: &[(String, String)], dims: [usize; 3]) -> Result<()> {
+    let Some((_, value)) = lines.iter().find(|(k, _)| k == "tiles") else { return Ok(()) };
+    let want = atlas::layout(dims[2]);
+    let got: Vec<usize> = value.split_whitespace().filter_map(|t| t.parse().ok()).collect();
+    if got != want {
+        return Err(Error::invalid(format!(
+            "tiles says {value:?} but {} slices are stored in {}x{} tiles",
+            dims[2], want[0], want[1]
+        )));
+    }
+    Ok(())
 }
 
 type ExrImage = Image<Layer<AnyChannels<FlatSamples>>>;
@@ -124,24 +121,22 @@ fn read_all(path: &Path) -> Result<ExrImage> {
         .map_err(|e| Error::file(path, format!("cannot read EXR (corrupt or truncated?): {e}")))
 }
 
-fn get<'a>(attrs: &'a HashMap<Text, AttributeValue>, key: &str) -> Option<&'a AttributeValue> {
-    attrs.iter().find(|(k, _)| *k == key).map(|(_, v)| v)
-}
-
-fn dims_of(attrs: &HashMap<Text, AttributeValue>) -> Option<[usize; 3]> {
-    match get(attrs, DIMS)? {
-        AttributeValue::IntVec3((x, y, z)) => Some([*x, *y, *z].map(|v| v.max(0) as usize)),
+/// The `key: value` lines of the `solidtex` attribute.
+fn description(attrs: &HashMap<Text, AttributeValue>) -> Option<Vec<(String, String)>> {
+    let value = attrs.iter().find(|(k, _)| *k == ATTRIBUTE).map(|(_, v)| v)?;
+    match value {
+        AttributeValue::TextVector(list) => {
+            let text: Vec<String> = list.iter().map(|t| t.to_string()).collect();
+            Some(fields::from_lines(&text.join("\n")))
+        }
         _ => None,
     }
 }
 
-/// Channel roles in storage order: from `solidtexChannels`, else the file's own names.
-fn channels_of(attrs: &HashMap<Text, AttributeValue>, layer: &Layer<AnyChannels<FlatSamples>>) -> Result<Vec<Channel>> {
-    let names: Vec<String> = match get(attrs, CHANNELS) {
-        Some(AttributeValue::TextVector(list)) => list.iter().map(|t| t.to_string()).collect(),
-        _ => layer.channel_data.list.iter().map(|c| c.name.to_string()).collect(),
-    };
-    let list = names.iter().map(|n| Channel::parse(n)).collect::<Result<Vec<_>>>()?;
+/// Channel roles from the file's own channel names (sorted by name, as EXR stores them).
+fn stored_channels(layer: &Layer<AnyChannels<FlatSamples>>) -> Result<Vec<Channel>> {
+    let list =
+        layer.channel_data.list.iter().map(|c| Channel::parse(&c.name.to_string())).collect::<Result<Vec<_>>>()?;
     Channel::check_list(&list)?;
     Ok(list)
 }
@@ -156,26 +151,10 @@ fn interleave(layer: &Layer<AnyChannels<FlatSamples>>, channels: &[Channel], pix
             .list
             .iter()
             .find(|ch| ch.name.to_string() == role.name())
-            .ok_or_else(|| Error::invalid(format!("channel {role} is listed in {CHANNELS} but not stored")))?;
+            .ok_or_else(|| Error::invalid(format!("channel {role} is listed in the description but not stored")))?;
         for (i, v) in stored.sample_data.values_as_f32().enumerate().take(pixels) {
             data[i * n + c] = v;
         }
     }
     Ok(data)
-}
-
-fn meta_of(attrs: &HashMap<Text, AttributeValue>) -> Result<Meta> {
-    let mut meta = Meta::default();
-    if let Some(AttributeValue::Text(t)) = get(attrs, TYPE) {
-        meta.texture_type = Some(t.to_string().parse::<TextureType>()?);
-    }
-    if let Some(AttributeValue::TextVector(list)) = get(attrs, PROVENANCE) {
-        for entry in list {
-            let entry = entry.to_string();
-            if let Some((k, v)) = entry.split_once('=') {
-                meta.set(k, v);
-            }
-        }
-    }
-    Ok(meta)
 }

@@ -108,12 +108,24 @@ pub fn write_volume(path: &Path, volume: &Volume) -> Result<()> {
 /// Load a 2D image (PNG, JPEG, EXR, TIFF, HDR) as f32 samples in its own channels:
 /// grey -> `[R]`, grey+alpha -> `[R, A]`, RGB, RGBA.
 pub fn read_image(path: &Path) -> Result<Image2d> {
+    read_image_fit(path, None)
+}
+
+/// [`read_image`], shrunk (Lanczos, aspect kept) so its longer side is at most `max_side`.
+pub fn read_image_fit(path: &Path, max_side: Option<usize>) -> Result<Image2d> {
     let bytes = atomic::read_bytes(path)?;
     let reader =
         image::ImageReader::new(std::io::Cursor::new(bytes)).with_guessed_format().map_err(|e| Error::io(path, e))?;
     let decoded = reader.decode().map_err(|e| {
         Error::file(path, format!("cannot decode image (corrupt, truncated, or not PNG/JPEG/EXR/TIFF/HDR): {e}"))
     })?;
+    let decoded = match max_side {
+        Some(0) => return Err(Error::invalid("the largest exemplar side must be at least 1 pixel")),
+        Some(side) if decoded.width().max(decoded.height()) as usize > side => {
+            decoded.resize(side as u32, side as u32, image::imageops::FilterType::Lanczos3)
+        }
+        _ => decoded,
+    };
     let (w, h) = (decoded.width() as usize, decoded.height() as usize);
     let color = decoded.color();
     let (channels, data) = match (color.has_color(), color.has_alpha()) {

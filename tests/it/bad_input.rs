@@ -77,13 +77,11 @@ fn truncated_vol() {
     convert_fails(dir.path(), &vol, &["v.vol", "shorter than the 4096-byte header"]);
 }
 
-fn exr_with(path: &Path, size: (usize, usize), dims: (i32, i32, i32), tiles: Option<(i32, i32)>) {
+fn exr_with(path: &Path, size: (usize, usize), lines: &[&str]) {
     use exr::prelude::*;
     let mut attributes = LayerAttributes::named("test");
-    attributes.other.insert(Text::from("solidtexDims"), AttributeValue::IntVec3(dims));
-    if let Some(t) = tiles {
-        attributes.other.insert(Text::from("solidtexTiles"), AttributeValue::IntVec2(Vec2(t.0, t.1)));
-    }
+    let list = lines.iter().map(|l| Text::from(*l)).collect();
+    attributes.other.insert(Text::from("solidtex"), AttributeValue::TextVector(list));
     let samples = FlatSamples::F32(vec![0.5; size.0 * size.1]);
     let channels = AnyChannels::sort(SmallVec::from_vec(vec![AnyChannel::new("R", samples)]));
     Image::from_layer(Layer::new(size, attributes, Encoding::UNCOMPRESSED, channels)).write().to_file(path).unwrap();
@@ -93,11 +91,13 @@ fn exr_with(path: &Path, size: (usize, usize), dims: (i32, i32, i32), tiles: Opt
 fn exr_whose_atlas_attributes_disagree_with_its_size() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("odd.exr");
-    exr_with(&path, (10, 10), (8, 8, 8), None);
+    exr_with(&path, (10, 10), &["dims: 8 8 8"]);
     let p = path.to_string_lossy();
     convert_fails(dir.path(), &p, &["odd.exr", "atlas is 10x10 pixels", "dims 8x8x8", "24x24"]);
-    exr_with(&path, (24, 24), (8, 8, 8), Some((2, 4)));
-    convert_fails(dir.path(), &p, &["odd.exr", "solidtexTiles says 2x4 tiles", "3x3"]);
+    exr_with(&path, (24, 24), &["dims: 8 8 8", "tiles: 2 4"]);
+    convert_fails(dir.path(), &p, &["odd.exr", "tiles says \"2 4\"", "3x3"]);
+    exr_with(&path, (24, 24), &["dims: 8 8 eight"]);
+    convert_fails(dir.path(), &p, &["odd.exr", "dims \"8 8 eight\""]);
 }
 
 #[test]
@@ -201,4 +201,32 @@ fn usage_errors_exit_with_two() {
     assert_eq!(out.status.code(), Some(2));
     let out = solidtex(&["frobnicate"]);
     assert_eq!(out.status.code(), Some(2));
+}
+
+#[test]
+fn synth_refuses_bad_exemplars_and_sizes_and_writes_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = at(dir.path(), "out.exr");
+    let photo = dir.path().join("nan.exr");
+    image::Rgb32FImage::from_fn(32, 32, |x, y| image::Rgb([if (x, y) == (5, 6) { f32::NAN } else { 0.5 }; 3]))
+        .save(&photo)
+        .unwrap();
+    let p = photo.to_string_lossy().into_owned();
+    assert_fails(&solidtex(&["synth", &p, "--size", "8", "-o", &out]), &["nan.exr", "(5, 6)", "not finite"]);
+    let small = dir.path().join("small.png");
+    image::RgbImage::from_pixel(12, 12, image::Rgb([1, 2, 3])).save(&small).unwrap();
+    let s = small.to_string_lossy().into_owned();
+    assert_fails(&solidtex(&["synth", &s, "--size", "8", "-o", &out]), &["small.png", "12x12 pixels", "neighbourhood"]);
+    assert_fails(&solidtex(&["synth", &s, "--size", "0", "-o", &out]), &["\"0\"", "at least 1"]);
+    let big = solidtex_env(
+        &["synth", &s, "--levels", "1", "--size", "4096", "-o", &out],
+        &[("SOLIDTEX_MAX_BYTES", "1000000")],
+    );
+    assert_fails(&big, &["4096x4096x4096", "voxel budget"]);
+    let depth = dir.path().join("depth.png");
+    image::GrayImage::from_pixel(20, 12, image::Luma([9])).save(&depth).unwrap();
+    let d = depth.to_string_lossy().into_owned();
+    let run = solidtex(&["synth", &s, "--layered", "--depth", &d, "--levels", "1", "--size", "8", "-o", &out]);
+    assert_fails(&run, &["depth image is 20x12", "12x12"]);
+    assert_eq!(listing(dir.path()), ["depth.png", "nan.exr", "small.png"]);
 }

@@ -40,6 +40,16 @@ fn exr_round_trip_is_bit_identical_with_roles_and_meta() {
 }
 
 #[test]
+fn the_same_volume_always_gives_the_same_exr_bytes() {
+    let dir = tempfile::tempdir().unwrap();
+    let v = with_meta(random_volume([6, 5, 4], Channel::rgba(), 9));
+    let (a, b) = (dir.path().join("a.exr"), dir.path().join("b.exr"));
+    write_volume(&a, &v).unwrap();
+    write_volume(&b, &v).unwrap();
+    assert_eq!(std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap());
+}
+
+#[test]
 fn nrrd_round_trip_is_bit_identical_with_roles_and_meta() {
     let dir = tempfile::tempdir().unwrap();
     for (k, channels) in channel_sets().into_iter().enumerate() {

@@ -1,0 +1,75 @@
+//! `solidtex quality`: slice energy, histogram distance and layered measures of a volume.
+
+use crate::error::Result;
+use crate::io;
+use crate::quality::{self, Report};
+use std::path::PathBuf;
+
+/// The arguments of `solidtex quality`.
+#[derive(Debug, clap::Args)]
+pub struct QualityArgs {
+    /// The volume to measure.
+    pub volume: PathBuf,
+    /// The exemplar it was made from (Ex, or the layered exemplar).
+    #[arg(long)]
+    pub exemplar: PathBuf,
+    /// The exemplar for slices orthogonal to y (default: the exemplar).
+    #[arg(long)]
+    pub ey: Option<PathBuf>,
+    /// The exemplar for slices orthogonal to z (default: Ey).
+    #[arg(long)]
+    pub ez: Option<PathBuf>,
+    /// Measure as a layered volume (x and y only, plus depth and sweeping measures);
+    /// the default when the volume's type is 1-b.
+    #[arg(long)]
+    pub layered: bool,
+    /// Shrink exemplars whose longer side exceeds this many pixels (as given to synth).
+    #[arg(long)]
+    pub max_exemplar: Option<usize>,
+    /// Print JSON instead of a table.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Run `solidtex quality`.
+pub fn run(args: &QualityArgs) -> Result<()> {
+    let volume = io::read_volume(&args.volume, io::budget_from_env()?)?;
+    let read = |p: &std::path::Path| io::read_image_fit(p, args.max_exemplar);
+    let ex = read(&args.exemplar)?;
+    let ey = args.ey.as_deref().map(read).transpose()?;
+    let ez = args.ez.as_deref().map(read).transpose()?;
+    let layered = args.layered || volume.meta.texture_type == Some(crate::TextureType::T1b);
+    let ey_ref = ey.as_ref().unwrap_or(&ex);
+    let exemplars = if layered {
+        [Some(&ex), Some(&ex), None]
+    } else {
+        [Some(&ex), Some(ey_ref), Some(ez.as_ref().unwrap_or(ey_ref))]
+    };
+    let report = quality::assess(&volume, exemplars, layered).map_err(|e| e.in_file(&args.volume))?;
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&report).expect("a report always serializes"));
+    } else {
+        print!("{}", table(&report));
+    }
+    Ok(())
+}
+
+fn table(r: &Report) -> String {
+    let mut out = String::from(
+        "slice energy (8x8, r = 0.8; lower is better)\n  axis    volume    random  exemplar  volume/exemplar\n",
+    );
+    for a in &r.axes {
+        out += &format!("  {:<4} {:>9.4} {:>9.4} {:>9.4} {:>16.2}\n", a.axis, a.volume, a.random, a.exemplar, a.ratio);
+    }
+    out += "histogram distance (L1 over 32 bins; 0 = equal, 2 = disjoint)\n";
+    for h in &r.histograms {
+        out += &format!("  {:<12} {:.4}\n", h.channel, h.distance);
+    }
+    if let Some(l) = &r.layered {
+        out += &format!(
+            "layered\n  depth error     {:.4}\n  depth monotonic {}\n  sweeping index  {:.4} (share of voxels whose x and y matches coincide)\n",
+            l.depth_error, l.depth_monotonic, l.sweeping_index
+        );
+    }
+    out
+}

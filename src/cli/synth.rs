@@ -1,0 +1,137 @@
+//! `solidtex synth`: 2D exemplars to a solid texture, with a progress bar on a terminal.
+
+use crate::error::{Error, Result};
+use crate::io;
+use crate::progress::Progress;
+use crate::synth::{self, Exemplars, LayeredParams, SynthParams};
+use crate::volume::Image2d;
+use indicatif::{ProgressBar, ProgressStyle};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// The arguments of `solidtex synth`.
+#[derive(Debug, clap::Args)]
+pub struct SynthArgs {
+    /// The exemplar image (Ex: the cross-section orthogonal to x; alone, all three).
+    pub exemplar: PathBuf,
+    /// The cross-section orthogonal to y (default: the exemplar).
+    #[arg(long)]
+    pub ey: Option<PathBuf>,
+    /// The cross-section orthogonal to z (default: Ey).
+    #[arg(long)]
+    pub ez: Option<PathBuf>,
+    /// Layered (type 1-b) synthesis: the exemplar's rows run along depth (the volume's z).
+    #[arg(long)]
+    pub layered: bool,
+    /// Depth of each exemplar pixel (grey image, same size; with --layered).
+    #[arg(long, requires = "layered")]
+    pub depth: Option<PathBuf>,
+    /// Switch off the anti-sweeping rule (with --layered; for comparison).
+    #[arg(long, requires = "layered")]
+    pub no_anti_sweeping: bool,
+    /// Weight of the depth channel in neighbourhood distances (with --layered).
+    #[arg(long, default_value_t = 1.0, requires = "layered")]
+    pub depth_weight: f32,
+    /// Shrink exemplars whose longer side exceeds this many pixels (e.g. 128 for photos).
+    #[arg(long)]
+    pub max_exemplar: Option<usize>,
+    /// Output size: N for a cube, or XxYxZ.
+    #[arg(long, default_value = "64")]
+    pub size: String,
+    /// Seed: the same inputs and seed give the same volume on any machine and thread count.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Pyramid levels.
+    #[arg(long, default_value_t = 3)]
+    pub levels: usize,
+    /// Most iterations per level below the finest.
+    #[arg(long, default_value_t = 4)]
+    pub iterations: usize,
+    /// Most iterations at the finest level.
+    #[arg(long, default_value_t = 2)]
+    pub finest_iterations: usize,
+    /// Stop a level when the mean match distance improves by less than this share.
+    #[arg(long, default_value_t = 0.01)]
+    pub tolerance: f32,
+    /// Histogram matching strength (0 = off).
+    #[arg(long, default_value_t = 1.0)]
+    pub histogram: f32,
+    /// k-coherence candidates per neighbour (more: better matches, slower).
+    #[arg(long, default_value_t = 6)]
+    pub coherence: usize,
+    /// Most PCA dimensions of the neighbourhood search (fewer: faster, coarser matches).
+    #[arg(long, default_value_t = 16)]
+    pub pca_dims: usize,
+    /// Print every stage with the time it was reached.
+    #[arg(long, short)]
+    pub verbose: bool,
+    /// The volume file to write (.exr, .nrrd, .vol, .png or a folder).
+    #[arg(short, long)]
+    pub output: PathBuf,
+}
+
+struct Bar {
+    bar: ProgressBar,
+    verbose: bool,
+    started: Instant,
+}
+
+impl Progress for Bar {
+    fn update(&self, stage: &str, fraction: f32) {
+        self.bar.set_position((fraction.clamp(0.0, 1.0) * 1000.0) as u64);
+        self.bar.set_message(stage.to_string());
+        if self.verbose {
+            self.bar.suspend(|| {
+                eprintln!("{:>8.3} s  {:>5.1} %  {stage}", self.started.elapsed().as_secs_f64(), fraction * 100.0)
+            });
+        }
+    }
+}
+
+fn load(path: &Path, what: &str, max_side: Option<usize>) -> Result<Image2d> {
+    io::read_image_fit(path, max_side).map_err(|e| match e {
+        Error::Io { path, source } => Error::file(&path, format!("cannot read the {what}: {source}")),
+        other => other,
+    })
+}
+
+/// Run `solidtex synth`.
+pub fn run(args: &SynthArgs) -> Result<()> {
+    io::Format::of(&args.output)?;
+    io::check_folder(&args.output)?;
+    let params = SynthParams {
+        size: super::commands::parse_size(&args.size)?,
+        levels: args.levels,
+        max_iterations: args.iterations,
+        finest_iterations: args.finest_iterations,
+        histogram_strength: args.histogram,
+        tolerance: args.tolerance,
+        coherence: args.coherence,
+        max_pca_dims: args.pca_dims,
+        budget_bytes: io::budget_from_env()?,
+        ..SynthParams::default()
+    };
+    let fit = args.max_exemplar;
+    let ex = load(&args.exemplar, "exemplar", fit)?;
+    let started = Instant::now();
+    let bar = Bar { bar: ProgressBar::new(1000), verbose: args.verbose, started };
+    bar.bar.set_style(
+        ProgressStyle::with_template("{elapsed:>4} [{bar:40}] {percent:>3}% {msg}").expect("valid template"),
+    );
+    let volume = if args.layered {
+        let depth = args.depth.as_deref().map(|p| load(p, "depth image", fit)).transpose()?;
+        let layered = LayeredParams { anti_sweeping: !args.no_anti_sweeping, depth_weight: args.depth_weight };
+        synth::synthesize_layered(&ex, depth.as_ref(), &params, &layered, args.seed, &bar)
+            .map_err(|e| e.in_file(&args.exemplar))?
+    } else {
+        let ey = args.ey.as_deref().map(|p| load(p, "Ey exemplar", fit)).transpose()?;
+        let ez = args.ez.as_deref().map(|p| load(p, "Ez exemplar", fit)).transpose()?;
+        let exemplars = Exemplars { x: &ex, y: ey.as_ref(), z: ez.as_ref() };
+        synth::synthesize(exemplars, &params, args.seed, &bar).map_err(|e| e.in_file(&args.exemplar))?
+    };
+    bar.bar.finish_and_clear();
+    io::write_volume(&args.output, &volume)?;
+    let [x, y, z] = volume.dims();
+    eprintln!("wrote {} ({x}x{y}x{z}) in {:.2} s", args.output.display(), started.elapsed().as_secs_f64());
+    Ok(())
+}

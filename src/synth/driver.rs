@@ -1,0 +1,255 @@
+//! The multi-resolution loop: prepare exemplar pyramids, initialize the coarsest
+//! volume, then per level {search, optimize} until converged, and upsample.
+
+use super::exemplar::{PrepareOptions, Prepared};
+use super::grid::Grid;
+use super::optimize::{Histograms, densities, optimize, transfer_histograms};
+use super::params::SynthParams;
+use super::search::{Matches, SearchSetup, pass_seed, search};
+use crate::error::{Error, Result};
+use crate::noise::hash3;
+use crate::progress::Progress;
+use crate::volume::{Edge, Image2d, Volume, downsample, upsample};
+use rayon::prelude::*;
+
+/// How the coarsest volume starts.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Init {
+    /// Random exemplar pixels.
+    Random,
+    /// Random exemplar pixels of the voxel's depth (the last channel); depth runs along z.
+    ByDepth,
+}
+
+/// One synthesis run: the exemplar per axis (`None`: the axis is not searched).
+pub struct Job<'a> {
+    /// Exemplar image per axis.
+    pub images: [Option<&'a Image2d>; 3],
+    /// Channel weights in neighbourhood distances.
+    pub weights: Vec<f32>,
+    /// Initialization.
+    pub init: Init,
+    /// Two-best-match rule between x and y.
+    pub anti_sweeping: bool,
+}
+
+/// Run the synthesis; returns the finest level's samples.
+pub fn run(job: &Job, params: &SynthParams, seed: u64, progress: &dyn Progress) -> Result<Vec<f32>> {
+    let pyramids = prepare(job, params, progress)?;
+    let levels = params.level_dims();
+    let work: Vec<f64> = levels.iter().map(|d| d.iter().product::<usize>() as f64).collect();
+    let total_work: f64 = work.iter().enumerate().map(|(l, w)| w * params.iterations_at(l) as f64).sum();
+    let mut done = 0.0;
+    let mut state: Option<(Grid, [Matches; 3])> = None;
+    for (level, dims) in levels.iter().enumerate() {
+        let ex = level_exemplars(&pyramids, level);
+        let (mut grid, mut matches) = match state.take() {
+            None => init(job, &ex, *dims, params, seed),
+            Some((g, m)) => upsample_level(&g, &m, &ex, *dims, &pyramids, level),
+        };
+        let mut previous = f64::INFINITY;
+        let iterations = params.iterations_at(level);
+        for iteration in 0..iterations {
+            if progress.cancelled() {
+                return Err(Error::Cancelled);
+            }
+            let setup = SearchSetup {
+                exemplars: ex,
+                anti_sweeping: job.anti_sweeping,
+                seed: pass_seed(seed, level, iteration),
+            };
+            let (found, energy) = search(&grid, &matches, &setup);
+            matches = found;
+            let stage = format!("level {}/{}, iteration {}", level + 1, levels.len(), iteration + 1);
+            progress.update(&format!("{stage}: searched"), (done / total_work) as f32);
+            grid.data = optimize(&grid, &matches, ex, &histograms(&ex, params));
+            if params.histogram_strength > 0.0 {
+                let first = ex.iter().flatten().next().expect("at least one axis is searched");
+                transfer_histograms(&mut grid.data, grid.channels, &first.colours);
+            }
+            done += work[level];
+            progress.update(&format!("{stage}: optimized"), (done / total_work) as f32);
+            let mean = energy / work[level];
+            if (previous - mean) < params.tolerance as f64 * previous {
+                done += work[level] * (iterations - iteration - 1) as f64;
+                break;
+            }
+            previous = mean;
+        }
+        state = Some((grid, matches));
+    }
+    progress.update("done", 1.0);
+    Ok(state.map(|(g, _)| g.data).unwrap_or_default())
+}
+
+/// Per axis, the prepared pyramid (coarsest first); axes sharing an image share it.
+type Pyramids = [Option<std::sync::Arc<Vec<Prepared>>>; 3];
+
+fn prepare(job: &Job, params: &SynthParams, progress: &dyn Progress) -> Result<Pyramids> {
+    let opt = PrepareOptions {
+        n: params.neighbourhood,
+        variance: params.pca_variance,
+        max_dims: params.max_pca_dims,
+        k: params.coherence,
+    };
+    let mut out: Pyramids = Default::default();
+    for axis in 0..3 {
+        let Some(image) = job.images[axis] else { continue };
+        let shared = (0..axis).find(|&a| job.images[a].is_some_and(|other| std::ptr::eq(other, image)));
+        if let Some(a) = shared {
+            out[axis] = out[a].clone();
+            continue;
+        }
+        progress.update(&format!("preparing exemplar for axis {axis}"), 0.0);
+        let levels = image_pyramid(image, params.levels)?;
+        let prepared: Vec<Prepared> = levels.iter().map(|img| Prepared::new(img, &job.weights, opt)).collect();
+        for (level, p) in prepared.iter().enumerate() {
+            let (dims, share) = (p.pca.dims, p.pca.explained * 100.0);
+            progress.update(
+                &format!("axis {axis} level {}: {dims} PCA dims keep {share:.0} % of the variance", level + 1),
+                0.0,
+            );
+        }
+        out[axis] = Some(std::sync::Arc::new(prepared));
+    }
+    progress.update("exemplars prepared", 0.0);
+    Ok(out)
+}
+
+/// Gaussian pyramid of a 2D image, coarsest first.
+fn image_pyramid(image: &Image2d, levels: usize) -> Result<Vec<Image2d>> {
+    let mut volume =
+        Volume::from_data([image.width(), image.height(), 1], image.channels().to_vec(), image.data().to_vec())?;
+    let mut out = vec![image.clone()];
+    for _ in 1..levels {
+        volume = downsample(&volume, Edge::Clamp)?;
+        let [w, h, _] = volume.dims();
+        out.push(Image2d::from_data(w, h, image.channels().to_vec(), volume.data().to_vec())?);
+    }
+    out.reverse();
+    Ok(out)
+}
+
+fn level_exemplars(pyramids: &Pyramids, level: usize) -> [Option<&Prepared>; 3] {
+    [0, 1, 2].map(|a| pyramids[a].as_ref().map(|p| &p[level]))
+}
+
+fn histograms(ex: &[Option<&Prepared>; 3], params: &SynthParams) -> Histograms {
+    let used: Vec<&Prepared> = ex.iter().flatten().copied().collect();
+    let per: Vec<Vec<Vec<f32>>> =
+        used.iter().map(|e| densities(&e.colours, e.channels, params.histogram_bins)).collect();
+    let target = (0..used[0].channels)
+        .map(|c| {
+            (0..params.histogram_bins).map(|b| per.iter().map(|h| h[c][b]).sum::<f32>() / per.len() as f32).collect()
+        })
+        .collect();
+    Histograms { bins: params.histogram_bins, strength: params.histogram_strength, target }
+}
+
+fn wraps(job: &Job, params: &SynthParams) -> [bool; 3] {
+    let depth_axis = job.init == Init::ByDepth;
+    [params.tileable, params.tileable, params.tileable && !depth_axis]
+}
+
+/// The coarsest level: every voxel gets random matches and the colour of one of them.
+fn init(
+    job: &Job,
+    ex: &[Option<&Prepared>; 3],
+    dims: [usize; 3],
+    params: &SynthParams,
+    seed: u64,
+) -> (Grid, [Matches; 3]) {
+    let count = dims.iter().product::<usize>();
+    let first = ex.iter().flatten().next().expect("at least one axis is searched");
+    let channels = first.channels;
+    let by_depth = (job.init == Init::ByDepth).then(|| depth_order(first));
+    let picks: Vec<[u32; 3]> = (0..count)
+        .into_par_iter()
+        .map(|v| {
+            let z = v / (dims[0] * dims[1]);
+            [0, 1, 2].map(|a| match (ex[a], &by_depth) {
+                (None, _) => 0,
+                (Some(e), None) => e.random_centre(hash3(seed, v as i64, a as i64, 1)),
+                (Some(_), Some(order)) => pick_by_depth(order, z, dims[2], hash3(seed, v as i64, a as i64, 1)),
+            })
+        })
+        .collect();
+    let mut data = Vec::with_capacity(count * channels);
+    for (v, p) in picks.iter().enumerate() {
+        let axes: Vec<usize> = (0..3).filter(|a| ex[*a].is_some()).collect();
+        let a = axes[(hash3(seed, v as i64, 7, 2) % axes.len() as u64) as usize];
+        let e = ex[a].expect("chosen among searched axes");
+        data.extend_from_slice(&e.colours[p[a] as usize * channels..(p[a] as usize + 1) * channels]);
+    }
+    let matches = [0, 1, 2].map(|a| match ex[a] {
+        Some(_) => Matches { pixel: picks.iter().map(|p| p[a]).collect(), dist: vec![1.0; count] },
+        None => Matches::default(),
+    });
+    (Grid { dims, channels, data, wrap: wraps(job, params) }, matches)
+}
+
+/// Valid centres sorted by their depth (the last channel), as (depth, pixel).
+fn depth_order(ex: &Prepared) -> Vec<(f32, u32)> {
+    let c = ex.channels;
+    let mut order: Vec<(f32, u32)> = ex.centres.iter().map(|&p| (ex.colours[p as usize * c + c - 1], p)).collect();
+    order.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    order
+}
+
+/// A random centre among those whose depth is nearest to slice z's depth.
+fn pick_by_depth(order: &[(f32, u32)], z: usize, depth: usize, hash: u64) -> u32 {
+    let target = if depth > 1 { z as f32 / (depth - 1) as f32 } else { 0.5 };
+    let at = order.partition_point(|e| e.0 < target);
+    let window = (order.len() / depth.max(1)).clamp(1, order.len());
+    let start = at.saturating_sub(window / 2).min(order.len() - window);
+    order[start + (hash % window as u64) as usize].1
+}
+
+/// Move to the next finer level: colours by linear upsampling, matches by coordinate
+/// doubling (each coarse match predicts four fine ones).
+fn upsample_level(
+    coarse: &Grid,
+    matches: &[Matches; 3],
+    ex: &[Option<&Prepared>; 3],
+    dims: [usize; 3],
+    pyramids: &Pyramids,
+    level: usize,
+) -> (Grid, [Matches; 3]) {
+    let fine = upsample_samples(coarse, dims);
+    let count = dims.iter().product::<usize>();
+    let moved = [0, 1, 2].map(|a| match (ex[a], pyramids[a].as_ref()) {
+        (Some(e), Some(p)) => {
+            let c_ex = &p[level - 1];
+            let pixel =
+                (0..count).into_par_iter().map(|v| finer_match(coarse, &matches[a], c_ex, e, a, dims, v)).collect();
+            Matches { pixel, dist: vec![1.0; count] }
+        }
+        _ => Matches::default(),
+    });
+    (Grid { dims, channels: coarse.channels, data: fine, wrap: coarse.wrap }, moved)
+}
+
+fn upsample_samples(coarse: &Grid, dims: [usize; 3]) -> Vec<f32> {
+    let channels = (0..coarse.channels).map(|i| crate::volume::Channel::Named(format!("c{i}"))).collect();
+    let volume = Volume::from_data(coarse.dims, channels, coarse.data.clone()).expect("grid sizes are consistent");
+    let edge = if coarse.wrap[0] { Edge::Wrap } else { Edge::Clamp };
+    upsample(&volume, dims, edge).expect("the finer level fits the budget checked up front").into_data()
+}
+
+fn finer_match(
+    coarse: &Grid,
+    m: &Matches,
+    c_ex: &Prepared,
+    f_ex: &Prepared,
+    axis: usize,
+    dims: [usize; 3],
+    v: usize,
+) -> u32 {
+    let p = [v % dims[0], (v / dims[0]) % dims[1], v / (dims[0] * dims[1])];
+    let c: [usize; 3] = std::array::from_fn(|k| (p[k] / 2).min(coarse.dims[k] - 1));
+    let pix = m.pixel[coarse.index(c[0], c[1], c[2])] as usize;
+    let (a, b) = crate::volume::Axis::ALL[axis].plane_axes();
+    let x = 2 * (pix % c_ex.width) as i64 + (p[a] % 2) as i64;
+    let y = 2 * (pix / c_ex.width) as i64 + (p[b] % 2) as i64;
+    f_ex.clamp_centre(x, y)
+}

@@ -1,0 +1,198 @@
+//! One exemplar at one pyramid level, prepared for search: its neighbourhood vectors
+//! projected by PCA, and k-coherence sets (for every valid centre, the k centres
+//! whose neighbourhoods are most alike, itself first).
+//!
+//! A centre is valid when its whole n x n neighbourhood lies inside the image:
+//!
+//! ```text
+//!  offsets -h .. n-1-h  (h = n / 2)     valid x: h ..= width - n + h
+//! ```
+
+use super::knn::KdTree;
+use super::pca::Pca;
+use crate::noise::mix64;
+use crate::volume::Image2d;
+use rayon::prelude::*;
+
+/// Most neighbourhood vectors used to fit the PCA basis (evenly strided).
+const PCA_SAMPLES: usize = 4096;
+
+/// Leading PCA dimensions the coherence kd-tree splits on (candidates are re-ranked in all).
+const TREE_DIMS: usize = 6;
+
+/// An exemplar level ready for neighbourhood search.
+#[derive(Debug, Clone)]
+pub struct Prepared {
+    /// Width in pixels.
+    pub width: usize,
+    /// Height in pixels.
+    pub height: usize,
+    /// Samples per pixel.
+    pub channels: usize,
+    /// Raw samples, interleaved.
+    pub colours: Vec<f32>,
+    /// Per-channel weights used in neighbourhood distances.
+    pub weights: Vec<f32>,
+    /// Neighbourhood side.
+    pub n: usize,
+    /// Pixel index of every valid centre, row-major.
+    pub centres: Vec<u32>,
+    /// The PCA projection of neighbourhood vectors.
+    pub pca: Pca,
+    /// `centres.len() x pca.dims` projected neighbourhoods.
+    pub projected: Vec<f32>,
+    /// `centres.len() x k` slots (indices into `centres`): the k-coherence set of each centre.
+    pub coherence: Vec<u32>,
+    /// Size of each coherence set.
+    pub k: usize,
+}
+
+/// What preparing needs besides the image.
+#[derive(Debug, Clone, Copy)]
+pub struct PrepareOptions {
+    /// Neighbourhood side.
+    pub n: usize,
+    /// Share of variance PCA keeps.
+    pub variance: f32,
+    /// Most PCA dimensions.
+    pub max_dims: usize,
+    /// Coherence set size (0: no coherence sets, for measuring only).
+    pub k: usize,
+}
+
+impl Prepared {
+    /// Prepare `image` with per-channel `weights`.
+    pub fn new(image: &Image2d, weights: &[f32], opt: PrepareOptions) -> Prepared {
+        let (width, height, channels) = (image.width(), image.height(), image.channel_count());
+        let h = opt.n / 2;
+        let centres: Vec<u32> = (h..=height - opt.n + h)
+            .flat_map(|y| (h..=width - opt.n + h).map(move |x| (y * width + x) as u32))
+            .collect();
+        let mut prepared = Prepared {
+            width,
+            height,
+            channels,
+            colours: image.data().to_vec(),
+            weights: weights.to_vec(),
+            n: opt.n,
+            centres,
+            pca: Pca { input: 0, dims: 0, mean: vec![], basis: vec![], explained: 0.0 },
+            projected: Vec::new(),
+            coherence: Vec::new(),
+            k: opt.k,
+        };
+        let vectors = prepared.all_vectors();
+        let m = opt.n * opt.n * channels;
+        let stride = (prepared.centres.len() / PCA_SAMPLES).max(1);
+        let sample: Vec<f32> = vectors.chunks_exact(m).step_by(stride).flatten().copied().collect();
+        prepared.pca = Pca::fit(&sample, m, opt.variance, opt.max_dims);
+        prepared.projected = project_all(&prepared.pca, &vectors, m);
+        if opt.k > 0 {
+            prepared.coherence = prepared.coherence_sets();
+        }
+        prepared
+    }
+
+    /// Offset range start: offsets run from `-half` to `n - 1 - half`.
+    pub fn half(&self) -> usize {
+        self.n / 2
+    }
+
+    /// The weighted neighbourhood vector of the centre at pixel `(cx, cy)`, appended to `out`.
+    pub fn vector(&self, cx: usize, cy: usize, out: &mut Vec<f32>) {
+        let h = self.half();
+        for dy in 0..self.n {
+            for dx in 0..self.n {
+                let p = (cy + dy - h) * self.width + cx + dx - h;
+                let px = &self.colours[p * self.channels..(p + 1) * self.channels];
+                out.extend(px.iter().zip(&self.weights).map(|(v, w)| v * w));
+            }
+        }
+    }
+
+    fn all_vectors(&self) -> Vec<f32> {
+        let m = self.n * self.n * self.channels;
+        let mut out = Vec::with_capacity(self.centres.len() * m);
+        for &c in &self.centres {
+            let c = c as usize;
+            self.vector(c % self.width, c / self.width, &mut out);
+        }
+        out
+    }
+
+    /// Slot (index into `centres`) of a valid centre pixel; `None` if not valid.
+    pub fn slot(&self, pixel: u32) -> Option<usize> {
+        let (x, y) = (pixel as usize % self.width, pixel as usize / self.width);
+        let h = self.half();
+        let (vw, vh) = (self.width + 1 - self.n, self.height + 1 - self.n);
+        (x >= h && y >= h && x - h < vw && y - h < vh).then(|| (y - h) * vw + (x - h))
+    }
+
+    /// The valid centre nearest to pixel (x, y), given as signed coordinates.
+    pub fn clamp_centre(&self, x: i64, y: i64) -> u32 {
+        let h = self.half() as i64;
+        let x = x.clamp(h, (self.width - self.n) as i64 + h);
+        let y = y.clamp(h, (self.height - self.n) as i64 + h);
+        (y * self.width as i64 + x) as u32
+    }
+
+    /// The projected neighbourhood of the centre in `slot`.
+    pub fn projection(&self, slot: usize) -> &[f32] {
+        &self.projected[slot * self.pca.dims..(slot + 1) * self.pca.dims]
+    }
+
+    /// A pseudo-random valid centre from a hash value.
+    pub fn random_centre(&self, hash: u64) -> u32 {
+        self.centres[self.random_slot(hash)]
+    }
+
+    /// The slot of a pseudo-random valid centre.
+    pub fn random_slot(&self, hash: u64) -> usize {
+        (mix64(hash) % self.centres.len() as u64) as usize
+    }
+
+    /// For every centre: itself, then its k - 1 most alike centres that are not its
+    /// close spatial neighbours (those would add nothing new).
+    fn coherence_sets(&self) -> Vec<u32> {
+        let dims = self.pca.dims;
+        let low = dims.min(TREE_DIMS);
+        let points: Vec<f32> = self.projected.chunks_exact(dims).flat_map(|p| p[..low].iter().copied()).collect();
+        let tree = KdTree::build(points, low);
+        let k = self.k;
+        let away = (self.n / 2).max(2) as i64;
+        (0..self.centres.len())
+            .into_par_iter()
+            .flat_map_iter(|slot| {
+                let me = self.centres[slot];
+                let here = self.projection(slot);
+                let (mx, my) = ((me as usize % self.width) as i64, (me as usize / self.width) as i64);
+                let mut hits: Vec<(f32, u32)> = tree
+                    .nearest(&here[..low], 2 * k + 6)
+                    .into_iter()
+                    .map(|(_, i)| (super::knn::squared(here, self.projection(i as usize)), i))
+                    .collect();
+                hits.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+                let others = hits.into_iter().map(|(_, i)| i).filter(move |&i| {
+                    let p = self.centres[i as usize] as usize;
+                    let (px, py) = ((p % self.width) as i64, (p / self.width) as i64);
+                    (px - mx).abs().max((py - my).abs()) >= away
+                });
+                let mut set: Vec<u32> = std::iter::once(slot as u32).chain(others).take(k).collect();
+                set.resize(k, slot as u32);
+                set
+            })
+            .collect()
+    }
+}
+
+fn project_all(pca: &Pca, vectors: &[f32], m: usize) -> Vec<f32> {
+    let dims = pca.dims;
+    let mut out = vec![0.0; vectors.len() / m * dims];
+    out.par_chunks_mut(dims * 256).zip(vectors.par_chunks(m * 256)).for_each(|(o, v)| {
+        for (oi, vi) in o.chunks_exact_mut(dims).zip(v.chunks_exact(m)) {
+            pca.project(vi, oi);
+        }
+    });
+    out
+}
+pub use super::knn::squared;

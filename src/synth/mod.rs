@@ -1,0 +1,173 @@
+//! 2D-to-3D solid texture synthesis (Kopf et al. 2007, thesis §4.1) and its layered
+//! extension (thesis §4.2 and the poster).
+//!
+//! ```text
+//!  exemplar pyramid (Gaussian)          volume, coarsest level first
+//!  E^0 <- E^1 <- E^2                    random (or depth-aware) init
+//!                                       per level, until converged:
+//!                                         search:   best exemplar neighbourhood per voxel
+//!                                                   and axis (PCA + k-coherence)
+//!                                         optimize: blend the matches' predictions,
+//!                                                   weight d^-1.2 and histogram matching
+//!                                       upsample colours and matches to the next level
+//! ```
+//!
+//! Deterministic: every random choice comes from a hash of (seed, level, iteration,
+//! voxel, axis), and every pass computes each voxel from the previous state only, so
+//! the output is bit-identical on any number of threads.
+
+mod driver;
+pub(crate) mod exemplar;
+mod grid;
+mod knn;
+mod optimize;
+mod params;
+mod pca;
+mod search;
+
+pub use params::{LayeredParams, SynthParams};
+
+use crate::error::{Error, Result};
+use crate::progress::Progress;
+use crate::texture_type::TextureType;
+use crate::volume::{Channel, Image2d, Meta, Volume};
+use driver::{Init, Job};
+
+/// The exemplars of homogeneous synthesis: the cross-sections orthogonal to x, y and z.
+/// A missing `y` is `x`; a missing `z` is `y` (so one image is isotropic, two make a
+/// type 1-a texture whose axis is x, three a type 2-a texture).
+#[derive(Debug, Clone, Copy)]
+pub struct Exemplars<'a> {
+    /// Cross-section orthogonal to x.
+    pub x: &'a Image2d,
+    /// Cross-section orthogonal to y.
+    pub y: Option<&'a Image2d>,
+    /// Cross-section orthogonal to z.
+    pub z: Option<&'a Image2d>,
+}
+
+/// Synthesize a homogeneous solid texture.
+pub fn synthesize(ex: Exemplars, params: &SynthParams, seed: u64, progress: &dyn Progress) -> Result<Volume> {
+    let ey = ex.y.unwrap_or(ex.x);
+    let ez = ex.z.unwrap_or(ey);
+    let images = [ex.x, ey, ez];
+    check_exemplars(&images, &["Ex", "Ey", "Ez"], params)?;
+    let weights = vec![1.0; ex.x.channel_count()];
+    let job = Job { images: [Some(ex.x), Some(ey), Some(ez)], weights, init: Init::Random, anti_sweeping: false };
+    let data = driver::run(&job, params, seed, progress)?;
+    let kind = match (ex.y, ex.z) {
+        (None, None) => TextureType::T0,
+        (_, None) => TextureType::T1a,
+        _ => TextureType::T2a,
+    };
+    finish(params, ex.x.channels().to_vec(), data, kind, "synth", seed)
+}
+
+/// Synthesize a layered (type 1-b) solid texture from one exemplar parallel to the
+/// depth direction: image rows run along depth, which becomes the volume's z axis.
+/// `depth` gives the depth of every exemplar pixel (first channel, 0 = outside); by
+/// default it is the row coordinate. The output carries a `Depth` channel.
+pub fn synthesize_layered(
+    exemplar: &Image2d,
+    depth: Option<&Image2d>,
+    params: &SynthParams,
+    layered: &LayeredParams,
+    seed: u64,
+    progress: &dyn Progress,
+) -> Result<Volume> {
+    check_exemplars(&[exemplar], &["exemplar"], params)?;
+    let with_depth = add_depth(exemplar, depth)?;
+    let mut weights = vec![1.0; exemplar.channel_count()];
+    weights.push(layered.depth_weight);
+    let job = Job {
+        images: [Some(&with_depth), Some(&with_depth), None],
+        weights,
+        init: Init::ByDepth,
+        anti_sweeping: layered.anti_sweeping,
+    };
+    let data = driver::run(&job, params, seed, progress)?;
+    finish(params, with_depth.channels().to_vec(), data, TextureType::T1b, "synth-layered", seed)
+}
+
+fn finish(
+    params: &SynthParams,
+    channels: Vec<Channel>,
+    data: Vec<f32>,
+    kind: TextureType,
+    recipe: &str,
+    seed: u64,
+) -> Result<Volume> {
+    let mut meta = Meta { texture_type: Some(kind), provenance: Vec::new() };
+    meta.set("recipe", recipe);
+    meta.set("seed", seed.to_string());
+    meta.set("levels", params.levels.to_string());
+    Ok(Volume::from_data(params.size, channels, data)?.with_meta(meta))
+}
+
+/// Channel counts agree, samples are finite, and the coarsest level holds a neighbourhood.
+fn check_exemplars(images: &[&Image2d], names: &[&str], params: &SynthParams) -> Result<()> {
+    params.check(images[0].channel_count() + 1)?;
+    for (image, name) in images.iter().zip(names) {
+        if image.channel_count() != images[0].channel_count() {
+            return Err(Error::invalid(format!(
+                "{name} has {} channel(s) ({}), {} has {} ({}); all exemplars need the same channels",
+                image.channel_count(),
+                crate::volume::channel_names(image.channels()),
+                names[0],
+                images[0].channel_count(),
+                crate::volume::channel_names(images[0].channels())
+            )));
+        }
+        if let Some([x, y, c]) = image.first_non_finite() {
+            return Err(Error::invalid(format!("{name}: pixel ({x}, {y}) channel {c} is not finite")));
+        }
+        let shrink = |s: usize| (1..params.levels).fold(s, |s, _| s.div_ceil(2));
+        let (w, h) = (shrink(image.width()), shrink(image.height()));
+        let need = params.neighbourhood + 2;
+        if w < need || h < need {
+            return Err(Error::invalid(format!(
+                "{name} is {}x{} pixels; at {} levels its coarsest level is {w}x{h}, smaller than the {need}x{need} \
+                 that a {n}x{n} neighbourhood needs; use fewer levels or a larger exemplar",
+                image.width(),
+                image.height(),
+                params.levels,
+                n = params.neighbourhood
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// The exemplar with a Depth channel appended (from `depth`, else the row coordinate).
+fn add_depth(exemplar: &Image2d, depth: Option<&Image2d>) -> Result<Image2d> {
+    let (w, h) = (exemplar.width(), exemplar.height());
+    if let Some(d) = depth {
+        if (d.width(), d.height()) != (w, h) {
+            return Err(Error::invalid(format!(
+                "the depth image is {}x{} pixels but the exemplar is {w}x{h}; they must be the same size",
+                d.width(),
+                d.height()
+            )));
+        }
+        if let Some([x, y, _]) = d.first_non_finite() {
+            return Err(Error::invalid(format!("depth image: pixel ({x}, {y}) is not finite")));
+        }
+    }
+    let mut channels = exemplar.channels().to_vec();
+    channels.retain(|c| *c != Channel::Depth);
+    if channels.len() != exemplar.channel_count() {
+        return Err(Error::invalid("the exemplar already has a Depth channel; give it as --depth instead"));
+    }
+    channels.push(Channel::Depth);
+    let mut data = Vec::with_capacity(w * h * channels.len());
+    for y in 0..h {
+        for x in 0..w {
+            data.extend_from_slice(exemplar.pixel(x, y));
+            data.push(match depth {
+                Some(d) => d.pixel(x, y)[0],
+                None => y as f32 / (h - 1).max(1) as f32,
+            });
+        }
+    }
+    Image2d::from_data(w, h, channels, data)
+}

@@ -1,0 +1,160 @@
+//! Solid synthesis: determinism, layering, the anti-sweeping rule, histograms, bad input.
+
+use solidtex::progress::NoProgress;
+use solidtex::quality;
+use solidtex::synth::{Exemplars, LayeredParams, SynthParams, synthesize, synthesize_layered};
+use solidtex::volume::{Channel, Image2d, Volume};
+use solidtex::{Error, noise};
+
+/// A 40x40 exemplar of soft blobs in `channels` channels (procedural, so tests need no files).
+fn blobs(channels: usize, seed: u64) -> Image2d {
+    let roles = match channels {
+        1 => Channel::grey(),
+        3 => Channel::rgb(),
+        _ => Channel::rgba(),
+    };
+    let mut data = Vec::new();
+    for y in 0..40 {
+        for x in 0..40 {
+            let p = glam::Vec3::new(x as f32 / 10.0, y as f32 / 10.0, 0.5);
+            for c in 0..channels {
+                let n = noise::fbm(seed + c as u64, p, [4, 4, 4], 3);
+                data.push((n * 0.5 + 0.5).clamp(0.0, 1.0));
+            }
+        }
+    }
+    Image2d::from_data(40, 40, roles, data).unwrap()
+}
+
+/// Horizontal bands that darken with the row: a layered exemplar.
+fn bands() -> Image2d {
+    let data = (0..40 * 40)
+        .flat_map(|i| {
+            let (x, y) = ((i % 40) as f32, (i / 40) as f32);
+            let band = ((y / 5.0).floor() % 2.0) * 0.3
+                + 0.2
+                + 0.1 * noise::fbm(3, glam::Vec3::new(x / 8.0, y / 8.0, 0.0), [5; 3], 2);
+            [band, band * 0.8, 1.0 - y / 40.0]
+        })
+        .collect();
+    Image2d::from_data(40, 40, Channel::rgb(), data).unwrap()
+}
+
+fn small(size: [usize; 3]) -> SynthParams {
+    SynthParams { size, levels: 2, max_iterations: 2, ..SynthParams::default() }
+}
+
+fn on_threads<T: Send>(n: usize, f: impl FnOnce() -> T + Send) -> T {
+    rayon::ThreadPoolBuilder::new().num_threads(n).build().unwrap().install(f)
+}
+
+#[test]
+fn the_same_seed_gives_the_same_volume_on_1_2_and_8_threads() {
+    let ex = blobs(3, 1);
+    let params = small([12, 10, 14]);
+    let run = || synthesize(Exemplars { x: &ex, y: None, z: None }, &params, 42, &NoProgress).unwrap();
+    let one = on_threads(1, run);
+    assert_eq!(on_threads(2, run), one);
+    assert_eq!(on_threads(8, run), one);
+    let other = synthesize(Exemplars { x: &ex, y: None, z: None }, &params, 43, &NoProgress).unwrap();
+    assert_ne!(other.data(), one.data(), "another seed gives another volume");
+    assert_eq!(one.dims(), [12, 10, 14]);
+    assert_eq!(one.meta.texture_type, Some(solidtex::TextureType::T0));
+}
+
+#[test]
+fn layered_synthesis_is_deterministic_too() {
+    let ex = bands();
+    let params = small([10, 10, 16]);
+    let run = || synthesize_layered(&ex, None, &params, &LayeredParams::default(), 5, &NoProgress).unwrap();
+    let one = on_threads(1, run);
+    assert_eq!(on_threads(3, run), one);
+}
+
+#[test]
+fn layered_depth_rises_along_z() {
+    let ex = bands();
+    let v = synthesize_layered(&ex, None, &small([12, 12, 24]), &LayeredParams::default(), 1, &NoProgress).unwrap();
+    let d = v.channel_index(&Channel::Depth).expect("a Depth channel");
+    let means: Vec<f32> =
+        (0..24).map(|z| (0..12 * 12).map(|i| v.get(i % 12, i / 12, z, d)).sum::<f32>() / 144.0).collect();
+    assert!(means.windows(2).all(|w| w[1] >= w[0]), "{means:?}");
+    assert!(means[0] < 0.15 && means[23] > 0.85, "{means:?}");
+    assert_eq!(v.meta.texture_type, Some(solidtex::TextureType::T1b));
+}
+
+#[test]
+fn the_anti_sweeping_rule_lowers_the_sweeping_index() {
+    let ex = bands();
+    let params = SynthParams { size: [16, 16, 40], levels: 2, max_iterations: 3, ..SynthParams::default() };
+    let index = |rule: bool| {
+        let layered = LayeredParams { anti_sweeping: rule, ..LayeredParams::default() };
+        let v = synthesize_layered(&ex, None, &params, &layered, 7, &NoProgress).unwrap();
+        quality::assess(&v, [Some(&ex), Some(&ex), None], true).unwrap().layered.unwrap().sweeping_index
+    };
+    let (with, without) = (index(true), index(false));
+    assert!(with < without, "with the rule {with}, without {without}");
+}
+
+#[test]
+fn histogram_matching_lowers_the_histogram_distance() {
+    let ex = blobs(1, 9);
+    let distance = |strength: f32| {
+        let params = SynthParams { histogram_strength: strength, ..small([16, 16, 16]) };
+        let v = synthesize(Exemplars { x: &ex, y: None, z: None }, &params, 3, &NoProgress).unwrap();
+        quality::assess(&v, [Some(&ex), Some(&ex), Some(&ex)], false).unwrap().histograms[0].distance
+    };
+    let (on, off) = (distance(1.0), distance(0.0));
+    assert!(on < off, "with matching {on}, without {off}");
+    assert!(on < 0.05, "{on}");
+}
+
+#[test]
+fn tiny_outputs_and_one_or_four_channels_work() {
+    let grey = blobs(1, 2);
+    let v = synthesize(Exemplars { x: &grey, y: None, z: None }, &small([8, 8, 8]), 1, &NoProgress).unwrap();
+    assert_eq!((v.dims(), v.channel_count()), ([8, 8, 8], 1));
+    let rgba = blobs(4, 2);
+    let v = synthesize(Exemplars { x: &rgba, y: None, z: None }, &small([9, 7, 5]), 1, &NoProgress).unwrap();
+    assert_eq!((v.dims(), v.channels()), ([9, 7, 5], Channel::rgba().as_slice()));
+    assert!(v.data().iter().all(|s| (0.0..=1.0).contains(s)));
+}
+
+#[test]
+fn anisotropic_exemplars_set_the_type() {
+    let (a, b) = (blobs(3, 1), blobs(3, 2));
+    let v = synthesize(Exemplars { x: &a, y: Some(&b), z: None }, &small([8, 8, 8]), 1, &NoProgress).unwrap();
+    assert_eq!(v.meta.texture_type, Some(solidtex::TextureType::T1a));
+    let v = synthesize(Exemplars { x: &a, y: Some(&b), z: Some(&a) }, &small([8, 8, 8]), 1, &NoProgress).unwrap();
+    assert_eq!(v.meta.texture_type, Some(solidtex::TextureType::T2a));
+}
+
+fn message(result: Result<Volume, Error>) -> String {
+    result.expect_err("must fail").to_string()
+}
+
+#[test]
+fn bad_synthesis_input_is_refused_with_a_clear_message() {
+    let ex = blobs(3, 1);
+    let none = |p: &SynthParams| message(synthesize(Exemplars { x: &ex, y: None, z: None }, p, 1, &NoProgress));
+    let tiny = Image2d::from_data(6, 6, Channel::rgb(), vec![0.5; 108]).unwrap();
+    let err = message(synthesize(Exemplars { x: &tiny, y: None, z: None }, &small([8, 8, 8]), 1, &NoProgress));
+    assert!(err.contains("Ex is 6x6 pixels") && err.contains("neighbourhood"), "{err}");
+    let grey = blobs(1, 1);
+    let err = message(synthesize(Exemplars { x: &ex, y: Some(&grey), z: None }, &small([8, 8, 8]), 1, &NoProgress));
+    assert!(err.contains("Ey has 1 channel(s)") && err.contains("Ex has 3"), "{err}");
+    let err = none(&small([8, 0, 8]));
+    assert!(err.contains("8x0x8") && err.contains("at least 1"), "{err}");
+    let err = none(&SynthParams { budget_bytes: 1000, ..small([64, 64, 64]) });
+    assert!(err.contains("voxel budget"), "{err}");
+    let err = none(&SynthParams { levels: 0, ..small([8, 8, 8]) });
+    assert!(err.contains("levels = 0") && err.contains("1 to 8"), "{err}");
+    let mut nan = ex.clone();
+    nan.pixel_mut(3, 4)[1] = f32::NAN;
+    let err = message(synthesize(Exemplars { x: &nan, y: None, z: None }, &small([8, 8, 8]), 1, &NoProgress));
+    assert!(err.contains("(3, 4)") && err.contains("not finite"), "{err}");
+    let depth = Image2d::from_data(20, 40, Channel::grey(), vec![0.5; 800]).unwrap();
+    let err =
+        message(synthesize_layered(&ex, Some(&depth), &small([8, 8, 8]), &LayeredParams::default(), 1, &NoProgress));
+    assert!(err.contains("depth image is 20x40") && err.contains("40x40"), "{err}");
+}
