@@ -38,11 +38,15 @@
 pub mod cli;
 pub mod error;
 pub mod io;
+pub mod mesh;
 pub mod noise;
 pub mod procedural;
 pub mod progress;
 pub mod quality;
 pub mod render;
+pub mod sections;
+pub mod stamp;
+pub mod sweep;
 pub mod synth;
 pub mod texture_type;
 pub mod volume;

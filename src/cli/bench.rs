@@ -33,6 +33,70 @@ const WORKLOADS: [Workload; 3] = [
 
 /// Run `solidtex bench`.
 pub fn run(args: &BenchArgs) -> Result<()> {
+    println!("{:<30} {:>5} {:>9} {:>9}", "workload", "runs", "median s", "min s");
+    for (name, work) in hand_made()? {
+        if args.only.as_ref().is_some_and(|o| !name.contains(o.as_str())) {
+            continue;
+        }
+        let mut times = Vec::new();
+        for _ in 0..args.runs.max(1) {
+            let started = Instant::now();
+            work()?;
+            times.push(started.elapsed().as_secs_f64());
+        }
+        times.sort_by(f64::total_cmp);
+        println!("{:<30} {:>5} {:>9.3} {:>9.3}", name, times.len(), times[times.len() / 2], times[0]);
+    }
+    synthesis(args)
+}
+
+type Work = Box<dyn Fn() -> Result<()>>;
+
+/// The hand-made workloads of issue 4: stamp, scatter, sweep + noise + skin at 128³.
+fn hand_made() -> Result<Vec<(&'static str, Work)>> {
+    let seed = std::rc::Rc::new(crate::sections::seed_mesh(32, 32)?);
+    let section = std::rc::Rc::new(crate::sections::draw("kiwi", 128, 128, 1)?);
+    let base = std::rc::Rc::new(crate::volume::Volume::from_fn([128; 3], Channel::rgb(), |_, _, _, o| o.fill(0.5))?);
+    let (s1, b1) = (seed.clone(), base.clone());
+    let stamp_one: Work = Box::new(move || {
+        let mut v = (*b1).clone();
+        let at = crate::stamp::Placement {
+            at: glam::Vec3::splat(64.0),
+            rotation: glam::Quat::IDENTITY,
+            scale: glam::Vec3::splat(10.0),
+        };
+        crate::stamp::stamp(&mut v, &s1, &at, [0.0; 3]).map(|_| ())
+    });
+    let (s2, b2) = (seed.clone(), base.clone());
+    let scatter: Work = Box::new(move || {
+        let mut v = (*b2).clone();
+        let region = crate::stamp::Region::Box(glam::Vec3::ZERO, glam::Vec3::splat(128.0));
+        let params = crate::stamp::Scatter { count: 100, region, scale: (4.0, 6.0), colour: [0.0; 3], attempts: 200 };
+        crate::stamp::scatter(&mut v, &s2, &params, 1).map(|_| ())
+    });
+    let sweep: Work = Box::new(move || {
+        let params = crate::sweep::Sweep {
+            length: 128,
+            axis: Axis::X,
+            depth_axis: Some(Axis::Z),
+            noise: Some(crate::sweep::Noise { amplitude: 1.5, frequency: 4.0, jitter: 0.02 }),
+            skin: Some(crate::sweep::Skin {
+                look: crate::sweep::SkinLook::Colour([0.4, 0.3, 0.1]),
+                width: 2.0,
+                width_noise: 0.5,
+            }),
+        };
+        crate::sweep::sweep(&section, &params, 1).map(|_| ())
+    });
+    Ok(vec![
+        ("stamp/2k-tri/128cube (+clone)", stamp_one),
+        ("scatter/100-seeds/128cube", scatter),
+        ("sweep+noise+skin/128cube", sweep),
+    ])
+}
+
+/// The synthesis workloads of issue 3.
+fn synthesis(args: &BenchArgs) -> Result<()> {
     let marble = exemplar(Recipe::Marble, Axis::Z)?;
     let strata = exemplar(Recipe::Strata, Axis::Y)?;
     println!("{:<30} {:>5} {:>9} {:>9} {:>12} {:>10}", "workload", "runs", "median s", "min s", "voxels/s", "peak MiB");

@@ -1,7 +1,7 @@
 //! The file-to-file subcommands: convert, slice, sheet, make, build.
 
 use crate::error::{Error, Result};
-use crate::io::{self, manifest};
+use crate::io;
 use crate::procedural::{self, Recipe};
 use crate::render::{self, ColourMap};
 use crate::volume::{Axis, Volume};
@@ -67,23 +67,4 @@ pub fn parse_size(text: &str) -> Result<[usize; 3]> {
         return Err(Error::invalid(format!("--size {text:?} contains a zero; every side must be at least 1")));
     }
     Ok(dims)
-}
-
-/// `solidtex build [MANIFEST] -o DIR`: every entry to `DIR/NAME.exr` and `DIR/NAME.sheet.png`.
-pub fn build(manifest_path: &Path, output: &Path) -> Result<()> {
-    let plan = manifest::read_plan(manifest_path)?;
-    std::fs::create_dir_all(output).map_err(|e| Error::io(output, e))?;
-    let total = plan.entries.len();
-    for (k, entry) in plan.entries.iter().enumerate() {
-        let [x, y, z] = entry.dims;
-        eprintln!("[{}/{total}] {} ({}, {x}x{y}x{z}, seed {})", k + 1, entry.name, entry.recipe, entry.seed);
-        let mut volume = procedural::generate(entry.recipe, entry.dims, entry.seed)?;
-        volume.meta.set("name", entry.name.clone());
-        let file = output.join(format!("{}.exr", entry.name));
-        io::write_volume(&file, &volume)?;
-        let sheet = output.join(format!("{}.sheet.png", entry.name));
-        io::write_rgb8(&sheet, &render::sheet(&volume, &entry.name))?;
-    }
-    eprintln!("built {total} exemplar(s) into {}", output.display());
-    Ok(())
 }

@@ -2,7 +2,9 @@
 //! Exit codes: 0 success, 1 failure, 2 usage (clap's own).
 
 mod bench;
+mod build;
 mod commands;
+mod handmade;
 mod info;
 mod quality;
 mod synth;
@@ -82,6 +84,16 @@ pub enum Command {
     Quality(quality::QualityArgs),
     /// Time the synthesis workloads (median of several runs) on built-in exemplars.
     Bench(bench::BenchArgs),
+    /// Sweep a 2D cross-section into a volume, with noise and a skin.
+    Sweep(handmade::SweepArgs),
+    /// Stamp a seed mesh (OBJ, STL, PLY) into a volume.
+    Stamp(handmade::StampArgs),
+    /// Scatter seed meshes without overlaps.
+    Scatter(handmade::ScatterArgs),
+    /// Blur a volume locally inside a sphere.
+    Blur(handmade::BlurArgs),
+    /// Draw the project's own inputs: a cross-section image (kiwi, carrot, trunk) or a seed mesh.
+    Draw(handmade::DrawArgs),
     /// Build every exemplar a manifest lists: a volume (.exr) and a sheet (.png) each.
     Build {
         /// The manifest.
@@ -104,6 +116,11 @@ pub fn run(cli: Cli) -> crate::Result<()> {
         Command::Synth(args) => synth::run(&args),
         Command::Quality(args) => quality::run(&args),
         Command::Bench(args) => bench::run(&args),
-        Command::Build { manifest, output } => commands::build(&manifest, &output),
+        Command::Build { manifest, output } => build::run(&manifest, &output),
+        Command::Sweep(args) => handmade::run_sweep(&args),
+        Command::Stamp(args) => handmade::run_stamp(&args),
+        Command::Scatter(args) => handmade::run_scatter(&args),
+        Command::Blur(args) => handmade::run_blur(&args),
+        Command::Draw(args) => handmade::run_draw(&args),
     }
 }

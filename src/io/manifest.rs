@@ -1,19 +1,18 @@
-//! The exemplar library manifest (`exemplars/library.toml`): a raw serde form, then
-//! a validated [`Plan`]. Every error names the file, the entry, the field, the value
-//! and what is allowed.
-//!
-//! ```toml
-//! [[exemplar]]
-//! name = "marble"              # output file stem: letters, digits, '-', '_'
-//! recipe = "procedural:marble" # procedural:marble | procedural:strata | procedural:wood
-//! size = [64, 64, 64]          # or a single number for a cube
-//! seed = 1
-//! ```
+//! The exemplar library manifest (`exemplars/library.toml`): a raw serde form, then a
+//! validated [`Plan`]. Every error names the file, the entry, the field, the value and
+//! what is allowed. Paths in the manifest are relative to the manifest's folder.
+//! The format, with examples: `docs/manifest.md`.
 
+use super::values;
 use crate::error::{Error, Result};
 use crate::procedural::Recipe;
+use crate::stamp::{Placement, Region};
+use crate::sweep::Noise;
+use crate::texture_type::TextureType;
+use crate::volume::Axis;
+use glam::Vec3;
 use serde::Deserialize;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -27,9 +26,21 @@ struct RawManifest {
 struct RawExemplar {
     name: String,
     recipe: String,
-    size: RawSize,
+    size: Option<RawSize>,
     #[serde(default)]
     seed: u64,
+    #[serde(rename = "type")]
+    texture_type: Option<String>,
+    image: Option<String>,
+    length: Option<usize>,
+    axis: Option<String>,
+    depth_axis: Option<String>,
+    noise: Option<Vec<f32>>,
+    skin: Option<String>,
+    skin_width: Option<f32>,
+    skin_noise: Option<f32>,
+    #[serde(default)]
+    steps: Vec<RawStep>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -39,17 +50,111 @@ enum RawSize {
     Dims(Vec<usize>),
 }
 
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawStep {
+    stamp: Option<String>,
+    scatter: Option<String>,
+    blur: Option<String>,
+    at: Option<String>,
+    rotate: Option<String>,
+    scale: Option<String>,
+    color: Option<String>,
+    count: Option<usize>,
+    region: Option<String>,
+    radius: Option<f32>,
+    strength: Option<f32>,
+    seed: Option<u64>,
+}
+
+/// How the skin looks.
+#[derive(Debug, Clone, PartialEq)]
+pub enum SkinSource {
+    /// A flat colour.
+    Colour([f32; 3]),
+    /// An image file.
+    Image(PathBuf),
+}
+
+/// A sweep recipe (see [`crate::sweep`]), with file paths resolved.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SweepSpec {
+    /// Cross-section image.
+    pub image: PathBuf,
+    /// Voxels along the sweep axis.
+    pub length: usize,
+    /// Sweep axis.
+    pub axis: Axis,
+    /// Depth axis, if any.
+    pub depth_axis: Option<Axis>,
+    /// Noise, if any.
+    pub noise: Option<Noise>,
+    /// Skin look, width and width noise, if any.
+    pub skin: Option<(SkinSource, f32, f32)>,
+}
+
+/// What makes an exemplar's volume.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Source {
+    /// A procedural recipe.
+    Procedural(Recipe),
+    /// A swept cross-section.
+    Sweep(SweepSpec),
+}
+
+/// A step applied after the source, in order.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Step {
+    /// Stamp one seed mesh.
+    Stamp {
+        /// Mesh file.
+        mesh: PathBuf,
+        /// Where.
+        placement: Placement,
+        /// Fill colour.
+        colour: [f32; 3],
+    },
+    /// Scatter seeds.
+    Scatter {
+        /// Mesh file.
+        mesh: PathBuf,
+        /// How many.
+        count: usize,
+        /// Where (`None`: the whole volume).
+        region: Option<Region>,
+        /// Scale range.
+        scale: (f32, f32),
+        /// Fill colour.
+        colour: [f32; 3],
+        /// Seed of this step.
+        seed: u64,
+    },
+    /// Blur inside a sphere.
+    Blur {
+        /// Centre.
+        at: Vec3,
+        /// Radius.
+        radius: f32,
+        /// Strength at the centre.
+        strength: f32,
+    },
+}
+
 /// One validated library entry.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Entry {
     /// Output file stem.
     pub name: String,
     /// What makes the volume.
-    pub recipe: Recipe,
-    /// Size in voxels.
-    pub dims: [usize; 3],
+    pub source: Source,
+    /// Size in voxels, when given (procedural: required; sweep: checked against the image).
+    pub dims: Option<[usize; 3]>,
     /// Seed for everything random.
     pub seed: u64,
+    /// Declared texture type (overrides the recipe's).
+    pub texture_type: Option<TextureType>,
+    /// Steps after the source.
+    pub steps: Vec<Step>,
 }
 
 /// A validated manifest: what `solidtex build` will make.
@@ -62,23 +167,22 @@ pub struct Plan {
 /// Largest side accepted in a manifest.
 pub const MAX_SIDE: usize = 512;
 
-/// Read and validate a manifest file.
+/// Read and validate a manifest file; relative paths in it are resolved from its folder.
 pub fn read_plan(path: &Path) -> Result<Plan> {
     let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-    parse_plan(&text).map_err(|e| e.in_file(path))
+    let folder = path.parent().unwrap_or(Path::new("."));
+    parse_plan(&text, folder).map_err(|e| e.in_file(path))
 }
 
-/// Validate manifest text.
-pub fn parse_plan(text: &str) -> Result<Plan> {
+/// Validate manifest text; `folder` resolves relative paths.
+pub fn parse_plan(text: &str, folder: &Path) -> Result<Plan> {
     let raw: RawManifest = toml::from_str(text).map_err(|e| Error::invalid(format!("invalid manifest: {e}")))?;
     let mut entries: Vec<Entry> = Vec::new();
     for (i, e) in raw.exemplar.into_iter().enumerate() {
-        let entry = validate(i, e)?;
+        let name = e.name.clone();
+        let entry = validate(e, folder).map_err(|err| Error::invalid(format!("exemplar[{i}] ({name}): {err}")))?;
         if entries.iter().any(|x| x.name == entry.name) {
-            return Err(Error::invalid(format!(
-                "exemplar[{i}].name = {:?} is used twice; names must be unique",
-                entry.name
-            )));
+            return Err(Error::invalid(format!("exemplar[{i}].name = {name:?} is used twice; names must be unique")));
         }
         entries.push(entry);
     }
@@ -88,73 +192,204 @@ pub fn parse_plan(text: &str) -> Result<Plan> {
     Ok(Plan { entries })
 }
 
-fn validate(i: usize, raw: RawExemplar) -> Result<Entry> {
+fn validate(raw: RawExemplar, folder: &Path) -> Result<Entry> {
     let ok_name = !raw.name.is_empty() && raw.name.chars().all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_');
     if !ok_name {
         return Err(Error::invalid(format!(
-            "exemplar[{i}].name = {:?} is not allowed: use ASCII letters, digits, '-' and '_'",
+            "name = {:?} is not allowed: use ASCII letters, digits, '-' and '_'",
             raw.name
         )));
     }
-    let recipe = raw
-        .recipe
-        .strip_prefix("procedural:")
-        .ok_or_else(|| {
-            Error::invalid(format!(
-                "exemplar[{i}] ({}): recipe = {:?} is unknown; allowed: procedural:marble, procedural:strata, procedural:wood",
-                raw.name, raw.recipe
-            ))
-        })?
-        .parse::<Recipe>()
-        .map_err(|e| Error::invalid(format!("exemplar[{i}] ({}): recipe: {e}", raw.name)))?;
-    let dims = match raw.size {
-        RawSize::Cube(n) => [n; 3],
+    let dims = raw.size.as_ref().map(dims_of).transpose()?;
+    let source = match raw.recipe.as_str() {
+        "sweep" => Source::Sweep(sweep_spec(&raw, folder)?),
+        other => match other.strip_prefix("procedural:") {
+            Some(r) => Source::Procedural(r.parse::<Recipe>().map_err(|e| Error::invalid(format!("recipe: {e}")))?),
+            None => {
+                return Err(Error::invalid(format!(
+                    "recipe = {other:?} is unknown; allowed: procedural:marble, procedural:strata, procedural:wood, sweep"
+                )));
+            }
+        },
+    };
+    if matches!(source, Source::Procedural(_)) && dims.is_none() {
+        return Err(Error::invalid("size is missing; a procedural recipe needs size = N or [x, y, z]"));
+    }
+    let texture_type = raw
+        .texture_type
+        .as_deref()
+        .map(|t| t.parse::<TextureType>())
+        .transpose()
+        .map_err(|e| Error::invalid(format!("type: {e}")))?;
+    let steps = raw
+        .steps
+        .iter()
+        .enumerate()
+        .map(|(k, s)| step(s, folder).map_err(|e| Error::invalid(format!("steps[{k}]: {e}"))))
+        .collect::<Result<_>>()?;
+    Ok(Entry { name: raw.name, source, dims, seed: raw.seed, texture_type, steps })
+}
+
+fn dims_of(size: &RawSize) -> Result<[usize; 3]> {
+    let dims = match size {
+        RawSize::Cube(n) => [*n; 3],
         RawSize::Dims(v) if v.len() == 3 => [v[0], v[1], v[2]],
         RawSize::Dims(v) => {
-            return Err(Error::invalid(format!(
-                "exemplar[{i}] ({}): size = {v:?} must be one number or three, e.g. 64 or [64, 64, 32]",
-                raw.name
-            )));
+            return Err(Error::invalid(format!("size = {v:?} must be one number or three, e.g. 64 or [64, 64, 32]")));
         }
     };
     if dims.iter().any(|d| *d == 0 || *d > MAX_SIDE) {
-        return Err(Error::invalid(format!(
-            "exemplar[{i}] ({}): size = {dims:?} is out of range; each side must be 1..={MAX_SIDE}",
-            raw.name
-        )));
+        return Err(Error::invalid(format!("size = {dims:?} is out of range; each side must be 1..={MAX_SIDE}")));
     }
-    Ok(Entry { name: raw.name, recipe, dims, seed: raw.seed })
+    Ok(dims)
+}
+
+fn sweep_spec(raw: &RawExemplar, folder: &Path) -> Result<SweepSpec> {
+    let need = |field: &str| Error::invalid(format!("{field} is missing; a sweep needs image, length and axis"));
+    let image = folder.join(raw.image.as_deref().ok_or_else(|| need("image"))?);
+    let length = raw.length.ok_or_else(|| need("length"))?;
+    if length == 0 || length > MAX_SIDE {
+        return Err(Error::invalid(format!("length = {length} is out of range; allowed 1..={MAX_SIDE}")));
+    }
+    let axis: Axis =
+        raw.axis.as_deref().ok_or_else(|| need("axis"))?.parse().map_err(|e| Error::invalid(format!("axis: {e}")))?;
+    let depth_axis = raw
+        .depth_axis
+        .as_deref()
+        .map(str::parse::<Axis>)
+        .transpose()
+        .map_err(|e| Error::invalid(format!("depth_axis: {e}")))?;
+    let noise = match raw.noise.as_deref() {
+        None => None,
+        Some([a, f]) => Some(Noise { amplitude: *a, frequency: *f, jitter: 0.0 }),
+        Some([a, f, j]) => Some(Noise { amplitude: *a, frequency: *f, jitter: *j }),
+        Some(v) => {
+            return Err(Error::invalid(format!(
+                "noise = {v:?} must be [amplitude, frequency] or [amplitude, frequency, jitter]"
+            )));
+        }
+    };
+    let skin = raw
+        .skin
+        .as_deref()
+        .map(|s| {
+            let look = match values::colour("skin", s) {
+                Ok(c) => SkinSource::Colour(c),
+                Err(_) if s.contains('.') => SkinSource::Image(folder.join(s)),
+                Err(e) => return Err(e),
+            };
+            Ok((look, raw.skin_width.unwrap_or(2.0), raw.skin_noise.unwrap_or(0.0)))
+        })
+        .transpose()?;
+    Ok(SweepSpec { image, length, axis, depth_axis, noise, skin })
+}
+
+fn step(raw: &RawStep, folder: &Path) -> Result<Step> {
+    let actions = [raw.stamp.is_some(), raw.scatter.is_some(), raw.blur.is_some()].iter().filter(|b| **b).count();
+    if actions != 1 {
+        return Err(Error::invalid(
+            "each step needs exactly one of stamp = \"MESH\", scatter = \"MESH\", blur = \"X,Y,Z\"",
+        ));
+    }
+    let colour = || values::colour("color", raw.color.as_deref().ok_or_else(|| Error::invalid("color is missing"))?);
+    if let Some(mesh) = &raw.stamp {
+        let at = values::point("at", raw.at.as_deref().ok_or_else(|| Error::invalid("at is missing"))?)?;
+        let rotation = raw.rotate.as_deref().map(|r| values::rotation("rotate", r)).transpose()?.unwrap_or_default();
+        let scale = values::scale("scale", raw.scale.as_deref().unwrap_or("1"))?;
+        return Ok(Step::Stamp {
+            mesh: folder.join(mesh),
+            placement: Placement { at, rotation, scale },
+            colour: colour()?,
+        });
+    }
+    if let Some(mesh) = &raw.scatter {
+        let count = raw.count.ok_or_else(|| Error::invalid("count is missing"))?;
+        let region = raw.region.as_deref().map(region).transpose()?;
+        let scale = values::range("scale", raw.scale.as_deref().unwrap_or("1"))?;
+        return Ok(Step::Scatter {
+            mesh: folder.join(mesh),
+            count,
+            region,
+            scale,
+            colour: colour()?,
+            seed: raw.seed.unwrap_or(1),
+        });
+    }
+    let at = values::point("blur", raw.blur.as_deref().unwrap_or_default())?;
+    let radius = raw.radius.ok_or_else(|| Error::invalid("radius is missing"))?;
+    Ok(Step::Blur { at, radius, strength: raw.strength.unwrap_or(1.0) })
+}
+
+/// `box:X0,Y0,Z0,X1,Y1,Z1` or `depth:FROM,TO`.
+pub fn region(text: &str) -> Result<Region> {
+    if let Some(rest) = text.strip_prefix("box:") {
+        let v = values::numbers("region box", rest, &[6])?;
+        return Ok(Region::Box(Vec3::new(v[0], v[1], v[2]), Vec3::new(v[3], v[4], v[5])));
+    }
+    if let Some(rest) = text.strip_prefix("depth:") {
+        let v = values::numbers("region depth", rest, &[2])?;
+        return Ok(Region::Depth(v[0], v[1]));
+    }
+    Err(Error::invalid(format!("region {text:?} is not box:X0,Y0,Z0,X1,Y1,Z1 or depth:FROM,TO")))
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
+    fn plan(text: &str) -> Result<Plan> {
+        parse_plan(text, Path::new("lib"))
+    }
+
     #[test]
     fn a_good_manifest_becomes_a_plan() {
-        let plan = parse_plan(
+        let p = plan(
             "[[exemplar]]\nname = \"m\"\nrecipe = \"procedural:marble\"\nsize = 8\nseed = 3\n\
-             [[exemplar]]\nname = \"s\"\nrecipe = \"procedural:strata\"\nsize = [8, 8, 16]\n",
+             [[exemplar]]\nname = \"k\"\nrecipe = \"sweep\"\nimage = \"kiwi.png\"\nlength = 16\naxis = \"x\"\n\
+             depth_axis = \"z\"\nnoise = [1.0, 2.0]\nskin = \"#503010\"\ntype = \"2-b\"\n\
+             [[exemplar.steps]]\nscatter = \"seed.obj\"\ncount = 5\nregion = \"depth:0.5,0.7\"\nscale = \"1..2\"\ncolor = \"0,0,0\"\n\
+             [[exemplar.steps]]\nblur = \"4,4,4\"\nradius = 3\n",
         )
         .unwrap();
-        assert_eq!(plan.entries[0].dims, [8, 8, 8]);
-        assert_eq!(plan.entries[1].recipe, Recipe::Strata);
-        assert_eq!(plan.entries[1].seed, 0);
+        assert_eq!(p.entries[0].dims, Some([8, 8, 8]));
+        let k = &p.entries[1];
+        assert_eq!(k.texture_type, Some(TextureType::T2b));
+        let Source::Sweep(s) = &k.source else { panic!("a sweep") };
+        assert_eq!(s.image, Path::new("lib/kiwi.png"));
+        assert_eq!(s.depth_axis, Some(Axis::Z));
+        assert!(matches!(k.steps[0], Step::Scatter { count: 5, region: Some(Region::Depth(_, _)), .. }));
+        assert!(matches!(k.steps[1], Step::Blur { strength: 1.0, .. }));
     }
 
     #[test]
     fn each_mistake_names_its_field() {
         let cases = [
             ("name = \"a b\"\nrecipe = \"procedural:marble\"\nsize = 8", "name = \"a b\""),
-            ("name = \"a\"\nrecipe = \"sweep:x\"\nsize = 8", "recipe = \"sweep:x\""),
+            ("name = \"a\"\nrecipe = \"weave\"\nsize = 8", "recipe = \"weave\""),
             ("name = \"a\"\nrecipe = \"procedural:granite\"\nsize = 8", "granite"),
             ("name = \"a\"\nrecipe = \"procedural:marble\"\nsize = [8, 8]", "size = [8, 8]"),
             ("name = \"a\"\nrecipe = \"procedural:marble\"\nsize = 0", "out of range"),
+            ("name = \"a\"\nrecipe = \"procedural:marble\"", "size is missing"),
             ("name = \"a\"\nrecipe = \"procedural:marble\"\nsize = 8\ncolour = 1", "colour"),
+            ("name = \"a\"\nrecipe = \"sweep\"\nlength = 4\naxis = \"x\"", "image is missing"),
+            (
+                "name = \"a\"\nrecipe = \"sweep\"\nimage = \"i.png\"\nlength = 4\naxis = \"w\"",
+                "axis: unknown axis \"w\"",
+            ),
+            ("name = \"a\"\nrecipe = \"procedural:marble\"\nsize = 8\ntype = \"3\"", "type: unknown texture type"),
+            (
+                "name = \"a\"\nrecipe = \"procedural:marble\"\nsize = 8\n[[exemplar.steps]]\nradius = 2",
+                "steps[0]: each step needs exactly one",
+            ),
+            (
+                "name = \"a\"\nrecipe = \"procedural:marble\"\nsize = 8\n[[exemplar.steps]]\nstamp = \"s.obj\"\ncolor = \"#000000\"",
+                "steps[0]: at is missing",
+            ),
         ];
         for (body, expected) in cases {
-            let err = parse_plan(&format!("[[exemplar]]\n{body}\n")).unwrap_err().to_string();
+            let err = plan(&format!("[[exemplar]]\n{body}\n")).unwrap_err().to_string();
             assert!(err.contains(expected), "{body}: {err}");
+            assert!(err.contains("exemplar[0]") || err.contains("invalid manifest"), "{err}");
         }
     }
 }

@@ -16,8 +16,10 @@ mod exr_file;
 mod fields;
 mod kopf_vol;
 pub mod manifest;
+pub mod mesh_file;
 mod nrrd;
 mod png_file;
+pub mod values;
 
 pub use atlas::layout as atlas_layout;
 pub use atomic::{check_folder, write_bytes};

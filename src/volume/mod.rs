@@ -128,6 +128,25 @@ impl Volume {
         Ok(volume)
     }
 
+    /// Like [`Volume::from_fn`], filling z-slices in parallel; `f` must depend only on its
+    /// arguments, so the result is the same on any number of threads.
+    pub fn from_fn_par(
+        dims: [usize; 3],
+        channels: Vec<Channel>,
+        f: impl Fn(usize, usize, usize, &mut [f32]) + Sync,
+    ) -> Result<Volume> {
+        use rayon::prelude::*;
+        let mut volume = Volume::new(dims, channels)?;
+        let n = volume.channels.len();
+        let plane = dims[0] * dims[1];
+        volume.data.par_chunks_mut(plane * n).enumerate().for_each(|(z, slice)| {
+            for (i, voxel) in slice.chunks_exact_mut(n).enumerate() {
+                f(i % dims[0], i / dims[0], z, voxel);
+            }
+        });
+        Ok(volume)
+    }
+
     /// The same volume with `meta` attached.
     pub fn with_meta(mut self, meta: Meta) -> Volume {
         self.meta = meta;

@@ -3,5 +3,7 @@
 mod bad_input;
 mod cli;
 mod formats;
+mod handmade;
+mod mesh;
 mod support;
 mod synth;

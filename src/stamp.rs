@@ -1,0 +1,270 @@
+//! Hand-made solids, part 2 (thesis §4.3): stamp seed meshes into a volume, scatter
+//! many of them without overlaps, and blur locally.
+//!
+//! A seed is placed by [`Placement`]: the mesh's own origin goes to voxel position `at`,
+//! after rotating it and scaling it so that one mesh unit becomes `scale` voxels.
+//! Voxel (i, j, k) is the cube [i, i+1) x [j, j+1) x [k, k+1).
+
+use crate::error::{Error, Result};
+use crate::mesh::{Mesh, voxelize};
+use crate::volume::{Channel, Volume};
+use glam::{Affine3A, Quat, Vec3};
+use rand::{RngExt, SeedableRng};
+use rand_pcg::Pcg64;
+
+/// Supersamples per axis for anti-aliased edges.
+pub const SUPERSAMPLE: usize = 4;
+
+/// Where and how big a seed goes.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Placement {
+    /// Voxel position of the mesh origin.
+    pub at: Vec3,
+    /// Rotation about the mesh origin.
+    pub rotation: Quat,
+    /// Voxels per mesh unit, per mesh axis.
+    pub scale: Vec3,
+}
+
+impl Placement {
+    /// Mesh coordinates to voxel coordinates.
+    pub fn matrix(&self) -> Affine3A {
+        Affine3A::from_scale_rotation_translation(self.scale, self.rotation, self.at)
+    }
+}
+
+/// What was stamped.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Stamped {
+    /// Voxels touched (coverage above 0).
+    pub voxels: usize,
+    /// Summed coverage: the seed's volume in voxels.
+    pub volume: f64,
+}
+
+/// Stamp `mesh` placed by `placement` into `volume`, blending `colour` (R, G, B) into the
+/// colour channels by coverage (anti-aliased edges). A seed wholly outside is an error.
+pub fn stamp(volume: &mut Volume, mesh: &Mesh, placement: &Placement, colour: [f32; 3]) -> Result<Stamped> {
+    let targets = colour_channels(volume)?;
+    let placed = mesh.transformed(placement.matrix());
+    let cover = voxelize(&placed, volume.dims(), SUPERSAMPLE);
+    let mut stamped = Stamped { voxels: 0, volume: 0.0 };
+    for (i, &alpha) in cover.alpha.iter().enumerate().filter(|(_, a)| **a > 0.0) {
+        let [x, y, z] = crate::volume::unindex(cover.dims, i);
+        let voxel = volume.voxel_mut(cover.origin[0] + x, cover.origin[1] + y, cover.origin[2] + z);
+        for (&c, value) in targets.iter().zip(colour) {
+            voxel[c] += alpha * (value - voxel[c]);
+        }
+        stamped.voxels += 1;
+        stamped.volume += alpha as f64;
+    }
+    if stamped.voxels == 0 {
+        let d = volume.dims();
+        return Err(Error::invalid(format!(
+            "the seed placed at ({}, {}, {}) lies wholly outside the {}x{}x{} volume",
+            placement.at.x, placement.at.y, placement.at.z, d[0], d[1], d[2]
+        )));
+    }
+    Ok(stamped)
+}
+
+/// Positions of R, G and B (a grey volume takes the first channel for all three).
+fn colour_channels(volume: &Volume) -> Result<Vec<usize>> {
+    let rgb: Vec<usize> = [Channel::R, Channel::G, Channel::B].iter().filter_map(|c| volume.channel_index(c)).collect();
+    match rgb.len() {
+        0 => Err(Error::invalid("the volume has no R, G or B channel to stamp a colour into")),
+        _ => Ok(rgb),
+    }
+}
+
+/// Where scattered seeds may go.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Region {
+    /// A box of voxel positions, min and max corners.
+    Box(Vec3, Vec3),
+    /// Wherever the volume's Depth channel lies between the two values (kiwi seeds sit in
+    /// a ring between two depths).
+    Depth(f32, f32),
+}
+
+/// How to scatter.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Scatter {
+    /// How many seeds to place.
+    pub count: usize,
+    /// Where they may go.
+    pub region: Region,
+    /// Smallest and largest scale (voxels per mesh unit), drawn uniformly.
+    pub scale: (f32, f32),
+    /// Seed colour.
+    pub colour: [f32; 3],
+    /// Tries per seed before giving up on it.
+    pub attempts: usize,
+}
+
+/// What a scatter did.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Scattered {
+    /// Placements of the seeds stamped, in order.
+    pub placed: Vec<Placement>,
+    /// Candidate positions rejected (overlap, outside, or out of the region).
+    pub rejected: usize,
+}
+
+/// Scatter up to `params.count` seeds with random orientation and scale, never overlapping
+/// (their bounding spheres stay apart) and wholly inside the volume. Reproducible from `seed`.
+pub fn scatter(volume: &mut Volume, mesh: &Mesh, params: &Scatter, seed: u64) -> Result<Scattered> {
+    check_scatter(volume, params)?;
+    let (centre, radius) = bounding_sphere(mesh);
+    let mut rng = Pcg64::seed_from_u64(seed);
+    let mut out = Scattered { placed: Vec::new(), rejected: 0 };
+    let mut spheres: Vec<(Vec3, f32)> = Vec::new();
+    for _ in 0..params.count {
+        for _ in 0..params.attempts.max(1) {
+            let scale = rng.random_range(params.scale.0..=params.scale.1);
+            let rotation = random_rotation(&mut rng);
+            let at = random_point(volume, params.region, &mut rng);
+            let sphere = (at + rotation * (centre * scale), radius * scale);
+            if fits(volume, sphere) && spheres.iter().all(|s| s.0.distance(sphere.0) >= s.1 + sphere.1) {
+                let placement = Placement { at, rotation, scale: Vec3::splat(scale) };
+                stamp(volume, mesh, &placement, params.colour)?;
+                spheres.push(sphere);
+                out.placed.push(placement);
+                break;
+            }
+            out.rejected += 1;
+        }
+    }
+    Ok(out)
+}
+
+fn check_scatter(volume: &Volume, p: &Scatter) -> Result<()> {
+    if p.scale.0.is_nan() || p.scale.0 <= 0.0 || p.scale.0 > p.scale.1 {
+        return Err(Error::invalid(format!(
+            "scatter scale {}..{} must be positive and the smaller first",
+            p.scale.0, p.scale.1
+        )));
+    }
+    if let Region::Depth(lo, hi) = p.region {
+        if volume.channel_index(&Channel::Depth).is_none() {
+            return Err(Error::invalid("scattering in a depth band needs a volume with a Depth channel"));
+        }
+        if !(0.0..=1.0).contains(&lo) || !(lo..=1.0).contains(&hi) {
+            return Err(Error::invalid(format!("depth band {lo}..{hi} must satisfy 0 <= from <= to <= 1")));
+        }
+    }
+    Ok(())
+}
+
+/// Centre and radius of a sphere around the mesh (bounding-box centre, farthest vertex).
+pub fn bounding_sphere(mesh: &Mesh) -> (Vec3, f32) {
+    let (lo, hi) = mesh.bounds();
+    let centre = (lo + hi) / 2.0;
+    let radius = mesh.vertices.iter().map(|v| v.distance(centre)).fold(0.0, f32::max);
+    (centre, radius)
+}
+
+/// A uniformly random rotation (Shoemake's method).
+fn random_rotation(rng: &mut Pcg64) -> Quat {
+    let (u1, u2, u3): (f32, f32, f32) = (rng.random(), rng.random(), rng.random());
+    let tau = std::f32::consts::TAU;
+    let (a, b) = ((1.0 - u1).sqrt(), u1.sqrt());
+    Quat::from_xyzw(a * (tau * u2).sin(), a * (tau * u2).cos(), b * (tau * u3).sin(), b * (tau * u3).cos()).normalize()
+}
+
+/// A random point of the region (for a depth band: a random voxel, kept only if its depth fits).
+fn random_point(volume: &Volume, region: Region, rng: &mut Pcg64) -> Vec3 {
+    let d = volume.dims();
+    match region {
+        Region::Box(lo, hi) => Vec3::new(
+            rng.random_range(lo.x..=hi.x.max(lo.x)),
+            rng.random_range(lo.y..=hi.y.max(lo.y)),
+            rng.random_range(lo.z..=hi.z.max(lo.z)),
+        ),
+        Region::Depth(lo, hi) => {
+            let depth = volume.channel_index(&Channel::Depth).expect("checked up front");
+            let p = [0, 1, 2].map(|k| rng.random_range(0..d[k]));
+            let value = volume.get(p[0], p[1], p[2], depth);
+            let inside = (lo..=hi).contains(&value);
+            let at = Vec3::new(p[0] as f32, p[1] as f32, p[2] as f32) + 0.5;
+            if inside { at } else { Vec3::splat(f32::NAN) }
+        }
+    }
+}
+
+/// The sphere lies wholly inside the volume (a NaN centre never fits).
+fn fits(volume: &Volume, (c, r): (Vec3, f32)) -> bool {
+    let d = volume.dims();
+    (0..3).all(|k| c[k] - r >= 0.0 && c[k] + r <= d[k] as f32)
+}
+
+/// A local blur: Gaussian-blurred values blended in inside a sphere, fully (times
+/// `strength`) at the centre and fading to nothing at the radius.
+pub fn blur(volume: &mut Volume, at: Vec3, radius: f32, strength: f32) -> Result<usize> {
+    if radius.is_nan() || radius <= 0.0 || !(0.0..=1.0).contains(&strength) {
+        return Err(Error::invalid(format!(
+            "blur radius {radius} must be positive and strength {strength} between 0 and 1"
+        )));
+    }
+    let d = volume.dims();
+    let lo = [0, 1, 2].map(|k| (at[k] - radius).floor().max(0.0) as usize);
+    let hi = [0, 1, 2].map(|k| ((at[k] + radius).ceil().max(0.0) as usize).min(d[k]));
+    if (0..3).any(|k| lo[k] >= hi[k]) {
+        return Err(Error::invalid(format!(
+            "the blur sphere at ({}, {}, {}) with radius {radius} misses the {}x{}x{} volume",
+            at.x, at.y, at.z, d[0], d[1], d[2]
+        )));
+    }
+    let blurred = box_gaussian(volume, lo, hi);
+    let n = volume.channel_count();
+    let mut changed = 0;
+    for z in lo[2]..hi[2] {
+        for y in lo[1]..hi[1] {
+            for x in lo[0]..hi[0] {
+                let r = (Vec3::new(x as f32, y as f32, z as f32) + 0.5).distance(at) / radius;
+                if r >= 1.0 {
+                    continue;
+                }
+                let w = strength * (1.0 - r * r).powi(2);
+                let i = ((z - lo[2]) * (hi[1] - lo[1]) + (y - lo[1])) * (hi[0] - lo[0]) + (x - lo[0]);
+                let voxel = volume.voxel_mut(x, y, z);
+                for c in 0..n {
+                    voxel[c] += w * (blurred[i * n + c] - voxel[c]);
+                }
+                changed += 1;
+            }
+        }
+    }
+    Ok(changed)
+}
+
+/// The 3x3x3 binomial blur (applied twice) of the box `lo..hi`, reading neighbours
+/// outside the box from the volume (clamped at its border).
+fn box_gaussian(volume: &Volume, lo: [usize; 3], hi: [usize; 3]) -> Vec<f32> {
+    let n = volume.channel_count();
+    let d = volume.dims();
+    let size = [0, 1, 2].map(|k| hi[k] - lo[k]);
+    let mut out = vec![0.0f32; size.iter().product::<usize>() * n];
+    let w1 = [0.0625f32, 0.25, 0.375, 0.25, 0.0625];
+    for z in 0..size[2] {
+        for y in 0..size[1] {
+            for x in 0..size[0] {
+                let at = ((z * size[1] + y) * size[0] + x) * n;
+                for (k, wz) in w1.iter().enumerate() {
+                    let zz = (lo[2] + z + k).saturating_sub(2).min(d[2] - 1);
+                    for (j, wy) in w1.iter().enumerate() {
+                        let yy = (lo[1] + y + j).saturating_sub(2).min(d[1] - 1);
+                        for (i, wx) in w1.iter().enumerate() {
+                            let xx = (lo[0] + x + i).saturating_sub(2).min(d[0] - 1);
+                            let w = wx * wy * wz;
+                            for (o, v) in out[at..at + n].iter_mut().zip(volume.voxel(xx, yy, zz)) {
+                                *o += w * v;
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+    out
+}

@@ -1,0 +1,208 @@
+//! Hand-made exemplars: stamping, scattering, blurring, sweeping from the command line,
+//! and the default library's kiwi, carrot and trunk.
+
+use crate::support::{assert_fails, at, listing, solidtex, stderr};
+use glam::{Quat, Vec3};
+use solidtex::io::read_volume;
+use solidtex::sections::seed_mesh;
+use solidtex::stamp::{Placement, Region, Scatter, blur, bounding_sphere, scatter, stamp};
+use solidtex::volume::{Channel, Volume};
+
+fn grey_cube(side: usize) -> Volume {
+    Volume::from_fn([side; 3], Channel::rgb(), |_, _, _, o| o.fill(0.5)).unwrap()
+}
+
+#[test]
+fn stamping_blends_the_colour_by_coverage() {
+    let mesh = seed_mesh(16, 16).unwrap();
+    let mut v = grey_cube(32);
+    let placement = Placement { at: Vec3::splat(16.0), rotation: Quat::IDENTITY, scale: Vec3::splat(6.0) };
+    let done = stamp(&mut v, &mesh, &placement, [0.0, 0.0, 0.0]).unwrap();
+    assert_eq!(v.voxel(16, 16, 16), &[0.0, 0.0, 0.0], "the centre is fully inside");
+    assert_eq!(v.voxel(1, 1, 1), &[0.5, 0.5, 0.5], "far away is untouched");
+    let edge = (0..32).map(|z| v.get(16, 16, z, 0)).filter(|c| *c > 0.0 && *c < 0.5).count();
+    assert!(edge >= 1, "the boundary is anti-aliased");
+    assert!(done.volume > 100.0 && (done.voxels as f64) >= done.volume);
+    let outside = Placement { at: Vec3::splat(500.0), ..placement };
+    let err = stamp(&mut v, &mesh, &outside, [1.0; 3]).unwrap_err().to_string();
+    assert!(err.contains("wholly outside") && err.contains("32x32x32"), "{err}");
+}
+
+#[test]
+fn scatter_never_overlaps_and_replays_from_its_seed() {
+    let mesh = seed_mesh(12, 12).unwrap();
+    let params = Scatter {
+        count: 25,
+        region: Region::Box(Vec3::ZERO, Vec3::splat(48.0)),
+        scale: (2.0, 3.0),
+        colour: [0.0; 3],
+        attempts: 200,
+    };
+    let (mut a, mut b) = (grey_cube(48), grey_cube(48));
+    let first = scatter(&mut a, &mesh, &params, 11).unwrap();
+    let second = scatter(&mut b, &mesh, &params, 11).unwrap();
+    assert_eq!(first, second);
+    assert_eq!(a, b);
+    assert_eq!(first.placed.len(), 25);
+    let (centre, radius) = bounding_sphere(&mesh);
+    let spheres: Vec<(Vec3, f32)> =
+        first.placed.iter().map(|p| (p.at + p.rotation * (centre * p.scale.x), radius * p.scale.x)).collect();
+    for (i, s) in spheres.iter().enumerate() {
+        assert!((0..3).all(|k| s.0[k] - s.1 >= 0.0 && s.0[k] + s.1 <= 48.0), "seed {i} pokes out");
+        for t in &spheres[i + 1..] {
+            assert!(s.0.distance(t.0) >= s.1 + t.1 - 1e-4, "seeds overlap");
+        }
+    }
+    let mut c = grey_cube(48);
+    assert_ne!(scatter(&mut c, &mesh, &params, 12).unwrap(), first);
+}
+
+#[test]
+fn scatter_in_a_depth_band_stays_in_the_band() {
+    let mesh = seed_mesh(12, 12).unwrap();
+    let mut v =
+        Volume::from_fn([40, 40, 40], vec![Channel::R, Channel::G, Channel::B, Channel::Depth], |_, _, z, o| {
+            o.copy_from_slice(&[0.5, 0.5, 0.5, z as f32 / 39.0])
+        })
+        .unwrap();
+    let params =
+        Scatter { count: 10, region: Region::Depth(0.5, 0.7), scale: (1.5, 1.5), colour: [0.0; 3], attempts: 500 };
+    let done = scatter(&mut v, &mesh, &params, 3).unwrap();
+    assert_eq!(done.placed.len(), 10);
+    for p in &done.placed {
+        let depth = p.at.z / 39.0;
+        assert!((0.48..=0.73).contains(&depth), "seed at depth {depth}");
+    }
+}
+
+#[test]
+fn blur_softens_inside_the_sphere_only() {
+    let mut v = Volume::from_fn([20, 20, 20], Channel::rgb(), |x, _, _, o| o.fill((x % 2) as f32)).unwrap();
+    let before = v.clone();
+    let changed = blur(&mut v, Vec3::new(10.0, 10.0, 10.0), 4.0, 1.0).unwrap();
+    assert!(changed > 100);
+    let centre = v.get(10, 10, 10, 0);
+    assert!((centre - 0.5).abs() < 0.2, "a checker blurs towards grey: {centre}");
+    assert_eq!(v.voxel(1, 1, 1), before.voxel(1, 1, 1));
+    assert!(blur(&mut v, Vec3::splat(100.0), 2.0, 1.0).unwrap_err().to_string().contains("misses"));
+    assert!(blur(&mut v, Vec3::splat(5.0), -1.0, 1.0).unwrap_err().to_string().contains("radius"));
+}
+
+#[test]
+fn the_command_line_sweeps_stamps_scatters_and_blurs() {
+    let dir = tempfile::tempdir().unwrap();
+    let (section, seed) = (at(dir.path(), "kiwi.png"), at(dir.path(), "seed.obj"));
+    assert!(solidtex(&["draw", "kiwi", "--size", "32x24", "-o", &section]).status.success());
+    assert!(solidtex(&["draw", "seed", "-o", &seed]).status.success());
+    let swept = at(dir.path(), "swept.exr");
+    let run = solidtex(&[
+        "sweep",
+        &section,
+        "--length",
+        "20",
+        "--depth-axis",
+        "z",
+        "--noise",
+        "1,2",
+        "--skin",
+        "#402010",
+        "--skin-width",
+        "2",
+        "-o",
+        &swept,
+    ]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let v = read_volume(std::path::Path::new(&swept), 1 << 30).unwrap();
+    assert_eq!(v.dims(), [20, 32, 24]);
+    assert_eq!(v.channels().last(), Some(&Channel::Depth));
+    let skin = v.voxel(5, 5, 0);
+    assert!((skin[0] - 0x40 as f32 / 255.0).abs() < 1e-5, "skin colour at depth 0: {skin:?}");
+    let stamped = at(dir.path(), "stamped.exr");
+    let run = solidtex(&[
+        "stamp", &swept, &seed, "--at", "10,16,12", "--scale", "3", "--rotate", "0,1,0,90", "--color", "0,0,0", "-o",
+        &stamped,
+    ]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let scattered = at(dir.path(), "scattered.exr");
+    let run = solidtex(&[
+        "scatter",
+        &stamped,
+        &seed,
+        "--count",
+        "5",
+        "--region",
+        "depth:0.3,0.8",
+        "--scale",
+        "1..1.5",
+        "--color",
+        "#000000",
+        "-o",
+        &scattered,
+    ]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    assert!(stderr(&run).contains("placed 5 seeds"), "{}", stderr(&run));
+    let blurred = at(dir.path(), "blurred.exr");
+    let run = solidtex(&["blur", &scattered, "--at", "10,16,12", "--radius", "4", "-o", &blurred]);
+    assert!(run.status.success(), "{}", stderr(&run));
+}
+
+#[test]
+fn hand_made_bad_input_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let (section, seed) = (at(dir.path(), "kiwi.png"), at(dir.path(), "seed.obj"));
+    assert!(solidtex(&["draw", "kiwi", "--size", "16x16", "-o", &section]).status.success());
+    assert!(solidtex(&["draw", "seed", "-o", &seed]).status.success());
+    let out = at(dir.path(), "out.exr");
+    assert_fails(&solidtex(&["sweep", &section, "--length", "0", "-o", &out]), &["length 0"]);
+    assert_fails(&solidtex(&["sweep", &section, "--length", "8", "--depth-axis", "x", "-o", &out]), &["sweep axis"]);
+    assert_fails(&solidtex(&["sweep", &section, "--length", "8", "--noise", "1", "-o", &out]), &["--noise \"1\""]);
+    let vol = at(dir.path(), "v.exr");
+    assert!(solidtex(&["sweep", &section, "--length", "8", "-o", &vol]).status.success());
+    assert_fails(
+        &solidtex(&["stamp", &vol, &seed, "--at", "900,0,0", "--color", "0,0,0", "-o", &out]),
+        &["wholly outside"],
+    );
+    assert_fails(&solidtex(&["stamp", &vol, &seed, "--at", "1,2", "--color", "0,0,0", "-o", &out]), &["--at \"1,2\""]);
+    assert_fails(
+        &solidtex(&[
+            "scatter",
+            &vol,
+            &seed,
+            "--count",
+            "3",
+            "--region",
+            "depth:0.2,0.4",
+            "--color",
+            "0,0,0",
+            "-o",
+            &out,
+        ]),
+        &["Depth channel"],
+    );
+    assert_fails(&solidtex(&["draw", "lemon", "-o", &out]), &["lemon", "kiwi"]);
+    assert_eq!(listing(dir.path()), ["kiwi.png", "seed.obj", "v.exr"]);
+}
+
+#[test]
+fn the_default_library_builds_kiwi_carrot_and_trunk() {
+    let dir = tempfile::tempdir().unwrap();
+    let manifest = concat!(env!("CARGO_MANIFEST_DIR"), "/exemplars/library.toml");
+    let out = at(dir.path(), "lib");
+    let run = solidtex(&["build", manifest, "-o", &out]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let kiwi = read_volume(&dir.path().join("lib/kiwi.exr"), 1 << 30).unwrap();
+    assert_eq!(kiwi.meta.texture_type, Some(solidtex::TextureType::T2b));
+    // Seeds were stamped: very dark voxels inside the seed band, none in the core.
+    let depth = kiwi.channel_index(&Channel::Depth).unwrap();
+    let dark = |lo: f32, hi: f32| {
+        kiwi.data()
+            .chunks(kiwi.channel_count())
+            .filter(|v| (lo..hi).contains(&v[depth]) && v[0] + v[1] + v[2] < 0.3)
+            .count()
+    };
+    assert!(dark(0.5, 0.8) > 40, "seed voxels: {}", dark(0.5, 0.8));
+    assert_eq!(dark(0.9, 1.01), 0);
+    for name in ["carrot", "trunk"] {
+        assert!(dir.path().join(format!("lib/{name}.sheet.png")).exists());
+    }
+}
