@@ -206,3 +206,45 @@ fn the_default_library_builds_kiwi_carrot_and_trunk() {
         assert!(dir.path().join(format!("lib/{name}.sheet.png")).exists());
     }
 }
+
+#[test]
+fn an_open_seed_is_stamped_with_a_warning_naming_its_boundary_edges() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut mesh = seed_mesh(12, 12).unwrap();
+    mesh.triangles.truncate(mesh.triangles.len() - 2);
+    let open = dir.path().join("open.obj");
+    solidtex::io::mesh_file::write_obj(&open, &mesh).unwrap();
+    let vol = at(dir.path(), "v.exr");
+    solidtex::io::write_volume(std::path::Path::new(&vol), &grey_cube(24)).unwrap();
+    let out = at(dir.path(), "out.exr");
+    let run = solidtex(&[
+        "stamp",
+        &vol,
+        &open.to_string_lossy(),
+        "--at",
+        "12,12,12",
+        "--scale",
+        "5",
+        "--color",
+        "0,0,0",
+        "-o",
+        &out,
+    ]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    assert!(stderr(&run).contains("warning") && stderr(&run).contains("boundary edge"), "{}", stderr(&run));
+    let v = read_volume(std::path::Path::new(&out), 1 << 30).unwrap();
+    assert_eq!(v.voxel(12, 12, 12), &[0.0, 0.0, 0.0], "the inside is still found");
+}
+
+#[test]
+fn a_sweep_image_that_does_not_fit_the_asked_size_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let section = at(dir.path(), "s.png");
+    assert!(solidtex(&["draw", "carrot", "--size", "16x12", "-o", &section]).status.success());
+    let manifest = dir.path().join("lib.toml");
+    std::fs::write(&manifest, "[[exemplar]]\nname = \"c\"\nrecipe = \"sweep\"\nimage = \"s.png\"\nlength = 8\naxis = \"x\"\nsize = [8, 16, 16]\n").unwrap();
+    let out = at(dir.path(), "lib");
+    let run = solidtex(&["build", &manifest.to_string_lossy(), "-o", &out]);
+    assert_fails(&run, &["s.png", "16x12 pixels", "[8, 16, 12]", "[8, 16, 16]"]);
+    assert!(!dir.path().join("lib/c.exr").exists());
+}
