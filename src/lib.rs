@@ -35,9 +35,11 @@
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
+pub mod classify;
 pub mod cli;
 pub mod error;
 pub mod io;
+pub mod mask;
 pub mod mesh;
 pub mod noise;
 pub mod procedural;

@@ -84,6 +84,46 @@ impl TextureType {
     pub fn tiling_dimensions(self) -> u8 {
         3 - self.variation()
     }
+
+    /// What orients a patch of this type in a model (thesis ch. 5).
+    pub fn tensor_field(self) -> &'static str {
+        match self {
+            TextureType::T0 => "none: each patch gets a random orientation",
+            TextureType::T1a => "a vector field from strokes (the fibre axis); the other axes random",
+            TextureType::T1b => "the gradient of a depth field (the layer normal); the other axes random",
+            TextureType::T2a => "a full tensor field: depth gradient plus stroke directions",
+            TextureType::T2b => "depth gradient plus stroke directions; the depth field itself is kept",
+            TextureType::T2c | TextureType::T2d => "a tensor field plus two (2-c) or three (2-d) coordinate fields",
+        }
+    }
+
+    /// How the filler pastes patches of this type.
+    pub fn filling(self) -> &'static str {
+        match self {
+            TextureType::T0 | TextureType::T1a | TextureType::T2a => {
+                "splotch mask, user-set scale, any depth: pasted until every tetrahedron is covered"
+            }
+            TextureType::T1b | TextureType::T2b => {
+                "outer/middle/inner masks by depth; scale 1/|grad depth| so the skin lands on the surface"
+            }
+            TextureType::T2c | TextureType::T2d => {
+                "not tileable enough for lapping; the prototype and solidtex do not fill these"
+            }
+        }
+    }
+
+    /// Examples from the thesis.
+    pub fn examples(self) -> &'static str {
+        match self {
+            TextureType::T0 => "granite, gravel, sponge",
+            TextureType::T1a => "long-grain wood, fibres, muscle",
+            TextureType::T1b => "strata, cake layers",
+            TextureType::T2a => "plywood, bricks",
+            TextureType::T2b => "kiwi, carrot, tree trunk",
+            TextureType::T2c => "(few real examples)",
+            TextureType::T2d => "(few real examples)",
+        }
+    }
 }
 
 impl fmt::Display for TextureType {

@@ -33,7 +33,7 @@ const WORKLOADS: [Workload; 3] = [
 
 /// Run `solidtex bench`.
 pub fn run(args: &BenchArgs) -> Result<()> {
-    println!("{:<30} {:>5} {:>9} {:>9}", "workload", "runs", "median s", "min s");
+    say!("{:<30} {:>5} {:>9} {:>9}", "workload", "runs", "median s", "min s");
     for (name, work) in hand_made()? {
         if args.only.as_ref().is_some_and(|o| !name.contains(o.as_str())) {
             continue;
@@ -45,7 +45,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             times.push(started.elapsed().as_secs_f64());
         }
         times.sort_by(f64::total_cmp);
-        println!("{:<30} {:>5} {:>9.3} {:>9.3}", name, times.len(), times[times.len() / 2], times[0]);
+        say!("{:<30} {:>5} {:>9.3} {:>9.3}", name, times.len(), times[times.len() / 2], times[0]);
     }
     synthesis(args)
 }
@@ -99,7 +99,7 @@ fn hand_made() -> Result<Vec<(&'static str, Work)>> {
 fn synthesis(args: &BenchArgs) -> Result<()> {
     let marble = exemplar(Recipe::Marble, Axis::Z)?;
     let strata = exemplar(Recipe::Strata, Axis::Y)?;
-    println!("{:<30} {:>5} {:>9} {:>9} {:>12} {:>10}", "workload", "runs", "median s", "min s", "voxels/s", "peak MiB");
+    say!("{:<30} {:>5} {:>9} {:>9} {:>12} {:>10}", "workload", "runs", "median s", "min s", "voxels/s", "peak MiB");
     for w in WORKLOADS.iter().filter(|w| args.only.as_ref().is_none_or(|o| w.name.contains(o.as_str()))) {
         let mut times = Vec::new();
         for run in 0..args.runs.max(1) {
@@ -116,7 +116,7 @@ fn synthesis(args: &BenchArgs) -> Result<()> {
         let median = times[times.len() / 2];
         let voxels = w.size.iter().product::<usize>() as f64;
         let peak = peak_mib().map(|m| format!("{m:.0}")).unwrap_or_else(|| "-".to_string());
-        println!(
+        say!(
             "{:<30} {:>5} {:>9.2} {:>9.2} {:>12.0} {:>10}",
             w.name,
             times.len(),

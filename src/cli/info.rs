@@ -21,9 +21,9 @@ pub fn run(file: &Path, json: bool) -> crate::Result<()> {
     let report = report(file, &volume);
     if json {
         let text = serde_json::to_string_pretty(&report).expect("a report always serializes");
-        println!("{text}");
+        say!("{text}");
     } else {
-        print!("{}", text(&report));
+        say!("{}", text(&report).trim_end());
     }
     Ok(())
 }

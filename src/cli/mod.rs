@@ -1,11 +1,18 @@
 //! The command line: argument definitions and one function per subcommand.
 //! Exit codes: 0 success, 1 failure, 2 usage (clap's own).
 
+/// `println!` for command output: a closed pipe (`solidtex info x.exr | head`) ends the
+/// program quietly instead of panicking.
+macro_rules! say {
+    ($($arg:tt)*) => { $crate::cli::write_out(&format!($($arg)*)) };
+}
+
 mod bench;
 mod build;
 mod commands;
 mod handmade;
 mod info;
+mod masks;
 mod quality;
 mod synth;
 
@@ -94,6 +101,22 @@ pub enum Command {
     Blur(handmade::BlurArgs),
     /// Draw the project's own inputs: a cross-section image (kiwi, carrot, trunk) or a seed mesh.
     Draw(handmade::DrawArgs),
+    /// List the seven LST texture types: levels, tiling, tensor field, filling, examples.
+    Types,
+    /// Estimate the LST texture type of a volume, with the measurements that decided it.
+    Classify {
+        /// The volume to classify.
+        file: PathBuf,
+        /// Print JSON instead of text.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Make alpha masks: splotch, layered (outer/middle/inner), from a mesh, or a preset.
+    Mask {
+        /// Which mask.
+        #[command(subcommand)]
+        kind: masks::MaskCommand,
+    },
     /// Build every exemplar a manifest lists: a volume (.exr) and a sheet (.png) each.
     Build {
         /// The manifest.
@@ -122,5 +145,19 @@ pub fn run(cli: Cli) -> crate::Result<()> {
         Command::Scatter(args) => handmade::run_scatter(&args),
         Command::Blur(args) => handmade::run_blur(&args),
         Command::Draw(args) => handmade::run_draw(&args),
+        Command::Classify { file, json } => masks::classify(&file, json),
+        Command::Types => {
+            masks::types();
+            Ok(())
+        }
+        Command::Mask { kind } => masks::run(&kind),
+    }
+}
+
+/// Write one line to stdout; exit quietly when the reader has gone away.
+pub fn write_out(text: &str) {
+    use std::io::Write;
+    if writeln!(std::io::stdout().lock(), "{text}").is_err() {
+        std::process::exit(0);
     }
 }

@@ -47,9 +47,9 @@ pub fn run(args: &QualityArgs) -> Result<()> {
     };
     let report = quality::assess(&volume, exemplars, layered).map_err(|e| e.in_file(&args.volume))?;
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&report).expect("a report always serializes"));
+        say!("{}", serde_json::to_string_pretty(&report).expect("a report always serializes"));
     } else {
-        print!("{}", table(&report));
+        say!("{}", table(&report).trim_end());
     }
     Ok(())
 }

@@ -22,7 +22,7 @@ mod png_file;
 pub mod values;
 
 pub use atlas::layout as atlas_layout;
-pub use atomic::{check_folder, write_bytes};
+pub use atomic::{check_folder, write_bytes, write_folder};
 pub use fields::parse_dims;
 pub use png_file::{write_image, write_rgb8};
 

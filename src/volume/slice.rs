@@ -111,6 +111,25 @@ impl Volume {
         Ok(image)
     }
 
+    /// The volume with its axes reordered: new axis k is the old axis `order[k]`
+    /// (`[Axis::Z, Axis::X, Axis::Y]` makes the old z the new x). `order` must be a permutation.
+    pub fn permuted(&self, order: [Axis; 3]) -> Result<Volume> {
+        let idx = order.map(|a| a.index());
+        if idx[0] == idx[1] || idx[1] == idx[2] || idx[0] == idx[2] {
+            return Err(Error::invalid(format!("axis order {}{}{} repeats an axis", order[0], order[1], order[2])));
+        }
+        let old = self.dims();
+        let dims = idx.map(|k| old[k]);
+        let out = Volume::from_fn(dims, self.channels().to_vec(), |x, y, z, o| {
+            let mut p = [0; 3];
+            for (k, v) in [x, y, z].into_iter().enumerate() {
+                p[idx[k]] = v;
+            }
+            o.copy_from_slice(self.voxel(p[0], p[1], p[2]));
+        })?;
+        Ok(out.with_meta(self.meta.clone()))
+    }
+
     /// A `width` x `height` slice on an arbitrary plane, trilinearly sampled.
     pub fn plane_slice(&self, plane: &Plane, width: usize, height: usize, edge: Edge) -> Result<Image2d> {
         let mut image = Image2d::new(width, height, self.channels().to_vec())?;
@@ -153,6 +172,15 @@ mod tests {
         let plane = Plane { origin: Vec3::new(0.0, 0.0, 2.0), u: Vec3::X, v: Vec3::Y };
         let s = v.plane_slice(&plane, 4, 5, Edge::Clamp).unwrap();
         assert_eq!(s, v.slice(Axis::Z, 2).unwrap());
+    }
+
+    #[test]
+    fn permuting_axes_moves_voxels() {
+        let v = coords();
+        let p = v.permuted([Axis::Z, Axis::X, Axis::Y]).unwrap();
+        assert_eq!(p.dims(), [6, 4, 5]);
+        assert_eq!(p.voxel(5, 3, 4), &[3.0, 4.0, 5.0]);
+        assert!(v.permuted([Axis::X, Axis::X, Axis::Y]).is_err());
     }
 
     #[test]

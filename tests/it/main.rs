@@ -1,9 +1,11 @@
 //! Integration tests: file formats, bad input, and the command line.
 
 mod bad_input;
+mod classify;
 mod cli;
 mod formats;
 mod handmade;
+mod masks;
 mod mesh;
 mod support;
 mod synth;

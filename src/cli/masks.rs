@@ -1,0 +1,196 @@
+//! `solidtex classify` and `solidtex mask ...`.
+
+use crate::error::{Error, Result};
+use crate::io;
+use crate::mask::{self, Layer, MaskMeasures};
+use crate::volume::{Axis, Volume};
+use serde::Deserialize;
+use std::path::{Path, PathBuf};
+
+/// Run `solidtex classify FILE [--json]`.
+pub fn classify(file: &Path, json: bool) -> Result<()> {
+    let volume = io::read_volume(file, io::budget_from_env()?)?;
+    let c = crate::classify::classify(&volume).map_err(|e| e.in_file(file))?;
+    if json {
+        say!("{}", serde_json::to_string_pretty(&c).expect("a classification always serializes"));
+        return Ok(());
+    }
+    let t = c.texture_type;
+    say!("{}\n  type        {t} (anisotropy {}, variation {})", file.display(), t.anisotropy(), t.variation());
+    say!("  primary     {}", c.primary_axis.as_deref().unwrap_or("none (isotropic)"));
+    say!("  depth axis  {}", c.depth_axis.as_deref().unwrap_or("none (homogeneous)"));
+    say!("  confidence  {:.2}", c.confidence);
+    let [gx, gy, gz] = c.gradient_energy;
+    let [lx, ly, lz] = c.layering;
+    say!("  gradient energy / variance   x {gx:.4}  y {gy:.4}  z {gz:.4}   (alike within a factor 1.8)");
+    say!("  within-slice variance share  x {lx:.3}  y {ly:.3}  z {lz:.3}   (layered below 0.45)");
+    if let Some(declared) = volume.meta.texture_type.filter(|d| *d != t) {
+        say!("  note        the file declares type {declared}");
+    }
+    for note in &c.notes {
+        say!("  note        {note}");
+    }
+    Ok(())
+}
+
+/// Print the table of the seven types.
+pub fn types() {
+    for t in crate::TextureType::ALL {
+        let tiles = ["in no direction", "along one axis", "in a plane", "in 3D"][t.tiling_dimensions() as usize];
+        say!("type {:<4} anisotropy {}  variation {}  tiles {tiles}", t.name(), t.anisotropy(), t.variation());
+        say!("          tensor field: {}", t.tensor_field());
+        say!("          filling:      {}", t.filling());
+        say!("          examples:     {}", t.examples());
+    }
+}
+
+/// The `mask` subcommands.
+#[derive(Debug, clap::Subcommand)]
+pub enum MaskCommand {
+    /// A soft noisy ball.
+    Splotch {
+        /// Side of the cubic mask in voxels.
+        #[arg(long, default_value_t = 64)]
+        size: usize,
+        /// Width of the soft band as a share of the size, in (0, 0.5).
+        #[arg(long, default_value_t = mask::DEFAULT_FALLOFF)]
+        falloff: f32,
+        /// Seed of the shape.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// The mask file to write.
+        #[arg(short, long)]
+        output: PathBuf,
+    },
+    /// Outer, middle and inner masks for depth-varying textures, into a folder.
+    Layered {
+        /// Side of the cubic masks in voxels.
+        #[arg(long, default_value_t = 64)]
+        size: usize,
+        /// Width of the soft band as a share of the size, in (0, 0.5).
+        #[arg(long, default_value_t = mask::DEFAULT_FALLOFF)]
+        falloff: f32,
+        /// Seed of the shape.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// The axis depth runs along (depth 0 at its first face).
+        #[arg(long, default_value = "z")]
+        depth_axis: String,
+        /// The folder to write outer.exr, middle.exr and inner.exr into.
+        #[arg(short, long)]
+        output: PathBuf,
+    },
+    /// A mask shaped by a closed mesh, scaled to fit the cube.
+    Mesh {
+        /// The mesh (OBJ, STL, PLY).
+        mesh: PathBuf,
+        /// Side of the cubic mask in voxels.
+        #[arg(long, default_value_t = 64)]
+        size: usize,
+        /// Width of the soft band as a share of the size, in (0, 0.5).
+        #[arg(long, default_value_t = mask::DEFAULT_FALLOFF)]
+        falloff: f32,
+        /// The mask file to write.
+        #[arg(short, long)]
+        output: PathBuf,
+    },
+    /// Build a preset (`masks/*.toml`) into the file (or folder) beside it.
+    Preset {
+        /// The preset file.
+        preset: PathBuf,
+    },
+}
+
+/// Run a `mask` subcommand.
+pub fn run(command: &MaskCommand) -> Result<()> {
+    match command {
+        MaskCommand::Splotch { size, falloff, seed, output } => {
+            write_one(output, mask::splotch(*size, *falloff, *seed)?)
+        }
+        MaskCommand::Layered { size, falloff, seed, depth_axis, output } => {
+            write_layers(output, *size, *falloff, *seed, depth_axis.parse()?)
+        }
+        MaskCommand::Mesh { mesh, size, falloff, output } => {
+            let shape = io::mesh_file::read_mesh(mesh)?.oriented();
+            write_one(output, mask::from_mesh(&shape, *size, *falloff).map_err(|e| e.in_file(mesh))?)
+        }
+        MaskCommand::Preset { preset } => build_preset(preset),
+    }
+}
+
+fn report(path: &Path, m: &MaskMeasures) {
+    eprintln!(
+        "wrote {}: opaque {:.1} %, fall-off {:.1} voxels, inscribed tetrahedron edge {:.1} voxels",
+        path.display(),
+        m.opaque_fraction * 100.0,
+        m.falloff_width,
+        m.inscribed_tetrahedron
+    );
+}
+
+fn write_one(output: &Path, volume: Volume) -> Result<()> {
+    io::Format::of(output)?;
+    io::write_volume(output, &volume)?;
+    report(output, &mask::measure(&volume));
+    Ok(())
+}
+
+fn write_layers(output: &Path, size: usize, falloff: f32, seed: u64, depth: Axis) -> Result<()> {
+    let layers: Vec<(Layer, Volume)> =
+        Layer::ALL.iter().map(|l| Ok((*l, mask::layered(size, falloff, seed, *l, depth)?))).collect::<Result<_>>()?;
+    io::write_folder(output, |dir| {
+        for (layer, volume) in &layers {
+            io::write_volume(&dir.join(format!("{}.exr", layer.name())), volume)?;
+        }
+        Ok(())
+    })?;
+    for (layer, volume) in &layers {
+        report(&output.join(format!("{}.exr", layer.name())), &mask::measure(volume));
+    }
+    Ok(())
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Preset {
+    kind: String,
+    #[serde(default = "default_size")]
+    size: usize,
+    #[serde(default = "default_falloff")]
+    falloff: f32,
+    #[serde(default)]
+    seed: u64,
+    depth_axis: Option<String>,
+    mesh: Option<String>,
+}
+
+fn default_size() -> usize {
+    64
+}
+
+fn default_falloff() -> f32 {
+    mask::DEFAULT_FALLOFF
+}
+
+fn build_preset(path: &Path) -> Result<()> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let p: Preset = toml::from_str(&text).map_err(|e| Error::file(path, format!("invalid mask preset: {e}")))?;
+    let folder = path.parent().unwrap_or(Path::new("."));
+    let stem = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    let fail = |e: Error| e.in_file(path);
+    match p.kind.as_str() {
+        "splotch" => {
+            write_one(&folder.join(format!("{stem}.exr")), mask::splotch(p.size, p.falloff, p.seed).map_err(fail)?)
+        }
+        "layered" => {
+            let depth: Axis = p.depth_axis.as_deref().unwrap_or("z").parse().map_err(fail)?;
+            write_layers(&folder.join(&stem), p.size, p.falloff, p.seed, depth).map_err(fail)
+        }
+        "mesh" => {
+            let mesh = folder.join(p.mesh.as_deref().ok_or_else(|| Error::file(path, "mesh = \"FILE\" is missing"))?);
+            let shape = io::mesh_file::read_mesh(&mesh)?.oriented();
+            write_one(&folder.join(format!("{stem}.exr")), mask::from_mesh(&shape, p.size, p.falloff).map_err(fail)?)
+        }
+        other => Err(Error::file(path, format!("kind = {other:?} is unknown; allowed: splotch, layered, mesh"))),
+    }
+}

@@ -1,0 +1,94 @@
+//! Classification and masks from the command line, with their bad input.
+
+use crate::support::{assert_fails, at, listing, solidtex, stderr};
+use solidtex::io::{read_volume, write_volume};
+use solidtex::volume::{Channel, Volume};
+use std::path::Path;
+
+#[test]
+fn classify_reports_type_axes_and_measurements() {
+    let dir = tempfile::tempdir().unwrap();
+    let strata = at(dir.path(), "strata.exr");
+    assert!(solidtex(&["make", "strata", "--size", "24", "-o", &strata]).status.success());
+    let run = solidtex(&["classify", &strata, "--json"]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let json: serde_json::Value = serde_json::from_slice(&run.stdout).unwrap();
+    assert_eq!(json["texture_type"], "1-b");
+    assert_eq!(json["depth_axis"], "z");
+    assert!(json["layering"][2].as_f64().unwrap() < 0.45);
+    let text = String::from_utf8(solidtex(&["classify", &strata]).stdout).unwrap();
+    assert!(text.contains("1-b (anisotropy 1, variation 1)") && text.contains("depth axis  z"), "{text}");
+}
+
+#[test]
+fn classify_refuses_small_volumes_and_explains_constant_ones() {
+    let dir = tempfile::tempdir().unwrap();
+    let small = dir.path().join("small.exr");
+    write_volume(&small, &Volume::new([8, 8, 5], Channel::rgb()).unwrap()).unwrap();
+    assert_fails(
+        &solidtex(&["classify", &small.to_string_lossy()]),
+        &["small.exr", "axis z has 5 voxels", "at least 8"],
+    );
+    let flat = dir.path().join("flat.exr");
+    write_volume(&flat, &Volume::from_fn([8; 3], Channel::grey(), |_, _, _, o| o[0] = 0.4).unwrap()).unwrap();
+    let text = String::from_utf8(solidtex(&["classify", &flat.to_string_lossy()]).stdout).unwrap();
+    assert!(text.contains("type        0") && text.contains("constant"), "{text}");
+}
+
+#[test]
+fn masks_are_built_measured_and_reproducible() {
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = (at(dir.path(), "a.exr"), at(dir.path(), "b.exr"));
+    let run = solidtex(&["mask", "splotch", "--size", "32", "--falloff", "0.1", "--seed", "4", "-o", &a]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    assert!(stderr(&run).contains("fall-off") && stderr(&run).contains("tetrahedron"), "{}", stderr(&run));
+    assert!(
+        solidtex(&["mask", "splotch", "--size", "32", "--falloff", "0.1", "--seed", "4", "-o", &b]).status.success()
+    );
+    assert_eq!(std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap());
+    let layers = at(dir.path(), "layers");
+    assert!(solidtex(&["mask", "layered", "--size", "24", "-o", &layers]).status.success());
+    assert_eq!(listing(&dir.path().join("layers")), ["inner.exr", "middle.exr", "outer.exr"]);
+    let outer = read_volume(&dir.path().join("layers/outer.exr"), 1 << 30).unwrap();
+    assert!((0..24 * 24).all(|i| outer.get(i % 24, i / 24, 0, 0) == 1.0), "the outer mask covers the depth-0 face");
+}
+
+#[test]
+fn a_mesh_mask_follows_the_mesh_and_refuses_open_ones() {
+    let dir = tempfile::tempdir().unwrap();
+    let seed = at(dir.path(), "seed.obj");
+    assert!(solidtex(&["draw", "seed", "-o", &seed]).status.success());
+    let m = at(dir.path(), "m.exr");
+    let run = solidtex(&["mask", "mesh", &seed, "--size", "24", "--falloff", "0.1", "-o", &m]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let v = read_volume(Path::new(&m), 1 << 30).unwrap();
+    assert_eq!(v.get(12, 12, 12, 0), 1.0);
+    assert_eq!(v.get(0, 0, 0, 0), 0.0);
+    let mut mesh = solidtex::sections::seed_mesh(8, 8).unwrap();
+    mesh.triangles.pop();
+    let open = dir.path().join("open.obj");
+    solidtex::io::mesh_file::write_obj(&open, &mesh).unwrap();
+    let out = at(dir.path(), "o.exr");
+    assert_fails(
+        &solidtex(&["mask", "mesh", &open.to_string_lossy(), "--size", "16", "-o", &out]),
+        &["open.obj", "boundary edge", "closed"],
+    );
+}
+
+#[test]
+fn mask_bad_input_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = at(dir.path(), "m.exr");
+    for f in ["0", "0.5", "0.7", "-0.1"] {
+        let arg = format!("--falloff={f}");
+        assert_fails(&solidtex(&["mask", "splotch", &arg, "-o", &out]), &["outside (0, 0.5)"]);
+    }
+    assert_fails(&solidtex(&["mask", "splotch", "--size", "2", "-o", &out]), &["size 2", "4 to 512"]);
+    let preset = dir.path().join("p.toml");
+    std::fs::write(&preset, "kind = \"cloud\"\n").unwrap();
+    assert_fails(
+        &solidtex(&["mask", "preset", &preset.to_string_lossy()]),
+        &["p.toml", "cloud", "splotch, layered, mesh"],
+    );
+    assert_eq!(listing(dir.path()), ["p.toml"]);
+}
