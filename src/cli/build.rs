@@ -1,5 +1,6 @@
-//! `solidtex build`: make every exemplar a manifest lists, each into `DIR/NAME.exr` and a
-//! contact sheet `DIR/NAME.sheet.png`.
+//! `solidtex build`: make every exemplar a manifest lists, in parallel, each into
+//! `DIR/NAME.exr` and a contact sheet `DIR/NAME.sheet.png`, skipping exemplars whose
+//! recipe and inputs have not changed (a content-addressed cache), and write a report.
 
 use crate::error::{Error, Result};
 use crate::io;
@@ -8,29 +9,202 @@ use crate::stamp::{self, Region, Scatter};
 use crate::sweep::{self, Skin, SkinLook, Sweep};
 use crate::volume::Volume;
 use crate::{procedural, render};
-use std::path::Path;
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-/// Build every entry of the manifest at `manifest_path` into `output`.
-pub fn run(manifest_path: &Path, output: &Path) -> Result<()> {
-    let plan = manifest::read_plan(manifest_path)?;
-    std::fs::create_dir_all(output).map_err(|e| Error::io(output, e))?;
-    let total = plan.entries.len();
-    for (k, entry) in plan.entries.iter().enumerate() {
-        let started = Instant::now();
-        let volume = make(entry).map_err(|e| match e {
-            Error::Invalid(m) => Error::file(manifest_path, format!("exemplar {}: {m}", entry.name)),
-            other => other,
-        })?;
-        let file = output.join(format!("{}.exr", entry.name));
-        io::write_volume(&file, &volume)?;
-        io::write_rgb8(&output.join(format!("{}.sheet.png", entry.name)), &render::sheet(&volume, &entry.name))?;
-        let [x, y, z] = volume.dims();
-        let kind = volume.meta.texture_type.map(|t| format!("type {t}")).unwrap_or_default();
-        eprintln!("[{}/{total}] {} {x}x{y}x{z} {kind} in {:.2} s", k + 1, entry.name, started.elapsed().as_secs_f64());
+/// The arguments of `solidtex build`.
+#[derive(Debug, clap::Args)]
+pub struct BuildArgs {
+    /// The manifest.
+    #[arg(default_value = "exemplars/library.toml")]
+    pub manifest: PathBuf,
+    /// Output folder (created if missing).
+    #[arg(short, long, default_value = "out")]
+    pub output: PathBuf,
+    /// Rebuild even what the cache says is up to date.
+    #[arg(long)]
+    pub force: bool,
+    /// Build only these exemplars (repeatable).
+    #[arg(long)]
+    pub only: Vec<String>,
+}
+
+/// What the cache remembers about a built exemplar (`DIR/.cache/NAME.json`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Record {
+    /// Exemplar name.
+    pub name: String,
+    /// Content hash of the recipe, its input files and the tool version.
+    pub key: String,
+    /// Size in voxels.
+    pub dims: [usize; 3],
+    /// Declared type, if any.
+    pub declared: Option<String>,
+    /// Type estimated by `classify`.
+    pub classified: String,
+    /// Seconds the build took.
+    pub seconds: f64,
+}
+
+enum Outcome {
+    Built(Record),
+    Cached(Record),
+    Failed(String, String),
+}
+
+/// Run `solidtex build`.
+pub fn run(args: &BuildArgs) -> Result<()> {
+    let plan = manifest::read_plan(&args.manifest)?;
+    let entries = select(&plan.entries, &args.only, &args.manifest)?;
+    std::fs::create_dir_all(args.output.join(".cache")).map_err(|e| Error::io(&args.output, e))?;
+    let folder = args.manifest.parent().unwrap_or(Path::new("."));
+    let outcomes: Vec<Outcome> =
+        entries.par_iter().map(|entry| build_one(entry, folder, &args.output, args.force)).collect();
+    write_report(&args.output, &outcomes)?;
+    summarize(&outcomes, &args.output)
+}
+
+fn select<'a>(entries: &'a [Entry], only: &[String], manifest: &Path) -> Result<Vec<&'a Entry>> {
+    if let Some(unknown) = only.iter().find(|n| !entries.iter().any(|e| &e.name == *n)) {
+        let names: Vec<&str> = entries.iter().map(|e| e.name.as_str()).collect();
+        return Err(Error::file(
+            manifest,
+            format!("--only {unknown:?} is not in the manifest; it has {}", names.join(", ")),
+        ));
     }
-    eprintln!("built {total} exemplar(s) into {}", output.display());
-    Ok(())
+    Ok(entries.iter().filter(|e| only.is_empty() || only.contains(&e.name)).collect())
+}
+
+fn build_one(entry: &Entry, folder: &Path, output: &Path, force: bool) -> Outcome {
+    let started = Instant::now();
+    let result = (|| {
+        let key = cache_key(entry, folder)?;
+        let record_path = output.join(".cache").join(format!("{}.json", entry.name));
+        if !force {
+            if let Some(record) = cached(&record_path, &key, output, &entry.name) {
+                return Ok(Outcome::Cached(record));
+            }
+        }
+        let volume = make(entry)?;
+        io::write_volume(&output.join(format!("{}.exr", entry.name)), &volume)?;
+        io::write_rgb8(&output.join(format!("{}.sheet.png", entry.name)), &render::sheet(&volume, &entry.name))?;
+        let classified =
+            crate::classify::classify(&volume).map(|c| c.texture_type.to_string()).unwrap_or_else(|_| "-".into());
+        let record = Record {
+            name: entry.name.clone(),
+            key,
+            dims: volume.dims(),
+            declared: volume.meta.texture_type.map(|t| t.to_string()),
+            classified,
+            seconds: started.elapsed().as_secs_f64(),
+        };
+        let json = serde_json::to_string_pretty(&record).expect("a record always serializes");
+        io::write_bytes(&record_path, json.as_bytes())?;
+        Ok(Outcome::Built(record))
+    })();
+    let outcome = result.unwrap_or_else(|e: Error| Outcome::Failed(entry.name.clone(), e.to_string()));
+    match &outcome {
+        Outcome::Built(r) => {
+            let [x, y, z] = r.dims;
+            eprintln!("built  {} {x}x{y}x{z} in {:.2} s", r.name, r.seconds);
+        }
+        Outcome::Cached(r) => eprintln!("cached {} (recipe and inputs unchanged)", r.name),
+        Outcome::Failed(name, why) => eprintln!("FAILED {name}: {why}"),
+    }
+    outcome
+}
+
+/// The record of an up-to-date build, if the key matches and the outputs exist.
+fn cached(record_path: &Path, key: &str, output: &Path, name: &str) -> Option<Record> {
+    let record: Record = serde_json::from_slice(&std::fs::read(record_path).ok()?).ok()?;
+    let present = ["exr", "sheet.png"].iter().all(|ext| output.join(format!("{name}.{ext}")).exists());
+    (record.key == key && present).then_some(record)
+}
+
+/// blake3 of the tool version, the recipe (paths relative to the manifest) and every input file.
+fn cache_key(entry: &Entry, folder: &Path) -> Result<String> {
+    let mut hasher = blake3::Hasher::new();
+    hasher.update(env!("CARGO_PKG_VERSION").as_bytes());
+    let recipe = format!("{entry:?}").replace(&folder.display().to_string(), "");
+    hasher.update(recipe.as_bytes());
+    for input in inputs(entry) {
+        hasher.update(&std::fs::read(&input).map_err(|e| Error::io(&input, e))?);
+    }
+    Ok(hasher.finalize().to_hex()[..32].to_string())
+}
+
+/// The files an entry reads.
+fn inputs(entry: &Entry) -> Vec<PathBuf> {
+    let mut files = Vec::new();
+    if let Source::Sweep(spec) = &entry.source {
+        files.push(spec.image.clone());
+        if let Some((SkinSource::Image(p), _, _)) = &spec.skin {
+            files.push(p.clone());
+        }
+    }
+    for step in &entry.steps {
+        match step {
+            Step::Stamp { mesh, .. } | Step::Scatter { mesh, .. } => files.push(mesh.clone()),
+            Step::Blur { .. } => {}
+        }
+    }
+    files
+}
+
+fn summarize(outcomes: &[Outcome], output: &Path) -> Result<()> {
+    let count = |f: fn(&Outcome) -> bool| outcomes.iter().filter(|o| f(o)).count();
+    let built = count(|o| matches!(o, Outcome::Built(_)));
+    let cached = count(|o| matches!(o, Outcome::Cached(_)));
+    let failed: Vec<&str> =
+        outcomes.iter().filter_map(|o| if let Outcome::Failed(n, _) = o { Some(n.as_str()) } else { None }).collect();
+    eprintln!(
+        "{built} built, {cached} cached, {} failed; report: {}",
+        failed.len(),
+        output.join("report.md").display()
+    );
+    if failed.is_empty() {
+        Ok(())
+    } else {
+        Err(Error::invalid(format!("{} exemplar(s) failed: {} (see the lines above)", failed.len(), failed.join(", "))))
+    }
+}
+
+/// `report.md` and `report.html`: one row per exemplar with its sheet.
+fn write_report(output: &Path, outcomes: &[Outcome]) -> Result<()> {
+    let mut md = String::from(
+        "# Exemplar library\n\n| exemplar | size | declared | classified | build | sheet |\n|---|---|---|---|---|---|\n",
+    );
+    let mut html = String::from(
+        "<!doctype html><meta charset=utf-8><title>Exemplar library</title>\
+         <style>body{font-family:sans-serif;background:#222;color:#eee}td,th{padding:4px 10px}img{width:280px}</style>\
+         <h1>Exemplar library</h1><table><tr><th>exemplar<th>size<th>declared<th>classified<th>build<th>sheet\n",
+    );
+    for o in outcomes {
+        let (name, size, declared, classified, build) = match o {
+            Outcome::Built(r) | Outcome::Cached(r) => {
+                let when = if matches!(o, Outcome::Built(_)) { format!("{:.2} s", r.seconds) } else { "cached".into() };
+                let [x, y, z] = r.dims;
+                (
+                    r.name.as_str(),
+                    format!("{x}x{y}x{z}"),
+                    r.declared.clone().unwrap_or("-".into()),
+                    r.classified.clone(),
+                    when,
+                )
+            }
+            Outcome::Failed(n, why) => (n.as_str(), "-".into(), "-".into(), "-".into(), format!("failed: {why}")),
+        };
+        md += &format!("| {name} | {size} | {declared} | {classified} | {build} | ![{name}]({name}.sheet.png) |\n");
+        html += &format!(
+            "<tr><td>{name}<td>{size}<td>{declared}<td>{classified}<td>{}<td><img src=\"{name}.sheet.png\" alt=\"{name}\">\n",
+            build.replace('<', "&lt;")
+        );
+    }
+    html += "</table>\n";
+    io::write_bytes(&output.join("report.md"), md.as_bytes())?;
+    io::write_bytes(&output.join("report.html"), html.as_bytes())
 }
 
 /// Make one entry's volume: its source, then its steps.
@@ -51,7 +225,6 @@ pub fn make(entry: &Entry) -> Result<Volume> {
     volume.meta.set("name", entry.name.clone());
     Ok(volume)
 }
-
 fn swept(spec: &SweepSpec, dims: Option<[usize; 3]>, seed: u64) -> Result<Volume> {
     let image = io::read_image(&spec.image)?;
     let (a, b) = spec.axis.plane_axes();

@@ -134,6 +134,13 @@ pub fn run_stamp(args: &StampArgs) -> Result<()> {
 /// A seed mesh, oriented, with a warning when it is not closed.
 pub fn read_seed(path: &Path) -> Result<crate::mesh::Mesh> {
     let mesh = io::mesh_file::read_mesh(path)?;
+    let dropped = mesh.dropped_degenerate();
+    if dropped > 0 {
+        eprintln!(
+            "warning: {}: dropped {dropped} degenerate triangle(s) (zero area or a repeated corner)",
+            path.display()
+        );
+    }
     let open = mesh.boundary_edges();
     if open > 0 {
         eprintln!(

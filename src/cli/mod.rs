@@ -117,15 +117,8 @@ pub enum Command {
         #[command(subcommand)]
         kind: masks::MaskCommand,
     },
-    /// Build every exemplar a manifest lists: a volume (.exr) and a sheet (.png) each.
-    Build {
-        /// The manifest.
-        #[arg(default_value = "exemplars/library.toml")]
-        manifest: PathBuf,
-        /// Output folder (created if missing).
-        #[arg(short, long, default_value = "out")]
-        output: PathBuf,
-    },
+    /// Build every exemplar a manifest lists (in parallel, cached), with a report.
+    Build(build::BuildArgs),
 }
 
 /// Run a parsed command line.
@@ -139,7 +132,7 @@ pub fn run(cli: Cli) -> crate::Result<()> {
         Command::Synth(args) => synth::run(&args),
         Command::Quality(args) => quality::run(&args),
         Command::Bench(args) => bench::run(&args),
-        Command::Build { manifest, output } => build::run(&manifest, &output),
+        Command::Build(args) => build::run(&args),
         Command::Sweep(args) => handmade::run_sweep(&args),
         Command::Stamp(args) => handmade::run_stamp(&args),
         Command::Scatter(args) => handmade::run_scatter(&args),

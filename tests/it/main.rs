@@ -5,6 +5,7 @@ mod classify;
 mod cli;
 mod formats;
 mod handmade;
+mod library;
 mod masks;
 mod mesh;
 mod support;
