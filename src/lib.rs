@@ -47,6 +47,7 @@ pub mod progress;
 pub mod quality;
 pub mod render;
 pub mod sections;
+pub mod snapshot;
 pub mod stamp;
 pub mod sweep;
 pub mod synth;

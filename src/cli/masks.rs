@@ -194,3 +194,21 @@ fn build_preset(path: &Path) -> Result<()> {
         other => Err(Error::file(path, format!("kind = {other:?} is unknown; allowed: splotch, layered, mesh"))),
     }
 }
+
+/// Run `solidtex snapshot VOLUME (-o NAME.snap | --check NAME.snap [--tolerance T])`.
+pub fn snapshot(volume: &Path, output: Option<&Path>, check: Option<&Path>, tolerance: f64) -> Result<()> {
+    let v = io::read_volume(volume, io::budget_from_env()?)?;
+    match (output, check) {
+        (Some(out), None) => {
+            io::snapshot_file::write(out, &v)?;
+            eprintln!("wrote {}", out.display());
+            Ok(())
+        }
+        (None, Some(snap)) => {
+            io::snapshot_file::check(snap, &v, tolerance)?;
+            eprintln!("{} matches {}", volume.display(), snap.display());
+            Ok(())
+        }
+        _ => Err(Error::invalid("give either -o NAME.snap (write) or --check NAME.snap (compare)")),
+    }
+}

@@ -8,7 +8,7 @@ macro_rules! say {
 }
 
 mod bench;
-mod build;
+pub mod build;
 mod commands;
 mod handmade;
 mod info;
@@ -101,6 +101,20 @@ pub enum Command {
     Blur(handmade::BlurArgs),
     /// Draw the project's own inputs: a cross-section image (kiwi, carrot, trunk) or a seed mesh.
     Draw(handmade::DrawArgs),
+    /// Write a small text snapshot of a volume, or check a volume against one.
+    Snapshot {
+        /// The volume.
+        volume: PathBuf,
+        /// Write the snapshot here.
+        #[arg(short, long, conflicts_with = "check")]
+        output: Option<PathBuf>,
+        /// Compare with this snapshot (exit 1 with the differences when they differ).
+        #[arg(long)]
+        check: Option<PathBuf>,
+        /// Allowed difference of statistics and thumbnail values (0: the content hash must match).
+        #[arg(long, default_value_t = 0.0)]
+        tolerance: f64,
+    },
     /// List the seven LST texture types: levels, tiling, tensor field, filling, examples.
     Types,
     /// Estimate the LST texture type of a volume, with the measurements that decided it.
@@ -139,6 +153,9 @@ pub fn run(cli: Cli) -> crate::Result<()> {
         Command::Blur(args) => handmade::run_blur(&args),
         Command::Draw(args) => handmade::run_draw(&args),
         Command::Classify { file, json } => masks::classify(&file, json),
+        Command::Snapshot { volume, output, check, tolerance } => {
+            masks::snapshot(&volume, output.as_deref(), check.as_deref(), tolerance)
+        }
         Command::Types => {
             masks::types();
             Ok(())

@@ -19,6 +19,7 @@ pub mod manifest;
 pub mod mesh_file;
 mod nrrd;
 mod png_file;
+pub mod snapshot_file;
 pub mod values;
 
 pub use atlas::layout as atlas_layout;

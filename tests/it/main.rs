@@ -8,5 +8,6 @@ mod handmade;
 mod library;
 mod masks;
 mod mesh;
+mod snapshots;
 mod support;
 mod synth;

@@ -1,0 +1,192 @@
+//! Small text snapshots of volumes for regression tests: dims, channels, type, a content
+//! hash, per-channel statistics and an 8x8 thumbnail of the central z-slice per channel.
+//!
+//! ```text
+//! solidtex-snapshot 1
+//! dims 16 16 16
+//! channels R,G,B
+//! type 0
+//! hash 5c1e...            blake3 of the samples rounded to 16 bits
+//! stat R 0.512300 0.101000 0.000000 1.000000     mean std min max
+//! thumb R 0.5100 0.5200 ...                      8 rows of 8 block means, row by row
+//! ```
+//! Compared exactly (hash) or within a tolerance (stats and thumbnails).
+
+use crate::error::{Error, Result};
+use crate::volume::Volume;
+
+/// Thumbnail side.
+pub const THUMB: usize = 8;
+
+/// A volume's snapshot.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Snapshot {
+    /// Size in voxels.
+    pub dims: [usize; 3],
+    /// Channel names.
+    pub channels: Vec<String>,
+    /// Texture type, if set.
+    pub texture_type: Option<String>,
+    /// Content hash of the 16-bit-rounded samples.
+    pub hash: String,
+    /// Per channel: mean, std, min, max.
+    pub stats: Vec<[f64; 4]>,
+    /// Per channel: THUMB x THUMB block means of the central z-slice, row by row.
+    pub thumbs: Vec<Vec<f64>>,
+}
+
+impl Snapshot {
+    /// Take the snapshot of `volume`.
+    pub fn of(volume: &Volume) -> Snapshot {
+        let mut hasher = blake3::Hasher::new();
+        for v in volume.data() {
+            hasher.update(&((v.clamp(0.0, 1.0) * 65535.0).round() as u16).to_le_bytes());
+        }
+        let stats = volume.channel_stats(1).iter().map(|s| [s.mean, s.std, s.min as f64, s.max as f64]).collect();
+        Snapshot {
+            dims: volume.dims(),
+            channels: volume.channels().iter().map(|c| c.name().to_string()).collect(),
+            texture_type: volume.meta.texture_type.map(|t| t.to_string()),
+            hash: hasher.finalize().to_hex()[..32].to_string(),
+            stats,
+            thumbs: (0..volume.channel_count()).map(|c| thumbnail(volume, c)).collect(),
+        }
+    }
+
+    /// The text form.
+    pub fn to_text(&self) -> String {
+        let [x, y, z] = self.dims;
+        let mut out = format!("solidtex-snapshot 1\ndims {x} {y} {z}\nchannels {}\n", self.channels.join(","));
+        out += &format!("type {}\nhash {}\n", self.texture_type.as_deref().unwrap_or("-"), self.hash);
+        for (name, s) in self.channels.iter().zip(&self.stats) {
+            out += &format!("stat {name} {:.6} {:.6} {:.6} {:.6}\n", s[0], s[1], s[2], s[3]);
+        }
+        for (name, t) in self.channels.iter().zip(&self.thumbs) {
+            let values: Vec<String> = t.iter().map(|v| format!("{v:.4}")).collect();
+            out += &format!("thumb {name} {}\n", values.join(" "));
+        }
+        out
+    }
+
+    /// Read the text form.
+    pub fn parse(text: &str) -> Result<Snapshot> {
+        let mut lines = text.lines();
+        if lines.next() != Some("solidtex-snapshot 1") {
+            return Err(Error::invalid("not a solidtex snapshot: the first line must be \"solidtex-snapshot 1\""));
+        }
+        let mut snap = Snapshot {
+            dims: [0; 3],
+            channels: Vec::new(),
+            texture_type: None,
+            hash: String::new(),
+            stats: Vec::new(),
+            thumbs: Vec::new(),
+        };
+        for (n, line) in lines.enumerate() {
+            let bad = || Error::invalid(format!("snapshot line {}: {line:?} cannot be read", n + 2));
+            let (key, rest) = line.split_once(' ').ok_or_else(bad)?;
+            let numbers = |skip: usize| {
+                rest.split_whitespace()
+                    .skip(skip)
+                    .map(|t| t.parse::<f64>().map_err(|_| bad()))
+                    .collect::<Result<Vec<f64>>>()
+            };
+            match key {
+                "dims" => {
+                    snap.dims =
+                        numbers(0)?.iter().map(|v| *v as usize).collect::<Vec<_>>().try_into().map_err(|_| bad())?
+                }
+                "channels" => snap.channels = rest.split(',').map(str::to_string).collect(),
+                "type" => snap.texture_type = (rest != "-").then(|| rest.to_string()),
+                "hash" => snap.hash = rest.to_string(),
+                "stat" => snap.stats.push(numbers(1)?.try_into().map_err(|_| bad())?),
+                "thumb" => snap.thumbs.push(numbers(1)?),
+                _ => return Err(bad()),
+            }
+        }
+        Ok(snap)
+    }
+
+    /// Differences from `expected`: none means equal (tolerance 0: the hash must match;
+    /// otherwise stats and thumbnail values may differ by up to `tolerance`).
+    pub fn differences(&self, expected: &Snapshot, tolerance: f64) -> Vec<String> {
+        let mut out = Vec::new();
+        if self.dims != expected.dims {
+            out.push(format!("dims {:?}, expected {:?}", self.dims, expected.dims));
+        }
+        if self.channels != expected.channels || self.texture_type != expected.texture_type {
+            out.push(format!(
+                "channels {} type {:?}, expected {} type {:?}",
+                self.channels.join(","),
+                self.texture_type,
+                expected.channels.join(","),
+                expected.texture_type
+            ));
+        }
+        if !out.is_empty() {
+            return out;
+        }
+        if tolerance == 0.0 {
+            if self.hash != expected.hash {
+                out.push(format!("content hash {}, expected {}", self.hash, expected.hash));
+            }
+            return out;
+        }
+        for (c, name) in self.channels.iter().enumerate() {
+            let worst = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max);
+            let (s, t) = (worst(&self.stats[c], &expected.stats[c]), worst(&self.thumbs[c], &expected.thumbs[c]));
+            if s > tolerance || t > tolerance {
+                out.push(format!(
+                    "channel {name}: stats differ by {s:.4}, thumbnail by {t:.4} (tolerance {tolerance})"
+                ));
+            }
+        }
+        out
+    }
+}
+
+/// Block means of the central z-slice of channel `c`.
+fn thumbnail(volume: &Volume, c: usize) -> Vec<f64> {
+    let [dx, dy, dz] = volume.dims();
+    let z = dz / 2;
+    let mut out = Vec::with_capacity(THUMB * THUMB);
+    for by in 0..THUMB {
+        for bx in 0..THUMB {
+            let (x0, x1) = (bx * dx / THUMB, ((bx + 1) * dx / THUMB).max(bx * dx / THUMB + 1).min(dx));
+            let (y0, y1) = (by * dy / THUMB, ((by + 1) * dy / THUMB).max(by * dy / THUMB + 1).min(dy));
+            let (mut sum, mut n) = (0.0, 0.0);
+            for y in y0..y1 {
+                for x in x0..x1 {
+                    sum += volume.get(x.min(dx - 1), y.min(dy - 1), z, c) as f64;
+                    n += 1.0;
+                }
+            }
+            out.push(sum / f64::max(n, 1.0));
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::volume::Channel;
+
+    #[test]
+    fn text_round_trips_and_differences_are_named() {
+        let v = Volume::from_fn([10, 6, 4], Channel::rgb(), |x, y, z, o| {
+            o.copy_from_slice(&[x as f32 / 9.0, y as f32 / 5.0, z as f32 / 3.0])
+        })
+        .unwrap();
+        let snap = Snapshot::of(&v);
+        let back = Snapshot::parse(&snap.to_text()).unwrap();
+        assert!(back.differences(&snap, 0.0).is_empty());
+        let mut w = v.clone();
+        w.set(3, 3, 2, 0, 0.9);
+        let other = Snapshot::of(&w);
+        assert!(other.differences(&snap, 0.0)[0].contains("content hash"));
+        assert!(other.differences(&snap, 0.5).is_empty(), "within a loose tolerance");
+        assert!(!other.differences(&snap, 0.001).is_empty());
+        assert!(Snapshot::parse("hello").unwrap_err().to_string().contains("first line"));
+    }
+}
