@@ -29,6 +29,43 @@ pub struct BuildArgs {
     /// Build only these exemplars (repeatable).
     #[arg(long)]
     pub only: Vec<String>,
+    /// Build only shard K of N (0 <= K < N): exemplars are assigned by a stable hash of
+    /// their name, so N machines can share a library. `auto/N` takes K from
+    /// JOB_COMPLETION_INDEX (Kubernetes Indexed Jobs) or SLURM_ARRAY_TASK_ID (Slurm arrays).
+    #[arg(long)]
+    pub shard: Option<String>,
+    /// Merge the output folders of shard builds into the output folder, with one report.
+    #[arg(long, num_args = 1..)]
+    pub merge: Vec<PathBuf>,
+}
+
+/// Parse `K/N` or `auto/N` (K from the scheduler's environment).
+pub fn parse_shard(text: &str) -> Result<(u64, u64)> {
+    let bad = || Error::invalid(format!("--shard {text:?} is not K/N with 0 <= K < N (or auto/N)"));
+    let (k, n) = text.split_once('/').ok_or_else(bad)?;
+    let n: u64 = n.parse().map_err(|_| bad())?;
+    let k: u64 = if k == "auto" {
+        let from_env = ["JOB_COMPLETION_INDEX", "SLURM_ARRAY_TASK_ID"].iter().find_map(|v| std::env::var(v).ok());
+        let value = from_env.ok_or_else(|| {
+            Error::invalid("--shard auto/N needs JOB_COMPLETION_INDEX or SLURM_ARRAY_TASK_ID in the environment")
+        })?;
+        value
+            .trim()
+            .parse()
+            .map_err(|_| Error::invalid(format!("the shard index {value:?} from the environment is not a number")))?
+    } else {
+        k.parse().map_err(|_| bad())?
+    };
+    if n == 0 || k >= n {
+        return Err(bad());
+    }
+    Ok((k, n))
+}
+
+/// The shard an exemplar belongs to among `n`: a stable hash of its name.
+pub fn shard_of(name: &str, n: u64) -> u64 {
+    let hash = blake3::hash(name.as_bytes());
+    u64::from_le_bytes(hash.as_bytes()[..8].try_into().expect("8 bytes")) % n
 }
 
 /// What the cache remembers about a built exemplar (`DIR/.cache/NAME.json`).
@@ -57,13 +94,46 @@ enum Outcome {
 /// Run `solidtex build`.
 pub fn run(args: &BuildArgs) -> Result<()> {
     let plan = manifest::read_plan(&args.manifest)?;
-    let entries = select(&plan.entries, &args.only, &args.manifest)?;
+    if !args.merge.is_empty() {
+        return merge(&plan.entries, &args.merge, &args.output);
+    }
+    let mut entries = select(&plan.entries, &args.only, &args.manifest)?;
+    if let Some(text) = &args.shard {
+        let (k, n) = parse_shard(text)?;
+        entries.retain(|e| shard_of(&e.name, n) == k);
+        eprintln!("shard {k} of {n}: {} exemplar(s)", entries.len());
+    }
     std::fs::create_dir_all(args.output.join(".cache")).map_err(|e| Error::io(&args.output, e))?;
     let folder = args.manifest.parent().unwrap_or(Path::new("."));
     let outcomes: Vec<Outcome> =
         entries.par_iter().map(|entry| build_one(entry, folder, &args.output, args.force)).collect();
     write_report(&args.output, &outcomes)?;
     summarize(&outcomes, &args.output)
+}
+
+/// Copy the outputs of shard builds into `output` and write the combined report.
+fn merge(entries: &[Entry], folders: &[PathBuf], output: &Path) -> Result<()> {
+    std::fs::create_dir_all(output.join(".cache")).map_err(|e| Error::io(output, e))?;
+    let mut outcomes = Vec::new();
+    for entry in entries {
+        let name = &entry.name;
+        let found = folders.iter().find(|f| f.join(".cache").join(format!("{name}.json")).exists());
+        let Some(folder) = found else {
+            outcomes.push(Outcome::Failed(name.clone(), "built by none of the merged folders".to_string()));
+            continue;
+        };
+        for file in [format!("{name}.exr"), format!("{name}.sheet.png"), format!(".cache/{name}.json")] {
+            let bytes = std::fs::read(folder.join(&file)).map_err(|e| Error::io(folder.join(&file), e))?;
+            io::write_bytes(&output.join(&file), &bytes)?;
+        }
+        let record: Record = serde_json::from_slice(
+            &std::fs::read(output.join(format!(".cache/{name}.json"))).map_err(|e| Error::io(output, e))?,
+        )
+        .map_err(|e| Error::file(folder.join(".cache"), format!("unreadable cache record: {e}")))?;
+        outcomes.push(Outcome::Cached(record));
+    }
+    write_report(output, &outcomes)?;
+    summarize(&outcomes, output)
 }
 
 fn select<'a>(entries: &'a [Entry], only: &[String], manifest: &Path) -> Result<Vec<&'a Entry>> {

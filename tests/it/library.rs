@@ -61,3 +61,92 @@ fn a_failing_exemplar_does_not_stop_the_others() {
     let unknown = solidtex(&["build", &manifest, "-o", &out, "--only", "zz"]);
     assert!(stderr(&unknown).contains("--only \"zz\" is not in the manifest; it has a, b, c"), "{}", stderr(&unknown));
 }
+
+#[test]
+fn three_shards_merged_equal_one_build() {
+    let dir = tempfile::tempdir().unwrap();
+    let manifest = library(dir.path());
+    let single = at(dir.path(), "single");
+    assert!(solidtex(&["build", &manifest, "-o", &single]).status.success());
+    let mut shards = Vec::new();
+    let mut built = 0;
+    for k in 0..3 {
+        let out = at(dir.path(), &format!("shard{k}"));
+        let run = solidtex(&["build", &manifest, "-o", &out, "--shard", &format!("{k}/3")]);
+        assert!(run.status.success(), "{}", stderr(&run));
+        built += stderr(&run).matches("built  ").count();
+        shards.push(out);
+    }
+    assert_eq!(built, 3, "every exemplar is built by exactly one shard");
+    let merged = at(dir.path(), "merged");
+    let mut args = vec!["build", &manifest, "-o", &merged, "--merge"];
+    args.extend(shards.iter().map(String::as_str));
+    let run = solidtex(&args);
+    assert!(run.status.success(), "{}", stderr(&run));
+    for name in ["a", "b", "c"] {
+        for ext in ["exr", "sheet.png"] {
+            let file = format!("{name}.{ext}");
+            assert_eq!(
+                std::fs::read(dir.path().join("single").join(&file)).unwrap(),
+                std::fs::read(dir.path().join("merged").join(&file)).unwrap(),
+                "{file}"
+            );
+        }
+    }
+    let rows = |folder: &str| -> Vec<String> {
+        let text = std::fs::read_to_string(dir.path().join(folder).join("report.md")).unwrap();
+        text.lines()
+            .filter(|l| l.starts_with("| ") && !l.starts_with("| exemplar"))
+            .map(|l| l.split(" | ").take(4).collect::<Vec<_>>().join("|"))
+            .collect()
+    };
+    assert_eq!(rows("single"), rows("merged"));
+}
+
+#[test]
+fn shard_arguments_are_checked_and_taken_from_the_scheduler() {
+    let dir = tempfile::tempdir().unwrap();
+    let manifest = library(dir.path());
+    let out = at(dir.path(), "out");
+    crate::support::assert_fails(
+        &solidtex(&["build", &manifest, "-o", &out, "--shard", "3/3"]),
+        &["--shard \"3/3\"", "0 <= K < N"],
+    );
+    crate::support::assert_fails(
+        &solidtex(&["build", &manifest, "-o", &out, "--shard", "auto/2"]),
+        &["JOB_COMPLETION_INDEX", "SLURM_ARRAY_TASK_ID"],
+    );
+    let run = crate::support::solidtex_env(
+        &["build", &manifest, "-o", &out, "--shard", "auto/2"],
+        &[("SLURM_ARRAY_TASK_ID", "1")],
+    );
+    assert!(run.status.success() && stderr(&run).contains("shard 1 of 2"), "{}", stderr(&run));
+}
+
+#[test]
+fn each_invalid_manifest_gets_its_own_clear_message() {
+    let cases = [
+        ("unknown-recipe.toml", vec!["exemplar[0] (a)", "recipe = \"weave\"", "allowed"]),
+        ("unknown-step.toml", vec!["unknown field `smudge`", "line"]),
+        ("wrong-type.toml", vec!["exemplar[0] (a)", "type", "\"3-a\"", "allowed: 0, 1-a"]),
+        ("size-out-of-range.toml", vec!["size = [4096, 4096, 4096]", "1..=512"]),
+        ("missing-input.toml", vec!["no-such-image.png", "FAILED a"]),
+        ("duplicate-id.toml", vec!["exemplar[1].name = \"a\" is used twice"]),
+        ("bad-size.toml", vec!["size = [8, 8]", "one number or three"]),
+        ("wrong-value-type.toml", vec!["size", "line 5"]),
+    ];
+    let folder = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/manifests/invalid");
+    let dir = tempfile::tempdir().unwrap();
+    for (k, (file, needles)) in cases.into_iter().enumerate() {
+        let out = at(dir.path(), &format!("out{k}"));
+        let run = solidtex(&["build", &folder.join(file).to_string_lossy(), "-o", &out]);
+        assert_eq!(run.status.code(), Some(1), "{file}");
+        let err = stderr(&run);
+        if file != "missing-input.toml" {
+            assert!(err.contains(file), "the message names the manifest {file}: {err}");
+        }
+        for n in needles {
+            assert!(err.contains(n), "{file}: {n:?} not in {err}");
+        }
+    }
+}

@@ -25,7 +25,7 @@ pub fn solidtex(args: &[&str]) -> Output {
 /// Run `solidtex` with `args` and extra environment variables.
 pub fn solidtex_env(args: &[&str], env: &[(&str, &str)]) -> Output {
     let mut cmd = Command::new(env!("CARGO_BIN_EXE_solidtex"));
-    cmd.args(args);
+    cmd.args(args).env_remove("JOB_COMPLETION_INDEX").env_remove("SLURM_ARRAY_TASK_ID");
     for (k, v) in env {
         cmd.env(k, v);
     }
