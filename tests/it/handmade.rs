@@ -245,6 +245,10 @@ fn a_sweep_image_that_does_not_fit_the_asked_size_is_refused() {
     std::fs::write(&manifest, "[[exemplar]]\nname = \"c\"\nrecipe = \"sweep\"\nimage = \"s.png\"\nlength = 8\naxis = \"x\"\nsize = [8, 16, 16]\n").unwrap();
     let out = at(dir.path(), "lib");
     let run = solidtex(&["build", &manifest.to_string_lossy(), "-o", &out]);
-    assert_fails(&run, &["s.png", "16x12 pixels", "[8, 16, 12]", "[8, 16, 16]"]);
+    assert_eq!(run.status.code(), Some(1));
+    let err = stderr(&run);
+    for needle in ["FAILED c:", "s.png", "16x12 pixels", "[8, 16, 12]", "[8, 16, 16]", "1 exemplar(s) failed: c"] {
+        assert!(err.contains(needle), "{needle:?} not in {err}");
+    }
     assert!(!dir.path().join("lib/c.exr").exists());
 }
