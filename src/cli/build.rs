@@ -4,11 +4,11 @@
 
 use crate::error::{Error, Result};
 use crate::io;
-use crate::io::manifest::{self, Entry, SkinSource, Source, Step, SweepSpec};
+use crate::io::manifest::{self, Entry, MaskKind, SkinSource, Source, Step, SweepSpec, SynthSpec};
 use crate::stamp::{self, Region, Scatter};
 use crate::sweep::{self, Skin, SkinLook, Sweep};
 use crate::volume::Volume;
-use crate::{procedural, render};
+use crate::{procedural, render, synth};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -104,6 +104,7 @@ pub fn run(args: &BuildArgs) -> Result<()> {
         eprintln!("shard {k} of {n}: {} exemplar(s)", entries.len());
     }
     std::fs::create_dir_all(args.output.join(".cache")).map_err(|e| Error::io(&args.output, e))?;
+    remove_stale_temporaries(&args.output);
     let folder = args.manifest.parent().unwrap_or(Path::new("."));
     let outcomes: Vec<Outcome> =
         entries.par_iter().map(|entry| build_one(entry, folder, &args.output, args.force)).collect();
@@ -122,9 +123,10 @@ fn merge(entries: &[Entry], folders: &[PathBuf], output: &Path) -> Result<()> {
             outcomes.push(Outcome::Failed(name.clone(), "built by none of the merged folders".to_string()));
             continue;
         };
-        for file in [format!("{name}.exr"), format!("{name}.sheet.png"), format!(".cache/{name}.json")] {
-            let bytes = std::fs::read(folder.join(&file)).map_err(|e| Error::io(folder.join(&file), e))?;
-            io::write_bytes(&output.join(&file), &bytes)?;
+        let mut files = outputs(entry);
+        files.push(format!(".cache/{name}.json"));
+        for file in files {
+            copy(&folder.join(&file), &output.join(&file))?;
         }
         let record: Record = serde_json::from_slice(
             &std::fs::read(output.join(format!(".cache/{name}.json"))).map_err(|e| Error::io(output, e))?,
@@ -134,6 +136,32 @@ fn merge(entries: &[Entry], folders: &[PathBuf], output: &Path) -> Result<()> {
     }
     write_report(output, &outcomes)?;
     summarize(&outcomes, output)
+}
+
+/// Remove the temporaries an interrupted build left (`.NAME.PID.tmp`, files or folders).
+fn remove_stale_temporaries(output: &Path) {
+    for folder in [output.to_path_buf(), output.join(".cache")] {
+        let Ok(entries) = std::fs::read_dir(&folder) else { continue };
+        for path in entries.filter_map(|e| e.ok().map(|e| e.path())) {
+            let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+            if name.starts_with('.') && name.ends_with(".tmp") {
+                let _ = if path.is_dir() { std::fs::remove_dir_all(&path) } else { std::fs::remove_file(&path) };
+            }
+        }
+    }
+}
+
+/// Copy a file, or a folder of files, atomically.
+fn copy(from: &Path, to: &Path) -> Result<()> {
+    if from.is_dir() {
+        let entries: Vec<PathBuf> =
+            std::fs::read_dir(from).map_err(|e| Error::io(from, e))?.filter_map(|e| e.ok().map(|e| e.path())).collect();
+        return io::write_folder(to, |dir| {
+            entries.iter().try_for_each(|f| copy(f, &dir.join(f.file_name().unwrap_or_default())))
+        });
+    }
+    let bytes = std::fs::read(from).map_err(|e| Error::io(from, e))?;
+    io::write_bytes(to, &bytes)
 }
 
 fn select<'a>(entries: &'a [Entry], only: &[String], manifest: &Path) -> Result<Vec<&'a Entry>> {
@@ -153,13 +181,14 @@ fn build_one(entry: &Entry, folder: &Path, output: &Path, force: bool) -> Outcom
         let key = cache_key(entry, folder)?;
         let record_path = output.join(".cache").join(format!("{}.json", entry.name));
         if !force {
-            if let Some(record) = cached(&record_path, &key, output, &entry.name) {
+            if let Some(record) = cached(&record_path, &key, output, entry) {
                 return Ok(Outcome::Cached(record));
             }
         }
         let volume = make(entry)?;
         io::write_volume(&output.join(format!("{}.exr", entry.name)), &volume)?;
         io::write_rgb8(&output.join(format!("{}.sheet.png", entry.name)), &render::sheet(&volume, &entry.name))?;
+        extras(entry, &volume, output)?;
         let classified =
             crate::classify::classify(&volume).map(|c| c.texture_type.to_string()).unwrap_or_else(|_| "-".into());
         let record = Record {
@@ -186,11 +215,27 @@ fn build_one(entry: &Entry, folder: &Path, output: &Path, force: bool) -> Outcom
     outcome
 }
 
-/// The record of an up-to-date build, if the key matches and the outputs exist.
-fn cached(record_path: &Path, key: &str, output: &Path, name: &str) -> Option<Record> {
+/// The record of an up-to-date build, if the key matches and every output exists.
+fn cached(record_path: &Path, key: &str, output: &Path, entry: &Entry) -> Option<Record> {
     let record: Record = serde_json::from_slice(&std::fs::read(record_path).ok()?).ok()?;
-    let present = ["exr", "sheet.png"].iter().all(|ext| output.join(format!("{name}.{ext}")).exists());
+    let present = outputs(entry).iter().all(|f| output.join(f).exists());
     (record.key == key && present).then_some(record)
+}
+
+/// The files and folders an entry's build writes (relative to the output folder).
+fn outputs(entry: &Entry) -> Vec<String> {
+    let name = &entry.name;
+    let mut files = vec![format!("{name}.exr"), format!("{name}.sheet.png")];
+    files.extend(
+        entry.exports.iter().map(|e| if e == "slices" { format!("{name}_slices") } else { format!("{name}.{e}") }),
+    );
+    for kind in &entry.masks {
+        files.push(match kind {
+            MaskKind::Splotch => format!("{name}.mask.exr"),
+            MaskKind::Layered => format!("{name}.masks"),
+        });
+    }
+    files
 }
 
 /// blake3 of the tool version, the recipe (paths relative to the manifest) and every input file.
@@ -208,11 +253,18 @@ fn cache_key(entry: &Entry, folder: &Path) -> Result<String> {
 /// The files an entry reads.
 fn inputs(entry: &Entry) -> Vec<PathBuf> {
     let mut files = Vec::new();
-    if let Source::Sweep(spec) = &entry.source {
-        files.push(spec.image.clone());
-        if let Some((SkinSource::Image(p), _, _)) = &spec.skin {
-            files.push(p.clone());
+    match &entry.source {
+        Source::Sweep(spec) => {
+            files.push(spec.image.clone());
+            if let Some((SkinSource::Image(p), _, _)) = &spec.skin {
+                files.push(p.clone());
+            }
         }
+        Source::Synth(spec) => {
+            files.push(spec.image.clone());
+            files.extend([&spec.ey, &spec.ez, &spec.depth].into_iter().flatten().cloned());
+        }
+        Source::Procedural(_) => {}
     }
     for step in &entry.steps {
         match step {
@@ -285,6 +337,9 @@ pub fn make(entry: &Entry) -> Result<Volume> {
             procedural::generate(*recipe, dims, entry.seed)?
         }
         Source::Sweep(spec) => swept(spec, entry.dims, entry.seed)?,
+        Source::Synth(spec) => {
+            synthesized(spec, entry.dims.ok_or_else(|| Error::invalid("size is missing"))?, entry.seed)?
+        }
     };
     for step in &entry.steps {
         apply(step, &mut volume)?;
@@ -295,6 +350,65 @@ pub fn make(entry: &Entry) -> Result<Volume> {
     volume.meta.set("name", entry.name.clone());
     Ok(volume)
 }
+fn synthesized(spec: &SynthSpec, size: [usize; 3], seed: u64) -> Result<Volume> {
+    let read = |p: &Path| io::read_image_fit(p, spec.max_exemplar);
+    let ex = read(&spec.image)?;
+    let params = synth::SynthParams { size, levels: spec.levels, ..synth::SynthParams::default() };
+    let none = crate::progress::NoProgress;
+    let volume = if spec.layered {
+        let depth = spec.depth.as_deref().map(read).transpose()?;
+        synth::synthesize_layered(&ex, depth.as_ref(), &params, &synth::LayeredParams::default(), seed, &none)
+    } else {
+        let ey = spec.ey.as_deref().map(read).transpose()?;
+        let ez = spec.ez.as_deref().map(read).transpose()?;
+        synth::synthesize(synth::Exemplars { x: &ex, y: ey.as_ref(), z: ez.as_ref() }, &params, seed, &none)
+    };
+    volume.map_err(|e| e.in_file(&spec.image))
+}
+
+/// Masks and extra formats beside the volume.
+fn extras(entry: &Entry, volume: &Volume, output: &Path) -> Result<()> {
+    let name = &entry.name;
+    for export in &entry.exports {
+        let path = match export.as_str() {
+            "slices" => output.join(format!("{name}_slices")),
+            ext => output.join(format!("{name}.{ext}")),
+        };
+        io::write_volume(&path, volume)?;
+    }
+    let size = *volume.dims().iter().max().expect("three dims");
+    for kind in &entry.masks {
+        match kind {
+            MaskKind::Splotch => {
+                let m = crate::mask::splotch(size, entry.mask_falloff, entry.seed)?;
+                io::write_volume(&output.join(format!("{name}.mask.exr")), &m)?;
+            }
+            MaskKind::Layered => {
+                let depth = depth_axis(entry);
+                let layers: Vec<(crate::mask::Layer, Volume)> = crate::mask::Layer::ALL
+                    .iter()
+                    .map(|l| Ok((*l, crate::mask::layered(size, entry.mask_falloff, entry.seed, *l, depth)?)))
+                    .collect::<Result<_>>()?;
+                io::write_folder(&output.join(format!("{name}.masks")), |dir| {
+                    for (l, m) in &layers {
+                        io::write_volume(&dir.join(format!("{}.exr", l.name())), m)?;
+                    }
+                    Ok(())
+                })?;
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The depth axis of an entry: the sweep's, else z.
+fn depth_axis(entry: &Entry) -> crate::volume::Axis {
+    match &entry.source {
+        Source::Sweep(spec) => spec.depth_axis.unwrap_or(crate::volume::Axis::Z),
+        _ => crate::volume::Axis::Z,
+    }
+}
+
 fn swept(spec: &SweepSpec, dims: Option<[usize; 3]>, seed: u64) -> Result<Volume> {
     let image = io::read_image(&spec.image)?;
     let (a, b) = spec.axis.plane_axes();

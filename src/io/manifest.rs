@@ -39,6 +39,16 @@ struct RawExemplar {
     skin: Option<String>,
     skin_width: Option<f32>,
     skin_noise: Option<f32>,
+    ey: Option<String>,
+    ez: Option<String>,
+    depth_image: Option<String>,
+    levels: Option<usize>,
+    max_exemplar: Option<usize>,
+    #[serde(default)]
+    masks: Vec<String>,
+    mask_falloff: Option<f32>,
+    #[serde(default)]
+    exports: Vec<String>,
     #[serde(default)]
     steps: Vec<RawStep>,
 }
@@ -93,6 +103,25 @@ pub struct SweepSpec {
     pub skin: Option<(SkinSource, f32, f32)>,
 }
 
+/// A synthesis recipe (see [`crate::synth`]), with file paths resolved.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SynthSpec {
+    /// The exemplar (Ex; the layered exemplar).
+    pub image: PathBuf,
+    /// Ey, if different.
+    pub ey: Option<PathBuf>,
+    /// Ez, if different.
+    pub ez: Option<PathBuf>,
+    /// Layered (type 1-b) synthesis.
+    pub layered: bool,
+    /// Depth image for layered synthesis.
+    pub depth: Option<PathBuf>,
+    /// Pyramid levels.
+    pub levels: usize,
+    /// Shrink exemplars to this longest side first.
+    pub max_exemplar: Option<usize>,
+}
+
 /// What makes an exemplar's volume.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Source {
@@ -100,7 +129,21 @@ pub enum Source {
     Procedural(Recipe),
     /// A swept cross-section.
     Sweep(SweepSpec),
+    /// 2D-to-3D synthesis.
+    Synth(SynthSpec),
 }
+
+/// Masks built beside an exemplar.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MaskKind {
+    /// `NAME.mask.exr`: a splotch.
+    Splotch,
+    /// `NAME.masks/{outer,middle,inner}.exr`.
+    Layered,
+}
+
+/// Extra formats written beside the native EXR.
+pub const EXPORTS: [&str; 4] = ["nrrd", "vol", "png", "slices"];
 
 /// A step applied after the source, in order.
 #[derive(Debug, Clone, PartialEq)]
@@ -155,6 +198,12 @@ pub struct Entry {
     pub texture_type: Option<TextureType>,
     /// Steps after the source.
     pub steps: Vec<Step>,
+    /// Masks to build.
+    pub masks: Vec<MaskKind>,
+    /// Fall-off of the masks, as a share of their size.
+    pub mask_falloff: f32,
+    /// Extra formats: any of [`EXPORTS`].
+    pub exports: Vec<String>,
 }
 
 /// A validated manifest: what `solidtex build` will make.
@@ -203,17 +252,34 @@ fn validate(raw: RawExemplar, folder: &Path) -> Result<Entry> {
     let dims = raw.size.as_ref().map(dims_of).transpose()?;
     let source = match raw.recipe.as_str() {
         "sweep" => Source::Sweep(sweep_spec(&raw, folder)?),
+        "synth" | "synth-layered" => Source::Synth(synth_spec(&raw, folder)?),
         other => match other.strip_prefix("procedural:") {
             Some(r) => Source::Procedural(r.parse::<Recipe>().map_err(|e| Error::invalid(format!("recipe: {e}")))?),
             None => {
                 return Err(Error::invalid(format!(
-                    "recipe = {other:?} is unknown; allowed: procedural:marble, procedural:strata, procedural:wood, sweep"
+                    "recipe = {other:?} is unknown; allowed: procedural:marble, procedural:strata, procedural:wood, sweep, synth, synth-layered"
                 )));
             }
         },
     };
-    if matches!(source, Source::Procedural(_)) && dims.is_none() {
-        return Err(Error::invalid("size is missing; a procedural recipe needs size = N or [x, y, z]"));
+    if matches!(source, Source::Procedural(_) | Source::Synth(_)) && dims.is_none() {
+        return Err(Error::invalid(format!("size is missing; recipe {} needs size = N or [x, y, z]", raw.recipe)));
+    }
+    let masks = raw
+        .masks
+        .iter()
+        .map(|m| match m.as_str() {
+            "splotch" => Ok(MaskKind::Splotch),
+            "layered" => Ok(MaskKind::Layered),
+            other => Err(Error::invalid(format!("masks: {other:?} is unknown; allowed: splotch, layered"))),
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let mask_falloff = raw.mask_falloff.unwrap_or(crate::mask::DEFAULT_FALLOFF);
+    if mask_falloff.is_nan() || mask_falloff <= 0.0 || mask_falloff >= 0.5 {
+        return Err(Error::invalid(format!("mask_falloff = {mask_falloff} is outside (0, 0.5)")));
+    }
+    if let Some(bad) = raw.exports.iter().find(|e| !EXPORTS.contains(&e.as_str())) {
+        return Err(Error::invalid(format!("exports: {bad:?} is unknown; allowed: {}", EXPORTS.join(", "))));
     }
     let texture_type = raw
         .texture_type
@@ -227,7 +293,17 @@ fn validate(raw: RawExemplar, folder: &Path) -> Result<Entry> {
         .enumerate()
         .map(|(k, s)| step(s, folder).map_err(|e| Error::invalid(format!("steps[{k}]: {e}"))))
         .collect::<Result<_>>()?;
-    Ok(Entry { name: raw.name, source, dims, seed: raw.seed, texture_type, steps })
+    Ok(Entry {
+        name: raw.name,
+        source,
+        dims,
+        seed: raw.seed,
+        texture_type,
+        steps,
+        masks,
+        mask_falloff,
+        exports: raw.exports,
+    })
 }
 
 fn dims_of(size: &RawSize) -> Result<[usize; 3]> {
@@ -282,6 +358,29 @@ fn sweep_spec(raw: &RawExemplar, folder: &Path) -> Result<SweepSpec> {
         })
         .transpose()?;
     Ok(SweepSpec { image, length, axis, depth_axis, noise, skin })
+}
+
+fn synth_spec(raw: &RawExemplar, folder: &Path) -> Result<SynthSpec> {
+    let image = folder
+        .join(raw.image.as_deref().ok_or_else(|| Error::invalid("image is missing; synth needs an exemplar image"))?);
+    let levels = raw.levels.unwrap_or(3);
+    if !(1..=8).contains(&levels) {
+        return Err(Error::invalid(format!("levels = {levels} is out of range; allowed 1 to 8")));
+    }
+    let layered = raw.recipe == "synth-layered";
+    if !layered && raw.depth_image.is_some() {
+        return Err(Error::invalid("depth_image needs recipe = \"synth-layered\""));
+    }
+    let join = |p: &Option<String>| p.as_deref().map(|p| folder.join(p));
+    Ok(SynthSpec {
+        image,
+        ey: join(&raw.ey),
+        ez: join(&raw.ez),
+        layered,
+        depth: join(&raw.depth_image),
+        levels,
+        max_exemplar: raw.max_exemplar,
+    })
 }
 
 fn step(raw: &RawStep, folder: &Path) -> Result<Step> {

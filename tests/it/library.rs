@@ -150,3 +150,46 @@ fn each_invalid_manifest_gets_its_own_clear_message() {
         }
     }
 }
+
+#[test]
+fn an_interrupted_build_resumes_and_ends_identical() {
+    let dir = tempfile::tempdir().unwrap();
+    let manifest = library(dir.path());
+    let mut text = std::fs::read_to_string(&manifest).unwrap();
+    text += "[[exemplar]]\nname = \"d\"\nrecipe = \"synth\"\nimage = \"section.png\"\nsize = 24\nlevels = 1\nmasks = [\"splotch\", \"layered\"]\nexports = [\"nrrd\", \"slices\"]\n";
+    std::fs::write(&manifest, text).unwrap();
+    let clean = at(dir.path(), "clean");
+    assert!(solidtex(&["build", &manifest, "-o", &clean]).status.success());
+    let resumed = at(dir.path(), "resumed");
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_solidtex"))
+        .args(["build", &manifest, "-o", &resumed])
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(150));
+    let _ = child.kill();
+    let _ = child.wait();
+    let run = solidtex(&["build", &manifest, "-o", &resumed]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let files = |folder: &str| -> Vec<(String, Vec<u8>)> {
+        let mut out = Vec::new();
+        let mut stack = vec![dir.path().join(folder)];
+        while let Some(f) = stack.pop() {
+            for e in std::fs::read_dir(&f).unwrap() {
+                let p = e.unwrap().path();
+                let rel = p.strip_prefix(dir.path().join(folder)).unwrap().to_string_lossy().into_owned();
+                if p.is_dir() {
+                    stack.push(p);
+                } else if !rel.ends_with(".json") && !rel.starts_with("report") {
+                    out.push((rel, std::fs::read(&p).unwrap()));
+                }
+            }
+        }
+        out.sort();
+        out
+    };
+    let (a, b) = (files("clean"), files("resumed"));
+    assert_eq!(a.iter().map(|f| &f.0).collect::<Vec<_>>(), b.iter().map(|f| &f.0).collect::<Vec<_>>());
+    assert!(a == b, "a resumed build differs from a clean one");
+    assert!(!a.iter().any(|f| f.0.ends_with(".tmp")), "no temporaries are left");
+}
