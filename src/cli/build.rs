@@ -106,8 +106,15 @@ pub fn run(args: &BuildArgs) -> Result<()> {
     std::fs::create_dir_all(args.output.join(".cache")).map_err(|e| Error::io(&args.output, e))?;
     remove_stale_temporaries(&args.output);
     let folder = args.manifest.parent().unwrap_or(Path::new("."));
-    let outcomes: Vec<Outcome> =
-        entries.par_iter().map(|entry| build_one(entry, folder, &args.output, args.force)).collect();
+    let lines = Lines::new(entries.len());
+    let budget = io::budget_from_env()?;
+    let mut outcomes: Vec<Outcome> = Vec::new();
+    for batch in batches(&entries, budget) {
+        let done: Vec<Outcome> =
+            batch.par_iter().map(|entry| build_one(entry, folder, &args.output, args.force, &lines)).collect();
+        outcomes.extend(done);
+    }
+    lines.finish();
     write_report(&args.output, &outcomes)?;
     summarize(&outcomes, &args.output)
 }
@@ -175,7 +182,71 @@ fn select<'a>(entries: &'a [Entry], only: &[String], manifest: &Path) -> Result<
     Ok(entries.iter().filter(|e| only.is_empty() || only.contains(&e.name)).collect())
 }
 
-fn build_one(entry: &Entry, folder: &Path, output: &Path, force: bool) -> Outcome {
+/// Bytes an exemplar's build may hold at once: its volume several times over (synthesis
+/// keeps matches and two grids per level).
+fn estimate(entry: &Entry) -> u64 {
+    let dims = entry.dims.unwrap_or([64; 3]);
+    let voxels = dims.iter().map(|d| *d as u64).product::<u64>();
+    let factor = if matches!(entry.source, Source::Synth(_)) { 48 } else { 16 };
+    voxels * 4 * factor
+}
+
+/// Consecutive groups of entries whose estimates together fit the budget (one entry alone
+/// always forms a group); groups run one after another, entries in a group in parallel.
+fn batches<'a>(entries: &[&'a Entry], budget: u64) -> Vec<Vec<&'a Entry>> {
+    let mut out: Vec<Vec<&Entry>> = Vec::new();
+    let mut used = 0;
+    for &e in entries {
+        let need = estimate(e);
+        match out.last_mut() {
+            Some(last) if used + need <= budget => {
+                last.push(e);
+                used += need;
+            }
+            _ => {
+                out.push(vec![e]);
+                used = need;
+            }
+        }
+    }
+    out
+}
+
+/// Progress: a bar above the result lines on a terminal, plain lines otherwise.
+struct Lines {
+    bar: Option<indicatif::ProgressBar>,
+}
+
+impl Lines {
+    fn new(total: usize) -> Lines {
+        use std::io::IsTerminal;
+        let bar = std::io::stderr().is_terminal().then(|| {
+            let bar = indicatif::ProgressBar::new(total as u64);
+            let style = indicatif::ProgressStyle::with_template("{elapsed:>4} [{bar:30}] {pos}/{len} exemplars");
+            bar.set_style(style.expect("valid template"));
+            bar
+        });
+        Lines { bar }
+    }
+
+    fn line(&self, text: String) {
+        match &self.bar {
+            Some(bar) => {
+                bar.println(text);
+                bar.inc(1);
+            }
+            None => eprintln!("{text}"),
+        }
+    }
+
+    fn finish(&self) {
+        if let Some(bar) = &self.bar {
+            bar.finish_and_clear();
+        }
+    }
+}
+
+fn build_one(entry: &Entry, folder: &Path, output: &Path, force: bool, lines: &Lines) -> Outcome {
     let started = Instant::now();
     let result = (|| {
         let key = cache_key(entry, folder)?;
@@ -204,14 +275,14 @@ fn build_one(entry: &Entry, folder: &Path, output: &Path, force: bool) -> Outcom
         Ok(Outcome::Built(record))
     })();
     let outcome = result.unwrap_or_else(|e: Error| Outcome::Failed(entry.name.clone(), e.to_string()));
-    match &outcome {
+    lines.line(match &outcome {
         Outcome::Built(r) => {
             let [x, y, z] = r.dims;
-            eprintln!("built  {} {x}x{y}x{z} in {:.2} s", r.name, r.seconds);
+            format!("built  {} {x}x{y}x{z} in {:.2} s", r.name, r.seconds)
         }
-        Outcome::Cached(r) => eprintln!("cached {} (recipe and inputs unchanged)", r.name),
-        Outcome::Failed(name, why) => eprintln!("FAILED {name}: {why}"),
-    }
+        Outcome::Cached(r) => format!("cached {} (recipe and inputs unchanged)", r.name),
+        Outcome::Failed(name, why) => format!("FAILED {name}: {why}"),
+    });
     outcome
 }
 
@@ -477,4 +548,34 @@ fn apply(step: &Step, volume: &mut Volume) -> Result<()> {
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::io::manifest::parse_plan;
+
+    #[test]
+    fn batches_keep_each_group_within_the_budget() {
+        let text = (0..5)
+            .map(|i| format!("[[exemplar]]\nname = \"e{i}\"\nrecipe = \"procedural:marble\"\nsize = 16\n"))
+            .collect::<String>();
+        let plan = parse_plan(&text, Path::new(".")).unwrap();
+        let entries: Vec<&Entry> = plan.entries.iter().collect();
+        let one = estimate(entries[0]);
+        let groups = batches(&entries, 2 * one);
+        assert_eq!(groups.iter().map(Vec::len).collect::<Vec<_>>(), [2, 2, 1]);
+        assert_eq!(batches(&entries, 1).len(), 5, "an entry over the budget still builds, alone");
+        assert_eq!(batches(&entries, u64::MAX).len(), 1);
+    }
+
+    #[test]
+    fn shards_split_names_stably() {
+        let names = ["kiwi", "carrot", "trunk", "marble", "wood", "strata"];
+        let first: Vec<u64> = names.iter().map(|n| shard_of(n, 3)).collect();
+        assert_eq!(first, names.iter().map(|n| shard_of(n, 3)).collect::<Vec<_>>());
+        assert!(first.iter().all(|k| *k < 3));
+        assert_eq!(parse_shard("2/5").unwrap(), (2, 5));
+        assert!(parse_shard("5/5").is_err() && parse_shard("x").is_err() && parse_shard("1/0").is_err());
+    }
 }
