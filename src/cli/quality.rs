@@ -13,19 +13,13 @@ pub struct QualityArgs {
     /// The exemplar it was made from (Ex, or the layered exemplar).
     #[arg(long)]
     pub exemplar: PathBuf,
-    /// The exemplar for slices orthogonal to y (default: the exemplar).
-    #[arg(long)]
-    pub ey: Option<PathBuf>,
-    /// The exemplar for slices orthogonal to z (default: Ey).
-    #[arg(long)]
-    pub ez: Option<PathBuf>,
+    /// Ey, Ez and shrinking.
+    #[command(flatten)]
+    pub others: super::synth::OtherExemplars,
     /// Measure as a layered volume (x and y only, plus depth and sweeping measures);
     /// the default when the volume's type is 1-b.
     #[arg(long)]
     pub layered: bool,
-    /// Shrink exemplars whose longer side exceeds this many pixels (as given to synth).
-    #[arg(long)]
-    pub max_exemplar: Option<usize>,
     /// Print JSON instead of a table.
     #[arg(long)]
     pub json: bool,
@@ -34,10 +28,8 @@ pub struct QualityArgs {
 /// Run `solidtex quality`.
 pub fn run(args: &QualityArgs) -> Result<()> {
     let volume = io::read_volume(&args.volume, io::budget_from_env()?)?;
-    let read = |p: &std::path::Path| io::read_image_fit(p, args.max_exemplar);
-    let ex = read(&args.exemplar)?;
-    let ey = args.ey.as_deref().map(read).transpose()?;
-    let ez = args.ez.as_deref().map(read).transpose()?;
+    let ex = args.others.load(&args.exemplar, "exemplar")?;
+    let (ey, ez) = args.others.load_yz()?;
     let layered = args.layered || volume.meta.texture_type == Some(crate::TextureType::T1b);
     let ey_ref = ey.as_ref().unwrap_or(&ex);
     let exemplars = if layered {

@@ -9,17 +9,45 @@ use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-/// The arguments of `solidtex synth`.
+/// Ey, Ez and exemplar shrinking: shared by `synth` and `quality`.
 #[derive(Debug, clap::Args)]
-pub struct SynthArgs {
-    /// The exemplar image (Ex: the cross-section orthogonal to x; alone, all three).
-    pub exemplar: PathBuf,
+pub struct OtherExemplars {
     /// The cross-section orthogonal to y (default: the exemplar).
     #[arg(long)]
     pub ey: Option<PathBuf>,
     /// The cross-section orthogonal to z (default: Ey).
     #[arg(long)]
     pub ez: Option<PathBuf>,
+    /// Shrink exemplars whose longer side exceeds this many pixels (e.g. 128 for photos).
+    #[arg(long)]
+    pub max_exemplar: Option<usize>,
+}
+
+impl OtherExemplars {
+    /// Load one image, shrunk as asked; `what` names it in errors.
+    pub fn load(&self, path: &Path, what: &str) -> Result<Image2d> {
+        io::read_image_fit(path, self.max_exemplar).map_err(|e| match e {
+            Error::Io { path, source } => Error::file(&path, format!("cannot read the {what}: {source}")),
+            other => other,
+        })
+    }
+
+    /// Ey and Ez, if given.
+    pub fn load_yz(&self) -> Result<(Option<Image2d>, Option<Image2d>)> {
+        let ey = self.ey.as_deref().map(|p| self.load(p, "Ey exemplar")).transpose()?;
+        let ez = self.ez.as_deref().map(|p| self.load(p, "Ez exemplar")).transpose()?;
+        Ok((ey, ez))
+    }
+}
+
+/// The arguments of `solidtex synth`.
+#[derive(Debug, clap::Args)]
+pub struct SynthArgs {
+    /// The exemplar image (Ex: the cross-section orthogonal to x; alone, all three).
+    pub exemplar: PathBuf,
+    /// Ey, Ez and shrinking.
+    #[command(flatten)]
+    pub others: OtherExemplars,
     /// Layered (type 1-b) synthesis: the exemplar's rows run along depth (the volume's z).
     #[arg(long)]
     pub layered: bool,
@@ -32,9 +60,6 @@ pub struct SynthArgs {
     /// Weight of the depth channel in neighbourhood distances (with --layered).
     #[arg(long, default_value_t = 1.0, requires = "layered")]
     pub depth_weight: f32,
-    /// Shrink exemplars whose longer side exceeds this many pixels (e.g. 128 for photos).
-    #[arg(long)]
-    pub max_exemplar: Option<usize>,
     /// Output size: N for a cube, or XxYxZ.
     #[arg(long, default_value = "64")]
     pub size: String,
@@ -88,13 +113,6 @@ impl Progress for Bar {
     }
 }
 
-fn load(path: &Path, what: &str, max_side: Option<usize>) -> Result<Image2d> {
-    io::read_image_fit(path, max_side).map_err(|e| match e {
-        Error::Io { path, source } => Error::file(&path, format!("cannot read the {what}: {source}")),
-        other => other,
-    })
-}
-
 /// Run `solidtex synth`.
 pub fn run(args: &SynthArgs) -> Result<()> {
     io::Format::of(&args.output)?;
@@ -111,21 +129,19 @@ pub fn run(args: &SynthArgs) -> Result<()> {
         budget_bytes: io::budget_from_env()?,
         ..SynthParams::default()
     };
-    let fit = args.max_exemplar;
-    let ex = load(&args.exemplar, "exemplar", fit)?;
+    let ex = args.others.load(&args.exemplar, "exemplar")?;
     let started = Instant::now();
     let bar = Bar { bar: ProgressBar::new(1000), verbose: args.verbose, started };
     bar.bar.set_style(
         ProgressStyle::with_template("{elapsed:>4} [{bar:40}] {percent:>3}% {msg}").expect("valid template"),
     );
     let volume = if args.layered {
-        let depth = args.depth.as_deref().map(|p| load(p, "depth image", fit)).transpose()?;
+        let depth = args.depth.as_deref().map(|p| args.others.load(p, "depth image")).transpose()?;
         let layered = LayeredParams { anti_sweeping: !args.no_anti_sweeping, depth_weight: args.depth_weight };
         synth::synthesize_layered(&ex, depth.as_ref(), &params, &layered, args.seed, &bar)
             .map_err(|e| e.in_file(&args.exemplar))?
     } else {
-        let ey = args.ey.as_deref().map(|p| load(p, "Ey exemplar", fit)).transpose()?;
-        let ez = args.ez.as_deref().map(|p| load(p, "Ez exemplar", fit)).transpose()?;
+        let (ey, ez) = args.others.load_yz()?;
         let exemplars = Exemplars { x: &ex, y: ey.as_ref(), z: ez.as_ref() };
         synth::synthesize(exemplars, &params, args.seed, &bar).map_err(|e| e.in_file(&args.exemplar))?
     };
