@@ -52,6 +52,7 @@ pub mod stamp;
 pub mod sweep;
 pub mod synth;
 pub mod texture_type;
+pub mod tui;
 pub mod volume;
 
 pub use error::{Error, Result};

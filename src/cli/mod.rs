@@ -23,9 +23,9 @@ use std::path::PathBuf;
 #[derive(Debug, Parser)]
 #[command(name = "solidtex", version, about, long_about = None)]
 pub struct Cli {
-    /// What to do.
+    /// What to do (none: open the terminal UI on exemplars/library.toml).
     #[command(subcommand)]
-    pub command: Command,
+    pub command: Option<Command>,
 }
 
 /// The subcommands.
@@ -131,13 +131,25 @@ pub enum Command {
         #[command(subcommand)]
         kind: masks::MaskCommand,
     },
+    /// Open the terminal UI on a library manifest.
+    Tui {
+        /// The manifest.
+        #[arg(default_value = "exemplars/library.toml")]
+        manifest: PathBuf,
+        /// Where builds go.
+        #[arg(short, long, default_value = "out")]
+        output: PathBuf,
+    },
     /// Build every exemplar a manifest lists (in parallel, cached), with a report.
     Build(build::BuildArgs),
 }
 
 /// Run a parsed command line.
 pub fn run(cli: Cli) -> crate::Result<()> {
-    match cli.command {
+    let Some(command) = cli.command else {
+        return crate::tui::run(std::path::Path::new("exemplars/library.toml"), std::path::Path::new("out"));
+    };
+    match command {
         Command::Info { file, json } => info::run(&file, json),
         Command::Convert { input, output } => commands::convert(&input, &output),
         Command::Slice { file, axis, index, output } => commands::slice(&file, &axis, index, &output),
@@ -147,6 +159,7 @@ pub fn run(cli: Cli) -> crate::Result<()> {
         Command::Quality(args) => quality::run(&args),
         Command::Bench(args) => bench::run(&args),
         Command::Build(args) => build::run(&args),
+        Command::Tui { manifest, output } => crate::tui::run(&manifest, &output),
         Command::Sweep(args) => handmade::run_sweep(&args),
         Command::Stamp(args) => handmade::run_stamp(&args),
         Command::Scatter(args) => handmade::run_scatter(&args),

@@ -1,0 +1,130 @@
+//! The terminal UI for texture designers (ratatui + crossterm), Model / Message / update /
+//! view: `keymap` and `update` are pure and unit-tested, `view` only draws, and long work
+//! (loading a volume, building exemplars) runs in worker threads that send messages back.
+//!
+//! This first version: the library list with declared and measured types and build state,
+//! building one or all in the background, and the exemplar view with three orthogonal
+//! slices as truecolour half-blocks, moved with keys, per channel.
+
+mod keymap;
+mod message;
+mod model;
+mod update;
+mod view;
+
+pub use message::{Effect, Message};
+pub use model::{BuildState, Item, Model, Screen};
+pub use update::update;
+pub use view::draw;
+
+use crate::error::{Error, Result};
+use crate::io;
+use crossterm::event::{self, Event, KeyEventKind};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::sync::mpsc::{Receiver, Sender, channel};
+use std::time::Duration;
+
+/// The library items of a manifest, with their build state read from `output`.
+pub fn load_items(manifest: &Path, output: &Path) -> (Vec<Item>, Vec<String>) {
+    match io::manifest::read_plan(manifest) {
+        Err(e) => (Vec::new(), vec![e.to_string()]),
+        Ok(plan) => (plan.entries.iter().map(|e| item(e, output)).collect(), Vec::new()),
+    }
+}
+
+fn item(entry: &io::manifest::Entry, output: &Path) -> Item {
+    let record = std::fs::read(output.join(".cache").join(format!("{}.json", entry.name)))
+        .ok()
+        .and_then(|b| serde_json::from_slice::<crate::cli::build::Record>(&b).ok())
+        .filter(|_| output.join(format!("{}.exr", entry.name)).exists());
+    Item {
+        name: entry.name.clone(),
+        declared: entry
+            .texture_type
+            .map(|t| t.to_string())
+            .or_else(|| record.as_ref().and_then(|r| r.declared.clone())),
+        size: record.as_ref().map(|r| r.dims).or(entry.dims),
+        state: record.map_or(BuildState::NotBuilt, |r| BuildState::Built(r.classified)),
+    }
+}
+
+/// Open the UI on `manifest`, with builds going to `output`.
+pub fn run(manifest: &Path, output: &Path) -> Result<()> {
+    let (items, errors) = load_items(manifest, output);
+    let mut model = Model::new(manifest.to_path_buf(), output.to_path_buf(), items, errors);
+    let (send, receive) = channel();
+    let mut terminal = ratatui::init();
+    let result = event_loop(&mut terminal, &mut model, &send, &receive);
+    ratatui::restore();
+    result
+}
+
+fn event_loop(
+    terminal: &mut ratatui::DefaultTerminal,
+    model: &mut Model,
+    send: &Sender<Message>,
+    receive: &Receiver<Message>,
+) -> Result<()> {
+    let fail = |e: std::io::Error| Error::io("terminal", e);
+    while !model.quit {
+        terminal.draw(|f| draw(f, model)).map_err(fail)?;
+        if event::poll(Duration::from_millis(100)).map_err(fail)? {
+            if let Event::Key(key) = event::read().map_err(fail)? {
+                if key.kind == KeyEventKind::Press {
+                    if let Some(message) = keymap::key(&model.screen, key) {
+                        start(update(model, message), model, send);
+                    }
+                }
+            }
+        }
+        while let Ok(message) = receive.try_recv() {
+            start(update(model, message), model, send);
+        }
+    }
+    Ok(())
+}
+
+/// Run effects in worker threads that report back through `send`.
+fn start(effects: Vec<Effect>, model: &Model, send: &Sender<Message>) {
+    for effect in effects {
+        let (send, manifest, output) = (send.clone(), model.manifest.clone(), model.output.clone());
+        std::thread::spawn(move || match effect {
+            Effect::Load(name) => {
+                let result =
+                    io::read_volume(&output.join(format!("{name}.exr")), io::budget_from_env().unwrap_or(u64::MAX))
+                        .map(Arc::new)
+                        .map_err(|e| e.to_string());
+                let _ = send.send(Message::Loaded(name, result));
+            }
+            Effect::Build(names) => build(&manifest, &output, names, &send),
+        });
+    }
+}
+
+/// Build by running this program's own `build` (its output stays out of the screen).
+fn build(manifest: &Path, output: &Path, names: Vec<String>, send: &Sender<Message>) {
+    let exe = std::env::current_exe().unwrap_or_else(|_| PathBuf::from("solidtex"));
+    let mut cmd = std::process::Command::new(exe);
+    cmd.arg("build").arg(manifest).arg("-o").arg(output);
+    for n in &names {
+        cmd.arg("--only").arg(n);
+    }
+    let log = cmd.output().map(|o| String::from_utf8_lossy(&o.stderr).into_owned()).unwrap_or_else(|e| e.to_string());
+    let (items, _) = load_items(manifest, output);
+    for name in names {
+        let row = items.iter().find(|i| i.name == name);
+        let result = match row {
+            Some(row) if matches!(row.state, BuildState::Built(_)) && !log.contains(&format!("FAILED {name}:")) => {
+                Ok(row.clone())
+            }
+            _ => Err(failure(&log, &name)),
+        };
+        let _ = send.send(Message::Built(name, result));
+    }
+}
+
+fn failure(log: &str, name: &str) -> String {
+    let prefix = format!("FAILED {name}: ");
+    log.lines().find_map(|l| l.strip_prefix(&prefix)).unwrap_or("the build did not finish").to_string()
+}

@@ -1,0 +1,173 @@
+//! `update`: the only place the model changes. Pure: returns the work to start.
+
+use super::message::{Effect, Message};
+use super::model::{BuildState, ExemplarView, Model, Screen};
+use crate::volume::Axis;
+
+/// Apply `message` to `model`; returns the effects to run.
+pub fn update(model: &mut Model, message: Message) -> Vec<Effect> {
+    match message {
+        Message::Quit => model.quit = true,
+        Message::Help => model.help = !model.help,
+        Message::Back => back(model),
+        Message::Up => model.selected = model.selected.saturating_sub(1),
+        Message::Down => model.selected = (model.selected + 1).min(model.items.len().saturating_sub(1)),
+        Message::Open => return open(model),
+        Message::Build => return build(model, false),
+        Message::BuildAll => return build(model, true),
+        Message::SelectAxis(axis) => with_view(model, |v| v.axis = axis),
+        Message::MoveSlice(step) => with_view(model, |v| move_slice(v, step)),
+        Message::NextChannel => with_view(model, |v| {
+            let n = v.volume.as_ref().map_or(1, |vol| vol.channel_count() + 1);
+            v.channel = (v.channel + 1) % n;
+        }),
+        Message::Loaded(name, result) => loaded(model, &name, result),
+        Message::Built(name, result) => built(model, &name, result),
+    }
+    Vec::new()
+}
+
+fn back(model: &mut Model) {
+    if model.help {
+        model.help = false;
+    } else if matches!(model.screen, Screen::Library) {
+        model.quit = true;
+    } else {
+        model.screen = Screen::Library;
+    }
+}
+
+fn with_view(model: &mut Model, f: impl FnOnce(&mut ExemplarView)) {
+    if let Screen::Exemplar(view) = &mut model.screen {
+        f(view);
+    }
+}
+
+fn move_slice(view: &mut ExemplarView, step: i64) {
+    let Some(volume) = &view.volume else { return };
+    let k = view.axis.index();
+    let last = volume.dims()[k] as i64 - 1;
+    view.index[k] = (view.index[k] as i64 + step).clamp(0, last) as usize;
+}
+
+fn open(model: &mut Model) -> Vec<Effect> {
+    let Some(item) = model.items.get(model.selected) else { return Vec::new() };
+    if !matches!(item.state, BuildState::Built(_)) {
+        model.status = format!("{} is not built yet: press b to build it", item.name);
+        return Vec::new();
+    }
+    let name = item.name.clone();
+    model.screen =
+        Screen::Exemplar(ExemplarView { name: name.clone(), volume: None, index: [0; 3], axis: Axis::Z, channel: 0 });
+    model.status = format!("loading {name}");
+    vec![Effect::Load(name)]
+}
+
+fn build(model: &mut Model, all: bool) -> Vec<Effect> {
+    let names: Vec<String> = model
+        .items
+        .iter()
+        .enumerate()
+        .filter(|(i, item)| (all || *i == model.selected) && item.state != BuildState::Building)
+        .map(|(_, item)| item.name.clone())
+        .collect();
+    if names.is_empty() {
+        return Vec::new();
+    }
+    for item in model.items.iter_mut().filter(|i| names.contains(&i.name)) {
+        item.state = BuildState::Building;
+    }
+    model.status = format!("building {}", names.join(", "));
+    vec![Effect::Build(names)]
+}
+
+fn loaded(model: &mut Model, name: &str, result: Result<std::sync::Arc<crate::volume::Volume>, String>) {
+    match result {
+        Ok(volume) => {
+            let d = volume.dims();
+            model.status = format!("{name}: {}x{}x{}; x/y/z choose the axis, arrows move the slice", d[0], d[1], d[2]);
+            with_view(model, |v| {
+                if v.name == name {
+                    v.index = [d[0] / 2, d[1] / 2, d[2] / 2];
+                    v.volume = Some(volume);
+                }
+            });
+        }
+        Err(e) => {
+            model.status = format!("cannot open {name}: {e}");
+            model.screen = Screen::Library;
+        }
+    }
+}
+
+fn built(model: &mut Model, name: &str, result: Result<crate::tui::model::Item, String>) {
+    if let Some(item) = model.items.iter_mut().find(|i| i.name == name) {
+        match result {
+            Ok(row) => {
+                if let BuildState::Built(kind) = &row.state {
+                    model.status = format!("built {name} (measured type {kind})");
+                }
+                *item = row;
+            }
+            Err(e) => {
+                model.status = format!("{name} failed: {e}");
+                item.state = BuildState::Failed(e);
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::tui::model::Item;
+    use crate::volume::{Channel, Volume};
+    use std::path::PathBuf;
+    use std::sync::Arc;
+
+    fn model() -> Model {
+        let item = |n: &str, state| Item { name: n.into(), declared: Some("0".into()), size: Some([8; 3]), state };
+        let items = vec![item("a", BuildState::Built("0".into())), item("b", BuildState::NotBuilt)];
+        Model::new(PathBuf::from("lib.toml"), PathBuf::from("out"), items, Vec::new())
+    }
+
+    #[test]
+    fn selection_stays_in_the_list_and_builds_mark_the_rows() {
+        let mut m = model();
+        update(&mut m, Message::Up);
+        assert_eq!(m.selected, 0);
+        update(&mut m, Message::Down);
+        update(&mut m, Message::Down);
+        assert_eq!(m.selected, 1);
+        assert!(update(&mut m, Message::Open).is_empty(), "b is not built");
+        assert!(m.status.contains("press b"));
+        assert_eq!(update(&mut m, Message::Build), vec![Effect::Build(vec!["b".into()])]);
+        assert_eq!(m.items[1].state, BuildState::Building);
+        assert!(update(&mut m, Message::Build).is_empty(), "no second build while one runs");
+        let row = Item {
+            name: "b".into(),
+            declared: Some("1-b".into()),
+            size: Some([8; 3]),
+            state: BuildState::Built("1-b".into()),
+        };
+        update(&mut m, Message::Built("b".into(), Ok(row)));
+        assert_eq!(m.items[1].state, BuildState::Built("1-b".into()));
+    }
+
+    #[test]
+    fn opening_loads_and_the_slice_keys_stay_inside_the_volume() {
+        let mut m = model();
+        assert_eq!(update(&mut m, Message::Open), vec![Effect::Load("a".into())]);
+        let v = Arc::new(Volume::new([8, 6, 4], Channel::rgb()).unwrap());
+        update(&mut m, Message::Loaded("a".into(), Ok(v)));
+        update(&mut m, Message::MoveSlice(100));
+        update(&mut m, Message::SelectAxis(Axis::X));
+        update(&mut m, Message::MoveSlice(-100));
+        let Screen::Exemplar(view) = &m.screen else { panic!("the exemplar view is open") };
+        assert_eq!(view.index, [0, 3, 3]);
+        update(&mut m, Message::Back);
+        assert!(matches!(m.screen, Screen::Library));
+        update(&mut m, Message::Back);
+        assert!(m.quit);
+    }
+}

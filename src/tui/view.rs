@@ -1,0 +1,239 @@
+//! `view`: draws the model, nothing else. Slices are truecolour half-blocks: each terminal
+//! cell shows two voxels, the upper as the foreground of '▀' and the lower as its background.
+
+use super::keymap::HELP;
+use super::model::{BuildState, ExemplarView, Model, Screen};
+use crate::render::ColourMap;
+use crate::volume::{Axis, Image2d};
+use ratatui::Frame;
+use ratatui::buffer::Buffer;
+use ratatui::layout::{Constraint, Layout, Rect};
+use ratatui::style::{Color, Modifier, Style};
+use ratatui::text::Line;
+use ratatui::widgets::{Block, Borders, Clear, Paragraph, Row, Table, Widget};
+
+/// Smallest usable terminal.
+pub const MIN_SIZE: (u16, u16) = (60, 16);
+
+/// Draw the whole screen.
+pub fn draw(frame: &mut Frame, model: &Model) {
+    let area = frame.area();
+    if area.width < MIN_SIZE.0 || area.height < MIN_SIZE.1 {
+        let text = format!(
+            "terminal too small: {}x{}, solidtex needs at least {}x{}",
+            area.width, area.height, MIN_SIZE.0, MIN_SIZE.1
+        );
+        frame.render_widget(Paragraph::new(text), area);
+        return;
+    }
+    let [main, status] = Layout::vertical([Constraint::Min(3), Constraint::Length(1)]).areas(area);
+    match &model.screen {
+        Screen::Library => library(frame, model, main),
+        Screen::Exemplar(view) => exemplar(frame, view, main),
+    }
+    let [left, right] = Layout::horizontal([Constraint::Min(10), Constraint::Length(16)]).areas(status);
+    frame.render_widget(Paragraph::new(model.status.as_str()).style(Style::new().fg(Color::Gray)), left);
+    frame.render_widget(Paragraph::new(" ? help  q quit").style(Style::new().fg(Color::DarkGray)), right);
+    if model.help {
+        help(frame, area);
+    }
+}
+
+fn library(frame: &mut Frame, model: &Model, area: Rect) {
+    let block =
+        Block::default().borders(Borders::ALL).title(format!(" solidtex library: {} ", model.manifest.display()));
+    if !model.errors.is_empty() {
+        let text: Vec<Line> = model.errors.iter().map(|e| Line::from(e.as_str())).collect();
+        frame.render_widget(Paragraph::new(text).block(block.title_bottom(" the manifest has errors ")), area);
+        return;
+    }
+    let rows = model.items.iter().enumerate().map(|(i, item)| {
+        let size = item.size.map(|[x, y, z]| format!("{x}x{y}x{z}")).unwrap_or_else(|| "-".into());
+        let declared = item.declared.clone().unwrap_or_else(|| "-".into());
+        let (state, measured) = match &item.state {
+            BuildState::NotBuilt => ("not built".to_string(), "-".to_string()),
+            BuildState::Building => ("building...".to_string(), "-".to_string()),
+            BuildState::Built(t) => ("built".to_string(), t.clone()),
+            BuildState::Failed(e) => (format!("failed: {e}"), "-".to_string()),
+        };
+        let badge = if measured != "-" && measured != declared { format!("{measured} (differs)") } else { measured };
+        let style = if i == model.selected { Style::new().add_modifier(Modifier::REVERSED) } else { Style::new() };
+        Row::new(vec![item.name.clone(), size, declared, badge, state]).style(style)
+    });
+    let widths = [
+        Constraint::Length(16),
+        Constraint::Length(12),
+        Constraint::Length(9),
+        Constraint::Length(14),
+        Constraint::Min(10),
+    ];
+    let header = Row::new(vec!["exemplar", "size", "declared", "measured", "state"])
+        .style(Style::new().add_modifier(Modifier::BOLD));
+    frame.render_widget(Table::new(rows, widths).header(header).block(block), area);
+}
+
+fn exemplar(frame: &mut Frame, view: &ExemplarView, area: Rect) {
+    let title = format!(" {}  (x/y/z axis, arrows move, c channel, esc back) ", view.name);
+    let block = Block::default().borders(Borders::ALL).title(title);
+    let inner = block.inner(area);
+    frame.render_widget(block, area);
+    let Some(volume) = &view.volume else {
+        frame.render_widget(Paragraph::new("loading..."), inner);
+        return;
+    };
+    let panels = Layout::horizontal([Constraint::Ratio(1, 3); 3]).split(inner);
+    let d = volume.dims();
+    let channel_name = match view.channel {
+        0 => "colour".to_string(),
+        k => volume.channels()[k - 1].to_string(),
+    };
+    for (panel, axis) in panels.iter().zip([Axis::Z, Axis::Y, Axis::X]) {
+        let k = axis.index();
+        let active = axis == view.axis;
+        let (a, b) = axis.plane_axes();
+        let label = format!(
+            " {}{} {axis}={}/{} {channel_name} ",
+            ["X", "Y", "Z"][a],
+            ["X", "Y", "Z"][b],
+            view.index[k],
+            d[k] - 1
+        );
+        let style = if active { Style::new().fg(Color::Yellow) } else { Style::new() };
+        let block = Block::default().borders(Borders::ALL).title(label).border_style(style);
+        let slice_area = block.inner(*panel);
+        frame.render_widget(block, *panel);
+        if let Ok(image) = volume.slice(axis, view.index[k]) {
+            frame.render_widget(HalfBlocks { image: &image, channel: view.channel }, slice_area);
+        }
+    }
+}
+
+/// A 2D image drawn with half-block characters, scaled to fit (nearest voxel).
+pub struct HalfBlocks<'a> {
+    /// The image.
+    pub image: &'a Image2d,
+    /// 0: natural colours; k: channel k - 1 as grey.
+    pub channel: usize,
+}
+
+impl Widget for HalfBlocks<'_> {
+    fn render(self, area: Rect, buf: &mut Buffer) {
+        let (w, h) = (self.image.width() as f32, self.image.height() as f32);
+        let scale = (area.width as f32 / w).min(2.0 * area.height as f32 / h);
+        if scale <= 0.0 {
+            return;
+        }
+        let map = match self.channel {
+            0 => ColourMap::for_channels(self.image.channels()),
+            k => ColourMap::Grey(k - 1),
+        };
+        let colour = |x: f32, y: f32| -> Option<Color> {
+            let (px, py) = ((x / scale) as usize, (y / scale) as usize);
+            (px < self.image.width() && py < self.image.height()).then(|| {
+                let [r, g, b] = map.colour(self.image.pixel(px, py));
+                Color::Rgb(r, g, b)
+            })
+        };
+        for cy in 0..area.height {
+            for cx in 0..area.width {
+                let (top, bottom) = (colour(cx as f32, 2.0 * cy as f32), colour(cx as f32, 2.0 * cy as f32 + 1.0));
+                let Some(top) = top else { continue };
+                if let Some(cell) = buf.cell_mut((area.x + cx, area.y + cy)) {
+                    cell.set_symbol("▀").set_fg(top).set_bg(bottom.unwrap_or(Color::Reset));
+                }
+            }
+        }
+    }
+}
+
+fn help(frame: &mut Frame, area: Rect) {
+    let (w, h) = (52u16.min(area.width), (HELP.len() as u16 + 2).min(area.height));
+    let rect = Rect::new(area.x + (area.width - w) / 2, area.y + (area.height - h) / 2, w, h);
+    let text: Vec<Line> = HELP.iter().map(|l| Line::from(*l)).collect();
+    frame.render_widget(Clear, rect);
+    frame.render_widget(Paragraph::new(text).block(Block::default().borders(Borders::ALL).title(" keys ")), rect);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::tui::model::{ExemplarView, Item};
+    use crate::volume::{Channel, Volume};
+    use ratatui::Terminal;
+    use ratatui::backend::TestBackend;
+    use std::path::PathBuf;
+    use std::sync::Arc;
+
+    fn screen(model: &Model, w: u16, h: u16) -> (String, Buffer) {
+        let mut terminal = Terminal::new(TestBackend::new(w, h)).unwrap();
+        terminal.draw(|f| draw(f, model)).unwrap();
+        let buffer = terminal.backend().buffer().clone();
+        let text = (0..h)
+            .map(|y| (0..w).map(|x| buffer[(x, y)].symbol().to_string()).collect::<String>())
+            .collect::<Vec<_>>()
+            .join("\n");
+        (text, buffer)
+    }
+
+    fn model() -> Model {
+        let items = vec![
+            Item {
+                name: "kiwi".into(),
+                declared: Some("2-b".into()),
+                size: Some([64; 3]),
+                state: BuildState::Built("1-b".into()),
+            },
+            Item {
+                name: "marble".into(),
+                declared: Some("0".into()),
+                size: Some([64; 3]),
+                state: BuildState::NotBuilt,
+            },
+        ];
+        Model::new(PathBuf::from("lib.toml"), PathBuf::from("out"), items, Vec::new())
+    }
+
+    #[test]
+    fn the_library_screen_lists_types_and_states_at_80x24() {
+        let (text, _) = screen(&model(), 80, 24);
+        assert!(text.contains("solidtex library: lib.toml"), "{text}");
+        assert!(text.contains("kiwi") && text.contains("64x64x64") && text.contains("1-b (differs)"), "{text}");
+        assert!(text.contains("marble") && text.contains("not built"), "{text}");
+        assert!(text.contains("? help"), "{text}");
+    }
+
+    #[test]
+    fn a_small_terminal_gets_a_message_and_help_overlays() {
+        let (text, _) = screen(&model(), 40, 10);
+        assert!(text.contains("terminal too small: 40x10"), "{text}");
+        let mut m = model();
+        m.help = true;
+        let (text, _) = screen(&m, 80, 24);
+        assert!(text.contains("keys") && text.contains("cycle colour"), "{text}");
+    }
+
+    #[test]
+    fn the_exemplar_view_draws_slices_in_colour() {
+        let volume =
+            Volume::from_fn([8, 8, 8], Channel::rgb(), |_, _, _, o| o.copy_from_slice(&[1.0, 0.0, 0.0])).unwrap();
+        let mut m = model();
+        m.screen = Screen::Exemplar(ExemplarView {
+            name: "kiwi".into(),
+            volume: Some(Arc::new(volume)),
+            index: [4; 3],
+            axis: Axis::Z,
+            channel: 0,
+        });
+        let (text, buffer) = screen(&m, 80, 24);
+        assert!(text.contains("XY z=4/7") && text.contains("XZ y=4/7") && text.contains("YZ x=4/7"), "{text}");
+        let red = (0..80u16)
+            .flat_map(|x| (0..24u16).map(move |y| (x, y)))
+            .filter(|p| buffer[*p].fg == Color::Rgb(255, 0, 0))
+            .count();
+        assert!(red > 100, "{red} red half-blocks");
+        let m2 =
+            Model { errors: vec!["lib.toml: exemplar[0] (a): size is missing".into()], items: Vec::new(), ..model() };
+        let (text, _) = screen(&m2, 80, 24);
+        assert!(text.contains("size is missing") && text.contains("the manifest has errors"), "{text}");
+    }
+}
