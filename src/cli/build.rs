@@ -335,6 +335,7 @@ fn inputs(entry: &Entry) -> Vec<PathBuf> {
             files.push(spec.image.clone());
             files.extend([&spec.ey, &spec.ez, &spec.depth].into_iter().flatten().cloned());
         }
+        Source::Load(path) => files.push(path.clone()),
         Source::Procedural(_) => {}
     }
     for step in &entry.steps {
@@ -411,6 +412,7 @@ pub fn make(entry: &Entry) -> Result<Volume> {
         Source::Synth(spec) => {
             synthesized(spec, entry.dims.ok_or_else(|| Error::invalid("size is missing"))?, entry.seed)?
         }
+        Source::Load(path) => io::read_volume(path, io::budget_from_env()?)?,
     };
     for step in &entry.steps {
         apply(step, &mut volume)?;

@@ -49,6 +49,7 @@ struct RawExemplar {
     mask_falloff: Option<f32>,
     #[serde(default)]
     exports: Vec<String>,
+    volume: Option<String>,
     #[serde(default)]
     steps: Vec<RawStep>,
 }
@@ -131,6 +132,8 @@ pub enum Source {
     Sweep(SweepSpec),
     /// 2D-to-3D synthesis.
     Synth(SynthSpec),
+    /// An existing volume file (any format solidtex reads).
+    Load(PathBuf),
 }
 
 /// Masks built beside an exemplar.
@@ -229,9 +232,14 @@ pub fn parse_plan(text: &str, folder: &Path) -> Result<Plan> {
     let mut entries: Vec<Entry> = Vec::new();
     for (i, e) in raw.exemplar.into_iter().enumerate() {
         let name = e.name.clone();
-        let entry = validate(e, folder).map_err(|err| Error::invalid(format!("exemplar[{i}] ({name}): {err}")))?;
+        let line = entry_line(text, i);
+        let entry =
+            validate(e, folder).map_err(|err| Error::invalid(format!("line {line}: exemplar[{i}] ({name}): {err}")))?;
         if entries.iter().any(|x| x.name == entry.name) {
-            return Err(Error::invalid(format!("exemplar[{i}].name = {name:?} is used twice; names must be unique")));
+            let line = entry_line(text, i);
+            return Err(Error::invalid(format!(
+                "line {line}: exemplar[{i}].name = {name:?} is used twice; names must be unique"
+            )));
         }
         entries.push(entry);
     }
@@ -239,6 +247,11 @@ pub fn parse_plan(text: &str, folder: &Path) -> Result<Plan> {
         return Err(Error::invalid("the manifest has no [[exemplar]] entries"));
     }
     Ok(Plan { entries })
+}
+
+/// The line (from 1) of the `i`-th `[[exemplar]]` header.
+fn entry_line(text: &str, i: usize) -> usize {
+    text.lines().enumerate().filter(|(_, l)| l.trim() == "[[exemplar]]").nth(i).map_or(0, |(n, _)| n + 1)
 }
 
 fn validate(raw: RawExemplar, folder: &Path) -> Result<Entry> {
@@ -253,11 +266,18 @@ fn validate(raw: RawExemplar, folder: &Path) -> Result<Entry> {
     let source = match raw.recipe.as_str() {
         "sweep" => Source::Sweep(sweep_spec(&raw, folder)?),
         "synth" | "synth-layered" => Source::Synth(synth_spec(&raw, folder)?),
+        "load" => Source::Load(
+            folder.join(
+                raw.volume
+                    .as_deref()
+                    .ok_or_else(|| Error::invalid("volume is missing; recipe load needs volume = FILE"))?,
+            ),
+        ),
         other => match other.strip_prefix("procedural:") {
             Some(r) => Source::Procedural(r.parse::<Recipe>().map_err(|e| Error::invalid(format!("recipe: {e}")))?),
             None => {
                 return Err(Error::invalid(format!(
-                    "recipe = {other:?} is unknown; allowed: procedural:marble, procedural:strata, procedural:wood, sweep, synth, synth-layered"
+                    "recipe = {other:?} is unknown; allowed: procedural:marble, procedural:strata, procedural:wood, sweep, synth, synth-layered, load"
                 )));
             }
         },

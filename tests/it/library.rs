@@ -37,6 +37,12 @@ fn a_second_build_rebuilds_nothing_and_a_touched_input_rebuilds_only_its_exempla
     let third = solidtex(&["build", &manifest, "-o", &out]);
     assert!(stderr(&third).contains("1 built, 2 cached") && stderr(&third).contains("built  c "), "{}", stderr(&third));
     assert_ne!(std::fs::read(dir.path().join("out/c.exr")).unwrap(), c_before);
+    let mut text = std::fs::read_to_string(&manifest).unwrap();
+    text += "[[exemplar]]\nname = \"e\"\nrecipe = \"load\"\nvolume = \"out/a.exr\"\nexports = [\"nrrd\"]\n";
+    std::fs::write(&manifest, text).unwrap();
+    let loaded = solidtex(&["build", &manifest, "-o", &out]);
+    assert!(stderr(&loaded).contains("1 built, 3 cached"), "{}", stderr(&loaded));
+    assert!(dir.path().join("out/e.nrrd").exists());
     let forced = solidtex(&["build", &manifest, "-o", &out, "--force", "--only", "a"]);
     assert!(stderr(&forced).contains("1 built, 0 cached"), "{}", stderr(&forced));
     let report = std::fs::read_to_string(dir.path().join("out/report.md")).unwrap();
@@ -126,12 +132,13 @@ fn shard_arguments_are_checked_and_taken_from_the_scheduler() {
 #[test]
 fn each_invalid_manifest_gets_its_own_clear_message() {
     let cases = [
-        ("unknown-recipe.toml", vec!["exemplar[0] (a)", "recipe = \"weave\"", "allowed"]),
+        ("unknown-recipe.toml", vec!["line 2: exemplar[0] (a)", "recipe = \"weave\"", "allowed"]),
+        ("unknown-mask.toml", vec!["line 2: exemplar[0] (a)", "masks: \"blob\"", "allowed: splotch, layered"]),
         ("unknown-step.toml", vec!["unknown field `smudge`", "line"]),
         ("wrong-type.toml", vec!["exemplar[0] (a)", "type", "\"3-a\"", "allowed: 0, 1-a"]),
         ("size-out-of-range.toml", vec!["size = [4096, 4096, 4096]", "1..=512"]),
         ("missing-input.toml", vec!["no-such-image.png", "FAILED a"]),
-        ("duplicate-id.toml", vec!["exemplar[1].name = \"a\" is used twice"]),
+        ("duplicate-id.toml", vec!["line 6: exemplar[1].name = \"a\" is used twice"]),
         ("bad-size.toml", vec!["size = [8, 8]", "one number or three"]),
         ("wrong-value-type.toml", vec!["size", "line 5"]),
     ];
