@@ -2,13 +2,13 @@
 //! `DIR/NAME.exr` and a contact sheet `DIR/NAME.sheet.png`, skipping exemplars whose
 //! recipe and inputs have not changed (a content-addressed cache), and write a report.
 
+pub use super::recipe::make;
+
+use super::recipe::extras;
 use crate::error::{Error, Result};
 use crate::io;
-use crate::io::manifest::{self, Entry, MaskKind, SkinSource, Source, Step, SweepSpec, SynthSpec};
-use crate::stamp::{self, Region, Scatter};
-use crate::sweep::{self, Skin, SkinLook, Sweep};
-use crate::volume::Volume;
-use crate::{procedural, render, synth};
+use crate::io::manifest::{self, Entry, MaskKind, SkinSource, Source, Step};
+use crate::render;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -399,157 +399,6 @@ fn write_report(output: &Path, outcomes: &[Outcome]) -> Result<()> {
     html += "</table>\n";
     io::write_bytes(&output.join("report.md"), md.as_bytes())?;
     io::write_bytes(&output.join("report.html"), html.as_bytes())
-}
-
-/// Make one entry's volume: its source, then its steps.
-pub fn make(entry: &Entry) -> Result<Volume> {
-    let mut volume = match &entry.source {
-        Source::Procedural(recipe) => {
-            let dims = entry.dims.ok_or_else(|| Error::invalid("size is missing"))?;
-            procedural::generate(*recipe, dims, entry.seed)?
-        }
-        Source::Sweep(spec) => swept(spec, entry.dims, entry.seed)?,
-        Source::Synth(spec) => {
-            synthesized(spec, entry.dims.ok_or_else(|| Error::invalid("size is missing"))?, entry.seed)?
-        }
-        Source::Load(path) => io::read_volume(path, io::budget_from_env()?)?,
-    };
-    for step in &entry.steps {
-        apply(step, &mut volume)?;
-    }
-    if entry.texture_type.is_some() {
-        volume.meta.texture_type = entry.texture_type;
-    }
-    volume.meta.set("name", entry.name.clone());
-    Ok(volume)
-}
-fn synthesized(spec: &SynthSpec, size: [usize; 3], seed: u64) -> Result<Volume> {
-    let read = |p: &Path| io::read_image_fit(p, spec.max_exemplar);
-    let ex = read(&spec.image)?;
-    let params = synth::SynthParams { size, levels: spec.levels, ..synth::SynthParams::default() };
-    let none = crate::progress::NoProgress;
-    let volume = if spec.layered {
-        let depth = spec.depth.as_deref().map(read).transpose()?;
-        synth::synthesize_layered(&ex, depth.as_ref(), &params, &synth::LayeredParams::default(), seed, &none)
-    } else {
-        let ey = spec.ey.as_deref().map(read).transpose()?;
-        let ez = spec.ez.as_deref().map(read).transpose()?;
-        synth::synthesize(synth::Exemplars { x: &ex, y: ey.as_ref(), z: ez.as_ref() }, &params, seed, &none)
-    };
-    volume.map_err(|e| e.in_file(&spec.image))
-}
-
-/// Masks and extra formats beside the volume.
-fn extras(entry: &Entry, volume: &Volume, output: &Path) -> Result<()> {
-    let name = &entry.name;
-    for export in &entry.exports {
-        let path = match export.as_str() {
-            "slices" => output.join(format!("{name}_slices")),
-            ext => output.join(format!("{name}.{ext}")),
-        };
-        io::write_volume(&path, volume)?;
-    }
-    let size = *volume.dims().iter().max().expect("three dims");
-    for kind in &entry.masks {
-        match kind {
-            MaskKind::Splotch => {
-                let m = crate::mask::splotch(size, entry.mask_falloff, entry.seed)?;
-                io::write_volume(&output.join(format!("{name}.mask.exr")), &m)?;
-            }
-            MaskKind::Layered => {
-                let depth = depth_axis(entry);
-                let layers: Vec<(crate::mask::Layer, Volume)> = crate::mask::Layer::ALL
-                    .iter()
-                    .map(|l| Ok((*l, crate::mask::layered(size, entry.mask_falloff, entry.seed, *l, depth)?)))
-                    .collect::<Result<_>>()?;
-                io::write_folder(&output.join(format!("{name}.masks")), |dir| {
-                    for (l, m) in &layers {
-                        io::write_volume(&dir.join(format!("{}.exr", l.name())), m)?;
-                    }
-                    Ok(())
-                })?;
-            }
-        }
-    }
-    Ok(())
-}
-
-/// The depth axis of an entry: the sweep's, else z.
-fn depth_axis(entry: &Entry) -> crate::volume::Axis {
-    match &entry.source {
-        Source::Sweep(spec) => spec.depth_axis.unwrap_or(crate::volume::Axis::Z),
-        _ => crate::volume::Axis::Z,
-    }
-}
-
-fn swept(spec: &SweepSpec, dims: Option<[usize; 3]>, seed: u64) -> Result<Volume> {
-    let image = io::read_image(&spec.image)?;
-    let (a, b) = spec.axis.plane_axes();
-    if let Some(d) = dims {
-        let along = d[spec.axis.index()];
-        if (d[a], d[b], along) != (image.width(), image.height(), spec.length) {
-            return Err(Error::file(
-                &spec.image,
-                format!(
-                    "the sweep image is {}x{} pixels, which with length {} along {} makes {:?}, not the size {d:?} asked for",
-                    image.width(),
-                    image.height(),
-                    spec.length,
-                    spec.axis,
-                    planned(image.width(), image.height(), spec)
-                ),
-            ));
-        }
-    }
-    let skin = match &spec.skin {
-        None => None,
-        Some((look, width, noise)) => {
-            let look = match look {
-                SkinSource::Colour(c) => SkinLook::Colour(*c),
-                SkinSource::Image(p) => SkinLook::Image(io::read_image(p)?),
-            };
-            Some(Skin { look, width: *width, width_noise: *noise })
-        }
-    };
-    let params = Sweep { length: spec.length, axis: spec.axis, depth_axis: spec.depth_axis, noise: spec.noise, skin };
-    sweep::sweep(&image, &params, seed).map_err(|e| e.in_file(&spec.image))
-}
-
-fn planned(w: usize, h: usize, spec: &SweepSpec) -> [usize; 3] {
-    let (a, b) = spec.axis.plane_axes();
-    let mut d = [0; 3];
-    d[a] = w;
-    d[b] = h;
-    d[spec.axis.index()] = spec.length;
-    d
-}
-
-fn apply(step: &Step, volume: &mut Volume) -> Result<()> {
-    match step {
-        Step::Stamp { mesh, placement, colour } => {
-            let seed = super::handmade::read_seed(mesh)?;
-            stamp::stamp(volume, &seed, placement, *colour).map_err(|e| e.in_file(mesh))?;
-        }
-        Step::Scatter { mesh, count, region, scale, colour, seed } => {
-            let shape = super::handmade::read_seed(mesh)?;
-            let d = volume.dims();
-            let region =
-                region.unwrap_or(Region::Box(glam::Vec3::ZERO, glam::Vec3::new(d[0] as f32, d[1] as f32, d[2] as f32)));
-            let params = Scatter { count: *count, region, scale: *scale, colour: *colour, attempts: 200 };
-            let done = stamp::scatter(volume, &shape, &params, *seed).map_err(|e| e.in_file(mesh))?;
-            if done.placed.len() < *count {
-                eprintln!(
-                    "warning: placed {} of {count} seeds from {}: no room for the rest",
-                    done.placed.len(),
-                    mesh.display()
-                );
-            }
-        }
-        Step::Blur { at, radius, strength } => {
-            stamp::blur(volume, *at, *radius, *strength)?;
-        }
-    }
-    Ok(())
 }
 
 #[cfg(test)]

@@ -14,6 +14,7 @@ mod handmade;
 mod info;
 mod masks;
 mod quality;
+mod recipe;
 mod synth;
 
 use clap::{Parser, Subcommand};
