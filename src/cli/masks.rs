@@ -44,35 +44,37 @@ pub fn types() {
     }
 }
 
+/// The options every mask shares.
+#[derive(Debug, clap::Args)]
+pub struct Shape {
+    /// Side of the cubic mask in voxels.
+    #[arg(long, default_value_t = 64)]
+    pub size: usize,
+    /// Width of the soft band as a share of the size, in (0, 0.5).
+    #[arg(long, default_value_t = mask::DEFAULT_FALLOFF)]
+    pub falloff: f32,
+    /// Seed of the shape.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+}
+
 /// The `mask` subcommands.
 #[derive(Debug, clap::Subcommand)]
 pub enum MaskCommand {
     /// A soft noisy ball.
     Splotch {
-        /// Side of the cubic mask in voxels.
-        #[arg(long, default_value_t = 64)]
-        size: usize,
-        /// Width of the soft band as a share of the size, in (0, 0.5).
-        #[arg(long, default_value_t = mask::DEFAULT_FALLOFF)]
-        falloff: f32,
-        /// Seed of the shape.
-        #[arg(long, default_value_t = 1)]
-        seed: u64,
+        /// Size, fall-off and seed.
+        #[command(flatten)]
+        shape: Shape,
         /// The mask file to write.
         #[arg(short, long)]
         output: PathBuf,
     },
     /// Outer, middle and inner masks for depth-varying textures, into a folder.
     Layered {
-        /// Side of the cubic masks in voxels.
-        #[arg(long, default_value_t = 64)]
-        size: usize,
-        /// Width of the soft band as a share of the size, in (0, 0.5).
-        #[arg(long, default_value_t = mask::DEFAULT_FALLOFF)]
-        falloff: f32,
-        /// Seed of the shape.
-        #[arg(long, default_value_t = 1)]
-        seed: u64,
+        /// Size, fall-off and seed.
+        #[command(flatten)]
+        shape: Shape,
         /// The axis depth runs along (depth 0 at its first face).
         #[arg(long, default_value = "z")]
         depth_axis: String,
@@ -84,12 +86,9 @@ pub enum MaskCommand {
     Mesh {
         /// The mesh (OBJ, STL, PLY).
         mesh: PathBuf,
-        /// Side of the cubic mask in voxels.
-        #[arg(long, default_value_t = 64)]
-        size: usize,
-        /// Width of the soft band as a share of the size, in (0, 0.5).
-        #[arg(long, default_value_t = mask::DEFAULT_FALLOFF)]
-        falloff: f32,
+        /// Size, fall-off (the seed is not used).
+        #[command(flatten)]
+        shape: Shape,
         /// The mask file to write.
         #[arg(short, long)]
         output: PathBuf,
@@ -104,15 +103,15 @@ pub enum MaskCommand {
 /// Run a `mask` subcommand.
 pub fn run(command: &MaskCommand) -> Result<()> {
     match command {
-        MaskCommand::Splotch { size, falloff, seed, output } => {
-            write_one(output, mask::splotch(*size, *falloff, *seed)?)
+        MaskCommand::Splotch { shape, output } => {
+            write_one(output, mask::splotch(shape.size, shape.falloff, shape.seed)?)
         }
-        MaskCommand::Layered { size, falloff, seed, depth_axis, output } => {
-            write_layers(output, *size, *falloff, *seed, depth_axis.parse()?)
+        MaskCommand::Layered { shape, depth_axis, output } => {
+            write_layers(output, shape.size, shape.falloff, shape.seed, depth_axis.parse()?)
         }
-        MaskCommand::Mesh { mesh, size, falloff, output } => {
-            let shape = io::mesh_file::read_mesh(mesh)?.oriented();
-            write_one(output, mask::from_mesh(&shape, *size, *falloff).map_err(|e| e.in_file(mesh))?)
+        MaskCommand::Mesh { mesh, shape, output } => {
+            let solid = io::mesh_file::read_mesh(mesh)?.oriented();
+            write_one(output, mask::from_mesh(&solid, shape.size, shape.falloff).map_err(|e| e.in_file(mesh))?)
         }
         MaskCommand::Preset { preset } => build_preset(preset),
     }
