@@ -38,6 +38,7 @@
 pub mod classify;
 pub mod cli;
 pub mod error;
+pub mod fill;
 pub mod io;
 pub mod mask;
 pub mod mesh;

@@ -1,0 +1,224 @@
+//! A tetrahedral mesh and the topology the filling needs: face neighbours, vertex one-rings,
+//! boundary faces, and point location by barycentric coordinates.
+//!
+//! ```text
+//!        3            a tet [v0, v1, v2, v3] is positively oriented:
+//!       /|\           (v1 - v0) x (v2 - v0) . (v3 - v0) > 0
+//!      / | \          face k is the face opposite vertex k; neighbours()[t][k]
+//!     0--|--2         is the tet across it, or NONE on the boundary
+//!      \ | /
+//!       \|/
+//!        1
+//! ```
+
+use glam::{Mat3, Vec3};
+
+/// Marks "no neighbour" (a boundary face).
+pub const NONE: u32 = u32::MAX;
+
+/// A tetrahedral mesh: corner positions and positively oriented index quadruples.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TetMesh {
+    /// Corner positions.
+    pub vertices: Vec<Vec3>,
+    /// Tetrahedra, each positively oriented (see the module diagram).
+    pub tets: Vec<[u32; 4]>,
+}
+
+/// The faces of a tet as vertex slots, face k opposite slot k, each seen from outside
+/// counter-clockwise for a positively oriented tet.
+pub const FACES: [[usize; 3]; 4] = [[1, 2, 3], [0, 3, 2], [0, 1, 3], [0, 2, 1]];
+
+impl TetMesh {
+    /// The four corners of tet `t`.
+    pub fn corners(&self, t: usize) -> [Vec3; 4] {
+        self.tets[t].map(|i| self.vertices[i as usize])
+    }
+
+    /// The signed volume of tet `t` (positive when correctly oriented).
+    pub fn volume_of(&self, t: usize) -> f32 {
+        let [a, b, c, d] = self.corners(t);
+        (b - a).cross(c - a).dot(d - a) / 6.0
+    }
+
+    /// The total volume.
+    pub fn volume(&self) -> f64 {
+        (0..self.tets.len()).map(|t| self.volume_of(t) as f64).sum()
+    }
+
+    /// The centroid of tet `t`.
+    pub fn centroid(&self, t: usize) -> Vec3 {
+        self.corners(t).iter().sum::<Vec3>() / 4.0
+    }
+
+    /// The edge matrix `[v1 - v0, v2 - v0, v3 - v0]` of tet `t`.
+    pub fn edges(&self, t: usize) -> Mat3 {
+        let [a, b, c, d] = self.corners(t);
+        Mat3::from_cols(b - a, c - a, d - a)
+    }
+
+    /// For each tet, the tet across each face (`NONE` on the boundary).
+    pub fn neighbours(&self) -> Vec<[u32; 4]> {
+        let mut keyed: Vec<([u32; 3], u32, u8)> = Vec::with_capacity(self.tets.len() * 4);
+        for (t, tet) in self.tets.iter().enumerate() {
+            for (k, face) in FACES.iter().enumerate() {
+                let mut key = face.map(|s| tet[s]);
+                key.sort_unstable();
+                keyed.push((key, t as u32, k as u8));
+            }
+        }
+        keyed.sort_unstable();
+        let mut out = vec![[NONE; 4]; self.tets.len()];
+        for pair in keyed.chunk_by(|a, b| a.0 == b.0).filter(|run| run.len() == 2) {
+            let ((_, t0, k0), (_, t1, k1)) = (pair[0], pair[1]);
+            out[t0 as usize][k0 as usize] = t1;
+            out[t1 as usize][k1 as usize] = t0;
+        }
+        out
+    }
+
+    /// The boundary faces (vertex triples facing outwards), in tet order.
+    pub fn boundary_faces(&self, neighbours: &[[u32; 4]]) -> Vec<[u32; 3]> {
+        let mut faces = Vec::new();
+        for (t, tet) in self.tets.iter().enumerate() {
+            for (k, face) in FACES.iter().enumerate() {
+                if neighbours[t][k] == NONE {
+                    faces.push(face.map(|s| tet[s]));
+                }
+            }
+        }
+        faces
+    }
+
+    /// The vertex one-rings as compressed rows: the neighbours of vertex `v` are
+    /// `list[offsets[v]..offsets[v + 1]]`, sorted.
+    pub fn one_rings(&self) -> (Vec<usize>, Vec<u32>) {
+        let mut pairs: Vec<(u32, u32)> = Vec::with_capacity(self.tets.len() * 12);
+        for tet in &self.tets {
+            for i in 0..4 {
+                for j in 0..4 {
+                    if i != j {
+                        pairs.push((tet[i], tet[j]));
+                    }
+                }
+            }
+        }
+        pairs.sort_unstable();
+        pairs.dedup();
+        let mut offsets = vec![0usize; self.vertices.len() + 1];
+        for &(a, _) in &pairs {
+            offsets[a as usize + 1] += 1;
+        }
+        for v in 0..self.vertices.len() {
+            offsets[v + 1] += offsets[v];
+        }
+        (offsets, pairs.into_iter().map(|(_, b)| b).collect())
+    }
+
+    /// The tets around each vertex as compressed rows (like [`TetMesh::one_rings`]).
+    pub fn vertex_tets(&self) -> (Vec<usize>, Vec<u32>) {
+        let mut offsets = vec![0usize; self.vertices.len() + 1];
+        for tet in &self.tets {
+            for &v in tet {
+                offsets[v as usize + 1] += 1;
+            }
+        }
+        for v in 0..self.vertices.len() {
+            offsets[v + 1] += offsets[v];
+        }
+        let mut fill = offsets.clone();
+        let mut list = vec![0u32; offsets[self.vertices.len()]];
+        for (t, tet) in self.tets.iter().enumerate() {
+            for &v in tet {
+                list[fill[v as usize]] = t as u32;
+                fill[v as usize] += 1;
+            }
+        }
+        (offsets, list)
+    }
+
+    /// The barycentric coordinates of `p` in tet `t` (they sum to 1; all are ≥ 0 inside).
+    pub fn barycentric(&self, t: usize, p: Vec3) -> [f32; 4] {
+        let local = self.edges(t).inverse() * (p - self.vertices[self.tets[t][0] as usize]);
+        [1.0 - local.x - local.y - local.z, local.x, local.y, local.z]
+    }
+
+    /// The smallest dihedral angle over all tets, in degrees (a quality figure).
+    pub fn min_dihedral_degrees(&self) -> f32 {
+        (0..self.tets.len()).map(|t| min_dihedral(self.corners(t))).fold(180.0, f32::min)
+    }
+}
+
+/// The smallest of the six dihedral angles of a tet, in degrees.
+pub fn min_dihedral(c: [Vec3; 4]) -> f32 {
+    let normals = FACES.map(|[a, b, d]| (c[b] - c[a]).cross(c[d] - c[a]).normalize_or_zero());
+    let mut smallest = 180.0f32;
+    for i in 0..4 {
+        for j in i + 1..4 {
+            let cos = -normals[i].dot(normals[j]);
+            smallest = smallest.min(cos.clamp(-1.0, 1.0).acos().to_degrees());
+        }
+    }
+    smallest
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn two_tets() -> TetMesh {
+        let vertices = vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z, Vec3::ONE];
+        TetMesh { vertices, tets: vec![[0, 1, 2, 3], [1, 2, 3, 4]] }
+    }
+
+    #[test]
+    fn faces_are_found_and_shared_once() {
+        let m = two_tets();
+        assert!(m.volume_of(0) > 0.0);
+        let n = m.neighbours();
+        assert_eq!(n[0], [1, NONE, NONE, NONE]);
+        assert_eq!(n[1][3], 0);
+        assert_eq!(m.boundary_faces(&n).len(), 6);
+    }
+
+    #[test]
+    fn boundary_faces_face_outwards() {
+        let m = TetMesh { vertices: vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z], tets: vec![[0, 1, 2, 3]] };
+        let centre = m.centroid(0);
+        for f in m.boundary_faces(&m.neighbours()) {
+            let [a, b, c] = f.map(|i| m.vertices[i as usize]);
+            assert!((b - a).cross(c - a).dot(a - centre) > 0.0, "face {f:?} faces inwards");
+        }
+    }
+
+    #[test]
+    fn barycentric_coordinates_rebuild_the_point() {
+        let m = two_tets();
+        let p = Vec3::new(0.2, 0.3, 0.1);
+        let b = m.barycentric(0, p);
+        let back: Vec3 = m.corners(0).iter().zip(b).map(|(v, w)| *v * w).sum();
+        assert!((back - p).length() < 1e-6 && b.iter().all(|w| *w >= 0.0));
+        assert!(m.barycentric(0, Vec3::ONE).iter().any(|w| *w < 0.0));
+    }
+
+    #[test]
+    fn rings_list_each_neighbour_once() {
+        let m = two_tets();
+        let (off, list) = m.one_rings();
+        assert_eq!(&list[off[0]..off[1]], &[1, 2, 3]);
+        assert_eq!(&list[off[1]..off[2]], &[0, 2, 3, 4]);
+        let (off, list) = m.vertex_tets();
+        assert_eq!(&list[off[2]..off[3]], &[0, 1]);
+    }
+
+    #[test]
+    fn regular_tet_dihedral_is_70_degrees() {
+        let c = [
+            Vec3::new(1.0, 1.0, 1.0),
+            Vec3::new(1.0, -1.0, -1.0),
+            Vec3::new(-1.0, 1.0, -1.0),
+            Vec3::new(-1.0, -1.0, 1.0),
+        ];
+        assert!((min_dihedral(c) - 70.53).abs() < 0.1);
+    }
+}
