@@ -4,3 +4,9 @@
 //! [`LstModel`](model::LstModel) — renders planar cuts and bakes to a volume.
 
 pub mod tets;
+pub mod field;
+pub mod solve;
+pub mod paste;
+pub mod warp;
+pub mod model;
+pub mod render;

@@ -149,6 +149,47 @@ impl TetMesh {
     }
 }
 
+/// A box of `cells` cubes of side `h` from the origin, each split into 6 tets around its
+/// main diagonal (the Freudenthal split, so neighbouring cubes share faces exactly). Used
+/// by tests and benchmarks as a mesh with known geometry.
+pub fn cube_lattice(cells: [usize; 3], h: f32) -> TetMesh {
+    let [nx, ny, nz] = cells;
+    let id = |x: usize, y: usize, z: usize| (x + (nx + 1) * (y + (ny + 1) * z)) as u32;
+    let mut vertices = Vec::new();
+    for z in 0..=nz {
+        for y in 0..=ny {
+            for x in 0..=nx {
+                vertices.push(Vec3::new(x as f32, y as f32, z as f32) * h);
+            }
+        }
+    }
+    let mut tets = Vec::new();
+    for z in 0..nz {
+        for y in 0..ny {
+            for x in 0..nx {
+                for order in AXIS_ORDERS {
+                    let mut p = [x, y, z];
+                    let mut tet = [id(x, y, z); 4];
+                    for (slot, axis) in order.iter().enumerate() {
+                        p[*axis] += 1;
+                        tet[slot + 1] = id(p[0], p[1], p[2]);
+                    }
+                    tets.push(positive(&vertices, tet));
+                }
+            }
+        }
+    }
+    TetMesh { vertices, tets }
+}
+
+const AXIS_ORDERS: [[usize; 3]; 6] = [[0, 1, 2], [0, 2, 1], [1, 0, 2], [1, 2, 0], [2, 0, 1], [2, 1, 0]];
+
+/// `tet` with two corners swapped if needed so it is positively oriented.
+pub fn positive(vertices: &[Vec3], tet: [u32; 4]) -> [u32; 4] {
+    let [a, b, c, d] = tet.map(|i| vertices[i as usize]);
+    if (b - a).cross(c - a).dot(d - a) < 0.0 { [tet[0], tet[2], tet[1], tet[3]] } else { tet }
+}
+
 /// The smallest of the six dihedral angles of a tet, in degrees.
 pub fn min_dihedral(c: [Vec3; 4]) -> f32 {
     let normals = FACES.map(|[a, b, d]| (c[b] - c[a]).cross(c[d] - c[a]).normalize_or_zero());
@@ -209,6 +250,17 @@ mod tests {
         assert_eq!(&list[off[1]..off[2]], &[0, 2, 3, 4]);
         let (off, list) = m.vertex_tets();
         assert_eq!(&list[off[2]..off[3]], &[0, 1]);
+    }
+
+    #[test]
+    fn the_lattice_fills_its_box_with_matching_faces() {
+        let m = cube_lattice([3, 2, 1], 0.5);
+        assert_eq!(m.tets.len(), 36);
+        assert!((0..36).all(|t| m.volume_of(t) > 0.0));
+        assert!((m.volume() - 1.5 * 0.5).abs() < 1e-5);
+        // the box surface: 2 triangles per boundary square
+        assert_eq!(m.boundary_faces(&m.neighbours()).len(), 2 * (2 * (6 + 3 + 2)));
+        assert!((m.min_dihedral_degrees() - 45.0).abs() < 0.1, "{}", m.min_dihedral_degrees());
     }
 
     #[test]

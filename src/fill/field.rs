@@ -1,0 +1,344 @@
+//! The tensor field that orients and scales the pasted patches (thesis §6.2.2).
+//!
+//! ```text
+//!  type   primary axis R         secondary S            scale            depth kept
+//!  0      random per patch       random per patch       user             no
+//!  1-a    strokes, smoothed      random about R         user             no
+//!  1-b    grad depth             random about R         1/|grad depth|   yes
+//!  2-a    grad depth             strokes on layers      user             no
+//!  2-b    grad depth             strokes on layers      1/|grad depth|   yes
+//! ```
+//! Strokes and scales are interpolated by Laplacian smoothing with soft constraints (a
+//! sparse least-squares solve; weights 1/|N_i|, or depth-aware for the secondary direction
+//! of 2-a/2-b, which is then made orthogonal to the depth gradient). The depth field is a
+//! thin-plate RBF (kernel |r| in 3D, plus a linear term) through the depth constraints.
+//! A tet's tensor is the mean of its vertices'.
+
+use super::solve::{Sparse, dense_solve, least_squares};
+use super::tets::TetMesh;
+use crate::TextureType;
+use crate::error::{Error, Result};
+use glam::{DVec3, Vec3};
+
+/// Weight of a constraint row against the smoothing rows.
+const CONSTRAINT_WEIGHT: f64 = 10.0;
+/// Most RBF centres used; more constraints are thinned evenly.
+const MAX_CENTRES: usize = 900;
+
+/// What the user asked for, in model space.
+#[derive(Debug, Clone, Default)]
+pub struct Constraints {
+    /// (point, direction): the fibre axis for 1-a, the secondary direction for 2-a/2-b.
+    pub directions: Vec<(Vec3, Vec3)>,
+    /// (point, depth) for the RBF: 0 on the outer surface, 1 on the innermost part.
+    pub depth: Vec<(Vec3, f32)>,
+    /// (point, texture scale): the side of the texture cube in model units.
+    pub scales: Vec<(Vec3, f32)>,
+    /// The scale where no scale constraint says otherwise.
+    pub scale: f32,
+}
+
+/// The field over a tet mesh.
+#[derive(Debug, Clone)]
+pub struct Field {
+    /// The depth at each vertex, for the depth-varying types (1-b, 2-b).
+    pub depth: Option<Vec<f32>>,
+    /// Per tet: the unit primary direction (zero for type 0).
+    pub primary: Vec<Vec3>,
+    /// Per tet: the unit secondary direction, orthogonal to the primary (zero when random).
+    pub secondary: Vec<Vec3>,
+    /// Per tet: the texture scale (side of the texture cube in model units).
+    pub scale: Vec<f32>,
+}
+
+/// Builds the field for `kind` over `mesh` from `constraints`.
+pub fn build(mesh: &TetMesh, kind: TextureType, constraints: &Constraints) -> Result<Field> {
+    check_required(kind, constraints)?;
+    let tets = mesh.tets.len();
+    let uses_depth = matches!(kind, TextureType::T1b | TextureType::T2a | TextureType::T2b);
+    let rbf = if uses_depth { Some(Rbf::fit(&constraints.depth)?) } else { None };
+    let depth: Option<Vec<f32>> = rbf.as_ref().map(|f| mesh.vertices.iter().map(|v| f.value(*v)).collect());
+    let primary: Vec<Vec3> = match (kind, &rbf) {
+        (TextureType::T1a, _) => per_tet(mesh, &smooth_vectors(mesh, &constraints.directions, None)?),
+        (_, Some(f)) => (0..tets).map(|t| f.gradient(mesh.centroid(t)).normalize_or(Vec3::Y)).collect(),
+        _ => vec![Vec3::ZERO; tets],
+    };
+    let secondary = match kind {
+        TextureType::T2a | TextureType::T2b => {
+            let smoothed = smooth_vectors(mesh, &constraints.directions, depth.as_deref())?;
+            per_tet(mesh, &smoothed).iter().zip(&primary).map(|(s, r)| orthogonal(*s, *r)).collect()
+        }
+        _ => vec![Vec3::ZERO; tets],
+    };
+    let scale = match (kind, &rbf) {
+        (TextureType::T1b | TextureType::T2b, Some(f)) => {
+            (0..tets).map(|t| 1.0 / f.gradient(mesh.centroid(t)).length().max(1e-6)).collect()
+        }
+        _ => smooth_scales(mesh, constraints)?,
+    };
+    let depth = if matches!(kind, TextureType::T1b | TextureType::T2b) { depth } else { None };
+    Ok(Field { depth, primary, secondary, scale })
+}
+
+fn check_required(kind: TextureType, c: &Constraints) -> Result<()> {
+    let needs = |what: &str| Err(Error::invalid(format!("texture type {kind} needs {what} in the fill spec")));
+    match kind {
+        TextureType::T2c | TextureType::T2d => Err(Error::invalid(format!(
+            "texture type {kind} cannot be filled (not tileable enough for lapping); allowed: 0, 1-a, 1-b, 2-a, 2-b"
+        ))),
+        TextureType::T1a if c.directions.is_empty() => needs("at least one direction stroke ([[direction]])"),
+        TextureType::T2a | TextureType::T2b if c.directions.is_empty() => {
+            needs("a direction stroke for the secondary direction ([[direction]], e.g. along the fruit axis)")
+        }
+        TextureType::T1b | TextureType::T2a | TextureType::T2b if !c.depth.iter().any(|d| d.1 > 0.0) => {
+            needs("a depth constraint above 0 ([depth] axis, points or a face group)")
+        }
+        _ if !(c.scale.is_finite() && c.scale > 0.0) => {
+            Err(Error::invalid(format!("scale {} must be a positive number of model units", c.scale)))
+        }
+        _ => Ok(()),
+    }
+}
+
+fn orthogonal(s: Vec3, r: Vec3) -> Vec3 {
+    let o = s - s.dot(r) * r;
+    o.try_normalize().unwrap_or_else(|| r.any_orthonormal_vector())
+}
+
+/// The mean of each tet's vertex vectors, normalized.
+fn per_tet(mesh: &TetMesh, at_vertices: &[Vec3]) -> Vec<Vec3> {
+    let mean = |tet: &[u32; 4]| tet.iter().map(|&v| at_vertices[v as usize]).sum::<Vec3>();
+    mesh.tets.iter().map(|t| mean(t).normalize_or(Vec3::Y)).collect()
+}
+
+/// Laplacian smoothing of the three components of `directions`, then normalized.
+fn smooth_vectors(mesh: &TetMesh, directions: &[(Vec3, Vec3)], depth: Option<&[f32]>) -> Result<Vec<Vec3>> {
+    let system = Smoothing::new(mesh, depth);
+    let points: Vec<(Vec3, [f32; 3])> = directions.iter().map(|(p, d)| (*p, d.normalize_or_zero().to_array())).collect();
+    let solved = system.solve(mesh, &points)?;
+    Ok((0..mesh.vertices.len()).map(|v| glam::DVec3::from_slice(&solved[v * 3..v * 3 + 3]).as_vec3().normalize_or(Vec3::Y)).collect())
+}
+
+/// Laplacian smoothing of the scale constraints; the default scale where there are none.
+fn smooth_scales(mesh: &TetMesh, c: &Constraints) -> Result<Vec<f32>> {
+    if c.scales.is_empty() {
+        return Ok(vec![c.scale; mesh.tets.len()]);
+    }
+    if let Some((p, s)) = c.scales.iter().find(|(_, s)| !(s.is_finite() && *s > 0.0)) {
+        return Err(Error::invalid(format!("scale {s} at {p} must be a positive number of model units")));
+    }
+    let points: Vec<(Vec3, [f32; 1])> = c.scales.iter().map(|(p, s)| (*p, [*s])).collect();
+    let at_vertices = Smoothing::new(mesh, None).solve(mesh, &points)?;
+    Ok(mesh.tets.iter().map(|t| t.iter().map(|&v| at_vertices[v as usize] as f32).sum::<f32>() / 4.0).collect())
+}
+
+/// The smoothing rows `x_i - Σ w_ij x_j` of a tet mesh.
+struct Smoothing {
+    rows: Sparse,
+}
+
+impl Smoothing {
+    fn new(mesh: &TetMesh, depth: Option<&[f32]>) -> Smoothing {
+        let (offsets, ring) = mesh.one_rings();
+        let spread = depth.map(|d| edge_spread(&offsets, &ring, d));
+        let mut rows = Sparse::new(mesh.vertices.len());
+        for v in 0..mesh.vertices.len() {
+            let ring = &ring[offsets[v]..offsets[v + 1]];
+            let weights: Vec<f64> = match (depth, spread) {
+                (Some(d), Some(s)) => ring.iter().map(|&j| (-((d[v] - d[j as usize]) as f64 / s).powi(2)).exp()).collect(),
+                _ => vec![1.0; ring.len()],
+            };
+            let total: f64 = weights.iter().sum::<f64>().max(f64::MIN_POSITIVE);
+            let entries = ring.iter().zip(&weights).map(|(&j, w)| (j as usize, -w / total));
+            rows.push_row(std::iter::once((v, 1.0)).chain(entries));
+        }
+        Smoothing { rows }
+    }
+
+    /// Solves for `K` values per vertex that are smooth and meet `points` softly.
+    fn solve<const K: usize>(&self, mesh: &TetMesh, points: &[(Vec3, [f32; K])]) -> Result<Vec<f64>> {
+        let n = mesh.vertices.len();
+        let mut a = self.rows.clone();
+        let mut targets: Vec<[f64; K]> = vec![[0.0; K]; n];
+        for (p, value) in points {
+            let (t, bary) = locate(mesh, *p);
+            a.push_row(mesh.tets[t].iter().zip(bary).map(|(&v, b)| (v as usize, CONSTRAINT_WEIGHT * b as f64)));
+            targets.push(value.map(|x| CONSTRAINT_WEIGHT * x as f64));
+        }
+        let mean: [f64; K] = std::array::from_fn(|k| points.iter().map(|p| p.1[k] as f64).sum::<f64>() / points.len() as f64);
+        let mut out = vec![0.0; n * K];
+        for k in 0..K {
+            let b: Vec<f64> = targets.iter().map(|t| t[k]).collect();
+            let mut x = vec![mean[k]; n];
+            least_squares(&a, &b, &mut x, 1e-7, 4000);
+            for v in 0..n {
+                out[v * K + k] = x[v];
+            }
+        }
+        Ok(out)
+    }
+}
+
+/// The mean depth difference across an edge, so the depth-aware weights do not depend on
+/// how fine the mesh is.
+fn edge_spread(offsets: &[usize], ring: &[u32], depth: &[f32]) -> f64 {
+    let mut total = 0.0;
+    for v in 0..depth.len() {
+        total += ring[offsets[v]..offsets[v + 1]].iter().map(|&j| (depth[v] - depth[j as usize]).abs() as f64).sum::<f64>();
+    }
+    (total / ring.len().max(1) as f64).max(1e-9)
+}
+
+/// The tet containing `p` (or, outside, the one whose barycentre is nearest) and the
+/// barycentric coordinates of `p` in it, clamped to the tet.
+pub fn locate(mesh: &TetMesh, p: Vec3) -> (usize, [f32; 4]) {
+    let inside = (0..mesh.tets.len()).find(|&t| mesh.barycentric(t, p).iter().all(|b| *b >= -1e-5));
+    let t = inside.unwrap_or_else(|| {
+        let d = |t: usize| mesh.centroid(t).distance_squared(p);
+        (0..mesh.tets.len()).min_by(|&a, &b| d(a).total_cmp(&d(b))).unwrap_or(0)
+    });
+    let b = mesh.barycentric(t, p).map(|b| b.max(0.0));
+    let sum: f32 = b.iter().sum::<f32>().max(1e-12);
+    (t, b.map(|x| x / sum))
+}
+
+/// A thin-plate RBF in 3D: `f(p) = Σ w_i |p - c_i| + a·p + b`.
+pub struct Rbf {
+    centres: Vec<DVec3>,
+    weights: Vec<f64>,
+    linear: [f64; 4],
+}
+
+impl Rbf {
+    /// Fits the RBF through `points` (thinned evenly to at most a few hundred centres).
+    pub fn fit(points: &[(Vec3, f32)]) -> Result<Rbf> {
+        let step = points.len().div_ceil(MAX_CENTRES).max(1);
+        let kept: Vec<(DVec3, f64)> = points.iter().step_by(step).map(|(p, v)| (p.as_dvec3(), *v as f64)).collect();
+        let n = kept.len();
+        let size = n + 4;
+        let mut m = vec![0.0; size * size];
+        let mut b = vec![0.0; size];
+        for (i, (pi, vi)) in kept.iter().enumerate() {
+            for (j, (pj, _)) in kept.iter().enumerate() {
+                m[i * size + j] = pi.distance(*pj);
+            }
+            for (k, x) in [pi.x, pi.y, pi.z, 1.0].into_iter().enumerate() {
+                m[i * size + n + k] = x;
+                m[(n + k) * size + i] = x;
+            }
+            b[i] = *vi;
+        }
+        let x = dense_solve(m, b).ok_or_else(|| {
+            Error::invalid(format!(
+                "the {n} depth constraint point(s) do not define a depth field (they must not all lie on one plane)"
+            ))
+        })?;
+        let centres = kept.into_iter().map(|(p, _)| p).collect();
+        Ok(Rbf { centres, weights: x[..n].to_vec(), linear: [x[n], x[n + 1], x[n + 2], x[n + 3]] })
+    }
+
+    /// The depth at `p`, clamped to [0, 1].
+    pub fn value(&self, p: Vec3) -> f32 {
+        let p = p.as_dvec3();
+        let radial: f64 = self.centres.iter().zip(&self.weights).map(|(c, w)| w * p.distance(*c)).sum();
+        let [a, b, c, d] = self.linear;
+        (radial + a * p.x + b * p.y + c * p.z + d).clamp(0.0, 1.0) as f32
+    }
+
+    /// The gradient of the (unclamped) depth at `p`.
+    pub fn gradient(&self, p: Vec3) -> Vec3 {
+        let p = p.as_dvec3();
+        let radial: DVec3 = self
+            .centres
+            .iter()
+            .zip(&self.weights)
+            .map(|(c, w)| (p - *c).try_normalize().unwrap_or(DVec3::ZERO) * *w)
+            .sum();
+        (radial + DVec3::new(self.linear[0], self.linear[1], self.linear[2])).as_vec3()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::fill::tets::cube_lattice;
+
+    #[test]
+    fn rbf_interpolates_a_radial_depth() {
+        // surface of a ball at 0, centre at 1: depth grows inwards, its gradient points in
+        let mut points: Vec<(Vec3, f32)> = (0..200)
+            .map(|i| {
+                let (a, b) = (i as f32 * 2.399, (i as f32 + 0.5) / 200.0);
+                let z = 1.0 - 2.0 * b;
+                let r = (1.0 - z * z).sqrt();
+                (Vec3::new(r * a.cos(), r * a.sin(), z), 0.0)
+            })
+            .collect();
+        points.push((Vec3::ZERO, 1.0));
+        let rbf = Rbf::fit(&points).unwrap();
+        assert!(rbf.value(Vec3::new(0.0, 0.0, 0.999)) < 0.05);
+        assert!((rbf.value(Vec3::ZERO) - 1.0).abs() < 1e-3);
+        let half = rbf.value(Vec3::new(0.5, 0.0, 0.0));
+        assert!(half > 0.2 && half < 0.8, "{half}");
+        assert!(rbf.gradient(Vec3::new(0.5, 0.0, 0.0)).normalize().dot(-Vec3::X) > 0.95);
+    }
+
+    #[test]
+    fn strokes_spread_over_the_mesh() {
+        let mesh = cube_lattice([4, 4, 4], 1.0);
+        let c = Constraints { directions: vec![(Vec3::splat(0.5), Vec3::X)], scale: 0.5, ..Default::default() };
+        let f = build(&mesh, TextureType::T1a, &c).unwrap();
+        assert!(f.primary.iter().all(|d| d.dot(Vec3::X) > 0.999));
+        assert!(f.scale.iter().all(|s| (*s - 0.5).abs() < 1e-6) && f.depth.is_none());
+    }
+
+    #[test]
+    fn two_strokes_blend_smoothly_between() {
+        let mesh = cube_lattice([6, 2, 2], 1.0);
+        let c = Constraints {
+            directions: vec![(Vec3::new(0.05, 0.5, 0.5), Vec3::X), (Vec3::new(5.95, 0.5, 0.5), Vec3::Y)],
+            scale: 1.0,
+            ..Default::default()
+        };
+        let f = build(&mesh, TextureType::T1a, &c).unwrap();
+        let (near, _) = locate(&mesh, Vec3::new(0.3, 0.5, 0.5));
+        let (mid, _) = locate(&mesh, Vec3::new(3.0, 1.0, 1.0));
+        assert!(f.primary[near].dot(Vec3::X) > 0.9, "{}", f.primary[near]);
+        let m = f.primary[mid];
+        assert!(m.x > 0.3 && m.y > 0.3, "{m}");
+    }
+
+    #[test]
+    fn layered_types_take_scale_and_axes_from_depth() {
+        let mesh = cube_lattice([2, 4, 2], 1.0);
+        // depth 0 on top (y = 4), 1 at the bottom: depth gradient -y, scale 4
+        let mut depth = Vec::new();
+        for &(x, z) in &[(0.0, 0.0), (2.0, 0.0), (0.0, 2.0), (2.0, 2.0), (1.0, 1.0)] {
+            depth.push((Vec3::new(x, 4.0, z), 0.0));
+            depth.push((Vec3::new(x, 0.0, z), 1.0));
+        }
+        let c = Constraints { directions: vec![(Vec3::new(1.0, 2.0, 1.0), Vec3::new(1.0, 0.3, 0.0))], depth, scale: 1.0, ..Default::default() };
+        let f = build(&mesh, TextureType::T2b, &c).unwrap();
+        assert!(f.primary.iter().all(|r| r.dot(-Vec3::Y) > 0.99));
+        assert!(f.secondary.iter().zip(&f.primary).all(|(s, r)| s.dot(*r).abs() < 1e-4 && s.dot(Vec3::X) > 0.99));
+        assert!(f.scale.iter().all(|s| (s - 4.0).abs() < 0.05), "{:?}", &f.scale[..4]);
+        let d = f.depth.unwrap();
+        assert!(mesh.vertices.iter().zip(&d).all(|(v, d)| (d - (1.0 - v.y / 4.0)).abs() < 0.02));
+    }
+
+    #[test]
+    fn missing_constraints_are_named() {
+        let mesh = cube_lattice([2, 2, 2], 1.0);
+        let c = Constraints { scale: 1.0, ..Default::default() };
+        let e = build(&mesh, TextureType::T1a, &c).unwrap_err().to_string();
+        assert!(e.contains("1-a") && e.contains("direction"), "{e}");
+        let e = build(&mesh, TextureType::T2b, &c).unwrap_err().to_string();
+        assert!(e.contains("direction"), "{e}");
+        let c = Constraints { directions: vec![(Vec3::ONE, Vec3::X)], scale: 1.0, ..Default::default() };
+        let e = build(&mesh, TextureType::T1b, &c).unwrap_err().to_string();
+        assert!(e.contains("depth"), "{e}");
+        let e = build(&mesh, TextureType::T2c, &c).unwrap_err().to_string();
+        assert!(e.contains("cannot be filled"), "{e}");
+        assert!(build(&mesh, TextureType::T0, &Constraints { scale: -1.0, ..c }).is_err());
+    }
+}

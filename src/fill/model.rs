@@ -1,0 +1,145 @@
+//! The LST model: a tet mesh, the (exemplar, mask) sources, the pasted patches and, per
+//! tet, the patches that show in it. Small: exemplars are referenced, not embedded.
+
+use super::paste::{Patch, Stats};
+use super::tets::TetMesh;
+use crate::error::{Error, Result};
+use crate::mask::{self, Layer};
+use crate::volume::{Axis, Volume};
+
+/// Where a source's mask comes from: a file, or a recipe regenerated on load.
+#[derive(Debug, Clone, PartialEq)]
+pub enum MaskRef {
+    /// A mask volume file (path relative to the model's folder, or absolute).
+    File(String),
+    /// `mask::splotch(size, falloff, seed)`.
+    Splotch {
+        /// Side in voxels.
+        size: usize,
+        /// Fall-off band share.
+        falloff: f32,
+        /// Seed.
+        seed: u64,
+    },
+    /// `mask::layered(size, falloff, seed, layer, depth)`.
+    Layered {
+        /// Outer, middle or inner.
+        layer: Layer,
+        /// The depth axis.
+        depth: Axis,
+        /// Side in voxels.
+        size: usize,
+        /// Fall-off band share.
+        falloff: f32,
+        /// Seed.
+        seed: u64,
+    },
+}
+
+impl MaskRef {
+    /// One line of text: `file PATH`, `splotch SIZE FALLOFF SEED` or
+    /// `layered LAYER AXIS SIZE FALLOFF SEED`.
+    pub fn to_text(&self) -> String {
+        match self {
+            MaskRef::File(p) => format!("file {p}"),
+            MaskRef::Splotch { size, falloff, seed } => format!("splotch {size} {falloff} {seed}"),
+            MaskRef::Layered { layer, depth, size, falloff, seed } => {
+                format!("layered {} {} {size} {falloff} {seed}", layer.name(), depth)
+            }
+        }
+    }
+
+    /// Parses [`MaskRef::to_text`].
+    pub fn parse(text: &str) -> Result<MaskRef> {
+        let bad = || Error::invalid(format!("mask reference '{text}' is not 'file PATH', 'splotch ...' or 'layered ...'"));
+        let words: Vec<&str> = text.split(' ').collect();
+        let num = |i: usize| words.get(i).ok_or_else(bad);
+        match words[0] {
+            "file" => Ok(MaskRef::File(text[5..].to_string())),
+            "splotch" => Ok(MaskRef::Splotch {
+                size: num(1)?.parse().map_err(|_| bad())?,
+                falloff: num(2)?.parse().map_err(|_| bad())?,
+                seed: num(3)?.parse().map_err(|_| bad())?,
+            }),
+            "layered" => Ok(MaskRef::Layered {
+                layer: Layer::ALL.into_iter().find(|l| l.name() == *num(1).unwrap_or(&"")).ok_or_else(bad)?,
+                depth: num(2)?.parse::<Axis>().map_err(|_| bad())?,
+                size: num(3)?.parse().map_err(|_| bad())?,
+                falloff: num(4)?.parse().map_err(|_| bad())?,
+                seed: num(5)?.parse().map_err(|_| bad())?,
+            }),
+            _ => Err(bad()),
+        }
+    }
+
+    /// The mask volume for a recipe (files are loaded by `io`).
+    pub fn generate(&self) -> Option<Result<Volume>> {
+        match *self {
+            MaskRef::File(_) => None,
+            MaskRef::Splotch { size, falloff, seed } => Some(mask::splotch(size, falloff, seed)),
+            MaskRef::Layered { layer, depth, size, falloff, seed } => Some(mask::layered(size, falloff, seed, layer, depth)),
+        }
+    }
+}
+
+/// One pasteable source: an exemplar volume and its mask.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Source {
+    /// The exemplar's library name.
+    pub exemplar: String,
+    /// The exemplar volume file (relative to the model's folder, or absolute).
+    pub volume: String,
+    /// The mask.
+    pub mask: MaskRef,
+}
+
+/// A filled model.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LstModel {
+    /// The tet mesh.
+    pub mesh: TetMesh,
+    /// The sources the patches use.
+    pub sources: Vec<Source>,
+    /// The patches, in paste order.
+    pub patches: Vec<Patch>,
+    /// Per tet, its patches bottom first.
+    pub tet_patches: Vec<Vec<u32>>,
+}
+
+impl LstModel {
+    /// Checks the cross references (after reading a file).
+    pub fn check(&self) -> Result<()> {
+        let (nv, np) = (self.mesh.vertices.len() as u32, self.patches.len() as u32);
+        if let Some(t) = self.mesh.tets.iter().position(|t| t.iter().any(|v| *v >= nv)) {
+            return Err(Error::invalid(format!("tet {t} uses a vertex beyond the {nv} vertices")));
+        }
+        if let Some(p) = self.patches.iter().position(|p| p.source as usize >= self.sources.len()) {
+            return Err(Error::invalid(format!("patch {p} uses a source beyond the {} sources", self.sources.len())));
+        }
+        if self.tet_patches.len() != self.mesh.tets.len() {
+            return Err(Error::invalid(format!("{} patch lists for {} tets", self.tet_patches.len(), self.mesh.tets.len())));
+        }
+        for (t, list) in self.tet_patches.iter().enumerate() {
+            for &p in list {
+                let patch = self.patches.get(p as usize).ok_or_else(|| Error::invalid(format!("tet {t} lists patch {p} of {np}")))?;
+                if self.mesh.tets[t].iter().any(|v| patch.vertices.binary_search(v).is_err()) {
+                    return Err(Error::invalid(format!("tet {t} lists patch {p}, which lacks its corners")));
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// A fill's figures, for `--json` and the report.
+#[derive(Debug, Clone, Default, serde::Serialize)]
+pub struct FillReport {
+    /// Tets in the mesh.
+    pub tets: usize,
+    /// Vertices in the mesh.
+    pub vertices: usize,
+    /// Smallest dihedral angle of the tet mesh, degrees.
+    pub min_dihedral: f32,
+    /// The paste loop's figures.
+    pub paste: Stats,
+}

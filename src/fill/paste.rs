@@ -1,0 +1,504 @@
+//! The paste loop (thesis §6.2.3–6.2.7): pick an uncovered seed tet, map it into texture
+//! space, grow a clump over neighbours that touch the mask, warp the clump along the field,
+//! regrow if the warp uncovered mask, accumulate coverage, repeat until every tet is
+//! covered.
+//!
+//! ```text
+//!   uncovered list --random seed--> rigid map --grow--> clump --optimize--> coords
+//!        ^                                                 ^         |
+//!        |                                                 +-regrow--+
+//!        +----- remove tets whose 165 samples all reach full alpha <--- coverage
+//! ```
+//! Coverage uses the 165 points `(i, j, k, l) / 8` with `i + j + k + l = 8` in every tet; a
+//! patch adds `255 x alpha` (saturating) at each. Everything random comes from one PCG
+//! stream seeded by the caller, and per-tet work is collected in order, so the result does
+//! not depend on the thread count.
+
+use super::field::Field;
+use super::tets::{NONE, TetMesh};
+use super::warp::{Frame, Rigid, Warp, jacobian};
+use crate::TextureType;
+use crate::error::{Error, Result};
+use crate::progress::Progress;
+use crate::volume::{Edge, Volume};
+use glam::Vec3;
+use rand::{RngExt, SeedableRng};
+use rand_pcg::Pcg64Mcg;
+use rayon::prelude::*;
+use std::collections::VecDeque;
+
+/// Sample points per tet for the coverage test.
+pub const SAMPLES: usize = 165;
+/// Times a seed tet may stay uncovered by its own patch before it is given up.
+const STRIKES: u8 = 4;
+/// Growth stops at neighbours whose tensor turns more than this (cosine).
+const ALIKE: f32 = 0.5;
+
+/// A pasted patch: which source it shows and the texture coordinates of its vertices.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Patch {
+    /// Index of the (exemplar, mask) source.
+    pub source: u16,
+    /// The patch's vertices, sorted.
+    pub vertices: Vec<u32>,
+    /// Texture coordinates, one per vertex.
+    pub coords: Vec<Vec3>,
+}
+
+impl Patch {
+    /// The texture coordinates of the corners of `tet` (all must be patch vertices).
+    pub fn corners(&self, tet: [u32; 4]) -> [Vec3; 4] {
+        tet.map(|v| self.coords[self.vertices.binary_search(&v).expect("patch vertex")])
+    }
+}
+
+/// How to paste.
+#[derive(Debug, Clone)]
+pub struct Params {
+    /// The texture type (decides which axes follow the field).
+    pub kind: TextureType,
+    /// Texture axes (0 = x, 1 = y, 2 = z) of the primary, secondary and third directions.
+    pub axes: [usize; 3],
+    /// Seed of the random stream.
+    pub seed: u64,
+}
+
+/// What the loop did, for the report.
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize)]
+pub struct Stats {
+    /// Patches pasted.
+    pub patches: usize,
+    /// Tets given up after repeated seeding (0 when the fill is complete).
+    pub forced: usize,
+    /// Mean tets per clump.
+    pub mean_clump: f64,
+    /// Mean patches listed per tet.
+    pub mean_layers: f64,
+    /// Mean angle (degrees) between warped texture axes and the field, over (tet, patch).
+    pub angle_mean: f64,
+    /// 95th percentile of that angle.
+    pub angle_p95: f64,
+}
+
+/// The result: patches and, per tet, the patches that touch it in paste order.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Pasted {
+    /// Every patch.
+    pub patches: Vec<Patch>,
+    /// Per tet, indices into `patches`, bottom first.
+    pub tet_patches: Vec<Vec<u32>>,
+    /// Figures.
+    pub stats: Stats,
+}
+
+/// Mutable state of a fill.
+pub struct Paster<'a> {
+    mesh: &'a TetMesh,
+    neighbours: Vec<[u32; 4]>,
+    field: &'a Field,
+    masks: &'a [Volume],
+    params: Params,
+    samples: Vec<[f32; 4]>,
+    coverage: Vec<u8>,
+    out: Pasted,
+    angles: Vec<f32>,
+}
+
+impl<'a> Paster<'a> {
+    /// Ready to paste into `mesh`; `masks` are one splotch, or outer/middle/inner for the
+    /// depth-varying types (source `i` uses mask `i`).
+    pub fn new(mesh: &'a TetMesh, field: &'a Field, masks: &'a [Volume], params: Params) -> Result<Paster<'a>> {
+        let want = if field.depth.is_some() { 3 } else { 1 };
+        if masks.len() < want {
+            return Err(Error::invalid(format!("type {} needs {want} mask(s), got {}", params.kind, masks.len())));
+        }
+        let tets = mesh.tets.len();
+        let out = Pasted { patches: Vec::new(), tet_patches: vec![Vec::new(); tets], stats: Stats::default() };
+        let (samples, coverage) = (sample_points(), vec![0; tets * SAMPLES]);
+        Ok(Paster { mesh, neighbours: mesh.neighbours(), field, masks, params, samples, coverage, out, angles: Vec::new() })
+    }
+
+    /// Pastes until every tet is covered.
+    pub fn fill(&mut self, progress: &dyn Progress) -> Result<()> {
+        let tets = self.mesh.tets.len();
+        let mut rng = Pcg64Mcg::seed_from_u64(self.params.seed);
+        let mut uncovered: Vec<u32> = (0..tets as u32).collect();
+        let mut strikes = vec![0u8; tets];
+        while !uncovered.is_empty() {
+            if progress.cancelled() {
+                return Err(Error::Cancelled);
+            }
+            let seed = uncovered[rng.random_range(0..uncovered.len())] as usize;
+            let frame = self.seed_frame(seed, &mut rng);
+            self.paste_auto(seed, frame);
+            strikes[seed] += 1;
+            if strikes[seed] >= STRIKES && !self.covered(seed) {
+                self.out.stats.forced += 1;
+            }
+            uncovered.retain(|&t| !self.covered(t as usize) && strikes[t as usize] < STRIKES);
+            progress.update("pasting", 1.0 - uncovered.len() as f32 / tets as f32);
+        }
+        Ok(())
+    }
+
+    /// Pastes one patch by hand: texture centre at `at`, rigid (not warped).
+    pub fn paste_manual(&mut self, at: Vec3, frame: Frame, source: u16) -> Result<()> {
+        let (seed, _) = super::field::locate(self.mesh, at);
+        if self.masks.get(source as usize).is_none() {
+            return Err(Error::invalid(format!("paste source {source} has no mask")));
+        }
+        let map = Rigid::new(&frame, self.params.axes, at, Vec3::splat(0.5));
+        let coords = |v: u32| map.apply(self.mesh.vertices[v as usize]);
+        let tets = self.grow(seed, &coords, source, None);
+        let vertices = vertices_of(self.mesh, &tets);
+        let all: Vec<Vec3> = vertices.iter().map(|&v| coords(v)).collect();
+        self.record(Patch { source, vertices, coords: all }, &tets, None);
+        Ok(())
+    }
+
+    /// The result so far.
+    pub fn finish(mut self) -> Pasted {
+        let stats = &mut self.out.stats;
+        stats.patches = self.out.patches.len();
+        let layers: usize = self.out.tet_patches.iter().map(Vec::len).sum();
+        stats.mean_layers = layers as f64 / self.out.tet_patches.len().max(1) as f64;
+        self.angles.sort_by(f32::total_cmp);
+        if !self.angles.is_empty() {
+            stats.angle_mean = self.angles.iter().map(|a| *a as f64).sum::<f64>() / self.angles.len() as f64;
+            stats.angle_p95 = self.angles[(self.angles.len() * 95 / 100).min(self.angles.len() - 1)] as f64;
+        }
+        self.out
+    }
+
+    fn covered(&self, t: usize) -> bool {
+        self.coverage[t * SAMPLES..(t + 1) * SAMPLES].iter().all(|c| *c == 255)
+    }
+
+    fn depth_at(&self, v: u32) -> Option<f32> {
+        self.field.depth.as_ref().map(|d| d[v as usize])
+    }
+
+    /// Which source (mask) a seed at depth `d` uses: outer, middle or inner.
+    fn source_for(&self, seed: usize) -> u16 {
+        match self.field.depth.as_ref() {
+            None => 0,
+            Some(d) => {
+                let depth = self.mesh.tets[seed].iter().map(|&v| d[v as usize]).sum::<f32>() / 4.0;
+                if depth < 1.0 / 3.0 { 0 } else if depth < 2.0 / 3.0 { 1 } else { 2 }
+            }
+        }
+    }
+
+    fn seed_frame(&self, t: usize, rng: &mut Pcg64Mcg) -> Frame {
+        let random = random_frame(rng);
+        let r = self.field.primary[t];
+        let s = self.field.secondary[t];
+        let dirs = if r == Vec3::ZERO {
+            random
+        } else if s == Vec3::ZERO {
+            let s = orthogonal(random[1], r);
+            [r, s, r.cross(s)]
+        } else {
+            [r, s, r.cross(s)]
+        };
+        Frame { dirs, scale: self.field.scale[t] }
+    }
+
+    /// The target frame of tet `t` for a patch seeded with `seed_frame`.
+    fn frame_of(&self, t: usize, seed_frame: &Frame) -> Frame {
+        let (r, s) = (self.field.primary[t], self.field.secondary[t]);
+        let dirs = match (r == Vec3::ZERO, s == Vec3::ZERO) {
+            (true, _) => seed_frame.dirs,
+            (false, true) => {
+                let s = orthogonal(seed_frame.dirs[1], r);
+                [r, s, r.cross(s)]
+            }
+            (false, false) => [r, s, r.cross(s)],
+        };
+        Frame { dirs, scale: self.field.scale[t] }
+    }
+
+    fn paste_auto(&mut self, seed: usize, frame: Frame) {
+        let axes = self.params.axes;
+        let anchor = self.mesh.centroid(seed);
+        let mut centre = Vec3::splat(0.5);
+        let fixed = self.field.depth.as_ref().map(|_| axes[0]);
+        if let Some(axis) = fixed {
+            centre[axis] = self.mesh.tets[seed].iter().map(|&v| self.depth_at(v).unwrap_or(0.5)).sum::<f32>() / 4.0;
+        }
+        let map = Rigid::new(&frame, axes, anchor, centre);
+        let source = self.source_for(seed);
+        let place = |v: u32| self.with_depth(v, map.apply(self.mesh.vertices[v as usize]));
+        let mut tets = self.grow(seed, &place, source, Some(&frame));
+        let mut vertices = vertices_of(self.mesh, &tets);
+        let mut coords: Vec<Vec3> = vertices.iter().map(|&v| place(v)).collect();
+        let mut rounds = 0;
+        loop {
+            if self.field.primary[seed] != Vec3::ZERO {
+                let frames: Vec<Frame> = tets.iter().map(|&t| self.frame_of(t as usize, &frame)).collect();
+                let pin = (tets.iter().position(|&t| t as usize == seed).unwrap_or(0), centre);
+                let warp = Warp { mesh: self.mesh, tets: &tets, vertices: &vertices, frames: &frames, axes, pin, fixed };
+                warp.solve(&mut coords);
+            }
+            let added = self.regrow(&tets, &vertices, &coords, source, &frame);
+            rounds += 1;
+            if added.is_empty() || rounds > 2 {
+                break;
+            }
+            (tets, vertices, coords) = self.extend(tets, &vertices, &coords, &added);
+        }
+        self.record(Patch { source: source as u16, vertices, coords }, &tets, Some(frame));
+    }
+
+    fn with_depth(&self, v: u32, mut w: Vec3) -> Vec3 {
+        if let Some(d) = self.depth_at(v) {
+            w[self.params.axes[0]] = d;
+        }
+        w
+    }
+
+    /// Grows a clump from `seed` over face neighbours that touch the mask under `coords`
+    /// and (for an oriented fill) whose tensor is close to the seed's.
+    fn grow(&self, seed: usize, coords: &dyn Fn(u32) -> Vec3, source: u16, frame: Option<&Frame>) -> Vec<u32> {
+        let mask = &self.masks[source as usize];
+        let mut inside = vec![false; self.mesh.tets.len()];
+        let mut queue = VecDeque::from([seed as u32]);
+        inside[seed] = true;
+        let mut clump = Vec::new();
+        while let Some(t) = queue.pop_front() {
+            clump.push(t);
+            for n in self.neighbours[t as usize] {
+                if n == NONE || inside[n as usize] {
+                    continue;
+                }
+                let w = self.mesh.tets[n as usize].map(coords);
+                if self.alike(seed, n as usize, frame) && touches(mask, w) {
+                    inside[n as usize] = true;
+                    queue.push_back(n);
+                }
+            }
+        }
+        clump.sort_unstable();
+        clump
+    }
+
+    fn alike(&self, seed: usize, t: usize, frame: Option<&Frame>) -> bool {
+        frame.is_none()
+            || self.field.primary[seed] == Vec3::ZERO
+            || self.field.primary[t].dot(self.field.primary[seed]) >= ALIKE
+                && self.field.secondary[t].dot(self.field.secondary[seed]) >= ALIKE.min(self.field.secondary[seed].length())
+    }
+
+    /// Neighbours outside the clump that the warped patch now reaches, with their corner
+    /// coordinates (new corners extrapolated by the adjacent clump tet's map).
+    fn regrow(&self, tets: &[u32], vertices: &[u32], coords: &[Vec3], source: u16, frame: &Frame) -> Vec<(u32, [Vec3; 4])> {
+        let mask = &self.masks[source as usize];
+        let seed = tets[0] as usize;
+        let mut added: Vec<(u32, [Vec3; 4])> = Vec::new();
+        for &t in tets {
+            let corners = self.mesh.tets[t as usize];
+            let w_t = corners.map(|v| coords[vertices.binary_search(&v).expect("vertex")]);
+            let jac = jacobian(self.mesh, t as usize, w_t);
+            let origin = self.mesh.vertices[corners[0] as usize];
+            for n in self.neighbours[t as usize] {
+                let seen = |n: u32| tets.binary_search(&n).is_ok() || added.iter().any(|a| a.0 == n);
+                if n == NONE || seen(n) || !self.alike(seed, n as usize, Some(frame)) {
+                    continue;
+                }
+                let w = self.mesh.tets[n as usize].map(|v| match vertices.binary_search(&v) {
+                    Ok(i) => coords[i],
+                    Err(_) => self.with_depth(v, w_t[0] + jac * (self.mesh.vertices[v as usize] - origin)),
+                });
+                if touches(mask, w) {
+                    added.push((n, w));
+                }
+            }
+        }
+        added.sort_unstable_by_key(|a| a.0);
+        added
+    }
+
+    fn extend(&self, tets: Vec<u32>, vertices: &[u32], coords: &[Vec3], added: &[(u32, [Vec3; 4])]) -> (Vec<u32>, Vec<u32>, Vec<Vec3>) {
+        let mut all = tets;
+        all.extend(added.iter().map(|a| a.0));
+        all.sort_unstable();
+        let new_vertices = vertices_of(self.mesh, &all);
+        let from_added = |v: u32| {
+            added.iter().find_map(|(t, w)| self.mesh.tets[*t as usize].iter().position(|&u| u == v).map(|k| w[k]))
+        };
+        let new_coords = new_vertices
+            .iter()
+            .map(|&v| match vertices.binary_search(&v) {
+                Ok(i) => coords[i],
+                Err(_) => from_added(v).expect("a new vertex belongs to an added tet"),
+            })
+            .collect();
+        (all, new_vertices, new_coords)
+    }
+
+    /// Adds a patch: samples its mask in each clump tet, accumulates coverage, lists it
+    /// where it shows, and measures how well it follows the field.
+    fn record(&mut self, patch: Patch, tets: &[u32], frame: Option<Frame>) {
+        let mask = &self.masks[patch.source as usize];
+        let alphas: Vec<Vec<u8>> = tets
+            .par_iter()
+            .map(|&t| {
+                let w = patch.corners(self.mesh.tets[t as usize]);
+                self.samples.iter().map(|b| to_byte(alpha(mask, w[0] * b[0] + w[1] * b[1] + w[2] * b[2] + w[3] * b[3]))).collect()
+            })
+            .collect();
+        let index = self.out.patches.len() as u32;
+        for (&t, a) in tets.iter().zip(&alphas) {
+            if a.iter().all(|x| *x == 0) {
+                continue;
+            }
+            let cov = &mut self.coverage[t as usize * SAMPLES..(t as usize + 1) * SAMPLES];
+            cov.iter_mut().zip(a).for_each(|(c, x)| *c = c.saturating_add(*x));
+            self.out.tet_patches[t as usize].push(index);
+            if let Some(f) = &frame {
+                self.angles.push(self.angle(t as usize, &patch, f));
+            }
+        }
+        self.out.stats.mean_clump += (tets.len() as f64 - self.out.stats.mean_clump) / (index as f64 + 1.0);
+        self.out.patches.push(prune(patch, self.mesh, tets, &alphas));
+    }
+
+    /// The largest angle (degrees) between a field axis mapped by the patch and its texture
+    /// axis: the primary for 1-a/1-b, primary and secondary for 2-a/2-b, none for type 0.
+    fn angle(&self, t: usize, patch: &Patch, seed_frame: &Frame) -> f32 {
+        let checked = match self.params.kind {
+            TextureType::T0 => 0,
+            TextureType::T1a | TextureType::T1b => 1,
+            _ => 2,
+        };
+        let frame = self.frame_of(t, seed_frame);
+        let jac = jacobian(self.mesh, t, patch.corners(self.mesh.tets[t]));
+        (0..checked)
+            .map(|k| {
+                let image = (jac * frame.dirs[k]).normalize_or_zero();
+                image[self.params.axes[k]].clamp(-1.0, 1.0).acos().to_degrees()
+            })
+            .fold(0.0, f32::max)
+    }
+}
+
+/// Drops the vertices of tets the patch does not show in.
+fn prune(patch: Patch, mesh: &TetMesh, tets: &[u32], alphas: &[Vec<u8>]) -> Patch {
+    let shown: Vec<u32> = tets.iter().zip(alphas).filter(|(_, a)| a.iter().any(|x| *x > 0)).map(|(t, _)| *t).collect();
+    let vertices = vertices_of(mesh, &shown);
+    let coords = vertices.iter().map(|v| patch.coords[patch.vertices.binary_search(v).expect("vertex")]).collect();
+    Patch { source: patch.source, vertices, coords }
+}
+
+fn vertices_of(mesh: &TetMesh, tets: &[u32]) -> Vec<u32> {
+    let mut v: Vec<u32> = tets.iter().flat_map(|&t| mesh.tets[t as usize]).collect();
+    v.sort_unstable();
+    v.dedup();
+    v
+}
+
+fn orthogonal(s: Vec3, r: Vec3) -> Vec3 {
+    (s - s.dot(r) * r).try_normalize().unwrap_or_else(|| r.any_orthonormal_vector())
+}
+
+/// A uniformly random orthonormal frame.
+fn random_frame(rng: &mut Pcg64Mcg) -> [Vec3; 3] {
+    let mut unit = || {
+        let z = rng.random::<f32>() * 2.0 - 1.0;
+        let phi = rng.random::<f32>() * std::f32::consts::TAU;
+        let r = (1.0 - z * z).max(0.0).sqrt();
+        Vec3::new(r * phi.cos(), r * phi.sin(), z)
+    };
+    let a = unit();
+    let b = orthogonal(unit(), a);
+    [a, b, a.cross(b)]
+}
+
+/// The 165 barycentric sample points `(i, j, k, l) / 8`.
+pub fn sample_points() -> Vec<[f32; 4]> {
+    let mut out = Vec::with_capacity(SAMPLES);
+    for i in 0..=8 {
+        for j in 0..=8 - i {
+            for k in 0..=8 - i - j {
+                out.push([i, j, k, 8 - i - j - k].map(|n| n as f32 / 8.0));
+            }
+        }
+    }
+    out
+}
+
+/// Mask alpha at texture point `w`: trilinear inside the unit cube, 0 outside.
+pub fn alpha(mask: &Volume, w: Vec3) -> f32 {
+    if w.cmplt(Vec3::ZERO).any() || w.cmpgt(Vec3::ONE).any() {
+        return 0.0;
+    }
+    let d = mask.dims();
+    let p = w * Vec3::new(d[0] as f32, d[1] as f32, d[2] as f32) - 0.5;
+    let mut out = [0.0];
+    mask.sample_trilinear(p, Edge::Clamp, &mut out);
+    out[0]
+}
+
+fn to_byte(a: f32) -> u8 {
+    (a.clamp(0.0, 1.0) * 255.0).round() as u8
+}
+
+/// Whether a tet with corner texture coords `w` reaches into the mask (sampled at its
+/// corners, edge midpoints and centre).
+fn touches(mask: &Volume, w: [Vec3; 4]) -> bool {
+    let centre = (w[0] + w[1] + w[2] + w[3]) / 4.0;
+    let mids = [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)].map(|(a, b)| (w[a] + w[b]) / 2.0);
+    w.iter().chain(&mids).chain(std::iter::once(&centre)).any(|p| alpha(mask, *p) > 0.0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::fill::field::{self, Constraints};
+    use crate::fill::tets::cube_lattice;
+    use crate::mask;
+    use crate::progress::NoProgress;
+
+    fn fill(kind: TextureType, c: &Constraints, masks: &[Volume], seed: u64) -> (TetMesh, Pasted) {
+        let mesh = cube_lattice([6, 6, 6], 1.0 / 6.0);
+        let field = field::build(&mesh, kind, c).unwrap();
+        let mut paster = Paster::new(&mesh, &field, masks, Params { kind, axes: [1, 0, 2], seed }).unwrap();
+        paster.fill(&NoProgress).unwrap();
+        let out = paster.finish();
+        (mesh, out)
+    }
+
+    #[test]
+    fn there_are_165_samples_summing_to_one() {
+        let s = sample_points();
+        assert_eq!(s.len(), SAMPLES);
+        assert!(s.iter().all(|b| (b.iter().sum::<f32>() - 1.0).abs() < 1e-6));
+    }
+
+    #[test]
+    fn every_tet_is_covered_and_the_fill_replays() {
+        let masks = [mask::splotch(16, 0.1, 1).unwrap()];
+        let c = Constraints { scale: 0.5, ..Default::default() };
+        let (mesh, a) = fill(TextureType::T0, &c, &masks, 3);
+        assert_eq!(a.stats.forced, 0);
+        assert!(a.tet_patches.iter().all(|l| !l.is_empty()));
+        assert!(a.stats.patches > 3 && a.stats.patches < mesh.tets.len(), "{:?}", a.stats);
+        let (_, b) = fill(TextureType::T0, &c, &masks, 3);
+        assert_eq!(a, b);
+        let (_, other) = fill(TextureType::T0, &c, &masks, 4);
+        assert_ne!(a.patches, other.patches);
+    }
+
+    #[test]
+    fn warped_patches_follow_the_field() {
+        let masks = [mask::splotch(16, 0.1, 1).unwrap()];
+        let c = Constraints {
+            directions: vec![(Vec3::new(0.1, 0.5, 0.5), Vec3::X), (Vec3::new(0.9, 0.5, 0.5), Vec3::new(1.0, 1.0, 0.0))],
+            scale: 0.5,
+            ..Default::default()
+        };
+        let (_, out) = fill(TextureType::T1a, &c, &masks, 5);
+        assert_eq!(out.stats.forced, 0);
+        assert!(out.stats.angle_mean < 8.0 && out.stats.angle_p95 < 20.0, "{:?}", out.stats);
+    }
+}

@@ -1,0 +1,252 @@
+//! Rendering an LST model (thesis §6.1): a planar cut composites, at every pixel, the
+//! patches of the tet that holds the point, top patch first, each through its mask; a bake
+//! stacks cuts into a volume.
+//!
+//! ```text
+//!   pixel -> point p on the plane -> tet t (barycentric b) -> for patch in t, top first:
+//!            w = Σ b_k w_k ; colour += (1 - A) α(w) c(w) ; A += (1 - A) α(w) ; stop at A ≈ 1
+//! ```
+//! Tets are binned by the rows of pixels they span; bands of rows render in parallel and
+//! each pixel takes the first tet (in index order) that contains it, so the picture does
+//! not depend on the thread count.
+
+use super::model::LstModel;
+use super::tets::TetMesh;
+use crate::error::{Error, Result};
+use crate::render::{Rgb8, to_u8};
+use crate::volume::{Channel, Edge, Volume};
+use glam::Vec3;
+use rayon::prelude::*;
+
+/// Rows per parallel band.
+const BAND: usize = 16;
+/// Background colour outside the model.
+pub const BACKGROUND: [u8; 3] = [24, 24, 28];
+
+/// The volumes of each source: colour (RGB, in texture order) and mask.
+pub struct Textures {
+    /// RGB volumes, one per source.
+    pub colour: Vec<Volume>,
+    /// Alpha masks, one per source.
+    pub masks: Vec<Volume>,
+}
+
+impl Textures {
+    /// Pairs colour and mask volumes, keeping only R, G, B of the colour (grey if it has one
+    /// channel).
+    pub fn new(colour: Vec<Volume>, masks: Vec<Volume>) -> Result<Textures> {
+        let colour = colour.iter().map(rgb_of).collect::<Result<Vec<_>>>()?;
+        Ok(Textures { colour, masks })
+    }
+}
+
+fn rgb_of(v: &Volume) -> Result<Volume> {
+    let pick: Vec<usize> = [Channel::R, Channel::G, Channel::B].iter().filter_map(|c| v.channel_index(c)).collect();
+    let pick = if pick.len() == 3 { pick } else { vec![0, 0, 0] };
+    let n = v.channel_count();
+    let data = v.data().chunks_exact(n).flat_map(|voxel| pick.iter().map(|&i| voxel[i])).collect();
+    Volume::from_data(v.dims(), Channel::rgb(), data)
+}
+
+/// A rectangle of pixels on a plane in model space.
+#[derive(Debug, Clone, Copy)]
+pub struct View {
+    /// The model point of the top-left pixel's corner.
+    pub origin: Vec3,
+    /// One pixel step to the right.
+    pub right: Vec3,
+    /// One pixel step down.
+    pub down: Vec3,
+    /// Size in pixels.
+    pub width: usize,
+    /// Size in pixels.
+    pub height: usize,
+}
+
+impl View {
+    /// A square view of `size` pixels on the plane through `point` with `normal`, framing
+    /// the whole mesh as seen along the normal.
+    pub fn framing(mesh: &TetMesh, point: Vec3, normal: Vec3, size: usize) -> Result<View> {
+        let n = normal.try_normalize().ok_or_else(|| Error::invalid("the cut plane's normal is zero"))?;
+        if !(point.is_finite() && n.is_finite()) || !(8..=8192).contains(&size) {
+            return Err(Error::invalid(format!("cut size {size} must be 8 to 8192 pixels and the plane finite")));
+        }
+        let up = if n.y.abs() < 0.9 { Vec3::Y } else { Vec3::Z };
+        let u = up.cross(n).normalize();
+        let v = n.cross(u);
+        let (lo, hi) = extent(mesh, u, v);
+        let side = (hi - lo).max_element().max(1e-6) * 1.04;
+        let mid = (lo + hi) / 2.0;
+        let on_plane = point - u * u.dot(point) - v * v.dot(point);
+        let step = side / size as f32;
+        let origin = on_plane + u * (mid.x - side / 2.0) + v * (mid.y + side / 2.0);
+        Ok(View { origin, right: u * step, down: -v * step, width: size, height: size })
+    }
+
+    /// The model point at the centre of pixel (x, y).
+    pub fn point(&self, x: usize, y: usize) -> Vec3 {
+        self.origin + self.right * (x as f32 + 0.5) + self.down * (y as f32 + 0.5)
+    }
+
+    fn normal(&self) -> Vec3 {
+        self.right.cross(self.down).normalize()
+    }
+}
+
+fn extent(mesh: &TetMesh, u: Vec3, v: Vec3) -> (glam::Vec2, glam::Vec2) {
+    let project = |p: &Vec3| glam::Vec2::new(u.dot(*p), v.dot(*p));
+    mesh.vertices.iter().map(project).fold((glam::Vec2::INFINITY, glam::Vec2::NEG_INFINITY), |(lo, hi), p| (lo.min(p), hi.max(p)))
+}
+
+/// A rendered cut: RGBA in [0, 1] per pixel (alpha 0 outside the model).
+pub struct Cut {
+    /// Width in pixels.
+    pub width: usize,
+    /// Height in pixels.
+    pub height: usize,
+    /// RGBA, row by row.
+    pub pixels: Vec<[f32; 4]>,
+}
+
+impl Cut {
+    /// As an 8-bit picture over [`BACKGROUND`].
+    pub fn picture(&self) -> Rgb8 {
+        let mut out = Rgb8::new(self.width, self.height, BACKGROUND);
+        for (i, p) in self.pixels.iter().enumerate() {
+            if p[3] > 0.0 {
+                out.put(i % self.width, i / self.width, [to_u8(p[0]), to_u8(p[1]), to_u8(p[2])]);
+            }
+        }
+        out
+    }
+
+    /// Share of pixels inside the model.
+    pub fn inside_share(&self) -> f64 {
+        self.pixels.iter().filter(|p| p[3] > 0.0).count() as f64 / self.pixels.len().max(1) as f64
+    }
+}
+
+/// Renders the cut of `model` seen through `view`.
+pub fn cut(model: &LstModel, textures: &Textures, view: &View) -> Cut {
+    let bands = bin_tets(&model.mesh, view);
+    let rows: Vec<Vec<[f32; 4]>> = bands.par_iter().enumerate().map(|(b, tets)| render_band(model, textures, view, b, tets)).collect();
+    Cut { width: view.width, height: view.height, pixels: rows.concat() }
+}
+
+/// For each band of rows, the tets that cross the plane there, in index order.
+fn bin_tets(mesh: &TetMesh, view: &View) -> Vec<Vec<u32>> {
+    let n = view.normal();
+    let offset = n.dot(view.origin);
+    let down = view.down / view.down.length_squared();
+    let mut bands = vec![Vec::new(); view.height.div_ceil(BAND)];
+    for (t, tet) in mesh.tets.iter().enumerate() {
+        let c = tet.map(|v| mesh.vertices[v as usize]);
+        let side = c.map(|p| n.dot(p) - offset);
+        if side.iter().all(|s| *s > 0.0) || side.iter().all(|s| *s < 0.0) {
+            continue;
+        }
+        let rows = c.map(|p| down.dot(p - view.origin));
+        let lo = rows.iter().copied().fold(f32::INFINITY, f32::min).floor().max(0.0) as usize;
+        let hi = rows.iter().copied().fold(f32::NEG_INFINITY, f32::max).ceil().max(0.0) as usize;
+        for band in bands.iter_mut().take((hi / BAND + 1).min(view.height.div_ceil(BAND))).skip(lo / BAND) {
+            band.push(t as u32);
+        }
+    }
+    bands
+}
+
+fn render_band(model: &LstModel, textures: &Textures, view: &View, band: usize, tets: &[u32]) -> Vec<[f32; 4]> {
+    let y0 = band * BAND;
+    let y1 = (y0 + BAND).min(view.height);
+    let mut out = vec![[0.0f32; 4]; (y1 - y0) * view.width];
+    let mut done = vec![false; out.len()];
+    let (right, down) = (view.right / view.right.length_squared(), view.down / view.down.length_squared());
+    for &t in tets {
+        let t = t as usize;
+        let c = model.mesh.corners(t);
+        let inverse = model.mesh.edges(t).inverse();
+        let (xs, ys) = (c.map(|p| right.dot(p - view.origin)), c.map(|p| down.dot(p - view.origin)));
+        let (x_lo, x_hi) = pixel_span(&xs, view.width);
+        let (y_lo, y_hi) = pixel_span(&ys, view.height);
+        let layers = layers_of(model, t);
+        for y in y_lo.max(y0)..y_hi.min(y1) {
+            for x in x_lo..x_hi {
+                let i = (y - y0) * view.width + x;
+                if done[i] {
+                    continue;
+                }
+                let l = inverse * (view.point(x, y) - c[0]);
+                let b = [1.0 - l.x - l.y - l.z, l.x, l.y, l.z];
+                if b.iter().all(|w| *w >= -1e-5) {
+                    out[i] = shade(textures, &layers, b);
+                    done[i] = true;
+                }
+            }
+        }
+    }
+    out
+}
+
+fn pixel_span(coords: &[f32; 4], limit: usize) -> (usize, usize) {
+    let lo = coords.iter().copied().fold(f32::INFINITY, f32::min).floor().max(0.0) as usize;
+    let hi = (coords.iter().copied().fold(f32::NEG_INFINITY, f32::max).ceil().max(0.0) as usize + 1).min(limit);
+    (lo.min(limit), hi)
+}
+
+/// The patches of tet `t` as (source, corner texture coordinates), bottom first.
+fn layers_of(model: &LstModel, t: usize) -> Vec<(usize, [Vec3; 4])> {
+    let tet = model.mesh.tets[t];
+    model.tet_patches[t].iter().map(|&p| (model.patches[p as usize].source as usize, model.patches[p as usize].corners(tet))).collect()
+}
+
+/// Composites the layers at barycentric point `b`, top first.
+fn shade(textures: &Textures, layers: &[(usize, [Vec3; 4])], b: [f32; 4]) -> [f32; 4] {
+    let mut colour = Vec3::ZERO;
+    let mut cover = 0.0f32;
+    let mut sample = [0.0f32; 3];
+    for (source, w) in layers.iter().rev() {
+        let p = w[0] * b[0] + w[1] * b[1] + w[2] * b[2] + w[3] * b[3];
+        let a = super::paste::alpha(&textures.masks[*source], p);
+        if a <= 0.0 {
+            continue;
+        }
+        texel(&textures.colour[*source], p, &mut sample);
+        colour += Vec3::from(sample) * (a * (1.0 - cover));
+        cover += a * (1.0 - cover);
+        if cover > 0.996 {
+            break;
+        }
+    }
+    if cover > 0.0 {
+        colour /= cover;
+    } else if let Some((source, w)) = layers.first() {
+        texel(&textures.colour[*source], w[0] * b[0] + w[1] * b[1] + w[2] * b[2] + w[3] * b[3], &mut sample);
+        colour = Vec3::from(sample);
+    }
+    [colour.x, colour.y, colour.z, 1.0]
+}
+
+fn texel(volume: &Volume, w: Vec3, out: &mut [f32; 3]) {
+    let d = volume.dims();
+    let p = w * Vec3::new(d[0] as f32, d[1] as f32, d[2] as f32) - 0.5;
+    volume.sample_trilinear(p, Edge::Clamp, out);
+}
+
+/// Samples the model into an RGBA volume of `res` voxels along its longest side (alpha is
+/// 1 inside the model): a stack of axis-aligned cuts.
+pub fn bake(model: &LstModel, textures: &Textures, res: usize) -> Result<Volume> {
+    if !(2..=1024).contains(&res) {
+        return Err(Error::invalid(format!("bake resolution {res} is out of range; allowed 2 to 1024")));
+    }
+    let (lo, hi) = model.mesh.vertices.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(a, b), p| (a.min(*p), b.max(*p)));
+    let step = (hi - lo).max_element() / res as f32;
+    let dims = ((hi - lo) / step).ceil().as_uvec3().max(glam::UVec3::ONE).to_array().map(|d| d as usize);
+    crate::volume::check_size(dims, 4, u64::MAX)?;
+    let mut data = Vec::with_capacity(dims[0] * dims[1] * dims[2] * 4);
+    for z in 0..dims[2] {
+        let origin = Vec3::new(lo.x, lo.y, lo.z + (z as f32 + 0.5) * step);
+        let view = View { origin, right: Vec3::X * step, down: Vec3::Y * step, width: dims[0], height: dims[1] };
+        data.extend(cut(model, textures, &view).pixels.into_iter().flatten());
+    }
+    Volume::from_data(dims, Channel::rgba(), data)
+}
