@@ -65,8 +65,8 @@ pub struct View {
 
 impl View {
     /// A square view of `size` pixels on the plane through `point` with `normal`, framing
-    /// the whole mesh as seen along the normal.
-    pub fn framing(mesh: &TetMesh, point: Vec3, normal: Vec3, size: usize) -> Result<View> {
+    /// the box `bounds` as seen along the normal.
+    pub fn framing(bounds: (Vec3, Vec3), point: Vec3, normal: Vec3, size: usize) -> Result<View> {
         let n = normal.try_normalize().ok_or_else(|| Error::invalid("the cut plane's normal is zero"))?;
         if !(point.is_finite() && n.is_finite()) || !(8..=8192).contains(&size) {
             return Err(Error::invalid(format!("cut size {size} must be 8 to 8192 pixels and the plane finite")));
@@ -74,10 +74,10 @@ impl View {
         let up = if n.y.abs() < 0.9 { Vec3::Y } else { Vec3::Z };
         let u = up.cross(n).normalize();
         let v = n.cross(u);
-        let (lo, hi) = extent(mesh, u, v);
+        let (lo, hi) = extent(bounds, u, v);
         let side = (hi - lo).max_element().max(1e-6) * 1.04;
         let mid = (lo + hi) / 2.0;
-        let on_plane = point - u * u.dot(point) - v * v.dot(point);
+        let on_plane = n * n.dot(point);
         let step = side / size as f32;
         let origin = on_plane + u * (mid.x - side / 2.0) + v * (mid.y + side / 2.0);
         Ok(View { origin, right: u * step, down: -v * step, width: size, height: size })
@@ -93,9 +93,20 @@ impl View {
     }
 }
 
-fn extent(mesh: &TetMesh, u: Vec3, v: Vec3) -> (glam::Vec2, glam::Vec2) {
-    let project = |p: &Vec3| glam::Vec2::new(u.dot(*p), v.dot(*p));
-    mesh.vertices.iter().map(project).fold((glam::Vec2::INFINITY, glam::Vec2::NEG_INFINITY), |(lo, hi), p| (lo.min(p), hi.max(p)))
+/// The 2D extent of a box's corners projected on (u, v).
+fn extent((lo, hi): (Vec3, Vec3), u: Vec3, v: Vec3) -> (glam::Vec2, glam::Vec2) {
+    let corners = (0..8).map(|i| Vec3::new([lo.x, hi.x][i & 1], [lo.y, hi.y][(i >> 1) & 1], [lo.z, hi.z][i >> 2]));
+    corners
+        .map(|p| glam::Vec2::new(u.dot(p), v.dot(p)))
+        .fold((glam::Vec2::INFINITY, glam::Vec2::NEG_INFINITY), |(a, b), p| (a.min(p), b.max(p)))
+}
+
+/// The bounding box of several models' vertices.
+pub fn bounds(models: &[(&LstModel, &Textures)]) -> (Vec3, Vec3) {
+    models
+        .iter()
+        .flat_map(|(m, _)| m.mesh.vertices.iter())
+        .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(a, b), p| (a.min(*p), b.max(*p)))
 }
 
 /// A rendered cut: RGBA in [0, 1] per pixel (alpha 0 outside the model).
@@ -232,21 +243,36 @@ fn texel(volume: &Volume, w: Vec3, out: &mut [f32; 3]) {
     volume.sample_trilinear(p, Edge::Clamp, out);
 }
 
-/// Samples the model into an RGBA volume of `res` voxels along its longest side (alpha is
-/// 1 inside the model): a stack of axis-aligned cuts.
-pub fn bake(model: &LstModel, textures: &Textures, res: usize) -> Result<Volume> {
+/// Cuts several models (a multi-material model): each pixel shows the first model that
+/// holds it.
+pub fn cut_many(models: &[(&LstModel, &Textures)], view: &View) -> Cut {
+    let mut cuts = models.iter().map(|(m, t)| cut(m, t, view));
+    let mut out = cuts.next().unwrap_or(Cut { width: view.width, height: view.height, pixels: vec![[0.0; 4]; view.width * view.height] });
+    for other in cuts {
+        for (p, q) in out.pixels.iter_mut().zip(other.pixels) {
+            if p[3] == 0.0 {
+                *p = q;
+            }
+        }
+    }
+    out
+}
+
+/// Samples models into an RGBA volume of `res` voxels along the longest side of their box
+/// (alpha is 1 inside): a stack of axis-aligned cuts.
+pub fn bake(models: &[(&LstModel, &Textures)], res: usize, budget: u64) -> Result<Volume> {
     if !(2..=1024).contains(&res) {
         return Err(Error::invalid(format!("bake resolution {res} is out of range; allowed 2 to 1024")));
     }
-    let (lo, hi) = model.mesh.vertices.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(a, b), p| (a.min(*p), b.max(*p)));
+    let (lo, hi) = bounds(models);
     let step = (hi - lo).max_element() / res as f32;
     let dims = ((hi - lo) / step).ceil().as_uvec3().max(glam::UVec3::ONE).to_array().map(|d| d as usize);
-    crate::volume::check_size(dims, 4, u64::MAX)?;
+    crate::volume::check_size(dims, 4, budget)?;
     let mut data = Vec::with_capacity(dims[0] * dims[1] * dims[2] * 4);
     for z in 0..dims[2] {
         let origin = Vec3::new(lo.x, lo.y, lo.z + (z as f32 + 0.5) * step);
         let view = View { origin, right: Vec3::X * step, down: Vec3::Y * step, width: dims[0], height: dims[1] };
-        data.extend(cut(model, textures, &view).pixels.into_iter().flatten());
+        data.extend(cut_many(models, &view).pixels.into_iter().flatten());
     }
     Volume::from_data(dims, Channel::rgba(), data)
 }

@@ -15,6 +15,8 @@ mod atomic;
 mod exr_file;
 mod fields;
 mod kopf_vol;
+pub mod fill_spec;
+pub mod lst_file;
 pub mod manifest;
 pub mod mesh_file;
 mod nrrd;

@@ -28,6 +28,7 @@ use crate::error::{Error, Result};
 use glam::{Affine3A, DVec3, Vec3};
 use std::f64::consts::PI;
 
+pub mod shapes;
 mod voxelize;
 pub use voxelize::{Coverage, voxelize};
 

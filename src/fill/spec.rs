@@ -1,0 +1,248 @@
+//! What a fill asks for (read from a TOML fill spec by `io::fill_spec`, documented in
+//! `docs/fill.md`), and how it becomes field constraints on a given surface.
+
+use super::field::Constraints;
+use crate::TextureType;
+use crate::error::{Error, Result};
+use crate::mesh::Mesh;
+use crate::volume::Axis;
+use glam::{Quat, Vec3};
+use std::path::PathBuf;
+
+/// Most depth constraint points taken from the surface.
+const SURFACE_POINTS: usize = 600;
+/// Stroke samples per unit of the model's size.
+const STROKE_SAMPLES: usize = 24;
+
+/// A validated fill spec.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FillSpec {
+    /// The exemplar's name in the library.
+    pub exemplar: String,
+    /// The library manifest.
+    pub library: PathBuf,
+    /// The folder `solidtex build` wrote the library into.
+    pub built: PathBuf,
+    /// The texture type (else the library's declared type, else classified).
+    pub texture_type: Option<TextureType>,
+    /// Seed of the paste loop.
+    pub seed: u64,
+    /// Texture cube side in model units (types 0, 1-a, 2-a).
+    pub scale: Option<f32>,
+    /// Target tet count.
+    pub tets: usize,
+    /// Texture axes of the primary and secondary directions (else from the exemplar).
+    pub axes: Option<[Axis; 2]>,
+    /// Fall-off of generated masks.
+    pub mask_falloff: f32,
+    /// Direction strokes (polylines).
+    pub directions: Vec<Vec<Vec3>>,
+    /// Depth constraints.
+    pub depth: DepthSpec,
+    /// Scale constraints (point, scale).
+    pub scales: Vec<(Vec3, f32)>,
+    /// Manual pastes after the automatic fill.
+    pub pastes: Vec<PasteSpec>,
+}
+
+/// Depth constraints: the surface, axis polylines, points and face groups.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct DepthSpec {
+    /// Whether the whole surface is depth 0 (face groups override their part).
+    pub surface: bool,
+    /// Polylines at depth 1 (e.g. the core of a fruit).
+    pub axes: Vec<Vec<Vec3>>,
+    /// Points with their depth.
+    pub points: Vec<(Vec3, f32)>,
+    /// Face groups with their own depth.
+    pub faces: Vec<FaceGroup>,
+}
+
+/// Surface faces reached from the face nearest `at` without crossing a crease sharper than
+/// `crease` degrees (the thesis' multi-face fill).
+#[derive(Debug, Clone, PartialEq)]
+pub struct FaceGroup {
+    /// A point on or near the seed face.
+    pub at: Vec3,
+    /// Crease angle in degrees.
+    pub crease: f32,
+    /// The group's depth.
+    pub value: f32,
+}
+
+/// A manual paste (thesis §5.6).
+#[derive(Debug, Clone, PartialEq)]
+pub struct PasteSpec {
+    /// The exemplar's name in the library.
+    pub exemplar: String,
+    /// Where the texture centre goes.
+    pub at: Vec3,
+    /// The texture's orientation.
+    pub rotation: Quat,
+    /// Texture cube side in model units.
+    pub scale: f32,
+}
+
+/// Turns the spec's strokes, depth and scales into field constraints on `surface`,
+/// refusing points outside the model. `default_scale` applies where no scale is given.
+pub fn constraints(spec: &FillSpec, surface: &Mesh, default_scale: f32) -> Result<Constraints> {
+    let size = size_of(surface);
+    for (i, stroke) in spec.directions.iter().enumerate() {
+        check_inside(surface, stroke, &format!("direction[{i}]"))?;
+    }
+    let directions = spec.directions.iter().flat_map(|s| stroke_samples(s, size)).collect();
+    let mut depth = surface_depth(spec, surface)?;
+    for (i, axis) in spec.depth.axes.iter().enumerate() {
+        check_inside(surface, axis, &format!("depth.axis[{i}]"))?;
+        depth.extend(resample(axis, size).into_iter().map(|p| (p, 1.0)));
+    }
+    for (i, (p, d)) in spec.depth.points.iter().enumerate() {
+        check_inside(surface, &[*p], &format!("depth.points[{i}]"))?;
+        depth.push((*p, *d));
+    }
+    for (i, (p, _)) in spec.scales.iter().enumerate() {
+        check_inside(surface, &[*p], &format!("scale_at[{i}]"))?;
+    }
+    Ok(Constraints { directions, depth, scales: spec.scales.clone(), scale: spec.scale.unwrap_or(default_scale) })
+}
+
+/// The model's size: the diagonal of its bounding box.
+pub fn size_of(surface: &Mesh) -> f32 {
+    let (lo, hi) = surface.bounds();
+    (hi - lo).length()
+}
+
+fn check_inside(surface: &Mesh, points: &[Vec3], field: &str) -> Result<()> {
+    match points.iter().position(|p| surface.winding_number(*p).abs() < 0.25) {
+        Some(k) => Err(Error::invalid(format!(
+            "{field}: point {} ({}) is outside the model; constraints must lie inside or on the surface",
+            k,
+            points[k]
+        ))),
+        None => Ok(()),
+    }
+}
+
+/// A stroke as (point, unit tangent) samples, evenly spaced.
+fn stroke_samples(stroke: &[Vec3], size: f32) -> Vec<(Vec3, Vec3)> {
+    if stroke.len() == 1 {
+        return Vec::new();
+    }
+    let points = resample(stroke, size);
+    points.windows(2).map(|w| ((w[0] + w[1]) / 2.0, (w[1] - w[0]).normalize_or_zero())).filter(|s| s.1 != Vec3::ZERO).collect()
+}
+
+/// Points along a polyline about `size / STROKE_SAMPLES` apart (the corners included).
+fn resample(line: &[Vec3], size: f32) -> Vec<Vec3> {
+    let step = size / STROKE_SAMPLES as f32;
+    let mut out = vec![line[0]];
+    for w in line.windows(2) {
+        let n = ((w[1] - w[0]).length() / step).ceil().max(1.0) as usize;
+        out.extend((1..=n).map(|k| w[0].lerp(w[1], k as f32 / n as f32)));
+    }
+    out
+}
+
+/// Depth constraints on the surface: 0 everywhere (if asked), face groups their value.
+fn surface_depth(spec: &FillSpec, surface: &Mesh) -> Result<Vec<(Vec3, f32)>> {
+    let mut value: Vec<Option<f32>> = vec![if spec.depth.surface { Some(0.0) } else { None }; surface.triangles.len()];
+    for group in &spec.depth.faces {
+        for t in face_group(surface, group)? {
+            value[t] = Some(group.value);
+        }
+    }
+    let step = surface.triangles.len().div_ceil(SURFACE_POINTS).max(1);
+    let centre = |t: usize| surface.triangles[t].iter().map(|&i| surface.vertices[i as usize]).sum::<Vec3>() / 3.0;
+    let mut out: Vec<(Vec3, f32)> = (0..surface.triangles.len()).step_by(step).filter_map(|t| value[t].map(|d| (centre(t), d))).collect();
+    // small groups could fall between the thinned samples: keep a few of each
+    for group in &spec.depth.faces {
+        let faces = face_group(surface, group)?;
+        let every = faces.len().div_ceil(40).max(1);
+        out.extend(faces.iter().step_by(every).map(|&t| (centre(t), group.value)));
+    }
+    Ok(out)
+}
+
+/// The triangles of a face group, sorted.
+pub fn face_group(surface: &Mesh, group: &FaceGroup) -> Result<Vec<usize>> {
+    if !(0.0..=180.0).contains(&group.crease) || !(0.0..=1.0).contains(&group.value) {
+        return Err(Error::invalid(format!(
+            "depth.faces at {}: crease {} must be 0 to 180 degrees and value {} in 0 to 1",
+            group.at, group.crease, group.value
+        )));
+    }
+    let normal = |t: usize| {
+        let [a, b, c] = surface.triangles[t].map(|i| surface.vertices[i as usize]);
+        (b - a).cross(c - a).normalize_or_zero()
+    };
+    let distance = |t: usize| {
+        let c = surface.triangles[t].iter().map(|&i| surface.vertices[i as usize]).sum::<Vec3>() / 3.0;
+        c.distance_squared(group.at)
+    };
+    let seed = (0..surface.triangles.len()).min_by(|&a, &b| distance(a).total_cmp(&distance(b))).unwrap_or(0);
+    let adjacency = edge_adjacency(surface);
+    let cos = group.crease.to_radians().cos();
+    let mut seen = vec![false; surface.triangles.len()];
+    let mut stack = vec![seed];
+    seen[seed] = true;
+    while let Some(t) = stack.pop() {
+        for &n in &adjacency[t] {
+            if !seen[n] && normal(t).dot(normal(n)) >= cos {
+                seen[n] = true;
+                stack.push(n);
+            }
+        }
+    }
+    Ok((0..seen.len()).filter(|&t| seen[t]).collect())
+}
+
+fn edge_adjacency(surface: &Mesh) -> Vec<Vec<usize>> {
+    let mut edges: Vec<(u32, u32, usize)> = Vec::new();
+    for (t, &[a, b, c]) in surface.triangles.iter().enumerate() {
+        for (p, q) in [(a, b), (b, c), (c, a)] {
+            edges.push((p.min(q), p.max(q), t));
+        }
+    }
+    edges.sort_unstable();
+    let mut out = vec![Vec::new(); surface.triangles.len()];
+    for run in edges.chunk_by(|x, y| (x.0, x.1) == (y.0, y.1)) {
+        for x in run {
+            out[x.2].extend(run.iter().filter(|y| y.2 != x.2).map(|y| y.2));
+        }
+    }
+    out
+}
+
+/// The texture axes (0 = x, 1 = y, 2 = z) that the primary, secondary and third field
+/// directions map to: `given` if set; else the primary is the axis the exemplar's Depth
+/// channel runs along (or, without one, the axis it changes fastest along — slowest for a
+/// 1-a fibre texture) and the secondary the remaining axis it changes slowest along.
+pub fn texture_axes(exemplar: &crate::Volume, kind: TextureType, given: Option<[Axis; 2]>) -> Result<[usize; 3]> {
+    let [a, b] = match given {
+        Some([a, b]) => [a.index(), b.index()],
+        None => {
+            let energy = crate::classify::classify(exemplar)?.gradient_energy;
+            let order = |x: &usize, y: &usize| energy[*x].total_cmp(&energy[*y]);
+            let primary = match depth_axis(exemplar) {
+                Some(d) => d,
+                None if kind == TextureType::T1a => (0..3).min_by(order).unwrap_or(2),
+                None => (0..3).max_by(order).unwrap_or(2),
+            };
+            let secondary = (0..3).filter(|&i| i != primary).min_by(order).unwrap_or((primary + 1) % 3);
+            [primary, secondary]
+        }
+    };
+    Ok([a, b, 3 - a - b])
+}
+
+/// The axis the Depth channel grows along, if the volume has one.
+pub fn depth_axis(volume: &crate::Volume) -> Option<usize> {
+    let c = volume.channel_index(&crate::Channel::Depth)?;
+    let d = volume.dims();
+    let step = |axis: usize| {
+        let mut far = [0, 0, 0];
+        far[axis] = d[axis] - 1;
+        (volume.get(far[0], far[1], far[2], c) - volume.get(0, 0, 0, c)).abs()
+    };
+    (0..3).max_by(|x, y| step(*x).total_cmp(&step(*y)))
+}

@@ -1,0 +1,268 @@
+//! The fill spec (TOML): a raw serde form, then a validated [`FillSpec`]. Every error names
+//! the file, the field, the value and what is allowed. Paths in the spec are relative to
+//! its folder. The format, with examples: `docs/fill.md`.
+
+use super::values;
+use crate::error::{Error, Result};
+use crate::fill::spec::{DepthSpec, FaceGroup, FillSpec, PasteSpec};
+use crate::texture_type::TextureType;
+use crate::volume::Axis;
+use glam::{Quat, Vec3};
+use serde::Deserialize;
+use std::path::Path;
+
+/// Allowed target tet counts.
+pub const TETS: std::ops::RangeInclusive<usize> = 100..=2_000_000;
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawSpec {
+    exemplar: String,
+    library: Option<String>,
+    built: Option<String>,
+    #[serde(rename = "type")]
+    texture_type: Option<String>,
+    #[serde(default)]
+    seed: u64,
+    scale: Option<f32>,
+    tets: Option<usize>,
+    axes: Option<String>,
+    mask_falloff: Option<f32>,
+    #[serde(default)]
+    direction: Vec<RawStroke>,
+    #[serde(default)]
+    depth: Option<RawDepth>,
+    #[serde(default)]
+    scale_at: Vec<RawScale>,
+    #[serde(default)]
+    paste: Vec<RawPaste>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawStroke {
+    points: Vec<[f32; 3]>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawDepth {
+    surface: Option<bool>,
+    #[serde(default)]
+    axis: Vec<Vec<[f32; 3]>>,
+    #[serde(default)]
+    points: Vec<[f32; 4]>,
+    #[serde(default)]
+    faces: Vec<RawFaces>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawFaces {
+    at: [f32; 3],
+    crease: Option<f32>,
+    value: f32,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawScale {
+    point: [f32; 3],
+    scale: f32,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawPaste {
+    exemplar: String,
+    at: [f32; 3],
+    rotate: Option<String>,
+    scale: f32,
+}
+
+/// Reads and validates a fill spec.
+pub fn read_fill_spec(path: &Path) -> Result<FillSpec> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let folder = path.parent().unwrap_or(Path::new("."));
+    parse_fill_spec(&text, folder).map_err(|e| e.in_file(path))
+}
+
+/// Validates fill spec text; `folder` resolves relative paths.
+pub fn parse_fill_spec(text: &str, folder: &Path) -> Result<FillSpec> {
+    let raw: RawSpec = toml::from_str(text).map_err(|e| Error::invalid(format!("invalid fill spec: {e}")))?;
+    let texture_type = raw
+        .texture_type
+        .as_deref()
+        .map(|t| t.parse::<TextureType>().map_err(|e| Error::invalid(format!("type = {t:?}: {e}"))))
+        .transpose()?;
+    let tets = raw.tets.unwrap_or(5000);
+    if !TETS.contains(&tets) {
+        return Err(Error::invalid(format!("tets = {tets} is out of range; allowed {} to {}", TETS.start(), TETS.end())));
+    }
+    positive("scale", raw.scale)?;
+    let falloff = raw.mask_falloff.unwrap_or(crate::mask::DEFAULT_FALLOFF);
+    if falloff.is_nan() || falloff <= 0.0 || falloff >= 0.5 {
+        return Err(Error::invalid(format!("mask_falloff = {falloff} is outside (0, 0.5)")));
+    }
+    let here = |p: Option<&String>, default: &str| p.map_or_else(|| default.into(), |p| folder.join(p));
+    Ok(FillSpec {
+        exemplar: raw.exemplar,
+        library: here(raw.library.as_ref(), "exemplars/library.toml"),
+        built: here(raw.built.as_ref(), "out"),
+        texture_type,
+        seed: raw.seed,
+        scale: raw.scale,
+        tets,
+        axes: raw.axes.as_deref().map(axes).transpose()?,
+        mask_falloff: falloff,
+        directions: strokes(&raw.direction)?,
+        depth: depth(raw.depth)?,
+        scales: scales(&raw.scale_at)?,
+        pastes: raw.paste.into_iter().enumerate().map(|(i, p)| paste(i, p)).collect::<Result<_>>()?,
+    })
+}
+
+fn positive(field: &str, value: Option<f32>) -> Result<()> {
+    match value {
+        Some(v) if !(v.is_finite() && v > 0.0) => {
+            Err(Error::invalid(format!("{field} = {v} must be a positive number of model units")))
+        }
+        _ => Ok(()),
+    }
+}
+
+fn axes(text: &str) -> Result<[Axis; 2]> {
+    let parts: Vec<&str> = text.split(',').map(str::trim).collect();
+    let bad = || Error::invalid(format!("axes = {text:?} must be two different texture axes like \"z,x\" (primary, secondary)"));
+    if parts.len() != 2 {
+        return Err(bad());
+    }
+    let a: Axis = parts[0].parse().map_err(|_| bad())?;
+    let b: Axis = parts[1].parse().map_err(|_| bad())?;
+    if a == b { Err(bad()) } else { Ok([a, b]) }
+}
+
+fn point(field: &str, p: [f32; 3]) -> Result<Vec3> {
+    let v = Vec3::from(p);
+    if v.is_finite() { Ok(v) } else { Err(Error::invalid(format!("{field} = {p:?} must be finite"))) }
+}
+
+fn strokes(raw: &[RawStroke]) -> Result<Vec<Vec<Vec3>>> {
+    let mut out = Vec::new();
+    for (i, s) in raw.iter().enumerate() {
+        let line: Vec<Vec3> = s.points.iter().map(|p| point(&format!("direction[{i}].points"), *p)).collect::<Result<_>>()?;
+        let length: f32 = line.windows(2).map(|w| w[0].distance(w[1])).sum();
+        if line.len() < 2 || length <= 0.0 {
+            return Err(Error::invalid(format!("direction[{i}].points needs at least two different points (a stroke)")));
+        }
+        out.push(line);
+    }
+    Ok(out)
+}
+
+fn depth(raw: Option<RawDepth>) -> Result<DepthSpec> {
+    let Some(raw) = raw else { return Ok(DepthSpec { surface: true, ..Default::default() }) };
+    let mut axes = Vec::new();
+    for (i, line) in raw.axis.iter().enumerate() {
+        let field = format!("depth.axis[{i}]");
+        if line.is_empty() {
+            return Err(Error::invalid(format!("{field} is empty; give one point or a polyline")));
+        }
+        axes.push(line.iter().map(|p| point(&field, *p)).collect::<Result<Vec<_>>>()?);
+    }
+    let mut points = Vec::new();
+    for (i, p) in raw.points.iter().enumerate() {
+        let field = format!("depth.points[{i}]");
+        if !(0.0..=1.0).contains(&p[3]) {
+            return Err(Error::invalid(format!("{field}: depth {} must be 0 (surface) to 1 (innermost)", p[3])));
+        }
+        points.push((point(&field, [p[0], p[1], p[2]])?, p[3]));
+    }
+    let mut faces = Vec::new();
+    for (i, f) in raw.faces.iter().enumerate() {
+        let field = format!("depth.faces[{i}]");
+        if !(0.0..=1.0).contains(&f.value) {
+            return Err(Error::invalid(format!("{field}.value = {} must be 0 to 1", f.value)));
+        }
+        let crease = f.crease.unwrap_or(30.0);
+        if !(0.0..=180.0).contains(&crease) {
+            return Err(Error::invalid(format!("{field}.crease = {crease} must be 0 to 180 degrees")));
+        }
+        faces.push(FaceGroup { at: point(&field, f.at)?, crease, value: f.value });
+    }
+    Ok(DepthSpec { surface: raw.surface.unwrap_or(true), axes, points, faces })
+}
+
+fn scales(raw: &[RawScale]) -> Result<Vec<(Vec3, f32)>> {
+    raw.iter()
+        .enumerate()
+        .map(|(i, s)| {
+            positive(&format!("scale_at[{i}].scale"), Some(s.scale))?;
+            Ok((point(&format!("scale_at[{i}].point"), s.point)?, s.scale))
+        })
+        .collect()
+}
+
+fn paste(i: usize, raw: RawPaste) -> Result<PasteSpec> {
+    positive(&format!("paste[{i}].scale"), Some(raw.scale))?;
+    let rotation = match raw.rotate.as_deref() {
+        Some(r) => values::rotation(&format!("paste[{i}].rotate"), r)?,
+        None => Quat::IDENTITY,
+    };
+    Ok(PasteSpec { exemplar: raw.exemplar, at: point(&format!("paste[{i}].at"), raw.at)?, rotation, scale: raw.scale })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_full_spec_parses() {
+        let text = r#"
+            exemplar = "kiwi"
+            type = "2-b"
+            seed = 4
+            tets = 3000
+            axes = "z,x"
+            [[direction]]
+            points = [[0, 0, -1], [0, 0, 1]]
+            [depth]
+            axis = [[[0, 0, -0.8], [0, 0, 0.8]]]
+            points = [[0.1, 0, 0, 0.5]]
+            [[depth.faces]]
+            at = [0, 1, 0]
+            value = 1
+            [[scale_at]]
+            point = [0, 0, 0]
+            scale = 0.3
+            [[paste]]
+            exemplar = "marble"
+            at = [0, 0, 0]
+            rotate = "0,1,0,45"
+            scale = 0.5
+        "#;
+        let s = parse_fill_spec(text, Path::new("specs")).unwrap();
+        assert_eq!(s.texture_type, Some(TextureType::T2b));
+        assert_eq!(s.axes, Some([Axis::Z, Axis::X]));
+        assert_eq!(s.library, Path::new("exemplars/library.toml"));
+        assert!(s.depth.surface && s.depth.axes[0].len() == 2 && s.depth.faces[0].crease == 30.0);
+        assert_eq!(s.pastes[0].exemplar, "marble");
+    }
+
+    #[test]
+    fn mistakes_name_the_field_and_the_allowed_values() {
+        let cases = [
+            ("exemplar = \"a\"\ntets = 5", "tets = 5"),
+            ("exemplar = \"a\"\nscale = -1", "scale = -1"),
+            ("exemplar = \"a\"\naxes = \"z,z\"", "axes"),
+            ("exemplar = \"a\"\ntype = \"3-a\"", "type"),
+            ("exemplar = \"a\"\n[[direction]]\npoints = [[0, 0, 0]]", "direction[0]"),
+            ("exemplar = \"a\"\n[depth]\npoints = [[0, 0, 0, 2]]", "depth.points[0]"),
+            ("exemplar = \"a\"\ncolour = 1", "unknown field"),
+        ];
+        for (text, want) in cases {
+            let e = parse_fill_spec(text, Path::new(".")).unwrap_err().to_string();
+            assert!(e.contains(want), "{text:?} gave {e}");
+        }
+    }
+}

@@ -1,0 +1,141 @@
+//! The `.lst` model file (layout in `docs/formats.md`): little-endian binary, versioned,
+//! written atomically; every count is checked against the bytes left before anything is
+//! allocated, and cross references are checked after reading.
+
+use super::atomic::{read_bytes, write_bytes};
+use crate::error::{Error, Result};
+use crate::fill::model::{LstModel, MaskRef, Source};
+use crate::fill::paste::Patch;
+use crate::fill::tets::TetMesh;
+use glam::Vec3;
+use std::path::Path;
+
+/// The first 8 bytes.
+pub const MAGIC: &[u8; 8] = b"SOLIDLST";
+/// The version this code writes and reads.
+pub const VERSION: u32 = 1;
+
+/// The model as bytes.
+pub fn to_bytes(model: &LstModel) -> Vec<u8> {
+    let mut out = Vec::new();
+    out.extend_from_slice(MAGIC);
+    let counts = [VERSION, model.mesh.vertices.len() as u32, model.mesh.tets.len() as u32];
+    let counts = [counts[0], counts[1], counts[2], model.sources.len() as u32, model.patches.len() as u32];
+    counts.iter().for_each(|c| out.extend_from_slice(&c.to_le_bytes()));
+    for s in &model.sources {
+        for text in [&s.exemplar, &s.volume, &s.mask.to_text()] {
+            out.extend_from_slice(&(text.len() as u32).to_le_bytes());
+            out.extend_from_slice(text.as_bytes());
+        }
+    }
+    model.mesh.vertices.iter().flat_map(|v| v.to_array()).for_each(|x| out.extend_from_slice(&x.to_le_bytes()));
+    model.mesh.tets.iter().flatten().for_each(|i| out.extend_from_slice(&i.to_le_bytes()));
+    for p in &model.patches {
+        out.extend_from_slice(&p.source.to_le_bytes());
+        out.extend_from_slice(&(p.vertices.len() as u32).to_le_bytes());
+        p.vertices.iter().for_each(|v| out.extend_from_slice(&v.to_le_bytes()));
+        p.coords.iter().flat_map(|c| c.to_array()).for_each(|x| out.extend_from_slice(&x.to_le_bytes()));
+    }
+    for list in &model.tet_patches {
+        out.extend_from_slice(&(list.len() as u32).to_le_bytes());
+        list.iter().for_each(|p| out.extend_from_slice(&p.to_le_bytes()));
+    }
+    out
+}
+
+/// Writes the model atomically.
+pub fn write_lst(path: &Path, model: &LstModel) -> Result<()> {
+    write_bytes(path, &to_bytes(model))
+}
+
+/// Reads and checks a model.
+pub fn read_lst(path: &Path) -> Result<LstModel> {
+    from_bytes(&read_bytes(path)?).map_err(|e| e.in_file(path))
+}
+
+/// Parses and checks model bytes.
+pub fn from_bytes(bytes: &[u8]) -> Result<LstModel> {
+    if bytes.len() < 8 || &bytes[..8] != MAGIC {
+        return Err(Error::invalid("not a solidtex .lst model (the file does not start with SOLIDLST)"));
+    }
+    let mut r = Reader { bytes, at: 8 };
+    let version = r.u32()?;
+    if version != VERSION {
+        return Err(Error::invalid(format!("model version {version} is not supported; this solidtex reads version {VERSION}")));
+    }
+    let (nv, nt, ns, np) = (r.count(12)?, r.count(16)?, r.count(12)?, r.count(6)?);
+    let sources = (0..ns).map(|_| r.source()).collect::<Result<Vec<_>>>()?;
+    let vertices = (0..nv).map(|_| r.vec3()).collect::<Result<Vec<_>>>()?;
+    let tets = (0..nt).map(|_| Ok([r.u32()?, r.u32()?, r.u32()?, r.u32()?])).collect::<Result<Vec<_>>>()?;
+    let patches = (0..np).map(|_| r.patch()).collect::<Result<Vec<_>>>()?;
+    let tet_patches = (0..nt).map(|_| r.list()).collect::<Result<Vec<_>>>()?;
+    if r.at != bytes.len() {
+        return Err(Error::invalid(format!("{} unexpected byte(s) after the model", bytes.len() - r.at)));
+    }
+    let model = LstModel { mesh: TetMesh { vertices, tets }, sources, patches, tet_patches };
+    model.check()?;
+    Ok(model)
+}
+
+struct Reader<'a> {
+    bytes: &'a [u8],
+    at: usize,
+}
+
+impl Reader<'_> {
+    fn take(&mut self, n: usize) -> Result<&[u8]> {
+        if self.bytes.len() - self.at < n {
+            return Err(Error::invalid(format!("truncated at byte {} (needed {n} more)", self.at)));
+        }
+        self.at += n;
+        Ok(&self.bytes[self.at - n..self.at])
+    }
+
+    fn u32(&mut self) -> Result<u32> {
+        Ok(u32::from_le_bytes(self.take(4)?.try_into().expect("4 bytes")))
+    }
+
+    /// A count of items of at least `each` bytes, checked against the bytes left.
+    fn count(&mut self, each: usize) -> Result<usize> {
+        let n = self.u32()? as usize;
+        if n.saturating_mul(each) > self.bytes.len() - self.at {
+            return Err(Error::invalid(format!("count {n} at byte {} is more than the file holds", self.at - 4)));
+        }
+        Ok(n)
+    }
+
+    fn f32(&mut self) -> Result<f32> {
+        let x = f32::from_le_bytes(self.take(4)?.try_into().expect("4 bytes"));
+        if x.is_finite() { Ok(x) } else { Err(Error::invalid(format!("non-finite number at byte {}", self.at - 4))) }
+    }
+
+    fn vec3(&mut self) -> Result<Vec3> {
+        Ok(Vec3::new(self.f32()?, self.f32()?, self.f32()?))
+    }
+
+    fn text(&mut self) -> Result<String> {
+        let n = self.count(1)?;
+        String::from_utf8(self.take(n)?.to_vec()).map_err(|_| Error::invalid(format!("text at byte {} is not UTF-8", self.at)))
+    }
+
+    fn source(&mut self) -> Result<Source> {
+        let (exemplar, volume) = (self.text()?, self.text()?);
+        Ok(Source { exemplar, volume, mask: MaskRef::parse(&self.text()?)? })
+    }
+
+    fn patch(&mut self) -> Result<Patch> {
+        let source = u16::from_le_bytes(self.take(2)?.try_into().expect("2 bytes"));
+        let n = self.count(16)?;
+        let vertices = (0..n).map(|_| self.u32()).collect::<Result<Vec<_>>>()?;
+        if vertices.windows(2).any(|w| w[0] >= w[1]) {
+            return Err(Error::invalid(format!("patch vertices before byte {} are not sorted", self.at)));
+        }
+        let coords = (0..n).map(|_| self.vec3()).collect::<Result<Vec<_>>>()?;
+        Ok(Patch { source, vertices, coords })
+    }
+
+    fn list(&mut self) -> Result<Vec<u32>> {
+        let n = self.count(4)?;
+        (0..n).map(|_| self.u32()).collect()
+    }
+}
