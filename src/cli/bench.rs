@@ -14,9 +14,13 @@ pub struct BenchArgs {
     /// Runs per workload (the median is reported).
     #[arg(long, default_value_t = 3)]
     pub runs: usize,
-    /// Only workloads whose name contains this text.
+    /// Only workloads whose name contains this text (e.g. `fill`, `synth`, `/128`).
     #[arg(long)]
     pub only: Option<String>,
+    /// Also time filling the closed meshes of this folder that it knows (the bunny, sphere,
+    /// stepped cylinder and pipe of ../shared/data/meshes).
+    #[arg(long)]
+    pub meshes: Option<std::path::PathBuf>,
 }
 
 struct Workload {
@@ -47,6 +51,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         times.sort_by(f64::total_cmp);
         say!("{:<30} {:>5} {:>9.3} {:>9.3}", name, times.len(), times[times.len() / 2], times[0]);
     }
+    super::bench_fill::run(args)?;
     synthesis(args)
 }
 

@@ -67,6 +67,25 @@ pub struct BakeArgs {
     pub output: PathBuf,
 }
 
+/// The arguments of `solidtex view`.
+#[derive(Debug, clap::Args)]
+pub struct ViewArgs {
+    /// The model (.lst).
+    pub model: PathBuf,
+    /// Degrees around the vertical axis.
+    #[arg(long, default_value_t = 35.0, allow_hyphen_values = true)]
+    pub yaw: f32,
+    /// Degrees above the horizon.
+    #[arg(long, default_value_t = 25.0, allow_hyphen_values = true)]
+    pub pitch: f32,
+    /// Picture size in pixels.
+    #[arg(long, default_value_t = 512)]
+    pub size: usize,
+    /// The PNG to write.
+    #[arg(short, long)]
+    pub output: PathBuf,
+}
+
 /// Run `solidtex fill`.
 pub fn run_fill(args: &FillArgs) -> Result<()> {
     lst_check(&args.output)?;
@@ -76,12 +95,11 @@ pub fn run_fill(args: &FillArgs) -> Result<()> {
     if !fill_spec::TETS.contains(&spec.tets) {
         return Err(Error::invalid(format!("--tets {} is out of range; allowed 100 to 2000000", spec.tets)));
     }
-    let surface = io::mesh_file::read_mesh(&args.mesh)?;
+    let surface = io::mesh_file::read_mesh(&args.mesh)?.canonical();
     let started = Instant::now();
     let tets = mesher::tetrahedralize(&surface, spec.tets).map_err(|e| e.in_file(&args.mesh))?;
     let meshed = started.elapsed().as_secs_f64();
     let resolved = resolve(&spec, &args.output)?;
-    let surface = surface.oriented();
     let job = Job { surface: &surface, spec: &spec, kind: resolved.kind, axes: resolved.axes, sources: resolved.sources, masks: resolved.masks };
     let bar = Bar::new();
     let (model, report) = fill::fill(&job, tets, &bar).map_err(|e| e.in_file(&args.spec))?;
@@ -250,7 +268,7 @@ fn load_model(path: &Path) -> Result<Loaded> {
     let budget = io::budget_from_env()?;
     let colour = model.sources.iter().map(|s| io::read_volume(&base.join(&s.volume), budget)).collect::<Result<Vec<_>>>()?;
     let masks = model.sources.iter().map(|s| load_mask(&s.mask, base)).collect::<Result<Vec<_>>>()?;
-    let textures = Textures::new(colour, masks).map_err(|e| e.in_file(path))?;
+    let textures = Textures::new(&colour, &masks);
     Ok(Loaded { model, textures })
 }
 
@@ -280,7 +298,8 @@ pub fn run_cut(args: &CutArgs) -> Result<()> {
     let cut = render::cut_many(&models, &view);
     let ms = started.elapsed().as_secs_f64() * 1000.0;
     io::write_rgb8(&args.output, &cut.picture())?;
-    eprintln!("wrote {} ({0}x{0}, {1:.0} % inside) in {ms:.1} ms", args.output.display(), cut.inside_share() * 100.0, args.size);
+    let (shown, size) = (args.output.display(), args.size);
+    eprintln!("wrote {shown} ({size}x{size}, {:.0} % inside) in {ms:.1} ms", cut.inside_share() * 100.0);
     Ok(())
 }
 
@@ -294,5 +313,20 @@ pub fn run_bake(args: &BakeArgs) -> Result<()> {
     io::write_volume(&args.output, &volume)?;
     let [x, y, z] = volume.dims();
     eprintln!("wrote {} ({x}x{y}x{z}) in {:.2} s", args.output.display(), started.elapsed().as_secs_f64());
+    Ok(())
+}
+
+/// Run `solidtex view`.
+pub fn run_view(args: &ViewArgs) -> Result<()> {
+    io::check_folder(&args.output)?;
+    if !(8..=8192).contains(&args.size) || !(args.yaw.is_finite() && args.pitch.is_finite()) {
+        return Err(Error::invalid(format!("--size {} must be 8 to 8192 and the angles finite", args.size)));
+    }
+    let loaded = load_model(&args.model)?;
+    let started = Instant::now();
+    let picture = crate::fill::view::surface(&loaded.model, &loaded.textures, args.yaw, args.pitch, args.size);
+    let ms = started.elapsed().as_secs_f64() * 1000.0;
+    io::write_rgb8(&args.output, &picture)?;
+    eprintln!("wrote {} in {ms:.0} ms", args.output.display());
     Ok(())
 }

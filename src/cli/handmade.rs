@@ -246,7 +246,8 @@ pub fn run_blur(args: &BlurArgs) -> Result<()> {
 /// `solidtex draw`.
 #[derive(Debug, clap::Args)]
 pub struct DrawArgs {
-    /// kiwi, carrot or trunk (a cross-section image), or seed (a seed mesh).
+    /// kiwi, carrot or trunk (a cross-section image), seed (a seed mesh), or a closed shape
+    /// to fill: fruit, pipe, log or block.
     pub what: String,
     /// Image size WxH (columns around the object, rows from the outside in).
     #[arg(long, default_value = "64x64")]
@@ -268,13 +269,18 @@ pub fn run_draw(args: &DrawArgs) -> Result<()> {
         eprintln!("wrote {} ({} triangles)", args.output.display(), mesh.triangles.len());
         return Ok(());
     }
+    if let Some(mesh) = crate::mesh::shapes::named(&args.what) {
+        io::mesh_file::write_mesh(&args.output, &mesh)?;
+        eprintln!("wrote {} ({} triangles)", args.output.display(), mesh.triangles.len());
+        return Ok(());
+    }
     let parts = parse::numbers("--size", &args.size.replace('x', ","), &[2])?;
     let (w, h) = (parts[0] as usize, parts[1] as usize);
     if w < 2 || h < 2 || w > 4096 || h > 4096 {
         return Err(Error::invalid(format!("--size {:?}: each side must be 2..=4096 pixels", args.size)));
     }
     let image =
-        crate::sections::draw(&args.what, w, h, args.seed).map_err(|e| Error::invalid(format!("{e}, or seed")))?;
+        crate::sections::draw(&args.what, w, h, args.seed).map_err(|e| Error::invalid(format!("{e}, or seed, fruit, pipe, log, block")))?;
     io::write_image(&args.output, &image)?;
     eprintln!("wrote {} ({w}x{h})", args.output.display());
     Ok(())

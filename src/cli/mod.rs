@@ -8,8 +8,10 @@ macro_rules! say {
 }
 
 mod bench;
+mod bench_fill;
 pub mod build;
 mod commands;
+mod fill;
 mod handmade;
 mod info;
 mod masks;
@@ -143,6 +145,14 @@ pub enum Command {
     },
     /// Build every exemplar a manifest lists (in parallel, cached), with a report.
     Build(build::BuildArgs),
+    /// Fill a closed mesh with a library exemplar by lapped solid textures (writes a .lst model).
+    Fill(fill::FillArgs),
+    /// Render a planar cut through one or more filled models as a PNG.
+    Cut(fill::CutArgs),
+    /// Sample one or more filled models into a volume.
+    Bake(fill::BakeArgs),
+    /// Render the surface of a filled model as a PNG.
+    View(fill::ViewArgs),
 }
 
 /// Run a parsed command line.
@@ -175,6 +185,10 @@ pub fn run(cli: Cli) -> crate::Result<()> {
             Ok(())
         }
         Command::Mask { kind } => masks::run(&kind),
+        Command::Fill(args) => fill::run_fill(&args),
+        Command::Cut(args) => fill::run_cut(&args),
+        Command::Bake(args) => fill::run_bake(&args),
+        Command::View(args) => fill::run_view(&args),
     }
 }
 

@@ -210,31 +210,42 @@ pub struct Rbf {
 }
 
 impl Rbf {
-    /// Fits the RBF through `points` (thinned evenly to at most a few hundred centres).
+    /// Fits the RBF through `points` (duplicates dropped, then thinned evenly to at most
+    /// a few hundred centres). When the points lie in one plane the linear term is
+    /// undetermined; the fit then falls back to a constant term.
     pub fn fit(points: &[(Vec3, f32)]) -> Result<Rbf> {
-        let step = points.len().div_ceil(MAX_CENTRES).max(1);
-        let kept: Vec<(DVec3, f64)> = points.iter().step_by(step).map(|(p, v)| (p.as_dvec3(), *v as f64)).collect();
+        let mut unique: Vec<(Vec3, f32)> = points.to_vec();
+        unique.sort_by(|a, b| a.0.to_array().partial_cmp(&b.0.to_array()).unwrap_or(std::cmp::Ordering::Equal));
+        unique.dedup_by(|a, b| a.0.distance_squared(b.0) < 1e-12);
+        let step = unique.len().div_ceil(MAX_CENTRES).max(1);
+        let kept: Vec<(DVec3, f64)> = unique.iter().step_by(step).map(|(p, v)| (p.as_dvec3(), *v as f64)).collect();
+        Rbf::solve(&kept, true).or_else(|| Rbf::solve(&kept, false)).ok_or_else(|| {
+            Error::invalid(format!("the {} depth constraint point(s) do not define a depth field", kept.len()))
+        })
+    }
+
+    fn solve(kept: &[(DVec3, f64)], linear: bool) -> Option<Rbf> {
         let n = kept.len();
-        let size = n + 4;
+        let terms = if linear { 4 } else { 1 };
+        let size = n + terms;
         let mut m = vec![0.0; size * size];
         let mut b = vec![0.0; size];
         for (i, (pi, vi)) in kept.iter().enumerate() {
             for (j, (pj, _)) in kept.iter().enumerate() {
                 m[i * size + j] = pi.distance(*pj);
             }
-            for (k, x) in [pi.x, pi.y, pi.z, 1.0].into_iter().enumerate() {
+            let poly = [1.0, pi.x, pi.y, pi.z];
+            for (k, x) in poly.into_iter().take(terms).enumerate() {
                 m[i * size + n + k] = x;
                 m[(n + k) * size + i] = x;
             }
             b[i] = *vi;
         }
-        let x = dense_solve(m, b).ok_or_else(|| {
-            Error::invalid(format!(
-                "the {n} depth constraint point(s) do not define a depth field (they must not all lie on one plane)"
-            ))
-        })?;
-        let centres = kept.into_iter().map(|(p, _)| p).collect();
-        Ok(Rbf { centres, weights: x[..n].to_vec(), linear: [x[n], x[n + 1], x[n + 2], x[n + 3]] })
+        let x = dense_solve(m, b)?;
+        let mut poly = [0.0; 4];
+        poly[..terms].copy_from_slice(&x[n..]);
+        let centres = kept.iter().map(|(p, _)| *p).collect();
+        Some(Rbf { centres, weights: x[..n].to_vec(), linear: [poly[1], poly[2], poly[3], poly[0]] })
     }
 
     /// The depth at `p`, clamped to [0, 1].

@@ -10,12 +10,15 @@
 //! ```
 
 pub mod field;
+pub mod mesher;
 pub mod model;
 pub mod paste;
 pub mod render;
+pub mod sampler;
 pub mod solve;
 pub mod spec;
 pub mod tets;
+pub mod view;
 pub mod warp;
 
 use crate::TextureType;
@@ -28,6 +31,9 @@ pub use model::{FillReport, LstModel, MaskRef, Source};
 use spec::FillSpec;
 use tets::TetMesh;
 use warp::Frame;
+
+/// The smallest texture scale, in mean tet edges, a patch may have.
+pub const MIN_SCALE_EDGES: f32 = 2.5;
 
 /// Everything a fill needs besides the tet mesh, resolved by the caller.
 pub struct Job<'a> {
@@ -52,8 +58,8 @@ pub fn fill(job: &Job, mesh: TetMesh, progress: &dyn Progress) -> Result<(LstMod
     let default_scale = spec::size_of(job.surface) / 4.0;
     let constraints = spec::constraints(job.spec, job.surface, default_scale)?;
     progress.update("tensor field", 0.0);
-    let field = field::build(&mesh, job.kind, &constraints)?;
-    check_scale(&mesh, &field, job.kind)?;
+    let mut field = field::build(&mesh, job.kind, &constraints)?;
+    let raised = check_scale(&mesh, &mut field, job.kind)?;
     let params = paste::Params { kind: job.kind, axes: job.axes, seed: job.spec.seed };
     let auto = if field.depth.is_some() { 3 } else { 1 };
     let mut paster = paste::Paster::new(&mesh, &field, &job.masks, params)?;
@@ -67,6 +73,7 @@ pub fn fill(job: &Job, mesh: TetMesh, progress: &dyn Progress) -> Result<(LstMod
         tets: mesh.tets.len(),
         vertices: mesh.vertices.len(),
         min_dihedral: mesh.min_dihedral_degrees(),
+        raised_scale: raised,
         paste: pasted.stats.clone(),
     };
     let model = LstModel { mesh, sources: job.sources.clone(), patches: pasted.patches, tet_patches: pasted.tet_patches };
@@ -79,21 +86,26 @@ fn unit(axis: usize) -> Vec3 {
     v
 }
 
-/// Refuses a texture scale so small that a patch could not cover a tet.
-fn check_scale(mesh: &TetMesh, field: &field::Field, kind: TextureType) -> Result<()> {
-    let edge = mean_edge(mesh);
-    let smallest = field.scale.iter().copied().fold(f32::INFINITY, f32::min);
-    if smallest < 3.0 * edge {
+/// Refuses a texture scale so small that patches could not cover the tets, and raises
+/// the scale of the few tets below [`MIN_SCALE_EDGES`] edges (where the depth field is
+/// steep, e.g. at the ends of a fruit's axis). Returns how many were raised.
+fn check_scale(mesh: &TetMesh, field: &mut field::Field, kind: TextureType) -> Result<usize> {
+    let floor = MIN_SCALE_EDGES * mean_edge(mesh);
+    let mut sorted = field.scale.clone();
+    sorted.sort_by(f32::total_cmp);
+    let median = sorted[sorted.len() / 2];
+    if median < floor {
         let hint = match kind {
-            TextureType::T1b | TextureType::T2b => "the depth field changes too fast (depth 0 and 1 too close); use more tets",
+            TextureType::T1b | TextureType::T2b => "depth 0 and 1 are too close for this many tets; use more tets",
             _ => "raise scale (or scale_at) or use more tets",
         };
         return Err(Error::invalid(format!(
-            "texture scale {smallest:.4} is below 3 tet edges ({:.4}): patches could not cover the tets; {hint}",
-            3.0 * edge
+            "the median texture scale {median:.4} is below {MIN_SCALE_EDGES} tet edges ({floor:.4}): patches could not cover the tets; {hint}"
         )));
     }
-    Ok(())
+    let low = field.scale.iter().filter(|s| **s < floor).count();
+    field.scale.iter_mut().for_each(|s| *s = s.max(floor));
+    Ok(low)
 }
 
 /// The mean edge length of the tets.
@@ -105,4 +117,63 @@ pub fn mean_edge(mesh: &TetMesh) -> f32 {
         })
         .sum();
     total / (6 * mesh.tets.len().max(1)) as f32
+}
+
+#[cfg(test)]
+mod tests {
+    use super::render::{Textures, View, cut};
+    use super::spec::{DepthSpec, FaceGroup};
+    use super::*;
+    use crate::mask::{self, Layer};
+    use crate::mesh::shapes::cuboid;
+    use crate::progress::NoProgress;
+    use crate::volume::{Axis, Channel};
+
+    fn layered_spec() -> FillSpec {
+        let group = |y: f32, value: f32| FaceGroup { at: Vec3::new(0.5, y, 0.5), crease: 30.0, value };
+        let mut spec = FillSpec::new("ramp");
+        spec.seed = 2;
+        spec.depth = DepthSpec { surface: false, faces: vec![group(1.0, 0.0), group(0.0, 1.0)], ..Default::default() };
+        spec
+    }
+
+    /// Red at texture depth 0 (z = 0) fading to blue at depth 1.
+    fn ramp() -> Volume {
+        Volume::from_fn([16, 16, 16], Channel::rgb(), |_, _, z, o| {
+            let d = z as f32 / 15.0;
+            o.copy_from_slice(&[1.0 - d, 0.0, d]);
+        })
+        .unwrap()
+    }
+
+    #[test]
+    fn a_layered_fill_puts_texture_depth_at_model_depth() {
+        // a unit box whose top (y = 1) is depth 0 and bottom depth 1
+        let surface = cuboid(Vec3::ZERO, Vec3::ONE);
+        let spec = layered_spec();
+        let masks: Vec<Volume> = Layer::ALL.iter().map(|l| mask::layered(16, 0.1, 1, *l, Axis::Z).unwrap()).collect();
+        let source = |l: Layer| Source {
+            exemplar: "ramp".into(),
+            volume: "ramp.exr".into(),
+            mask: MaskRef::Layered { layer: l, depth: Axis::Z, size: 16, falloff: 0.1, seed: 1 },
+        };
+        let job = Job { surface: &surface, spec: &spec, kind: TextureType::T1b, axes: [2, 0, 1], sources: Layer::ALL.map(source).to_vec(), masks: masks.clone() };
+        let (model, report) = fill(&job, tets::cube_lattice([8, 8, 8], 0.125), &NoProgress).unwrap();
+        assert_eq!(report.paste.forced, 0);
+        assert!(model.tet_patches.iter().all(|l| !l.is_empty()));
+        model.check().unwrap();
+        let textures = Textures::new(&[ramp(), ramp(), ramp()], &masks);
+        let view = View::framing((Vec3::ZERO, Vec3::ONE), Vec3::splat(0.5), Vec3::Z, 64).unwrap();
+        let picture = cut(&model, &textures, &view);
+        let at = |y: f32| {
+            let row = ((1.0 - y) * 64.0 / 1.04 + 64.0 * 0.02 / 1.04) as usize;
+            let p = picture.pixels[row.min(63) * 64 + 32];
+            (p[0], p[2])
+        };
+        let (top, bottom, middle) = (at(0.97), at(0.03), at(0.5));
+        assert!(top.0 > 0.85, "top {top:?}");
+        assert!(bottom.1 > 0.85, "bottom {bottom:?}");
+        assert!((middle.0 - 0.5).abs() < 0.15, "middle {middle:?}");
+        assert!(picture.inside_share() > 0.9);
+    }
 }

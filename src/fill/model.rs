@@ -140,6 +140,8 @@ pub struct FillReport {
     pub vertices: usize,
     /// Smallest dihedral angle of the tet mesh, degrees.
     pub min_dihedral: f32,
+    /// Tets whose texture scale was raised to the smallest allowed.
+    pub raised_scale: usize,
     /// The paste loop's figures.
     pub paste: Stats,
 }

@@ -20,7 +20,8 @@ use super::warp::{Frame, Rigid, Warp, jacobian};
 use crate::TextureType;
 use crate::error::{Error, Result};
 use crate::progress::Progress;
-use crate::volume::{Edge, Volume};
+use super::sampler::Sampler;
+use crate::volume::Volume;
 use glam::Vec3;
 use rand::{RngExt, SeedableRng};
 use rand_pcg::Pcg64Mcg;
@@ -30,9 +31,11 @@ use std::collections::VecDeque;
 /// Sample points per tet for the coverage test.
 pub const SAMPLES: usize = 165;
 /// Times a seed tet may stay uncovered by its own patch before it is given up.
-const STRIKES: u8 = 4;
-/// Growth stops at neighbours whose tensor turns more than this (cosine).
-const ALIKE: f32 = 0.5;
+const STRIKES: u8 = 6;
+/// Each time a seed tet stays uncovered, its next patch is this much larger.
+const GROWTH: f32 = 1.4;
+/// Growth stops at neighbours whose tensor turns more than 45 degrees from the seed's (cosine).
+const ALIKE: f32 = 0.7;
 
 /// A pasted patch: which source it shows and the texture coordinates of its vertices.
 #[derive(Debug, Clone, PartialEq)]
@@ -74,7 +77,8 @@ pub struct Stats {
     pub mean_clump: f64,
     /// Mean patches listed per tet.
     pub mean_layers: f64,
-    /// Mean angle (degrees) between warped texture axes and the field, over (tet, patch).
+    /// Mean angle (degrees) between warped texture axes and the field, over the (tet, patch)
+    /// pairs where the patch shows with alpha of at least one half.
     pub angle_mean: f64,
     /// 95th percentile of that angle.
     pub angle_p95: f64,
@@ -96,7 +100,7 @@ pub struct Paster<'a> {
     mesh: &'a TetMesh,
     neighbours: Vec<[u32; 4]>,
     field: &'a Field,
-    masks: &'a [Volume],
+    masks: Vec<Sampler>,
     params: Params,
     samples: Vec<[f32; 4]>,
     coverage: Vec<u8>,
@@ -107,7 +111,7 @@ pub struct Paster<'a> {
 impl<'a> Paster<'a> {
     /// Ready to paste into `mesh`; `masks` are one splotch, or outer/middle/inner for the
     /// depth-varying types (source `i` uses mask `i`).
-    pub fn new(mesh: &'a TetMesh, field: &'a Field, masks: &'a [Volume], params: Params) -> Result<Paster<'a>> {
+    pub fn new(mesh: &'a TetMesh, field: &'a Field, masks: &[Volume], params: Params) -> Result<Paster<'a>> {
         let want = if field.depth.is_some() { 3 } else { 1 };
         if masks.len() < want {
             return Err(Error::invalid(format!("type {} needs {want} mask(s), got {}", params.kind, masks.len())));
@@ -115,6 +119,7 @@ impl<'a> Paster<'a> {
         let tets = mesh.tets.len();
         let out = Pasted { patches: Vec::new(), tet_patches: vec![Vec::new(); tets], stats: Stats::default() };
         let (samples, coverage) = (sample_points(), vec![0; tets * SAMPLES]);
+        let masks = masks.iter().map(Sampler::mask).collect();
         Ok(Paster { mesh, neighbours: mesh.neighbours(), field, masks, params, samples, coverage, out, angles: Vec::new() })
     }
 
@@ -129,8 +134,9 @@ impl<'a> Paster<'a> {
                 return Err(Error::Cancelled);
             }
             let seed = uncovered[rng.random_range(0..uncovered.len())] as usize;
-            let frame = self.seed_frame(seed, &mut rng);
-            self.paste_auto(seed, frame);
+            let mut frame = self.seed_frame(seed, &mut rng);
+            frame.scale *= GROWTH.powi(strikes[seed] as i32);
+            self.paste_auto(seed, frame, strikes[seed]);
             strikes[seed] += 1;
             if strikes[seed] >= STRIKES && !self.covered(seed) {
                 self.out.stats.forced += 1;
@@ -178,13 +184,16 @@ impl<'a> Paster<'a> {
         self.field.depth.as_ref().map(|d| d[v as usize])
     }
 
-    /// Which source (mask) a seed at depth `d` uses: outer, middle or inner.
-    fn source_for(&self, seed: usize) -> u16 {
+    /// Which source (mask) a seed uses: outer, middle or inner by its mean depth (thesis
+    /// §6.2.7). A seed tet that its own patch left uncovered (it spans more depth than one
+    /// mask, where the depth field is steep) tries the next mask on each later attempt.
+    fn source_for(&self, seed: usize, strike: u8) -> u16 {
         match self.field.depth.as_ref() {
             None => 0,
             Some(d) => {
                 let depth = self.mesh.tets[seed].iter().map(|&v| d[v as usize]).sum::<f32>() / 4.0;
-                if depth < 1.0 / 3.0 { 0 } else if depth < 2.0 / 3.0 { 1 } else { 2 }
+                let base = if depth < 1.0 / 3.0 { 0 } else if depth < 2.0 / 3.0 { 1 } else { 2 };
+                ((base + strike) % 3) as u16
             }
         }
     }
@@ -205,7 +214,7 @@ impl<'a> Paster<'a> {
     }
 
     /// The target frame of tet `t` for a patch seeded with `seed_frame`.
-    fn frame_of(&self, t: usize, seed_frame: &Frame) -> Frame {
+    fn frame_of(&self, t: usize, seed_frame: &Frame, boost: f32) -> Frame {
         let (r, s) = (self.field.primary[t], self.field.secondary[t]);
         let dirs = match (r == Vec3::ZERO, s == Vec3::ZERO) {
             (true, _) => seed_frame.dirs,
@@ -215,10 +224,10 @@ impl<'a> Paster<'a> {
             }
             (false, false) => [r, s, r.cross(s)],
         };
-        Frame { dirs, scale: self.field.scale[t] }
+        Frame { dirs, scale: self.field.scale[t] * boost }
     }
 
-    fn paste_auto(&mut self, seed: usize, frame: Frame) {
+    fn paste_auto(&mut self, seed: usize, frame: Frame, strike: u8) {
         let axes = self.params.axes;
         let anchor = self.mesh.centroid(seed);
         let mut centre = Vec3::splat(0.5);
@@ -227,7 +236,7 @@ impl<'a> Paster<'a> {
             centre[axis] = self.mesh.tets[seed].iter().map(|&v| self.depth_at(v).unwrap_or(0.5)).sum::<f32>() / 4.0;
         }
         let map = Rigid::new(&frame, axes, anchor, centre);
-        let source = self.source_for(seed);
+        let source = self.source_for(seed, strike);
         let place = |v: u32| self.with_depth(v, map.apply(self.mesh.vertices[v as usize]));
         let mut tets = self.grow(seed, &place, source, Some(&frame));
         let mut vertices = vertices_of(self.mesh, &tets);
@@ -235,7 +244,8 @@ impl<'a> Paster<'a> {
         let mut rounds = 0;
         loop {
             if self.field.primary[seed] != Vec3::ZERO {
-                let frames: Vec<Frame> = tets.iter().map(|&t| self.frame_of(t as usize, &frame)).collect();
+                let boost = frame.scale / self.field.scale[seed];
+                let frames: Vec<Frame> = tets.iter().map(|&t| self.frame_of(t as usize, &frame, boost)).collect();
                 let pin = (tets.iter().position(|&t| t as usize == seed).unwrap_or(0), centre);
                 let warp = Warp { mesh: self.mesh, tets: &tets, vertices: &vertices, frames: &frames, axes, pin, fixed };
                 warp.solve(&mut coords);
@@ -344,7 +354,7 @@ impl<'a> Paster<'a> {
             .par_iter()
             .map(|&t| {
                 let w = patch.corners(self.mesh.tets[t as usize]);
-                self.samples.iter().map(|b| to_byte(alpha(mask, w[0] * b[0] + w[1] * b[1] + w[2] * b[2] + w[3] * b[3]))).collect()
+                self.samples.iter().map(|b| to_byte(mask.alpha(w[0] * b[0] + w[1] * b[1] + w[2] * b[2] + w[3] * b[3]))).collect()
             })
             .collect();
         let index = self.out.patches.len() as u32;
@@ -355,7 +365,7 @@ impl<'a> Paster<'a> {
             let cov = &mut self.coverage[t as usize * SAMPLES..(t as usize + 1) * SAMPLES];
             cov.iter_mut().zip(a).for_each(|(c, x)| *c = c.saturating_add(*x));
             self.out.tet_patches[t as usize].push(index);
-            if let Some(f) = &frame {
+            if let (Some(f), true) = (&frame, a.iter().any(|x| *x >= 128)) {
                 self.angles.push(self.angle(t as usize, &patch, f));
             }
         }
@@ -371,7 +381,7 @@ impl<'a> Paster<'a> {
             TextureType::T1a | TextureType::T1b => 1,
             _ => 2,
         };
-        let frame = self.frame_of(t, seed_frame);
+        let frame = self.frame_of(t, seed_frame, 1.0);
         let jac = jacobian(self.mesh, t, patch.corners(self.mesh.tets[t]));
         (0..checked)
             .map(|k| {
@@ -427,28 +437,16 @@ pub fn sample_points() -> Vec<[f32; 4]> {
     out
 }
 
-/// Mask alpha at texture point `w`: trilinear inside the unit cube, 0 outside.
-pub fn alpha(mask: &Volume, w: Vec3) -> f32 {
-    if w.cmplt(Vec3::ZERO).any() || w.cmpgt(Vec3::ONE).any() {
-        return 0.0;
-    }
-    let d = mask.dims();
-    let p = w * Vec3::new(d[0] as f32, d[1] as f32, d[2] as f32) - 0.5;
-    let mut out = [0.0];
-    mask.sample_trilinear(p, Edge::Clamp, &mut out);
-    out[0]
-}
-
 fn to_byte(a: f32) -> u8 {
     (a.clamp(0.0, 1.0) * 255.0).round() as u8
 }
 
 /// Whether a tet with corner texture coords `w` reaches into the mask (sampled at its
 /// corners, edge midpoints and centre).
-fn touches(mask: &Volume, w: [Vec3; 4]) -> bool {
+fn touches(mask: &Sampler, w: [Vec3; 4]) -> bool {
     let centre = (w[0] + w[1] + w[2] + w[3]) / 4.0;
     let mids = [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)].map(|(a, b)| (w[a] + w[b]) / 2.0);
-    w.iter().chain(&mids).chain(std::iter::once(&centre)).any(|p| alpha(mask, *p) > 0.0)
+    w.iter().chain(&mids).chain(std::iter::once(&centre)).any(|p| mask.alpha(*p) > 0.0)
 }
 
 #[cfg(test)]

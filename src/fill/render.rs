@@ -14,7 +14,8 @@ use super::model::LstModel;
 use super::tets::TetMesh;
 use crate::error::{Error, Result};
 use crate::render::{Rgb8, to_u8};
-use crate::volume::{Channel, Edge, Volume};
+use super::sampler::Sampler;
+use crate::volume::{Channel, Volume};
 use glam::Vec3;
 use rayon::prelude::*;
 
@@ -23,29 +24,19 @@ const BAND: usize = 16;
 /// Background colour outside the model.
 pub const BACKGROUND: [u8; 3] = [24, 24, 28];
 
-/// The volumes of each source: colour (RGB, in texture order) and mask.
+/// The samplers of each source: colour (RGB) and mask.
 pub struct Textures {
-    /// RGB volumes, one per source.
-    pub colour: Vec<Volume>,
+    /// RGB, one per source.
+    pub colour: Vec<Sampler>,
     /// Alpha masks, one per source.
-    pub masks: Vec<Volume>,
+    pub masks: Vec<Sampler>,
 }
 
 impl Textures {
-    /// Pairs colour and mask volumes, keeping only R, G, B of the colour (grey if it has one
-    /// channel).
-    pub fn new(colour: Vec<Volume>, masks: Vec<Volume>) -> Result<Textures> {
-        let colour = colour.iter().map(rgb_of).collect::<Result<Vec<_>>>()?;
-        Ok(Textures { colour, masks })
+    /// Pairs colour and mask volumes (R, G, B of the colour, or its first channel as grey).
+    pub fn new(colour: &[Volume], masks: &[Volume]) -> Textures {
+        Textures { colour: colour.iter().map(Sampler::colour).collect(), masks: masks.iter().map(Sampler::mask).collect() }
     }
-}
-
-fn rgb_of(v: &Volume) -> Result<Volume> {
-    let pick: Vec<usize> = [Channel::R, Channel::G, Channel::B].iter().filter_map(|c| v.channel_index(c)).collect();
-    let pick = if pick.len() == 3 { pick } else { vec![0, 0, 0] };
-    let n = v.channel_count();
-    let data = v.data().chunks_exact(n).flat_map(|voxel| pick.iter().map(|&i| voxel[i])).collect();
-    Volume::from_data(v.dims(), Channel::rgb(), data)
 }
 
 /// A rectangle of pixels on a plane in model space.
@@ -172,15 +163,21 @@ fn render_band(model: &LstModel, textures: &Textures, view: &View, band: usize, 
     let mut out = vec![[0.0f32; 4]; (y1 - y0) * view.width];
     let mut done = vec![false; out.len()];
     let (right, down) = (view.right / view.right.length_squared(), view.down / view.down.length_squared());
+    let (normal, offset) = (view.normal(), view.normal().dot(view.origin));
     for &t in tets {
         let t = t as usize;
         let c = model.mesh.corners(t);
-        let inverse = model.mesh.edges(t).inverse();
-        let (xs, ys) = (c.map(|p| right.dot(p - view.origin)), c.map(|p| down.dot(p - view.origin)));
+        let section = section(&c, normal, offset);
+        let (xs, ys): (Vec<f32>, Vec<f32>) = section.iter().map(|p| (right.dot(*p - view.origin), down.dot(*p - view.origin))).unzip();
         let (x_lo, x_hi) = pixel_span(&xs, view.width);
         let (y_lo, y_hi) = pixel_span(&ys, view.height);
+        let (y_lo, y_hi) = (y_lo.max(y0), y_hi.min(y1));
+        if y_lo >= y_hi || x_lo >= x_hi {
+            continue;
+        }
+        let inverse = model.mesh.edges(t).inverse();
         let layers = layers_of(model, t);
-        for y in y_lo.max(y0)..y_hi.min(y1) {
+        for y in y_lo..y_hi {
             for x in x_lo..x_hi {
                 let i = (y - y0) * view.width + x;
                 if done[i] {
@@ -198,7 +195,20 @@ fn render_band(model: &LstModel, textures: &Textures, view: &View, band: usize, 
     out
 }
 
-fn pixel_span(coords: &[f32; 4], limit: usize) -> (usize, usize) {
+/// The points where the tet's edges cross the plane `normal . p = offset`.
+fn section(c: &[Vec3; 4], normal: Vec3, offset: f32) -> Vec<Vec3> {
+    let side = c.map(|p| normal.dot(p) - offset);
+    let mut points = Vec::with_capacity(4);
+    for (a, b) in [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)] {
+        if (side[a] <= 0.0) != (side[b] <= 0.0) {
+            let t = side[a] / (side[a] - side[b]);
+            points.push(c[a].lerp(c[b], t));
+        }
+    }
+    points
+}
+
+fn pixel_span(coords: &[f32], limit: usize) -> (usize, usize) {
     let lo = coords.iter().copied().fold(f32::INFINITY, f32::min).floor().max(0.0) as usize;
     let hi = (coords.iter().copied().fold(f32::NEG_INFINITY, f32::max).ceil().max(0.0) as usize + 1).min(limit);
     (lo.min(limit), hi)
@@ -210,19 +220,25 @@ fn layers_of(model: &LstModel, t: usize) -> Vec<(usize, [Vec3; 4])> {
     model.tet_patches[t].iter().map(|&p| (model.patches[p as usize].source as usize, model.patches[p as usize].corners(tet))).collect()
 }
 
+/// The composited colour of the model at `point` inside tet `t`.
+pub fn shade_point(model: &LstModel, textures: &Textures, t: usize, point: Vec3) -> [f32; 4] {
+    let b = model.mesh.barycentric(t, point).map(|x| x.max(0.0));
+    let sum: f32 = b.iter().sum::<f32>().max(1e-12);
+    shade(textures, &layers_of(model, t), b.map(|x| x / sum))
+}
+
 /// Composites the layers at barycentric point `b`, top first.
 fn shade(textures: &Textures, layers: &[(usize, [Vec3; 4])], b: [f32; 4]) -> [f32; 4] {
+    let at = |w: &[Vec3; 4]| w[0] * b[0] + w[1] * b[1] + w[2] * b[2] + w[3] * b[3];
     let mut colour = Vec3::ZERO;
     let mut cover = 0.0f32;
-    let mut sample = [0.0f32; 3];
     for (source, w) in layers.iter().rev() {
-        let p = w[0] * b[0] + w[1] * b[1] + w[2] * b[2] + w[3] * b[3];
-        let a = super::paste::alpha(&textures.masks[*source], p);
+        let p = at(w);
+        let a = textures.masks[*source].alpha(p);
         if a <= 0.0 {
             continue;
         }
-        texel(&textures.colour[*source], p, &mut sample);
-        colour += Vec3::from(sample) * (a * (1.0 - cover));
+        colour += textures.colour[*source].rgb(p) * (a * (1.0 - cover));
         cover += a * (1.0 - cover);
         if cover > 0.996 {
             break;
@@ -231,16 +247,9 @@ fn shade(textures: &Textures, layers: &[(usize, [Vec3; 4])], b: [f32; 4]) -> [f3
     if cover > 0.0 {
         colour /= cover;
     } else if let Some((source, w)) = layers.first() {
-        texel(&textures.colour[*source], w[0] * b[0] + w[1] * b[1] + w[2] * b[2] + w[3] * b[3], &mut sample);
-        colour = Vec3::from(sample);
+        colour = textures.colour[*source].rgb(at(w));
     }
     [colour.x, colour.y, colour.z, 1.0]
-}
-
-fn texel(volume: &Volume, w: Vec3, out: &mut [f32; 3]) {
-    let d = volume.dims();
-    let p = w * Vec3::new(d[0] as f32, d[1] as f32, d[2] as f32) - 0.5;
-    volume.sample_trilinear(p, Edge::Clamp, out);
 }
 
 /// Cuts several models (a multi-material model): each pixel shows the first model that

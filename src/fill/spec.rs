@@ -45,6 +45,28 @@ pub struct FillSpec {
     pub pastes: Vec<PasteSpec>,
 }
 
+impl FillSpec {
+    /// A spec with the defaults of the TOML form: no constraints, 5,000 tets, seed 0, the
+    /// default library and build folder, the surface at depth 0.
+    pub fn new(exemplar: &str) -> FillSpec {
+        FillSpec {
+            exemplar: exemplar.to_string(),
+            library: PathBuf::from("exemplars/library.toml"),
+            built: PathBuf::from("out"),
+            texture_type: None,
+            seed: 0,
+            scale: None,
+            tets: 5000,
+            axes: None,
+            mask_falloff: crate::mask::DEFAULT_FALLOFF,
+            directions: Vec::new(),
+            depth: DepthSpec { surface: true, ..Default::default() },
+            scales: Vec::new(),
+            pastes: Vec::new(),
+        }
+    }
+}
+
 /// Depth constraints: the surface, axis polylines, points and face groups.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct DepthSpec {
@@ -152,13 +174,19 @@ fn surface_depth(spec: &FillSpec, surface: &Mesh) -> Result<Vec<(Vec3, f32)>> {
         }
     }
     let step = surface.triangles.len().div_ceil(SURFACE_POINTS).max(1);
-    let centre = |t: usize| surface.triangles[t].iter().map(|&i| surface.vertices[i as usize]).sum::<Vec3>() / 3.0;
+    let centre = |t: usize| {
+        // corners summed in index order, so a flipped triangle gives the same bits
+        let mut corners = surface.triangles[t];
+        corners.sort_unstable();
+        corners.iter().map(|&i| surface.vertices[i as usize]).sum::<Vec3>() / 3.0
+    };
     let mut out: Vec<(Vec3, f32)> = (0..surface.triangles.len()).step_by(step).filter_map(|t| value[t].map(|d| (centre(t), d))).collect();
-    // small groups could fall between the thinned samples: keep a few of each
+    // small groups could fall between the thinned samples: keep some corners of each
     for group in &spec.depth.faces {
         let faces = face_group(surface, group)?;
         let every = faces.len().div_ceil(40).max(1);
-        out.extend(faces.iter().step_by(every).map(|&t| (centre(t), group.value)));
+        let corners = faces.iter().step_by(every).flat_map(|&t| surface.triangles[t]);
+        out.extend(corners.map(|i| (surface.vertices[i as usize], group.value)));
     }
     Ok(out)
 }

@@ -99,7 +99,7 @@ impl Reader<'_> {
     fn count(&mut self, each: usize) -> Result<usize> {
         let n = self.u32()? as usize;
         if n.saturating_mul(each) > self.bytes.len() - self.at {
-            return Err(Error::invalid(format!("count {n} at byte {} is more than the file holds", self.at - 4)));
+            return Err(Error::invalid(format!("truncated or damaged: count {n} at byte {} is more than the file holds", self.at - 4)));
         }
         Ok(n)
     }

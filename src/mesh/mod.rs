@@ -79,6 +79,18 @@ impl Mesh {
         if self.signed_volume() < 0.0 { self.flipped() } else { self }
     }
 
+    /// The mesh [`oriented`](Mesh::oriented) with every triangle's corners rotated so the
+    /// smallest index comes first: a mesh and its inverted copy give identical triangles,
+    /// so everything computed from them is bit-identical.
+    pub fn canonical(self) -> Mesh {
+        let mut mesh = self.oriented();
+        for t in &mut mesh.triangles {
+            let first = (0..3).min_by_key(|&k| t[k]).unwrap_or(0);
+            t.rotate_left(first);
+        }
+        mesh
+    }
+
     /// How many undirected edges are not shared by exactly two triangles: 0 for a closed
     /// mesh; open borders (one triangle) and non-manifold edges (three or more) count.
     pub fn boundary_edges(&self) -> usize {

@@ -95,6 +95,21 @@ pub fn cuboid(lo: Vec3, hi: Vec3) -> Mesh {
     Mesh::new(vertices, triangles).expect("a valid box").oriented()
 }
 
+/// The named shapes `solidtex draw` makes, in model units of about 2.
+pub const NAMES: [&str; 4] = ["fruit", "pipe", "log", "block"];
+
+/// A named shape: `fruit` (a 2 x 1.3 x 1.3 ellipsoid along x, like a kiwi), `pipe` (a torus,
+/// genus 1), `log` (a capped cylinder along z) or `block` (a 2 x 1 x 1 box).
+pub fn named(name: &str) -> Option<Mesh> {
+    match name {
+        "fruit" => Some(ellipsoid(Vec3::new(1.0, 0.65, 0.65), 24, 48)),
+        "pipe" => Some(torus(0.75, 0.3, 64, 24)),
+        "log" => Some(cylinder(0.5, 2.0, 48, 8)),
+        "block" => Some(cuboid(Vec3::new(-1.0, -0.5, -0.5), Vec3::new(1.0, 0.5, 0.5))),
+        _ => None,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -1,0 +1,183 @@
+//! The filling backend end to end: fill, cut, bake and view through the binary, on shapes
+//! the project draws itself and the default exemplar library.
+
+use crate::support::{assert_fails, at, listing, solidtex, stderr};
+use std::path::Path;
+
+fn library() -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("exemplars/library.toml").to_string_lossy().into_owned()
+}
+
+/// Writes a spec into `dir` (library = the default one, built into `dir/built`).
+fn spec(dir: &Path, name: &str, body: &str) -> String {
+    let text = format!("library = {:?}\nbuilt = \"built\"\n{body}", library());
+    let path = dir.join(name);
+    std::fs::write(&path, text).unwrap();
+    path.to_string_lossy().into_owned()
+}
+
+fn draw(dir: &Path, what: &str) -> String {
+    let path = at(dir, &format!("{what}.obj"));
+    assert!(solidtex(&["draw", what, "-o", &path]).status.success());
+    path
+}
+
+const KIWI: &str = r#"
+exemplar = "kiwi"
+seed = 3
+tets = 3000
+[depth]
+axis = [[[-0.75, 0, 0], [0.75, 0, 0]]]
+[[direction]]
+points = [[-0.75, 0, 0], [0.75, 0, 0]]
+"#;
+
+fn fill(dir: &Path, mesh: &str, spec: &str, out: &str) -> serde_json::Value {
+    let json = at(dir, &format!("{out}.json"));
+    let run = solidtex(&["fill", mesh, "--spec", spec, "-o", &at(dir, out), "--json", &json]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap()
+}
+
+fn pixel(png: &str, x: u32, y: u32) -> [f32; 3] {
+    let img = image::open(png).unwrap().to_rgb8();
+    img.get_pixel(x, y).0.map(|c| c as f32 / 255.0)
+}
+
+#[test]
+fn a_kiwi_fill_covers_every_tet_and_puts_the_skin_on_the_surface() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (mesh, spec) = (draw(d, "fruit"), spec(d, "kiwi.toml", KIWI));
+    let stats = fill(d, &mesh, &spec, "kiwi.lst");
+    assert_eq!(stats["fill"]["paste"]["forced"], 0, "{stats}");
+    assert!(stats["fill"]["tets"].as_u64().unwrap() > 2000);
+    assert!(stats["fill"]["paste"]["angle_mean"].as_f64().unwrap() < 20.0, "{stats}");
+    // a cut across the fruit's axis: a 0.65-radius disc; 512 px span 1.3 x 1.04
+    let png = at(d, "cut.png");
+    assert!(solidtex(&["cut", &at(d, "kiwi.lst"), "--plane", "0,0,0,1,0,0", "--size", "512", "-o", &png]).status.success());
+    let centre = pixel(&png, 256, 256);
+    assert!(centre.iter().all(|c| *c > 0.75), "the core is pale: {centre:?}");
+    let px_per_unit = 512.0 / (1.3 * 1.04);
+    let rim = (256.0 + 0.64 * px_per_unit) as u32;
+    let skin = pixel(&png, 256, rim);
+    assert!(skin[0] > skin[1] && skin[1] > skin[2] && skin[0] < 0.6, "brown skin at the rim: {skin:?}");
+    let flesh = pixel(&png, 256, (256.0 + 0.3 * px_per_unit) as u32);
+    assert!(flesh[1] > flesh[0] && flesh[1] > flesh[2], "green flesh between: {flesh:?}");
+}
+
+#[test]
+fn fills_replay_for_a_seed_and_ignore_the_mesh_orientation() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (mesh, spec) = (draw(d, "fruit"), spec(d, "kiwi.toml", KIWI));
+    fill(d, &mesh, &spec, "a.lst");
+    fill(d, &mesh, &spec, "b.lst");
+    let same = std::fs::read(d.join("a.lst")).unwrap() == std::fs::read(d.join("b.lst")).unwrap();
+    assert!(same, "two fills with the same seed differ");
+    // the same fruit with every triangle flipped (facing inwards)
+    let text = std::fs::read_to_string(&mesh).unwrap();
+    let flipped: String = text
+        .lines()
+        .map(|l| match l.strip_prefix("f ") {
+            Some(rest) => format!("f {}\n", rest.split_whitespace().rev().collect::<Vec<_>>().join(" ")),
+            None => format!("{l}\n"),
+        })
+        .collect();
+    let inward = at(d, "inward.obj");
+    std::fs::write(&inward, flipped).unwrap();
+    fill(d, &inward, &spec, "c.lst");
+    let same = std::fs::read(d.join("a.lst")).unwrap() == std::fs::read(d.join("c.lst")).unwrap();
+    assert!(same, "the inward-facing copy fills differently");
+}
+
+#[test]
+fn a_pipe_of_genus_one_fills_and_its_hole_stays_empty() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let mesh = draw(d, "pipe");
+    let spec = spec(d, "marble.toml", "exemplar = \"marble\"\nscale = 0.5\ntets = 3000\nseed = 1\n");
+    let stats = fill(d, &mesh, &spec, "pipe.lst");
+    assert_eq!(stats["fill"]["paste"]["forced"], 0, "{stats}");
+    assert_eq!(stats["type"], "0");
+    let png = at(d, "cut.png");
+    assert!(solidtex(&["cut", &at(d, "pipe.lst"), "--size", "128", "-o", &png]).status.success());
+    assert_eq!(pixel(&png, 64, 64), [24, 24, 28].map(|c| c as f32 / 255.0), "the hole is background");
+    let tube = pixel(&png, 64, 64 - (0.75 * 128.0 / (2.1 * 1.04)) as u32);
+    assert!(tube.iter().all(|c| *c > 0.4), "marble in the tube: {tube:?}");
+    // bake: RGBA, alpha 0 in the hole and 1 in the tube
+    let exr = at(d, "pipe.exr");
+    let run = solidtex(&["bake", &at(d, "pipe.lst"), "--res", "32", "-o", &exr]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let v = solidtex::io::read_volume(Path::new(&exr), u64::MAX).unwrap();
+    let [x, y, z] = v.dims();
+    assert_eq!((x, y), (32, 32));
+    assert!(z >= 8 && z <= 12, "{z}");
+    assert_eq!(v.get(16, 16, z / 2, 3), 0.0);
+    assert_eq!(v.get(16, 16 - 11, z / 2, 3), 1.0);
+}
+
+#[test]
+fn two_models_cut_together_and_the_surface_view_draws_the_model() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let block = draw(d, "block");
+    let spec = spec(d, "strata.toml", "exemplar = \"strata\"\ntype = \"0\"\nscale = 1.0\ntets = 2000\n");
+    fill(d, &block, &spec, "block.lst");
+    let fruit = draw(d, "fruit");
+    let kiwi = self::spec(d, "kiwi.toml", KIWI);
+    fill(d, &fruit, &kiwi, "kiwi.lst");
+    let png = at(d, "both.png");
+    let run = solidtex(&["cut", &at(d, "kiwi.lst"), &at(d, "block.lst"), "--plane", "0,0,0,0,0,1", "--size", "64", "-o", &png]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let view = at(d, "view.png");
+    assert!(solidtex(&["view", &at(d, "kiwi.lst"), "--size", "96", "-o", &view]).status.success());
+    let img = image::open(&view).unwrap().to_rgb8();
+    assert_ne!(img.get_pixel(48, 48).0, [24, 24, 28], "the fruit is in the middle");
+    assert_eq!(img.get_pixel(1, 1).0, [24, 24, 28], "the corner is background");
+}
+
+#[test]
+fn bad_fills_are_refused_with_the_reason_and_nothing_written() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let fruit = draw(d, "fruit");
+    let out = at(d, "out.lst");
+    let cases: Vec<(String, String, Vec<&str>)> = vec![
+        (fruit.clone(), spec(d, "unknown.toml", "exemplar = \"plum\"\n"), vec!["plum", "not in the library", "kiwi"]),
+        (fruit.clone(), spec(d, "nostroke.toml", "exemplar = \"wood\"\ntype = \"1-a\"\n"), vec!["1-a", "direction"]),
+        (fruit.clone(), spec(d, "nodepth.toml", "exemplar = \"kiwi\"\n[depth]\nsurface = true\n[[direction]]\npoints = [[0,0,0],[0.5,0,0]]\n"), vec!["2-b", "depth"]),
+        (fruit.clone(), spec(d, "outside.toml", &KIWI.replace("0.75, 0, 0]]]", "3, 0, 0]]]")), vec!["depth.axis[0]", "outside the model"]),
+        (fruit.clone(), spec(d, "tiny.toml", "exemplar = \"marble\"\nscale = 0.001\n"), vec!["scale", "tet edges"]),
+    ];
+    for (mesh, spec, needles) in cases {
+        assert_fails(&solidtex(&["fill", &mesh, "--spec", &spec, "-o", &out]), &needles);
+    }
+    // an open mesh: the fruit without its last face
+    let text = std::fs::read_to_string(&fruit).unwrap();
+    let last = text.rfind("\nf ").unwrap();
+    let open = at(d, "open.obj");
+    std::fs::write(&open, &text[..last + 1]).unwrap();
+    let marble = spec(d, "marble.toml", "exemplar = \"marble\"\n");
+    assert_fails(&solidtex(&["fill", &open, "--spec", &marble, "-o", &out]), &["open.obj", "not closed", "3 boundary edge"]);
+    // a flat mesh: two triangles back to back
+    let flat = at(d, "flat.obj");
+    std::fs::write(&flat, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 3 2\n").unwrap();
+    assert_fails(&solidtex(&["fill", &flat, "--spec", &marble, "-o", &out]), &["flat.obj", "volume"]);
+    assert!(!listing(d).iter().any(|n| n.ends_with(".lst")), "{:?}", listing(d));
+}
+
+#[test]
+fn a_damaged_model_file_is_named_and_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (mesh, spec) = (draw(d, "block"), spec(d, "m.toml", "exemplar = \"marble\"\nscale = 1.0\ntets = 2000\n"));
+    fill(d, &mesh, &spec, "m.lst");
+    let bytes = std::fs::read(d.join("m.lst")).unwrap();
+    std::fs::write(d.join("cut.lst"), &bytes[..bytes.len() / 2]).unwrap();
+    let png = at(d, "x.png");
+    assert_fails(&solidtex(&["cut", &at(d, "cut.lst"), "-o", &png]), &["cut.lst", "truncated"]);
+    std::fs::write(d.join("junk.lst"), b"hello").unwrap();
+    assert_fails(&solidtex(&["cut", &at(d, "junk.lst"), "-o", &png]), &["junk.lst", "SOLIDLST"]);
+    assert!(!d.join("x.png").exists());
+}
