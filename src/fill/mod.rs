@@ -3,4 +3,5 @@
 //! patches are pasted along the field until every tet is covered, and the result — an
 //! [`LstModel`](model::LstModel) — renders planar cuts and bakes to a volume.
 
+pub mod mesher;
 pub mod tets;

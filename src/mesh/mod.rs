@@ -28,7 +28,7 @@ use crate::error::{Error, Result};
 use glam::{Affine3A, DVec3, Vec3};
 use std::f64::consts::PI;
 
-mod voxelize;
+pub(crate) mod voxelize;
 pub use voxelize::{Coverage, voxelize};
 
 /// A triangle mesh: corner positions and index triples.
