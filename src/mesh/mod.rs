@@ -29,7 +29,7 @@ use glam::{Affine3A, DVec3, Vec3};
 use std::f64::consts::PI;
 
 pub mod shapes;
-mod voxelize;
+pub(crate) mod voxelize;
 pub use voxelize::{Coverage, voxelize};
 
 /// A triangle mesh: corner positions and index triples.

@@ -287,7 +287,7 @@ fn crossing(tri: &RayTri, py: f64, pz: f64) -> Option<(f64, i32)> {
 /// The edge function of `u -> v` at `(py, pz)` in the (y, z) plane and its sign, with exact
 /// antisymmetry (the edge is always evaluated from its lexicographically smaller end) and
 /// zero resolved as if the point were moved by `(ε, ε²)`.
-fn edge(u: DVec3, v: DVec3, py: f64, pz: f64) -> (f64, bool) {
+pub(crate) fn edge(u: DVec3, v: DVec3, py: f64, pz: f64) -> (f64, bool) {
     let swap = (u.y, u.z) > (v.y, v.z);
     let (s, t) = if swap { (v, u) } else { (u, v) };
     let e = (t.y - s.y) * (pz - s.z) - (t.z - s.z) * (py - s.y);

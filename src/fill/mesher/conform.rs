@@ -1,0 +1,269 @@
+//! Conforming the cut lattice to the surface: boundary vertices move to their closest
+//! surface points as far as their tets stay well shaped, tets that would be flattened
+//! against the surface are given up, and the vertices around poor tets are eased.
+
+use super::closest::Surface;
+use crate::fill::tets::{FACES, NONE, TetMesh};
+use glam::Vec3;
+use rayon::prelude::*;
+
+/// The smallest dihedral angle a vertex move may leave in any tet it touches, in degrees.
+/// The lattice tets start at 45°; every move keeps every tet at or above this.
+pub(super) const MIN_DIHEDRAL: f32 = 12.0;
+/// How many rounds of snapping, giving up and easing there are at most.
+const ROUNDS: usize = 16;
+/// How many times a blocked move is halved before the vertex stays where it is.
+const HALVINGS: usize = 4;
+/// The corners of tets with a smaller dihedral angle than this (degrees) are eased.
+const EASE_BELOW: f32 = 20.0;
+/// The interior corners of tets with a smaller dihedral angle than this (degrees) are
+/// smoothed at the end (the untouched lattice tets have 45°).
+const SMOOTH_BELOW: f32 = 40.0;
+/// How many sweeps of smoothing there are.
+const SMOOTHING_PASSES: usize = 2;
+
+/// Moves the boundary vertices of `mesh` onto `surface`, gives up the tets that would be
+/// flattened, eases and smooths, and drops loose tets and unused vertices.
+pub(super) fn conform(mesh: &mut TetMesh, surface: &Surface) {
+    let mut work = Work::new(mesh);
+    for _ in 0..ROUNDS {
+        let stuck = work.snap_boundary(surface);
+        let blockers = work.blockers(&stuck, surface);
+        if !blockers.is_empty() {
+            work.give_up(&blockers);
+            continue;
+        }
+        work.relax(surface);
+        if stuck.is_empty() {
+            break;
+        }
+    }
+    work.smooth();
+    work.finish();
+}
+
+/// The mesh being conformed, which tets are still in, and its topology.
+struct Work<'a> {
+    mesh: &'a mut TetMesh,
+    neighbours: Vec<[u32; 4]>,
+    alive: Vec<bool>,
+    /// Whether each vertex lies on a boundary face of the live tets.
+    boundary: Vec<bool>,
+    /// The live tets around vertex `v`: `around[offsets[v]..offsets[v + 1]]`.
+    offsets: Vec<usize>,
+    around: Vec<u32>,
+}
+
+impl<'a> Work<'a> {
+    fn new(mesh: &'a mut TetMesh) -> Work<'a> {
+        let neighbours = mesh.neighbours();
+        let alive = vec![true; mesh.tets.len()];
+        let mut work = Work { mesh, neighbours, alive, boundary: Vec::new(), offsets: Vec::new(), around: Vec::new() };
+        work.refresh();
+        work
+    }
+
+    /// Recomputes the boundary vertices and the stars from the live tets.
+    fn refresh(&mut self) {
+        let n = self.mesh.vertices.len();
+        self.boundary = vec![false; n];
+        self.offsets = vec![0; n + 1];
+        for (t, tet) in self.mesh.tets.iter().enumerate().filter(|(t, _)| self.alive[*t]) {
+            tet.iter().for_each(|&v| self.offsets[v as usize + 1] += 1);
+            for (k, face) in FACES.iter().enumerate() {
+                let across = self.neighbours[t][k];
+                if across == NONE || !self.alive[across as usize] {
+                    face.iter().for_each(|&s| self.boundary[tet[s] as usize] = true);
+                }
+            }
+        }
+        for v in 0..n {
+            self.offsets[v + 1] += self.offsets[v];
+        }
+        let mut fill = self.offsets.clone();
+        self.around = vec![0; self.offsets[n]];
+        for (t, tet) in self.mesh.tets.iter().enumerate().filter(|(t, _)| self.alive[*t]) {
+            for &v in tet {
+                self.around[fill[v as usize]] = t as u32;
+                fill[v as usize] += 1;
+            }
+        }
+    }
+
+    fn star(&self, v: u32) -> &[u32] {
+        &self.around[self.offsets[v as usize]..self.offsets[v as usize + 1]]
+    }
+
+    /// The cosine of the smallest dihedral angle around `v` with `v` put at `p` (see
+    /// [`worst_with`]).
+    fn worst(&self, v: u32, p: Vec3) -> f32 {
+        worst_with(self.mesh, self.star(v), v, p)
+    }
+
+    /// Snaps every boundary vertex, twice (a vertex blocked in the first sweep may be free
+    /// once its neighbours moved); the vertices that did not get all the way.
+    fn snap_boundary(&mut self, surface: &Surface) -> Vec<u32> {
+        let mut stuck: Vec<u32> = (0..self.mesh.vertices.len() as u32).filter(|&v| self.boundary[v as usize]).collect();
+        for _ in 0..2 {
+            stuck.retain(|&v| !self.move_towards(v, surface.closest(self.mesh.vertices[v as usize])));
+        }
+        stuck
+    }
+
+    /// Moves `v` the whole way to `target` when that keeps its tets good, else by the largest
+    /// of a few halved steps that does, else not at all. Whether it got the whole way.
+    fn move_towards(&mut self, v: u32, target: Vec3) -> bool {
+        let from = self.mesh.vertices[v as usize];
+        let mut step = 1.0;
+        for _ in 0..=HALVINGS {
+            let p = from + (target - from) * step;
+            if self.worst(v, p) <= cos_deg(MIN_DIHEDRAL) {
+                self.mesh.vertices[v as usize] = p;
+                return step == 1.0;
+            }
+            step *= 0.5;
+        }
+        false
+    }
+
+    /// The tets that keep the `stuck` vertices off the surface and whose corners are all
+    /// boundary vertices (giving them up exposes no interior vertex), sorted.
+    fn blockers(&self, stuck: &[u32], surface: &Surface) -> Vec<u32> {
+        let mut found: Vec<u32> = Vec::new();
+        for &v in stuck {
+            let target = surface.closest(self.mesh.vertices[v as usize]);
+            let spoilt =
+                self.star(v).iter().filter(|&&t| worst_with(self.mesh, &[t], v, target) > cos_deg(MIN_DIHEDRAL));
+            found.extend(spoilt.filter(|&&t| self.mesh.tets[t as usize].iter().all(|&u| self.boundary[u as usize])));
+        }
+        found.sort_unstable();
+        found.dedup();
+        found
+    }
+
+    fn give_up(&mut self, tets: &[u32]) {
+        tets.iter().for_each(|&t| self.alive[t as usize] = false);
+        self.refresh();
+    }
+
+    /// The corners of the live tets whose smallest dihedral angle is below `limit`, sorted.
+    fn corners_of_poor_tets(&self, limit: f32) -> Vec<u32> {
+        let quality: Vec<f32> =
+            (0..self.mesh.tets.len()).into_par_iter().map(|t| sharpest(self.mesh.corners(t))).collect();
+        let poor = (0..self.mesh.tets.len()).filter(|&t| self.alive[t] && quality[t] > cos_deg(limit));
+        let mut corners: Vec<u32> = poor.flat_map(|t| self.mesh.tets[t]).collect();
+        corners.sort_unstable();
+        corners.dedup();
+        corners
+    }
+
+    /// Eases the corners of the poor tets (boundary vertices along the surface).
+    fn relax(&mut self, surface: &Surface) {
+        for v in self.corners_of_poor_tets(EASE_BELOW) {
+            let best = ease(self, v, self.boundary[v as usize].then_some(surface));
+            self.mesh.vertices[v as usize] = best;
+        }
+    }
+
+    /// Sweeps of smoothing over the interior corners of the distorted tets: each moves to
+    /// the mean of its tets' corners when that raises the smallest angle around it.
+    fn smooth(&mut self) {
+        for _ in 0..SMOOTHING_PASSES {
+            for v in self.corners_of_poor_tets(SMOOTH_BELOW) {
+                let star = self.star(v);
+                if self.boundary[v as usize] || star.is_empty() {
+                    continue;
+                }
+                let corners = star.iter().flat_map(|&t| self.mesh.tets[t as usize]);
+                let mean = corners.map(|u| self.mesh.vertices[u as usize]).sum::<Vec3>() / (4 * star.len()) as f32;
+                if self.worst(v, mean) < self.worst(v, self.mesh.vertices[v as usize]) {
+                    self.mesh.vertices[v as usize] = mean;
+                }
+            }
+        }
+    }
+
+    /// Keeps the live tets that share a face with another live tet (a tet left hanging by
+    /// an edge or a corner once its neighbours were given up goes too), then drops the
+    /// vertices no tet uses and renumbers the rest in order.
+    fn finish(self) {
+        let (alive, neighbours) = (&self.alive, &self.neighbours);
+        let attached = |t: usize| neighbours[t].iter().any(|&n| n != NONE && alive[n as usize]);
+        let mut t = 0;
+        self.mesh.tets.retain(|_| {
+            t += 1;
+            alive[t - 1] && attached(t - 1)
+        });
+        drop_unused(self.mesh);
+    }
+}
+
+/// The position that most raises the smallest dihedral angle around `v`: a pattern search
+/// along the axes with steps from a fifth of the mean distance to its tets' corners down to
+/// a fortieth; with a surface, every candidate is moved onto it.
+fn ease(work: &Work, v: u32, surface: Option<&Surface>) -> Vec3 {
+    let here = work.mesh.vertices[v as usize];
+    let star = work.star(v);
+    let corners = star.iter().flat_map(|&t| work.mesh.tets[t as usize]).map(|u| work.mesh.vertices[u as usize]);
+    let mut step = corners.map(|c| c.distance(here)).sum::<f32>() / (3 * star.len()).max(1) as f32 * 0.2;
+    let mut best = (work.worst(v, here), here);
+    for _ in 0..4 {
+        for _ in 0..4 {
+            let moves = [Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z].map(|d| best.1 + d * step);
+            let candidates = moves.map(|p| surface.map_or(p, |s| s.closest(p)));
+            let found =
+                candidates.into_iter().map(|p| (work.worst(v, p), p)).fold(best, |b, c| if c.0 < b.0 { c } else { b });
+            if found.1 == best.1 {
+                break;
+            }
+            best = found;
+        }
+        step *= 0.5;
+    }
+    best.1
+}
+
+/// The cosine of the smallest dihedral angle of the tets `star` with vertex `v` put at `p`
+/// (lower is better); 2 when one of them is inverted or flat. Comparing cosines spares the
+/// arc cosines.
+fn worst_with(mesh: &TetMesh, star: &[u32], v: u32, p: Vec3) -> f32 {
+    let mut worst = -1.0f32;
+    for &t in star {
+        let c = mesh.tets[t as usize].map(|i| if i == v { p } else { mesh.vertices[i as usize] });
+        if (c[1] - c[0]).cross(c[2] - c[0]).dot(c[3] - c[0]) <= 0.0 {
+            return 2.0;
+        }
+        worst = worst.max(sharpest(c));
+    }
+    worst
+}
+
+/// The cosine of the smallest dihedral angle of a tet (as in
+/// [`min_dihedral`](crate::fill::tets::min_dihedral)).
+fn sharpest(c: [Vec3; 4]) -> f32 {
+    let normals = FACES.map(|[a, b, d]| (c[b] - c[a]).cross(c[d] - c[a]).normalize_or_zero());
+    let mut largest = -1.0f32;
+    for i in 0..4 {
+        for j in i + 1..4 {
+            largest = largest.max(-normals[i].dot(normals[j]));
+        }
+    }
+    largest
+}
+
+/// The cosine of an angle in degrees.
+fn cos_deg(degrees: f32) -> f32 {
+    degrees.to_radians().cos()
+}
+
+/// Drops the vertices no tet uses and renumbers the rest in order.
+fn drop_unused(mesh: &mut TetMesh) {
+    let mut new_index = vec![u32::MAX; mesh.vertices.len()];
+    mesh.tets.iter().flatten().for_each(|&v| new_index[v as usize] = 0);
+    for (next, slot) in new_index.iter_mut().filter(|s| **s == 0).enumerate() {
+        *slot = next as u32;
+    }
+    let old = std::mem::take(&mut mesh.vertices);
+    mesh.vertices = old.into_iter().zip(&new_index).filter(|(_, n)| **n != u32::MAX).map(|(p, _)| p).collect();
+    mesh.tets.iter_mut().flatten().for_each(|v| *v = new_index[*v as usize]);
+}
