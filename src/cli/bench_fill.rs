@@ -48,7 +48,13 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             let p = &report.paste;
             let figures = format!(
                 "{} tets, {} patches, {:.1} layers, angle {:.1}/{:.1} deg, uncovered {}, {:.0} KB",
-                report.tets, p.patches, p.mean_layers, p.angle_mean, p.angle_p95, p.forced, bytes as f64 / 1024.0
+                report.tets,
+                p.patches,
+                p.mean_layers,
+                p.angle_mean,
+                p.angle_p95,
+                p.forced,
+                bytes as f64 / 1024.0
             );
             model = Some(m);
             Ok(figures)
@@ -107,7 +113,14 @@ impl Case {
     /// Meshes `mesh` (5,000 tets) and fills it.
     fn fill(&self, mesh: &Mesh) -> Result<(LstModel, fill::FillReport)> {
         let tets = mesher::tetrahedralize(mesh, self.spec.tets)?;
-        let job = Job { surface: mesh, spec: &self.spec, kind: self.kind, axes: self.axes, sources: self.sources.clone(), masks: self.masks.clone() };
+        let job = Job {
+            surface: mesh,
+            spec: &self.spec,
+            kind: self.kind,
+            axes: self.axes,
+            sources: self.sources.clone(),
+            masks: self.masks.clone(),
+        };
         fill::fill(&job, tets, &NoProgress)
     }
 }
@@ -123,11 +136,20 @@ fn layered_case(mesh: &Mesh, colour: &Volume) -> Result<Case> {
     let mut spec = FillSpec::new("marble");
     spec.depth.axes = vec![axis.clone()];
     spec.directions = vec![axis];
-    let refs: Vec<MaskRef> =
-        Layer::ALL.iter().map(|&layer| MaskRef::Layered { layer, depth: Axis::Z, size: 64, falloff: mask::DEFAULT_FALLOFF, seed: 0 }).collect();
+    let refs: Vec<MaskRef> = Layer::ALL
+        .iter()
+        .map(|&layer| MaskRef::Layered { layer, depth: Axis::Z, size: 64, falloff: mask::DEFAULT_FALLOFF, seed: 0 })
+        .collect();
     let masks = refs.iter().map(|r| r.generate().expect("a recipe")).collect::<Result<Vec<_>>>()?;
     let textures = Textures::new(&[colour.clone(), colour.clone(), colour.clone()], &masks);
-    Ok(Case { spec, kind: TextureType::T2b, axes: [2, 0, 1], sources: refs.into_iter().map(source).collect(), masks, textures })
+    Ok(Case {
+        spec,
+        kind: TextureType::T2b,
+        axes: [2, 0, 1],
+        sources: refs.into_iter().map(source).collect(),
+        masks,
+        textures,
+    })
 }
 
 /// A type-0 fill with a splotch, the texture a quarter of the model's diagonal.

@@ -100,7 +100,14 @@ pub fn run_fill(args: &FillArgs) -> Result<()> {
     let tets = mesher::tetrahedralize(&surface, spec.tets).map_err(|e| e.in_file(&args.mesh))?;
     let meshed = started.elapsed().as_secs_f64();
     let resolved = resolve(&spec, &args.output)?;
-    let job = Job { surface: &surface, spec: &spec, kind: resolved.kind, axes: resolved.axes, sources: resolved.sources, masks: resolved.masks };
+    let job = Job {
+        surface: &surface,
+        spec: &spec,
+        kind: resolved.kind,
+        axes: resolved.axes,
+        sources: resolved.sources,
+        masks: resolved.masks,
+    };
     let bar = Bar::new();
     let (model, report) = fill::fill(&job, tets, &bar).map_err(|e| e.in_file(&args.spec))?;
     bar.0.finish_and_clear();
@@ -110,7 +117,12 @@ pub fn run_fill(args: &FillArgs) -> Result<()> {
     let p = &report.paste;
     eprintln!(
         "filled {} ({} tets, min dihedral {:.1}°) with {} patches of '{}' (type {}) in {total:.2} s (mesh {meshed:.2} s)",
-        args.mesh.display(), report.tets, report.min_dihedral, p.patches, spec.exemplar, resolved.kind
+        args.mesh.display(),
+        report.tets,
+        report.min_dihedral,
+        p.patches,
+        spec.exemplar,
+        resolved.kind
     );
     eprintln!(
         "  layers per tet {:.1}, tets per clump {:.0}, field angle mean {:.1}° p95 {:.1}°, uncovered {}",
@@ -136,7 +148,9 @@ struct Bar(ProgressBar);
 impl Bar {
     fn new() -> Bar {
         let bar = ProgressBar::new(1000);
-        bar.set_style(ProgressStyle::with_template("{elapsed:>4} [{bar:40}] {percent:>3}% {msg}").expect("valid template"));
+        bar.set_style(
+            ProgressStyle::with_template("{elapsed:>4} [{bar:40}] {percent:>3}% {msg}").expect("valid template"),
+        );
         Bar(bar)
     }
 }
@@ -183,7 +197,8 @@ fn resolve(spec: &FillSpec, model_path: &Path) -> Result<Resolved> {
     let base = model_path.parent().unwrap_or(Path::new("."));
     let mut sources = Vec::new();
     let layered = matches!(kind, TextureType::T1b | TextureType::T2b);
-    let layers: &[Option<Layer>] = if layered { &[Some(Layer::Outer), Some(Layer::Middle), Some(Layer::Inner)] } else { &[None] };
+    let layers: &[Option<Layer>] =
+        if layered { &[Some(Layer::Outer), Some(Layer::Middle), Some(Layer::Inner)] } else { &[None] };
     for layer in layers {
         sources.push(source(spec, &spec.exemplar, *layer, Axis::ALL[axes[0]], size, base));
     }
@@ -266,7 +281,8 @@ fn load_model(path: &Path) -> Result<Loaded> {
     let model = lst_file::read_lst(path)?;
     let base = path.parent().unwrap_or(Path::new("."));
     let budget = io::budget_from_env()?;
-    let colour = model.sources.iter().map(|s| io::read_volume(&base.join(&s.volume), budget)).collect::<Result<Vec<_>>>()?;
+    let colour =
+        model.sources.iter().map(|s| io::read_volume(&base.join(&s.volume), budget)).collect::<Result<Vec<_>>>()?;
     let masks = model.sources.iter().map(|s| load_mask(&s.mask, base)).collect::<Result<Vec<_>>>()?;
     let textures = Textures::new(&colour, &masks);
     Ok(Loaded { model, textures })
@@ -319,7 +335,7 @@ pub fn run_bake(args: &BakeArgs) -> Result<()> {
 /// Run `solidtex view`.
 pub fn run_view(args: &ViewArgs) -> Result<()> {
     io::check_folder(&args.output)?;
-    if !(8..=8192).contains(&args.size) || !(args.yaw.is_finite() && args.pitch.is_finite()) {
+    if !((8..=8192).contains(&args.size) && args.yaw.is_finite() && args.pitch.is_finite()) {
         return Err(Error::invalid(format!("--size {} must be 8 to 8192 and the angles finite", args.size)));
     }
     let loaded = load_model(&args.model)?;

@@ -279,8 +279,8 @@ pub fn run_draw(args: &DrawArgs) -> Result<()> {
     if w < 2 || h < 2 || w > 4096 || h > 4096 {
         return Err(Error::invalid(format!("--size {:?}: each side must be 2..=4096 pixels", args.size)));
     }
-    let image =
-        crate::sections::draw(&args.what, w, h, args.seed).map_err(|e| Error::invalid(format!("{e}, or seed, fruit, pipe, log, block")))?;
+    let image = crate::sections::draw(&args.what, w, h, args.seed)
+        .map_err(|e| Error::invalid(format!("{e}, or seed, fruit, pipe, log, block")))?;
     io::write_image(&args.output, &image)?;
     eprintln!("wrote {} ({w}x{h})", args.output.display());
     Ok(())

@@ -114,9 +114,12 @@ fn per_tet(mesh: &TetMesh, at_vertices: &[Vec3]) -> Vec<Vec3> {
 /// Laplacian smoothing of the three components of `directions`, then normalized.
 fn smooth_vectors(mesh: &TetMesh, directions: &[(Vec3, Vec3)], depth: Option<&[f32]>) -> Result<Vec<Vec3>> {
     let system = Smoothing::new(mesh, depth);
-    let points: Vec<(Vec3, [f32; 3])> = directions.iter().map(|(p, d)| (*p, d.normalize_or_zero().to_array())).collect();
+    let points: Vec<(Vec3, [f32; 3])> =
+        directions.iter().map(|(p, d)| (*p, d.normalize_or_zero().to_array())).collect();
     let solved = system.solve(mesh, &points)?;
-    Ok((0..mesh.vertices.len()).map(|v| glam::DVec3::from_slice(&solved[v * 3..v * 3 + 3]).as_vec3().normalize_or(Vec3::Y)).collect())
+    Ok((0..mesh.vertices.len())
+        .map(|v| glam::DVec3::from_slice(&solved[v * 3..v * 3 + 3]).as_vec3().normalize_or(Vec3::Y))
+        .collect())
 }
 
 /// Laplacian smoothing of the scale constraints; the default scale where there are none.
@@ -145,7 +148,9 @@ impl Smoothing {
         for v in 0..mesh.vertices.len() {
             let ring = &ring[offsets[v]..offsets[v + 1]];
             let weights: Vec<f64> = match (depth, spread) {
-                (Some(d), Some(s)) => ring.iter().map(|&j| (-((d[v] - d[j as usize]) as f64 / s).powi(2)).exp()).collect(),
+                (Some(d), Some(s)) => {
+                    ring.iter().map(|&j| (-((d[v] - d[j as usize]) as f64 / s).powi(2)).exp()).collect()
+                }
                 _ => vec![1.0; ring.len()],
             };
             let total: f64 = weights.iter().sum::<f64>().max(f64::MIN_POSITIVE);
@@ -165,7 +170,8 @@ impl Smoothing {
             a.push_row(mesh.tets[t].iter().zip(bary).map(|(&v, b)| (v as usize, CONSTRAINT_WEIGHT * b as f64)));
             targets.push(value.map(|x| CONSTRAINT_WEIGHT * x as f64));
         }
-        let mean: [f64; K] = std::array::from_fn(|k| points.iter().map(|p| p.1[k] as f64).sum::<f64>() / points.len() as f64);
+        let mean: [f64; K] =
+            std::array::from_fn(|k| points.iter().map(|p| p.1[k] as f64).sum::<f64>() / points.len() as f64);
         let mut out = vec![0.0; n * K];
         for k in 0..K {
             let b: Vec<f64> = targets.iter().map(|t| t[k]).collect();
@@ -184,7 +190,8 @@ impl Smoothing {
 fn edge_spread(offsets: &[usize], ring: &[u32], depth: &[f32]) -> f64 {
     let mut total = 0.0;
     for v in 0..depth.len() {
-        total += ring[offsets[v]..offsets[v + 1]].iter().map(|&j| (depth[v] - depth[j as usize]).abs() as f64).sum::<f64>();
+        total +=
+            ring[offsets[v]..offsets[v + 1]].iter().map(|&j| (depth[v] - depth[j as usize]).abs() as f64).sum::<f64>();
     }
     (total / ring.len().max(1) as f64).max(1e-9)
 }
@@ -328,7 +335,12 @@ mod tests {
             depth.push((Vec3::new(x, 4.0, z), 0.0));
             depth.push((Vec3::new(x, 0.0, z), 1.0));
         }
-        let c = Constraints { directions: vec![(Vec3::new(1.0, 2.0, 1.0), Vec3::new(1.0, 0.3, 0.0))], depth, scale: 1.0, ..Default::default() };
+        let c = Constraints {
+            directions: vec![(Vec3::new(1.0, 2.0, 1.0), Vec3::new(1.0, 0.3, 0.0))],
+            depth,
+            scale: 1.0,
+            ..Default::default()
+        };
         let f = build(&mesh, TextureType::T2b, &c).unwrap();
         assert!(f.primary.iter().all(|r| r.dot(-Vec3::Y) > 0.99));
         assert!(f.secondary.iter().zip(&f.primary).all(|(s, r)| s.dot(*r).abs() < 1e-4 && s.dot(Vec3::X) > 0.99));

@@ -76,7 +76,8 @@ pub fn fill(job: &Job, mesh: TetMesh, progress: &dyn Progress) -> Result<(LstMod
         raised_scale: raised,
         paste: pasted.stats.clone(),
     };
-    let model = LstModel { mesh, sources: job.sources.clone(), patches: pasted.patches, tet_patches: pasted.tet_patches };
+    let model =
+        LstModel { mesh, sources: job.sources.clone(), patches: pasted.patches, tet_patches: pasted.tet_patches };
     Ok((model, report))
 }
 
@@ -157,7 +158,14 @@ mod tests {
             volume: "ramp.exr".into(),
             mask: MaskRef::Layered { layer: l, depth: Axis::Z, size: 16, falloff: 0.1, seed: 1 },
         };
-        let job = Job { surface: &surface, spec: &spec, kind: TextureType::T1b, axes: [2, 0, 1], sources: Layer::ALL.map(source).to_vec(), masks: masks.clone() };
+        let job = Job {
+            surface: &surface,
+            spec: &spec,
+            kind: TextureType::T1b,
+            axes: [2, 0, 1],
+            sources: Layer::ALL.map(source).to_vec(),
+            masks: masks.clone(),
+        };
         let (model, report) = fill(&job, tets::cube_lattice([8, 8, 8], 0.125), &NoProgress).unwrap();
         assert_eq!(report.paste.forced, 0);
         assert!(model.tet_patches.iter().all(|l| !l.is_empty()));

@@ -51,7 +51,8 @@ impl MaskRef {
 
     /// Parses [`MaskRef::to_text`].
     pub fn parse(text: &str) -> Result<MaskRef> {
-        let bad = || Error::invalid(format!("mask reference '{text}' is not 'file PATH', 'splotch ...' or 'layered ...'"));
+        let bad =
+            || Error::invalid(format!("mask reference '{text}' is not 'file PATH', 'splotch ...' or 'layered ...'"));
         let words: Vec<&str> = text.split(' ').collect();
         let num = |i: usize| words.get(i).ok_or_else(bad);
         match words[0] {
@@ -77,7 +78,9 @@ impl MaskRef {
         match *self {
             MaskRef::File(_) => None,
             MaskRef::Splotch { size, falloff, seed } => Some(mask::splotch(size, falloff, seed)),
-            MaskRef::Layered { layer, depth, size, falloff, seed } => Some(mask::layered(size, falloff, seed, layer, depth)),
+            MaskRef::Layered { layer, depth, size, falloff, seed } => {
+                Some(mask::layered(size, falloff, seed, layer, depth))
+            }
         }
     }
 }
@@ -117,11 +120,18 @@ impl LstModel {
             return Err(Error::invalid(format!("patch {p} uses a source beyond the {} sources", self.sources.len())));
         }
         if self.tet_patches.len() != self.mesh.tets.len() {
-            return Err(Error::invalid(format!("{} patch lists for {} tets", self.tet_patches.len(), self.mesh.tets.len())));
+            return Err(Error::invalid(format!(
+                "{} patch lists for {} tets",
+                self.tet_patches.len(),
+                self.mesh.tets.len()
+            )));
         }
         for (t, list) in self.tet_patches.iter().enumerate() {
             for &p in list {
-                let patch = self.patches.get(p as usize).ok_or_else(|| Error::invalid(format!("tet {t} lists patch {p} of {np}")))?;
+                let patch = self
+                    .patches
+                    .get(p as usize)
+                    .ok_or_else(|| Error::invalid(format!("tet {t} lists patch {p} of {np}")))?;
                 if self.mesh.tets[t].iter().any(|v| patch.vertices.binary_search(v).is_err()) {
                     return Err(Error::invalid(format!("tet {t} lists patch {p}, which lacks its corners")));
                 }

@@ -15,12 +15,12 @@
 //! not depend on the thread count.
 
 use super::field::Field;
+use super::sampler::Sampler;
 use super::tets::{NONE, TetMesh};
 use super::warp::{Frame, Rigid, Warp, jacobian};
 use crate::TextureType;
 use crate::error::{Error, Result};
 use crate::progress::Progress;
-use super::sampler::Sampler;
 use crate::volume::Volume;
 use glam::Vec3;
 use rand::{RngExt, SeedableRng};
@@ -120,7 +120,17 @@ impl<'a> Paster<'a> {
         let out = Pasted { patches: Vec::new(), tet_patches: vec![Vec::new(); tets], stats: Stats::default() };
         let (samples, coverage) = (sample_points(), vec![0; tets * SAMPLES]);
         let masks = masks.iter().map(Sampler::mask).collect();
-        Ok(Paster { mesh, neighbours: mesh.neighbours(), field, masks, params, samples, coverage, out, angles: Vec::new() })
+        Ok(Paster {
+            mesh,
+            neighbours: mesh.neighbours(),
+            field,
+            masks,
+            params,
+            samples,
+            coverage,
+            out,
+            angles: Vec::new(),
+        })
     }
 
     /// Pastes until every tet is covered.
@@ -192,7 +202,13 @@ impl<'a> Paster<'a> {
             None => 0,
             Some(d) => {
                 let depth = self.mesh.tets[seed].iter().map(|&v| d[v as usize]).sum::<f32>() / 4.0;
-                let base = if depth < 1.0 / 3.0 { 0 } else if depth < 2.0 / 3.0 { 1 } else { 2 };
+                let base = if depth < 1.0 / 3.0 {
+                    0
+                } else if depth < 2.0 / 3.0 {
+                    1
+                } else {
+                    2
+                };
                 ((base + strike) % 3) as u16
             }
         }
@@ -247,7 +263,8 @@ impl<'a> Paster<'a> {
                 let boost = frame.scale / self.field.scale[seed];
                 let frames: Vec<Frame> = tets.iter().map(|&t| self.frame_of(t as usize, &frame, boost)).collect();
                 let pin = (tets.iter().position(|&t| t as usize == seed).unwrap_or(0), centre);
-                let warp = Warp { mesh: self.mesh, tets: &tets, vertices: &vertices, frames: &frames, axes, pin, fixed };
+                let warp =
+                    Warp { mesh: self.mesh, tets: &tets, vertices: &vertices, frames: &frames, axes, pin, fixed };
                 warp.solve(&mut coords);
             }
             let added = self.regrow(&tets, &vertices, &coords, source, &frame);
@@ -257,7 +274,7 @@ impl<'a> Paster<'a> {
             }
             (tets, vertices, coords) = self.extend(tets, &vertices, &coords, &added);
         }
-        self.record(Patch { source: source as u16, vertices, coords }, &tets, Some(frame));
+        self.record(Patch { source, vertices, coords }, &tets, Some(frame));
     }
 
     fn with_depth(&self, v: u32, mut w: Vec3) -> Vec3 {
@@ -296,12 +313,20 @@ impl<'a> Paster<'a> {
         frame.is_none()
             || self.field.primary[seed] == Vec3::ZERO
             || self.field.primary[t].dot(self.field.primary[seed]) >= ALIKE
-                && self.field.secondary[t].dot(self.field.secondary[seed]) >= ALIKE.min(self.field.secondary[seed].length())
+                && self.field.secondary[t].dot(self.field.secondary[seed])
+                    >= ALIKE.min(self.field.secondary[seed].length())
     }
 
     /// Neighbours outside the clump that the warped patch now reaches, with their corner
     /// coordinates (new corners extrapolated by the adjacent clump tet's map).
-    fn regrow(&self, tets: &[u32], vertices: &[u32], coords: &[Vec3], source: u16, frame: &Frame) -> Vec<(u32, [Vec3; 4])> {
+    fn regrow(
+        &self,
+        tets: &[u32],
+        vertices: &[u32],
+        coords: &[Vec3],
+        source: u16,
+        frame: &Frame,
+    ) -> Vec<(u32, [Vec3; 4])> {
         let mask = &self.masks[source as usize];
         let seed = tets[0] as usize;
         let mut added: Vec<(u32, [Vec3; 4])> = Vec::new();
@@ -328,7 +353,13 @@ impl<'a> Paster<'a> {
         added
     }
 
-    fn extend(&self, tets: Vec<u32>, vertices: &[u32], coords: &[Vec3], added: &[(u32, [Vec3; 4])]) -> (Vec<u32>, Vec<u32>, Vec<Vec3>) {
+    fn extend(
+        &self,
+        tets: Vec<u32>,
+        vertices: &[u32],
+        coords: &[Vec3],
+        added: &[(u32, [Vec3; 4])],
+    ) -> (Vec<u32>, Vec<u32>, Vec<Vec3>) {
         let mut all = tets;
         all.extend(added.iter().map(|a| a.0));
         all.sort_unstable();
@@ -354,7 +385,10 @@ impl<'a> Paster<'a> {
             .par_iter()
             .map(|&t| {
                 let w = patch.corners(self.mesh.tets[t as usize]);
-                self.samples.iter().map(|b| to_byte(mask.alpha(w[0] * b[0] + w[1] * b[1] + w[2] * b[2] + w[3] * b[3]))).collect()
+                self.samples
+                    .iter()
+                    .map(|b| to_byte(mask.alpha(w[0] * b[0] + w[1] * b[1] + w[2] * b[2] + w[3] * b[3])))
+                    .collect()
             })
             .collect();
         let index = self.out.patches.len() as u32;

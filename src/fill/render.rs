@@ -11,10 +11,10 @@
 //! not depend on the thread count.
 
 use super::model::LstModel;
+use super::sampler::Sampler;
 use super::tets::TetMesh;
 use crate::error::{Error, Result};
 use crate::render::{Rgb8, to_u8};
-use super::sampler::Sampler;
 use crate::volume::{Channel, Volume};
 use glam::Vec3;
 use rayon::prelude::*;
@@ -35,7 +35,10 @@ pub struct Textures {
 impl Textures {
     /// Pairs colour and mask volumes (R, G, B of the colour, or its first channel as grey).
     pub fn new(colour: &[Volume], masks: &[Volume]) -> Textures {
-        Textures { colour: colour.iter().map(Sampler::colour).collect(), masks: masks.iter().map(Sampler::mask).collect() }
+        Textures {
+            colour: colour.iter().map(Sampler::colour).collect(),
+            masks: masks.iter().map(Sampler::mask).collect(),
+        }
     }
 }
 
@@ -59,7 +62,7 @@ impl View {
     /// the box `bounds` as seen along the normal.
     pub fn framing(bounds: (Vec3, Vec3), point: Vec3, normal: Vec3, size: usize) -> Result<View> {
         let n = normal.try_normalize().ok_or_else(|| Error::invalid("the cut plane's normal is zero"))?;
-        if !(point.is_finite() && n.is_finite()) || !(8..=8192).contains(&size) {
+        if !(point.is_finite() && n.is_finite() && (8..=8192).contains(&size)) {
             return Err(Error::invalid(format!("cut size {size} must be 8 to 8192 pixels and the plane finite")));
         }
         let up = if n.y.abs() < 0.9 { Vec3::Y } else { Vec3::Z };
@@ -131,7 +134,8 @@ impl Cut {
 /// Renders the cut of `model` seen through `view`.
 pub fn cut(model: &LstModel, textures: &Textures, view: &View) -> Cut {
     let bands = bin_tets(&model.mesh, view);
-    let rows: Vec<Vec<[f32; 4]>> = bands.par_iter().enumerate().map(|(b, tets)| render_band(model, textures, view, b, tets)).collect();
+    let rows: Vec<Vec<[f32; 4]>> =
+        bands.par_iter().enumerate().map(|(b, tets)| render_band(model, textures, view, b, tets)).collect();
     Cut { width: view.width, height: view.height, pixels: rows.concat() }
 }
 
@@ -168,7 +172,8 @@ fn render_band(model: &LstModel, textures: &Textures, view: &View, band: usize, 
         let t = t as usize;
         let c = model.mesh.corners(t);
         let section = section(&c, normal, offset);
-        let (xs, ys): (Vec<f32>, Vec<f32>) = section.iter().map(|p| (right.dot(*p - view.origin), down.dot(*p - view.origin))).unzip();
+        let (xs, ys): (Vec<f32>, Vec<f32>) =
+            section.iter().map(|p| (right.dot(*p - view.origin), down.dot(*p - view.origin))).unzip();
         let (x_lo, x_hi) = pixel_span(&xs, view.width);
         let (y_lo, y_hi) = pixel_span(&ys, view.height);
         let (y_lo, y_hi) = (y_lo.max(y0), y_hi.min(y1));
@@ -217,7 +222,10 @@ fn pixel_span(coords: &[f32], limit: usize) -> (usize, usize) {
 /// The patches of tet `t` as (source, corner texture coordinates), bottom first.
 fn layers_of(model: &LstModel, t: usize) -> Vec<(usize, [Vec3; 4])> {
     let tet = model.mesh.tets[t];
-    model.tet_patches[t].iter().map(|&p| (model.patches[p as usize].source as usize, model.patches[p as usize].corners(tet))).collect()
+    model.tet_patches[t]
+        .iter()
+        .map(|&p| (model.patches[p as usize].source as usize, model.patches[p as usize].corners(tet)))
+        .collect()
 }
 
 /// The composited colour of the model at `point` inside tet `t`.
@@ -256,7 +264,11 @@ fn shade(textures: &Textures, layers: &[(usize, [Vec3; 4])], b: [f32; 4]) -> [f3
 /// holds it.
 pub fn cut_many(models: &[(&LstModel, &Textures)], view: &View) -> Cut {
     let mut cuts = models.iter().map(|(m, t)| cut(m, t, view));
-    let mut out = cuts.next().unwrap_or(Cut { width: view.width, height: view.height, pixels: vec![[0.0; 4]; view.width * view.height] });
+    let mut out = cuts.next().unwrap_or(Cut {
+        width: view.width,
+        height: view.height,
+        pixels: vec![[0.0; 4]; view.width * view.height],
+    });
     for other in cuts {
         for (p, q) in out.pixels.iter_mut().zip(other.pixels) {
             if p[3] == 0.0 {

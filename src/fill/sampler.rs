@@ -24,7 +24,8 @@ impl Sampler {
 
     /// A sampler of R, G, B (or the first channel three times for a grey volume).
     pub fn colour(volume: &Volume) -> Sampler {
-        let rgb: Vec<usize> = [Channel::R, Channel::G, Channel::B].iter().filter_map(|c| volume.channel_index(c)).collect();
+        let rgb: Vec<usize> =
+            [Channel::R, Channel::G, Channel::B].iter().filter_map(|c| volume.channel_index(c)).collect();
         Sampler::pick(volume, if rgb.len() == 3 { &rgb } else { &[0, 0, 0] })
     }
 

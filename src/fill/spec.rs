@@ -138,8 +138,7 @@ fn check_inside(surface: &Mesh, points: &[Vec3], field: &str) -> Result<()> {
     match points.iter().position(|p| surface.winding_number(*p).abs() < 0.25) {
         Some(k) => Err(Error::invalid(format!(
             "{field}: point {} ({}) is outside the model; constraints must lie inside or on the surface",
-            k,
-            points[k]
+            k, points[k]
         ))),
         None => Ok(()),
     }
@@ -151,7 +150,11 @@ fn stroke_samples(stroke: &[Vec3], size: f32) -> Vec<(Vec3, Vec3)> {
         return Vec::new();
     }
     let points = resample(stroke, size);
-    points.windows(2).map(|w| ((w[0] + w[1]) / 2.0, (w[1] - w[0]).normalize_or_zero())).filter(|s| s.1 != Vec3::ZERO).collect()
+    points
+        .windows(2)
+        .map(|w| ((w[0] + w[1]) / 2.0, (w[1] - w[0]).normalize_or_zero()))
+        .filter(|s| s.1 != Vec3::ZERO)
+        .collect()
 }
 
 /// Points along a polyline about `size / STROKE_SAMPLES` apart (the corners included).
@@ -180,7 +183,8 @@ fn surface_depth(spec: &FillSpec, surface: &Mesh) -> Result<Vec<(Vec3, f32)>> {
         corners.sort_unstable();
         corners.iter().map(|&i| surface.vertices[i as usize]).sum::<Vec3>() / 3.0
     };
-    let mut out: Vec<(Vec3, f32)> = (0..surface.triangles.len()).step_by(step).filter_map(|t| value[t].map(|d| (centre(t), d))).collect();
+    let mut out: Vec<(Vec3, f32)> =
+        (0..surface.triangles.len()).step_by(step).filter_map(|t| value[t].map(|d| (centre(t), d))).collect();
     // small groups could fall between the thinned samples: keep some corners of each
     for group in &spec.depth.faces {
         let faces = face_group(surface, group)?;

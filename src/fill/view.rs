@@ -30,7 +30,11 @@ pub fn surface(model: &LstModel, textures: &Textures, yaw: f32, pitch: f32, size
     let right = forward.cross(Vec3::Y).normalize_or(Vec3::X);
     let up = right.cross(forward);
     let project = |p: Vec3| Vec2::new(right.dot(p), up.dot(p));
-    let (lo, hi) = model.mesh.vertices.iter().fold((Vec2::INFINITY, Vec2::NEG_INFINITY), |(a, b), p| (a.min(project(*p)), b.max(project(*p))));
+    let (lo, hi) = model
+        .mesh
+        .vertices
+        .iter()
+        .fold((Vec2::INFINITY, Vec2::NEG_INFINITY), |(a, b), p| (a.min(project(*p)), b.max(project(*p))));
     let side = (hi - lo).max_element().max(1e-6) * 1.08;
     let scale = size as f32 / side;
     let centre = (lo + hi) / 2.0;

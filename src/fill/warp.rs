@@ -80,7 +80,7 @@ pub struct Warp<'a> {
 impl Warp<'_> {
     /// Improves `coords` (one per vertex, in `vertices` order) in place.
     pub fn solve(&self, coords: &mut [Vec3]) {
-        let local = |v: u32| self.vertices.binary_search(&v).expect("clump vertex") ;
+        let local = |v: u32| self.vertices.binary_search(&v).expect("clump vertex");
         let mut a = Sparse::new(self.vertices.len());
         let mut targets: Vec<Vec3> = Vec::new();
         for (i, &t) in self.tets.iter().enumerate() {
@@ -151,7 +151,15 @@ mod tests {
             .collect();
         let start = Rigid::new(&frames[0], [0, 1, 2], mesh.centroid(0), Vec3::splat(0.5));
         let mut coords: Vec<Vec3> = vertices.iter().map(|&v| start.apply(mesh.vertices[v as usize])).collect();
-        let warp = Warp { mesh: &mesh, tets: &tets, vertices: &vertices, frames: &frames, axes: [0, 1, 2], pin: (0, Vec3::splat(0.5)), fixed: None };
+        let warp = Warp {
+            mesh: &mesh,
+            tets: &tets,
+            vertices: &vertices,
+            frames: &frames,
+            axes: [0, 1, 2],
+            pin: (0, Vec3::splat(0.5)),
+            fixed: None,
+        };
         let error = |coords: &[Vec3]| -> f32 {
             tets.iter()
                 .enumerate()
@@ -167,7 +175,8 @@ mod tests {
         warp.solve(&mut coords);
         let after = error(&coords);
         assert!(before > 10.0 && after < before * 0.5, "mean angle {before} -> {after}");
-        let pinned: Vec3 = mesh.tets[0].iter().map(|&v| coords[vertices.binary_search(&v).unwrap()]).sum::<Vec3>() / 4.0;
+        let pinned: Vec3 =
+            mesh.tets[0].iter().map(|&v| coords[vertices.binary_search(&v).unwrap()]).sum::<Vec3>() / 4.0;
         assert!((pinned - Vec3::splat(0.5)).length() < 0.02, "{pinned}");
     }
 }

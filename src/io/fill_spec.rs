@@ -97,7 +97,11 @@ pub fn parse_fill_spec(text: &str, folder: &Path) -> Result<FillSpec> {
         .transpose()?;
     let tets = raw.tets.unwrap_or(5000);
     if !TETS.contains(&tets) {
-        return Err(Error::invalid(format!("tets = {tets} is out of range; allowed {} to {}", TETS.start(), TETS.end())));
+        return Err(Error::invalid(format!(
+            "tets = {tets} is out of range; allowed {} to {}",
+            TETS.start(),
+            TETS.end()
+        )));
     }
     positive("scale", raw.scale)?;
     let falloff = raw.mask_falloff.unwrap_or(crate::mask::DEFAULT_FALLOFF);
@@ -133,7 +137,9 @@ fn positive(field: &str, value: Option<f32>) -> Result<()> {
 
 fn axes(text: &str) -> Result<[Axis; 2]> {
     let parts: Vec<&str> = text.split(',').map(str::trim).collect();
-    let bad = || Error::invalid(format!("axes = {text:?} must be two different texture axes like \"z,x\" (primary, secondary)"));
+    let bad = || {
+        Error::invalid(format!("axes = {text:?} must be two different texture axes like \"z,x\" (primary, secondary)"))
+    };
     if parts.len() != 2 {
         return Err(bad());
     }
@@ -150,10 +156,13 @@ fn point(field: &str, p: [f32; 3]) -> Result<Vec3> {
 fn strokes(raw: &[RawStroke]) -> Result<Vec<Vec<Vec3>>> {
     let mut out = Vec::new();
     for (i, s) in raw.iter().enumerate() {
-        let line: Vec<Vec3> = s.points.iter().map(|p| point(&format!("direction[{i}].points"), *p)).collect::<Result<_>>()?;
+        let line: Vec<Vec3> =
+            s.points.iter().map(|p| point(&format!("direction[{i}].points"), *p)).collect::<Result<_>>()?;
         let length: f32 = line.windows(2).map(|w| w[0].distance(w[1])).sum();
         if line.len() < 2 || length <= 0.0 {
-            return Err(Error::invalid(format!("direction[{i}].points needs at least two different points (a stroke)")));
+            return Err(Error::invalid(format!(
+                "direction[{i}].points needs at least two different points (a stroke)"
+            )));
         }
         out.push(line);
     }

@@ -61,7 +61,9 @@ pub fn from_bytes(bytes: &[u8]) -> Result<LstModel> {
     let mut r = Reader { bytes, at: 8 };
     let version = r.u32()?;
     if version != VERSION {
-        return Err(Error::invalid(format!("model version {version} is not supported; this solidtex reads version {VERSION}")));
+        return Err(Error::invalid(format!(
+            "model version {version} is not supported; this solidtex reads version {VERSION}"
+        )));
     }
     let (nv, nt, ns, np) = (r.count(12)?, r.count(16)?, r.count(12)?, r.count(6)?);
     let sources = (0..ns).map(|_| r.source()).collect::<Result<Vec<_>>>()?;
@@ -99,7 +101,10 @@ impl Reader<'_> {
     fn count(&mut self, each: usize) -> Result<usize> {
         let n = self.u32()? as usize;
         if n.saturating_mul(each) > self.bytes.len() - self.at {
-            return Err(Error::invalid(format!("truncated or damaged: count {n} at byte {} is more than the file holds", self.at - 4)));
+            return Err(Error::invalid(format!(
+                "truncated or damaged: count {n} at byte {} is more than the file holds",
+                self.at - 4
+            )));
         }
         Ok(n)
     }
@@ -115,7 +120,8 @@ impl Reader<'_> {
 
     fn text(&mut self) -> Result<String> {
         let n = self.count(1)?;
-        String::from_utf8(self.take(n)?.to_vec()).map_err(|_| Error::invalid(format!("text at byte {} is not UTF-8", self.at)))
+        String::from_utf8(self.take(n)?.to_vec())
+            .map_err(|_| Error::invalid(format!("text at byte {} is not UTF-8", self.at)))
     }
 
     fn source(&mut self) -> Result<Source> {

@@ -55,7 +55,9 @@ fn a_kiwi_fill_covers_every_tet_and_puts_the_skin_on_the_surface() {
     assert!(stats["fill"]["paste"]["angle_mean"].as_f64().unwrap() < 20.0, "{stats}");
     // a cut across the fruit's axis: a 0.65-radius disc; 512 px span 1.3 x 1.04
     let png = at(d, "cut.png");
-    assert!(solidtex(&["cut", &at(d, "kiwi.lst"), "--plane", "0,0,0,1,0,0", "--size", "512", "-o", &png]).status.success());
+    assert!(
+        solidtex(&["cut", &at(d, "kiwi.lst"), "--plane", "0,0,0,1,0,0", "--size", "512", "-o", &png]).status.success()
+    );
     let centre = pixel(&png, 256, 256);
     assert!(centre.iter().all(|c| *c > 0.75), "the core is pale: {centre:?}");
     let px_per_unit = 512.0 / (1.3 * 1.04);
@@ -112,7 +114,7 @@ fn a_pipe_of_genus_one_fills_and_its_hole_stays_empty() {
     let v = solidtex::io::read_volume(Path::new(&exr), u64::MAX).unwrap();
     let [x, y, z] = v.dims();
     assert_eq!((x, y), (32, 32));
-    assert!(z >= 8 && z <= 12, "{z}");
+    assert!((8..=12).contains(&z), "{z}");
     assert_eq!(v.get(16, 16, z / 2, 3), 0.0);
     assert_eq!(v.get(16, 16 - 11, z / 2, 3), 1.0);
 }
@@ -128,7 +130,17 @@ fn two_models_cut_together_and_the_surface_view_draws_the_model() {
     let kiwi = self::spec(d, "kiwi.toml", KIWI);
     fill(d, &fruit, &kiwi, "kiwi.lst");
     let png = at(d, "both.png");
-    let run = solidtex(&["cut", &at(d, "kiwi.lst"), &at(d, "block.lst"), "--plane", "0,0,0,0,0,1", "--size", "64", "-o", &png]);
+    let run = solidtex(&[
+        "cut",
+        &at(d, "kiwi.lst"),
+        &at(d, "block.lst"),
+        "--plane",
+        "0,0,0,0,0,1",
+        "--size",
+        "64",
+        "-o",
+        &png,
+    ]);
     assert!(run.status.success(), "{}", stderr(&run));
     let view = at(d, "view.png");
     assert!(solidtex(&["view", &at(d, "kiwi.lst"), "--size", "96", "-o", &view]).status.success());
@@ -146,8 +158,20 @@ fn bad_fills_are_refused_with_the_reason_and_nothing_written() {
     let cases: Vec<(String, String, Vec<&str>)> = vec![
         (fruit.clone(), spec(d, "unknown.toml", "exemplar = \"plum\"\n"), vec!["plum", "not in the library", "kiwi"]),
         (fruit.clone(), spec(d, "nostroke.toml", "exemplar = \"wood\"\ntype = \"1-a\"\n"), vec!["1-a", "direction"]),
-        (fruit.clone(), spec(d, "nodepth.toml", "exemplar = \"kiwi\"\n[depth]\nsurface = true\n[[direction]]\npoints = [[0,0,0],[0.5,0,0]]\n"), vec!["2-b", "depth"]),
-        (fruit.clone(), spec(d, "outside.toml", &KIWI.replace("0.75, 0, 0]]]", "3, 0, 0]]]")), vec!["depth.axis[0]", "outside the model"]),
+        (
+            fruit.clone(),
+            spec(
+                d,
+                "nodepth.toml",
+                "exemplar = \"kiwi\"\n[depth]\nsurface = true\n[[direction]]\npoints = [[0,0,0],[0.5,0,0]]\n",
+            ),
+            vec!["2-b", "depth"],
+        ),
+        (
+            fruit.clone(),
+            spec(d, "outside.toml", &KIWI.replace("0.75, 0, 0]]]", "3, 0, 0]]]")),
+            vec!["depth.axis[0]", "outside the model"],
+        ),
         (fruit.clone(), spec(d, "tiny.toml", "exemplar = \"marble\"\nscale = 0.001\n"), vec!["scale", "tet edges"]),
     ];
     for (mesh, spec, needles) in cases {
@@ -159,7 +183,10 @@ fn bad_fills_are_refused_with_the_reason_and_nothing_written() {
     let open = at(d, "open.obj");
     std::fs::write(&open, &text[..last + 1]).unwrap();
     let marble = spec(d, "marble.toml", "exemplar = \"marble\"\n");
-    assert_fails(&solidtex(&["fill", &open, "--spec", &marble, "-o", &out]), &["open.obj", "not closed", "3 boundary edge"]);
+    assert_fails(
+        &solidtex(&["fill", &open, "--spec", &marble, "-o", &out]),
+        &["open.obj", "not closed", "3 boundary edge"],
+    );
     // a flat mesh: two triangles back to back
     let flat = at(d, "flat.obj");
     std::fs::write(&flat, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 3 2\n").unwrap();
