@@ -1,7 +1,7 @@
 //! The filling backend end to end: fill, cut, bake and view through the binary, on shapes
 //! the project draws itself and the default exemplar library.
 
-use crate::support::{assert_fails, at, listing, solidtex, stderr};
+use crate::support::{assert_fails, at, listing, solidtex, solidtex_env, stderr};
 use std::path::Path;
 
 fn library() -> String {
@@ -77,6 +77,19 @@ fn fills_replay_for_a_seed_and_ignore_the_mesh_orientation() {
     fill(d, &mesh, &spec, "b.lst");
     let same = std::fs::read(d.join("a.lst")).unwrap() == std::fs::read(d.join("b.lst")).unwrap();
     assert!(same, "two fills with the same seed differ");
+    // one thread and four: the same model and the same cut
+    for (threads, name) in [("1", "t1"), ("4", "t4")] {
+        let env = [("RAYON_NUM_THREADS", threads)];
+        let lst = at(d, &format!("{name}.lst"));
+        assert!(solidtex_env(&["fill", &mesh, "--spec", &spec, "-o", &lst], &env).status.success());
+        let png = at(d, &format!("{name}.png"));
+        assert!(solidtex_env(&["cut", &lst, "--size", "96", "-o", &png], &env).status.success());
+    }
+    for ext in ["lst", "png"] {
+        let read = |n: &str| std::fs::read(d.join(format!("{n}.{ext}"))).unwrap();
+        assert!(read("t1") == read("t4"), "the {ext} depends on the thread count");
+    }
+    assert!(std::fs::read(d.join("t1.lst")).unwrap() == std::fs::read(d.join("a.lst")).unwrap());
     // the same fruit with every triangle flipped (facing inwards)
     let text = std::fs::read_to_string(&mesh).unwrap();
     let flipped: String = text
@@ -142,11 +155,43 @@ fn two_models_cut_together_and_the_surface_view_draws_the_model() {
         &png,
     ]);
     assert!(run.status.success(), "{}", stderr(&run));
+    // (0, 0): inside both, the kiwi (listed first) shows its pale core; (0.95, 0.45): only
+    // the block holds it, so strata show there. 64 px span 2 x 1.04 model units.
+    let px = |x: f32, y: f32| pixel(&png, (32.0 + x * 32.0 / 1.04) as u32, (32.0 - y * 32.0 / 1.04) as u32);
+    assert!(px(0.0, 0.0).iter().all(|c| *c > 0.7), "kiwi core {:?}", px(0.0, 0.0));
+    let strata = px(0.95, 0.45);
+    assert!(strata[0] > strata[2] && strata[0] > 0.3 && strata[1] < strata[0], "strata {strata:?}");
     let view = at(d, "view.png");
     assert!(solidtex(&["view", &at(d, "kiwi.lst"), "--size", "96", "-o", &view]).status.success());
     let img = image::open(&view).unwrap().to_rgb8();
     assert_ne!(img.get_pixel(48, 48).0, [24, 24, 28], "the fruit is in the middle");
     assert_eq!(img.get_pixel(1, 1).0, [24, 24, 28], "the corner is background");
+}
+
+#[test]
+fn a_manual_paste_shows_on_top_of_the_automatic_fill() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let block = draw(d, "block");
+    let plain = "exemplar = \"marble\"\nscale = 1.0\ntets = 2000\n";
+    let pasted = format!("{plain}[[paste]]\nexemplar = \"carrot\"\nat = [0.4, 0, 0]\nscale = 0.8\n");
+    let (a, b) = (spec(d, "plain.toml", plain), spec(d, "pasted.toml", &pasted));
+    fill(d, &block, &a, "plain.lst");
+    let stats = fill(d, &block, &b, "pasted.lst");
+    assert_eq!(stats["fill"]["paste"]["forced"], 0);
+    let cut = |model: &str| {
+        let png = at(d, &format!("{model}.png"));
+        assert!(
+            solidtex(&["cut", &at(d, model), "--plane", "0,0,0,0,0,1", "--size", "64", "-o", &png]).status.success()
+        );
+        pixel(&png, (32.0 + 0.4 * 32.0 / 1.04) as u32, 32)
+    };
+    let (marble, carrot) = (cut("plain.lst"), cut("pasted.lst"));
+    assert!((marble[0] - marble[2]).abs() < 0.15, "marble is grey-white: {marble:?}");
+    assert!(
+        carrot[0] > carrot[1] && carrot[1] > carrot[2] && carrot[0] - carrot[2] > 0.3,
+        "carrot is orange: {carrot:?}"
+    );
 }
 
 #[test]
