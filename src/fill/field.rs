@@ -14,6 +14,7 @@
 //! thin-plate RBF (kernel |r| in 3D, plus a linear term) through the depth constraints.
 //! A tet's tensor is the mean of its vertices'.
 
+use super::patch::orthogonal;
 use super::solve::{Sparse, dense_solve, least_squares};
 use super::tets::TetMesh;
 use crate::TextureType;
@@ -98,11 +99,6 @@ fn check_required(kind: TextureType, c: &Constraints) -> Result<()> {
         }
         _ => Ok(()),
     }
-}
-
-fn orthogonal(s: Vec3, r: Vec3) -> Vec3 {
-    let o = s - s.dot(r) * r;
-    o.try_normalize().unwrap_or_else(|| r.any_orthonormal_vector())
 }
 
 /// The mean of each tet's vertex vectors, normalized.

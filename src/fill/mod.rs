@@ -13,6 +13,7 @@ pub mod field;
 pub mod mesher;
 pub mod model;
 pub mod paste;
+pub mod patch;
 pub mod render;
 pub mod sampler;
 pub mod solve;

@@ -15,6 +15,8 @@
 //! not depend on the thread count.
 
 use super::field::Field;
+pub use super::patch::{Patch, SAMPLES};
+use super::patch::{orthogonal, prune, random_frame, sample_points, to_byte, touches, vertices_of};
 use super::sampler::Sampler;
 use super::tets::{NONE, TetMesh};
 use super::warp::{Frame, Rigid, Warp, jacobian};
@@ -28,32 +30,12 @@ use rand_pcg::Pcg64Mcg;
 use rayon::prelude::*;
 use std::collections::VecDeque;
 
-/// Sample points per tet for the coverage test.
-pub const SAMPLES: usize = 165;
 /// Times a seed tet may stay uncovered by its own patch before it is given up.
 const STRIKES: u8 = 6;
 /// Each time a seed tet stays uncovered, its next patch is this much larger.
 const GROWTH: f32 = 1.4;
 /// Growth stops at neighbours whose tensor turns more than 45 degrees from the seed's (cosine).
 const ALIKE: f32 = 0.7;
-
-/// A pasted patch: which source it shows and the texture coordinates of its vertices.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Patch {
-    /// Index of the (exemplar, mask) source.
-    pub source: u16,
-    /// The patch's vertices, sorted.
-    pub vertices: Vec<u32>,
-    /// Texture coordinates, one per vertex.
-    pub coords: Vec<Vec3>,
-}
-
-impl Patch {
-    /// The texture coordinates of the corners of `tet` (all must be patch vertices).
-    pub fn corners(&self, tet: [u32; 4]) -> [Vec3; 4] {
-        tet.map(|v| self.coords[self.vertices.binary_search(&v).expect("patch vertex")])
-    }
-}
 
 /// How to paste.
 #[derive(Debug, Clone)]
@@ -426,63 +408,6 @@ impl<'a> Paster<'a> {
     }
 }
 
-/// Drops the vertices of tets the patch does not show in.
-fn prune(patch: Patch, mesh: &TetMesh, tets: &[u32], alphas: &[Vec<u8>]) -> Patch {
-    let shown: Vec<u32> = tets.iter().zip(alphas).filter(|(_, a)| a.iter().any(|x| *x > 0)).map(|(t, _)| *t).collect();
-    let vertices = vertices_of(mesh, &shown);
-    let coords = vertices.iter().map(|v| patch.coords[patch.vertices.binary_search(v).expect("vertex")]).collect();
-    Patch { source: patch.source, vertices, coords }
-}
-
-fn vertices_of(mesh: &TetMesh, tets: &[u32]) -> Vec<u32> {
-    let mut v: Vec<u32> = tets.iter().flat_map(|&t| mesh.tets[t as usize]).collect();
-    v.sort_unstable();
-    v.dedup();
-    v
-}
-
-fn orthogonal(s: Vec3, r: Vec3) -> Vec3 {
-    (s - s.dot(r) * r).try_normalize().unwrap_or_else(|| r.any_orthonormal_vector())
-}
-
-/// A uniformly random orthonormal frame.
-fn random_frame(rng: &mut Pcg64Mcg) -> [Vec3; 3] {
-    let mut unit = || {
-        let z = rng.random::<f32>() * 2.0 - 1.0;
-        let phi = rng.random::<f32>() * std::f32::consts::TAU;
-        let r = (1.0 - z * z).max(0.0).sqrt();
-        Vec3::new(r * phi.cos(), r * phi.sin(), z)
-    };
-    let a = unit();
-    let b = orthogonal(unit(), a);
-    [a, b, a.cross(b)]
-}
-
-/// The 165 barycentric sample points `(i, j, k, l) / 8`.
-pub fn sample_points() -> Vec<[f32; 4]> {
-    let mut out = Vec::with_capacity(SAMPLES);
-    for i in 0..=8 {
-        for j in 0..=8 - i {
-            for k in 0..=8 - i - j {
-                out.push([i, j, k, 8 - i - j - k].map(|n| n as f32 / 8.0));
-            }
-        }
-    }
-    out
-}
-
-fn to_byte(a: f32) -> u8 {
-    (a.clamp(0.0, 1.0) * 255.0).round() as u8
-}
-
-/// Whether a tet with corner texture coords `w` reaches into the mask (sampled at its
-/// corners, edge midpoints and centre).
-fn touches(mask: &Sampler, w: [Vec3; 4]) -> bool {
-    let centre = (w[0] + w[1] + w[2] + w[3]) / 4.0;
-    let mids = [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)].map(|(a, b)| (w[a] + w[b]) / 2.0);
-    w.iter().chain(&mids).chain(std::iter::once(&centre)).any(|p| mask.alpha(*p) > 0.0)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -498,13 +423,6 @@ mod tests {
         paster.fill(&NoProgress).unwrap();
         let out = paster.finish();
         (mesh, out)
-    }
-
-    #[test]
-    fn there_are_165_samples_summing_to_one() {
-        let s = sample_points();
-        assert_eq!(s.len(), SAMPLES);
-        assert!(s.iter().all(|b| (b.iter().sum::<f32>() - 1.0).abs() < 1e-6));
     }
 
     #[test]

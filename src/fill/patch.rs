@@ -1,0 +1,103 @@
+//! A pasted patch and the small pieces of geometry the paste loop uses: the 165 coverage
+//! samples per tet, the mask-touch test, random frames, and pruning a patch to the tets
+//! it shows in.
+
+use super::sampler::Sampler;
+use super::tets::TetMesh;
+use glam::Vec3;
+use rand::RngExt;
+use rand_pcg::Pcg64Mcg;
+
+/// Sample points per tet for the coverage test.
+pub const SAMPLES: usize = 165;
+
+/// A pasted patch: which source it shows and the texture coordinates of its vertices.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Patch {
+    /// Index of the (exemplar, mask) source.
+    pub source: u16,
+    /// The patch's vertices, sorted.
+    pub vertices: Vec<u32>,
+    /// Texture coordinates, one per vertex.
+    pub coords: Vec<Vec3>,
+}
+
+impl Patch {
+    /// The texture coordinates of the corners of `tet` (all must be patch vertices).
+    pub fn corners(&self, tet: [u32; 4]) -> [Vec3; 4] {
+        tet.map(|v| self.coords[self.vertices.binary_search(&v).expect("patch vertex")])
+    }
+}
+
+/// Drops the vertices of tets the patch does not show in.
+pub fn prune(patch: Patch, mesh: &TetMesh, tets: &[u32], alphas: &[Vec<u8>]) -> Patch {
+    let shown: Vec<u32> = tets.iter().zip(alphas).filter(|(_, a)| a.iter().any(|x| *x > 0)).map(|(t, _)| *t).collect();
+    let vertices = vertices_of(mesh, &shown);
+    let coords = vertices.iter().map(|v| patch.coords[patch.vertices.binary_search(v).expect("vertex")]).collect();
+    Patch { source: patch.source, vertices, coords }
+}
+
+/// The vertices of `tets`, sorted, each once.
+pub fn vertices_of(mesh: &TetMesh, tets: &[u32]) -> Vec<u32> {
+    let mut v: Vec<u32> = tets.iter().flat_map(|&t| mesh.tets[t as usize]).collect();
+    v.sort_unstable();
+    v.dedup();
+    v
+}
+
+/// `s` made orthogonal to the unit vector `r` and normalized (any orthogonal unit vector if
+/// `s` is parallel to `r`).
+pub fn orthogonal(s: Vec3, r: Vec3) -> Vec3 {
+    (s - s.dot(r) * r).try_normalize().unwrap_or_else(|| r.any_orthonormal_vector())
+}
+
+/// A uniformly random orthonormal frame.
+pub fn random_frame(rng: &mut Pcg64Mcg) -> [Vec3; 3] {
+    let mut unit = || {
+        let z = rng.random::<f32>() * 2.0 - 1.0;
+        let phi = rng.random::<f32>() * std::f32::consts::TAU;
+        let r = (1.0 - z * z).max(0.0).sqrt();
+        Vec3::new(r * phi.cos(), r * phi.sin(), z)
+    };
+    let a = unit();
+    let b = orthogonal(unit(), a);
+    [a, b, a.cross(b)]
+}
+
+/// The 165 barycentric sample points `(i, j, k, l) / 8`.
+pub fn sample_points() -> Vec<[f32; 4]> {
+    let mut out = Vec::with_capacity(SAMPLES);
+    for i in 0..=8 {
+        for j in 0..=8 - i {
+            for k in 0..=8 - i - j {
+                out.push([i, j, k, 8 - i - j - k].map(|n| n as f32 / 8.0));
+            }
+        }
+    }
+    out
+}
+
+/// Alpha in [0, 1] as a coverage byte.
+pub fn to_byte(a: f32) -> u8 {
+    (a.clamp(0.0, 1.0) * 255.0).round() as u8
+}
+
+/// Whether a tet with corner texture coords `w` reaches into the mask (sampled at its
+/// corners, edge midpoints and centre).
+pub fn touches(mask: &Sampler, w: [Vec3; 4]) -> bool {
+    let centre = (w[0] + w[1] + w[2] + w[3]) / 4.0;
+    let mids = [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)].map(|(a, b)| (w[a] + w[b]) / 2.0);
+    w.iter().chain(&mids).chain(std::iter::once(&centre)).any(|p| mask.alpha(*p) > 0.0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn there_are_165_samples_summing_to_one() {
+        let s = sample_points();
+        assert_eq!(s.len(), SAMPLES);
+        assert!(s.iter().all(|b| (b.iter().sum::<f32>() - 1.0).abs() < 1e-6));
+    }
+}
