@@ -19,8 +19,10 @@ wait_for() { # text, seconds
   for _ in $(seq 1 $(( $2 * 10 ))); do screen | grep -q "$1" && return 0; sleep 0.1; done
   echo "tui e2e: never saw '$1'; the screen was:"; screen; exit 1
 }
-tmux new-session -d -s "$session" -x 100 -y 30 "$bin tui exemplars/library.toml -o $out"
-wait_for "solidtex library: exemplars/library.toml" 10
+# a copy of the default library, so the editor can save into it
+cp -r exemplars "$out/lib"
+tmux new-session -d -s "$session" -x 100 -y 30 "$bin tui $out/lib/library.toml -o $out/built"
+wait_for "solidtex library: .*library.toml" 10
 wait_for "not built" 5
 tmux send-keys -t "$session" b
 wait_for "built marble (measured type 0)" 60
@@ -32,6 +34,29 @@ tmux send-keys -t "$session" '?'
 wait_for "cycle colour" 5
 tmux send-keys -t "$session" Escape
 sleep 0.5
+# fill preview: a shape filled with marble, the cut moved
+tmux send-keys -t "$session" f
+wait_for "fill preview: marble" 5
+wait_for "patches" 60
+tmux send-keys -t "$session" z Right
+wait_for "cut across z" 5
+tmux send-keys -t "$session" Escape
+wait_for "solidtex library" 5
+# recipe editor: size 64 -> 32 (validated, previewed), saved with the comments kept
+tmux send-keys -t "$session" e
+wait_for "recipe: marble" 10
+wait_for "size = 64" 10
+tmux send-keys -t "$session" Down Down Enter BSpace BSpace 0 Enter
+wait_for "size 0 is out of range\|size.*0" 5
+tmux send-keys -t "$session" BSpace 3 2 Enter
+wait_for "recipe: marble \[modified\]" 5
+wait_for "preview (low resolution)" 20
+tmux send-keys -t "$session" u
+wait_for "undone" 5
+tmux send-keys -t "$session" r s
+wait_for "saved" 5
+grep -q "^size = 32" "$out/lib/library.toml" || { echo "tui e2e: the edit was not saved"; exit 1; }
+grep -q "^# The default exemplar library" "$out/lib/library.toml" || { echo "tui e2e: comments were lost"; exit 1; }
 tmux send-keys -t "$session" Escape
 wait_for "solidtex library" 5
 tmux send-keys -t "$session" q

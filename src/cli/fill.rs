@@ -346,3 +346,45 @@ pub fn run_view(args: &ViewArgs) -> Result<()> {
     eprintln!("wrote {} in {ms:.0} ms", args.output.display());
     Ok(())
 }
+
+/// The fill preview of the terminal UI: a drawn shape filled with library exemplar `name`
+/// (built into `output` first if needed) — a fruit with its axis as the innermost part for
+/// the depth-varying types and strokes along it, a block with strokes along x for 1-a, a
+/// fruit for type 0 — at 2,500 tets, with the textures to cut it.
+pub fn preview_fill(manifest: &Path, output: &Path, name: &str) -> Result<crate::tui::FillPreview> {
+    let started = Instant::now();
+    let mut spec = FillSpec::new(name);
+    spec.library = manifest.to_path_buf();
+    spec.built = output.to_path_buf();
+    spec.tets = 2500;
+    let probe = resolve(&spec, &output.join("preview.lst"))?;
+    let (shape, axis) = match probe.kind {
+        TextureType::T1a => ("block", vec![glam::Vec3::new(-0.9, 0.0, 0.0), glam::Vec3::new(0.9, 0.0, 0.0)]),
+        _ => ("fruit", vec![glam::Vec3::new(-0.75, 0.0, 0.0), glam::Vec3::new(0.75, 0.0, 0.0)]),
+    };
+    if matches!(probe.kind, TextureType::T1b | TextureType::T2a | TextureType::T2b) {
+        spec.depth.axes = vec![axis.clone()];
+    }
+    spec.directions = vec![axis];
+    let surface = crate::mesh::shapes::named(shape).expect("a drawn shape").canonical();
+    let tets = mesher::tetrahedralize(&surface, spec.tets)?;
+    let job = Job {
+        surface: &surface,
+        spec: &spec,
+        kind: probe.kind,
+        axes: probe.axes,
+        sources: probe.sources.clone(),
+        masks: probe.masks.clone(),
+    };
+    let (model, report) = fill::fill(&job, tets, &crate::progress::NoProgress)?;
+    let colour = probe.sources.iter().map(|s| load_built(&spec, &s.exemplar)).collect::<Result<Vec<_>>>()?;
+    let textures = Textures::new(&colour, &probe.masks);
+    let summary = format!(
+        "{name} (type {}) in a {shape}: {} tets, {} patches, {:.2} s",
+        probe.kind,
+        report.tets,
+        report.paste.patches,
+        started.elapsed().as_secs_f64()
+    );
+    Ok(crate::tui::FillPreview { model, textures, summary })
+}

@@ -192,6 +192,9 @@ pub fn run(cli: Cli) -> crate::Result<()> {
     }
 }
 
+pub use fill::preview_fill;
+pub use recipe::preview as preview_recipe;
+
 /// Write one line to stdout; exit quietly when the reader has gone away.
 pub fn write_out(text: &str) {
     use std::io::Write;

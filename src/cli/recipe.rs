@@ -32,6 +32,32 @@ pub fn make(entry: &Entry) -> Result<Volume> {
     volume.meta.set("name", entry.name.clone());
     Ok(volume)
 }
+/// A quick, low-resolution build of exemplar `name` from manifest `text` (for the editor's
+/// live preview): procedural and synthesized sizes are capped at 32 and 24 voxels, sweeps at
+/// 32 voxels along their axis; steps and masks apply as in the real build, exports do not.
+pub fn preview(manifest: &Path, name: &str, text: &str) -> Result<Volume> {
+    let folder = manifest.parent().unwrap_or(Path::new("."));
+    let plan = crate::io::manifest::parse_plan(text, folder)?;
+    let mut entry = plan
+        .entries
+        .into_iter()
+        .find(|e| e.name == name)
+        .ok_or_else(|| Error::invalid(format!("no exemplar named {name:?}")))?;
+    let cap = match &mut entry.source {
+        Source::Sweep(spec) => {
+            spec.length = spec.length.min(32);
+            entry.dims = None;
+            0
+        }
+        Source::Synth(_) => 24,
+        _ => 32,
+    };
+    if cap > 0 {
+        entry.dims = entry.dims.map(|d| d.map(|x| x.min(cap)));
+    }
+    make(&entry)
+}
+
 fn synthesized(spec: &SynthSpec, size: [usize; 3], seed: u64) -> Result<Volume> {
     let read = |p: &Path| io::read_image_fit(p, spec.max_exemplar);
     let ex = read(&spec.image)?;

@@ -1,7 +1,7 @@
 //! Keys to messages, per screen: a pure function, unit-tested.
 
 use super::message::Message;
-use super::model::Screen;
+use super::model::{Editor, Screen};
 use crate::volume::Axis;
 use crossterm::event::{KeyCode, KeyEvent, KeyModifiers};
 
@@ -10,16 +10,22 @@ pub fn key(screen: &Screen, event: KeyEvent) -> Option<Message> {
     if event.modifiers.contains(KeyModifiers::CONTROL) && event.code == KeyCode::Char('c') {
         return Some(Message::Quit);
     }
+    if let Screen::Editor(Editor { input: Some(_), .. }) = screen {
+        return typing(event.code);
+    }
     let common = match event.code {
         KeyCode::Char('?') => Some(Message::Help),
         KeyCode::Char('q') => Some(Message::Quit),
         KeyCode::Esc => Some(Message::Back),
         _ => None,
     };
-    common.or(match screen {
-        Screen::Library => library(event.code),
-        Screen::Exemplar(_) => exemplar(event.code),
-    })
+    let esc = |m: Option<Message>| if event.code == KeyCode::Esc { Some(Message::Cancel) } else { m };
+    match screen {
+        Screen::Library => common.or(library(event.code)),
+        Screen::Exemplar(_) => common.or(exemplar(event.code)),
+        Screen::Editor(_) => esc(common).or(editor(event.code)),
+        Screen::Fill(_) => common.or(fill(event.code)),
+    }
 }
 
 fn library(code: KeyCode) -> Option<Message> {
@@ -29,6 +35,43 @@ fn library(code: KeyCode) -> Option<Message> {
         KeyCode::Enter => Some(Message::Open),
         KeyCode::Char('b') => Some(Message::Build),
         KeyCode::Char('B') => Some(Message::BuildAll),
+        KeyCode::Char('e') => Some(Message::Edit),
+        _ => None,
+    }
+}
+
+fn typing(code: KeyCode) -> Option<Message> {
+    match code {
+        KeyCode::Enter => Some(Message::Commit),
+        KeyCode::Esc => Some(Message::Cancel),
+        KeyCode::Backspace => Some(Message::InputBack),
+        KeyCode::Char(c) => Some(Message::Input(c)),
+        _ => None,
+    }
+}
+
+fn editor(code: KeyCode) -> Option<Message> {
+    match code {
+        KeyCode::Up | KeyCode::Char('k') => Some(Message::Up),
+        KeyCode::Down | KeyCode::Char('j') => Some(Message::Down),
+        KeyCode::Enter => Some(Message::Commit),
+        KeyCode::Char('u') => Some(Message::Undo),
+        KeyCode::Char('r') => Some(Message::Redo),
+        KeyCode::Char('s') => Some(Message::Save),
+        _ => None,
+    }
+}
+
+fn fill(code: KeyCode) -> Option<Message> {
+    match code {
+        KeyCode::Char('x') => Some(Message::SelectAxis(Axis::X)),
+        KeyCode::Char('y') => Some(Message::SelectAxis(Axis::Y)),
+        KeyCode::Char('z') => Some(Message::SelectAxis(Axis::Z)),
+        KeyCode::Right | KeyCode::Up | KeyCode::Char('l') => Some(Message::MovePlane(0.05)),
+        KeyCode::Left | KeyCode::Down | KeyCode::Char('h') => Some(Message::MovePlane(-0.05)),
+        KeyCode::PageUp => Some(Message::MovePlane(0.25)),
+        KeyCode::PageDown => Some(Message::MovePlane(-0.25)),
+        KeyCode::Backspace => Some(Message::Back),
         _ => None,
     }
 }
@@ -43,19 +86,24 @@ fn exemplar(code: KeyCode) -> Option<Message> {
         KeyCode::PageUp => Some(Message::MoveSlice(8)),
         KeyCode::PageDown => Some(Message::MoveSlice(-8)),
         KeyCode::Char('c') => Some(Message::NextChannel),
+        KeyCode::Char('f') => Some(Message::FillPreview),
         KeyCode::Backspace => Some(Message::Back),
         _ => None,
     }
 }
 
 /// The help text: one line per key.
-pub const HELP: [&str; 12] = [
+pub const HELP: [&str; 16] = [
     "up/down, j/k   choose an exemplar",
     "enter          open its slices",
     "b / B          build it / build all",
+    "e              edit its recipe (enter edits a",
+    "               value, s saves, u undo, r redo)",
     "x, y, z        choose the slice axis",
     "left/right     move the slice (page up/down: 8)",
     "c              cycle colour and single channels",
+    "f              fill a shape with it, then",
+    "               x/y/z + arrows move the cut",
     "esc            back",
     "?              this help",
     "q, ctrl-c      quit",
@@ -95,5 +143,14 @@ mod tests {
         assert!(matches!(key(&view, press(KeyCode::Char('?'))), Some(Message::Help)));
         let ctrl_c = KeyEvent { modifiers: KeyModifiers::CONTROL, ..press(KeyCode::Char('c')) };
         assert!(matches!(key(&view, ctrl_c), Some(Message::Quit)));
+        assert!(matches!(key(&view, press(KeyCode::Char('f'))), Some(Message::FillPreview)));
+        let editing =
+            |input: Option<&str>| Screen::Editor(Editor { input: input.map(String::from), ..Editor::default() });
+        assert!(matches!(key(&editing(None), press(KeyCode::Char('u'))), Some(Message::Undo)));
+        assert!(matches!(key(&editing(None), press(KeyCode::Esc)), Some(Message::Cancel)));
+        // while a value is typed, every letter is text, even q and ?
+        assert!(matches!(key(&editing(Some("")), press(KeyCode::Char('q'))), Some(Message::Input('q'))));
+        assert!(matches!(key(&editing(Some("")), press(KeyCode::Char('?'))), Some(Message::Input('?'))));
+        assert!(matches!(key(&editing(Some("")), press(KeyCode::Enter)), Some(Message::Commit)));
     }
 }

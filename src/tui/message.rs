@@ -32,6 +32,34 @@ pub enum Message {
     Loaded(String, Result<Arc<Volume>, String>),
     /// A build finished: name, and the rebuilt list row or the error.
     Built(String, Result<super::model::Item, String>),
+    /// Open the recipe editor of the selected exemplar.
+    Edit,
+    /// The manifest text for the editor arrived.
+    EditorReady(Result<String, String>),
+    /// Start editing the selected field, or commit the value being typed.
+    Commit,
+    /// Type a character into the value.
+    Input(char),
+    /// Delete the last character of the value.
+    InputBack,
+    /// Stop editing the value without changing it.
+    Cancel,
+    /// Undo the last edit.
+    Undo,
+    /// Redo the last undone edit.
+    Redo,
+    /// Save the manifest.
+    Save,
+    /// The manifest was saved (or not).
+    Saved(Result<String, String>),
+    /// A preview finished: the edit generation it belongs to, and the volume.
+    Previewed(u64, Result<Arc<Volume>, String>),
+    /// Open the fill preview of the exemplar on screen.
+    FillPreview,
+    /// A fill preview finished.
+    Filled(String, Result<Arc<super::model::FillPreview>, String>),
+    /// Move the cut plane by this share of the model.
+    MovePlane(f32),
 }
 
 /// Work `update` asks the runtime to start in a worker thread.
@@ -41,4 +69,19 @@ pub enum Effect {
     Load(String),
     /// Build these exemplars.
     Build(Vec<String>),
+    /// Read the manifest text for the editor.
+    ReadManifest,
+    /// Build a low-resolution preview of exemplar `name` from manifest `text`.
+    Preview {
+        /// The exemplar.
+        name: String,
+        /// The manifest text.
+        text: String,
+        /// The edit generation.
+        generation: u64,
+    },
+    /// Write the manifest text (atomically).
+    Save(String),
+    /// Fill a drawn shape with this exemplar.
+    Fill(String),
 }

@@ -2,18 +2,23 @@
 //! view: `keymap` and `update` are pure and unit-tested, `view` only draws, and long work
 //! (loading a volume, building exemplars) runs in worker threads that send messages back.
 //!
-//! This first version: the library list with declared and measured types and build state,
-//! building one or all in the background, and the exemplar view with three orthogonal
-//! slices as truecolour half-blocks, moved with keys, per channel.
+//! Screens: the library list with declared and measured types and build state (building
+//! one or all in the background); the exemplar view with three orthogonal slices as
+//! truecolour half-blocks, moved with keys, per channel; the recipe editor (format-preserving
+//! edits validated in place, undo/redo, live low-resolution preview, save); and the fill
+//! preview (a shape filled with the exemplar, a cut plane moved with keys).
 
+mod edit;
+mod editing;
 mod keymap;
 mod message;
 mod model;
 mod update;
 mod view;
+mod view_edit;
 
 pub use message::{Effect, Message};
-pub use model::{BuildState, Item, Model, Screen};
+pub use model::{BuildState, FillPreview, Item, Model, Screen};
 pub use update::update;
 pub use view::draw;
 
@@ -98,6 +103,24 @@ fn start(effects: Vec<Effect>, model: &Model, send: &Sender<Message>) {
                 let _ = send.send(Message::Loaded(name, result));
             }
             Effect::Build(names) => build(&manifest, &output, names, &send),
+            Effect::ReadManifest => {
+                let text = std::fs::read_to_string(&manifest).map_err(|e| format!("{}: {e}", manifest.display()));
+                let _ = send.send(Message::EditorReady(text));
+            }
+            Effect::Save(text) => {
+                let result = io::write_bytes(&manifest, text.as_bytes()).map(|_| text).map_err(|e| e.to_string());
+                let _ = send.send(Message::Saved(result));
+            }
+            Effect::Preview { name, text, generation } => {
+                let result =
+                    crate::cli::preview_recipe(&manifest, &name, &text).map(Arc::new).map_err(|e| e.to_string());
+                let _ = send.send(Message::Previewed(generation, result));
+            }
+            Effect::Fill(name) => {
+                let result =
+                    crate::cli::preview_fill(&manifest, &output, &name).map(Arc::new).map_err(|e| e.to_string());
+                let _ = send.send(Message::Filled(name, result));
+            }
         });
     }
 }

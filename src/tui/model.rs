@@ -45,6 +45,62 @@ pub struct ExemplarView {
     pub channel: usize,
 }
 
+/// The recipe editor of one exemplar: the manifest text being edited, with undo and redo.
+#[derive(Debug, Clone, Default)]
+pub struct Editor {
+    /// Exemplar name.
+    pub name: String,
+    /// The manifest text as edited (None while it loads).
+    pub text: Option<String>,
+    /// The text as last read or saved.
+    pub saved: String,
+    /// Selected field row.
+    pub selected: usize,
+    /// The value being typed, when editing.
+    pub input: Option<String>,
+    /// Why the last edit was refused.
+    pub error: Option<String>,
+    /// Earlier texts, newest last.
+    pub undo: Vec<String>,
+    /// Undone texts, newest last.
+    pub redo: Vec<String>,
+    /// The low-resolution preview of the current text.
+    pub preview: Option<Arc<Volume>>,
+    /// Counts edits, so a late preview of an older text is dropped.
+    pub generation: u64,
+    /// A preview is being made.
+    pub previewing: bool,
+}
+
+/// A filled preview model with the textures to cut it.
+pub struct FillPreview {
+    /// The model.
+    pub model: crate::fill::LstModel,
+    /// Its textures.
+    pub textures: crate::fill::render::Textures,
+    /// One line about the fill (shape, tets, patches, time).
+    pub summary: String,
+}
+
+impl std::fmt::Debug for FillPreview {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.summary)
+    }
+}
+
+/// The fill preview: a drawn shape filled with the exemplar, and a cut plane.
+#[derive(Debug, Clone)]
+pub struct FillView {
+    /// Exemplar name.
+    pub name: String,
+    /// The filled model (None while filling).
+    pub filled: Option<Arc<FillPreview>>,
+    /// The axis the cut plane is across.
+    pub axis: Axis,
+    /// Where the plane sits between the model's bounds, -1 to 1.
+    pub offset: f32,
+}
+
 /// The screen on top.
 #[derive(Debug, Clone)]
 pub enum Screen {
@@ -52,6 +108,10 @@ pub enum Screen {
     Library,
     /// One exemplar's slices.
     Exemplar(ExemplarView),
+    /// The recipe editor.
+    Editor(Editor),
+    /// The fill preview.
+    Fill(FillView),
 }
 
 /// The whole UI state.

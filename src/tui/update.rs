@@ -1,5 +1,6 @@
 //! `update`: the only place the model changes. Pure: returns the work to start.
 
+use super::editing;
 use super::message::{Effect, Message};
 use super::model::{BuildState, ExemplarView, Model, Screen};
 use crate::volume::Axis;
@@ -10,12 +11,15 @@ pub fn update(model: &mut Model, message: Message) -> Vec<Effect> {
         Message::Quit => model.quit = true,
         Message::Help => model.help = !model.help,
         Message::Back => back(model),
-        Message::Up => model.selected = model.selected.saturating_sub(1),
-        Message::Down => model.selected = (model.selected + 1).min(model.items.len().saturating_sub(1)),
+        Message::Up => select(model, -1),
+        Message::Down => select(model, 1),
         Message::Open => return open(model),
         Message::Build => return build(model, false),
         Message::BuildAll => return build(model, true),
-        Message::SelectAxis(axis) => with_view(model, |v| v.axis = axis),
+        Message::SelectAxis(axis) => {
+            with_view(model, |v| v.axis = axis);
+            editing::plane(model, Some(axis), 0.0);
+        }
         Message::MoveSlice(step) => with_view(model, |v| move_slice(v, step)),
         Message::NextChannel => with_view(model, |v| {
             let n = v.volume.as_ref().map_or(1, |vol| vol.channel_count() + 1);
@@ -23,6 +27,24 @@ pub fn update(model: &mut Model, message: Message) -> Vec<Effect> {
         }),
         Message::Loaded(name, result) => loaded(model, &name, result),
         Message::Built(name, result) => built(model, &name, result),
+        Message::Edit => return editing::open_editor(model),
+        Message::EditorReady(result) => return editing::editor_ready(model, result),
+        Message::Commit => return editing::commit(model),
+        Message::Input(c) => editing::input(model, Some(c)),
+        Message::InputBack => editing::input(model, None),
+        Message::Cancel => {
+            if !editing::cancel(model) {
+                back(model);
+            }
+        }
+        Message::Undo => return editing::undo(model, false),
+        Message::Redo => return editing::undo(model, true),
+        Message::Save => return editing::save(model),
+        Message::Saved(result) => editing::saved(model, result),
+        Message::Previewed(generation, result) => editing::previewed(model, generation, result),
+        Message::FillPreview => return editing::open_fill(model),
+        Message::Filled(name, result) => editing::filled(model, &name, result),
+        Message::MovePlane(step) => editing::plane(model, None, step),
     }
     Vec::new()
 }
@@ -32,9 +54,26 @@ fn back(model: &mut Model) {
         model.help = false;
     } else if matches!(model.screen, Screen::Library) {
         model.quit = true;
+    } else if unsaved(model) && !model.status.starts_with("unsaved") {
+        model.status = "unsaved changes: s saves them, esc again leaves without saving".into();
     } else {
         model.screen = Screen::Library;
     }
+}
+
+fn select(model: &mut Model, step: i64) {
+    let (row, count) = match &mut model.screen {
+        Screen::Editor(e) => {
+            let count = e.text.as_deref().and_then(|t| super::edit::fields(t, &e.name).ok()).map_or(0, |f| f.len());
+            (&mut e.selected, count)
+        }
+        _ => (&mut model.selected, model.items.len()),
+    };
+    *row = (*row as i64 + step).clamp(0, count.saturating_sub(1) as i64) as usize;
+}
+
+fn unsaved(model: &Model) -> bool {
+    matches!(&model.screen, Screen::Editor(e) if e.text.as_ref().is_some_and(|t| *t != e.saved))
 }
 
 fn with_view(model: &mut Model, f: impl FnOnce(&mut ExemplarView)) {

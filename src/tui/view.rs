@@ -30,6 +30,8 @@ pub fn draw(frame: &mut Frame, model: &Model) {
     match &model.screen {
         Screen::Library => library(frame, model, main),
         Screen::Exemplar(view) => exemplar(frame, view, main),
+        Screen::Editor(editor) => super::view_edit::editor(frame, editor, main),
+        Screen::Fill(view) => super::view_edit::fill(frame, view, main),
     }
     let [left, right] = Layout::horizontal([Constraint::Min(10), Constraint::Length(16)]).areas(status);
     frame.render_widget(Paragraph::new(model.status.as_str()).style(Style::new().fg(Color::Gray)), left);
@@ -73,7 +75,7 @@ fn library(frame: &mut Frame, model: &Model, area: Rect) {
 }
 
 fn exemplar(frame: &mut Frame, view: &ExemplarView, area: Rect) {
-    let title = format!(" {}  (x/y/z axis, arrows move, c channel, esc back) ", view.name);
+    let title = format!(" {}  (x/y/z axis, arrows move, c channel, f fill preview, esc back) ", view.name);
     let block = Block::default().borders(Borders::ALL).title(title);
     let inner = block.inner(area);
     frame.render_widget(block, area);
@@ -235,5 +237,63 @@ mod tests {
             Model { errors: vec!["lib.toml: exemplar[0] (a): size is missing".into()], items: Vec::new(), ..model() };
         let (text, _) = screen(&m2, 80, 24);
         assert!(text.contains("size is missing") && text.contains("the manifest has errors"), "{text}");
+    }
+
+    #[test]
+    fn the_editor_shows_fields_the_value_being_typed_and_errors() {
+        let text = "[[exemplar]]\nname = \"m\"\nrecipe = \"procedural:marble\"\nsize = 16\n";
+        let mut m = model();
+        m.screen = Screen::Editor(crate::tui::model::Editor {
+            name: "m".into(),
+            text: Some(text.replace("16", "20")),
+            saved: text.into(),
+            selected: 2,
+            input: Some("0".into()),
+            error: Some("size 0 is not allowed".into()),
+            ..Default::default()
+        });
+        let (screen, _) = screen(&m, 80, 24);
+        assert!(screen.contains("recipe: m [modified]"), "{screen}");
+        assert!(screen.contains("recipe = \"procedural:marble\"") && screen.contains("size = 0_"), "{screen}");
+        assert!(screen.contains("size 0 is not allowed") && screen.contains("s save"), "{screen}");
+    }
+
+    #[test]
+    fn the_fill_preview_draws_a_cut_of_the_model() {
+        use crate::fill::render::Textures;
+        let marble = crate::procedural::generate(crate::procedural::Recipe::Marble, [16; 3], 1).unwrap();
+        let mask = crate::mask::splotch(16, 0.1, 1).unwrap();
+        let mesh = crate::fill::tets::cube_lattice([4, 4, 4], 0.25);
+        let patch = crate::fill::paste::Patch {
+            source: 0,
+            vertices: (0..mesh.vertices.len() as u32).collect(),
+            coords: mesh.vertices.iter().map(|v| *v * 0.5 + 0.25).collect(),
+        };
+        let tet_patches = vec![vec![0]; mesh.tets.len()];
+        let sources = vec![crate::fill::Source {
+            exemplar: "marble".into(),
+            volume: "marble.exr".into(),
+            mask: crate::fill::MaskRef::Splotch { size: 16, falloff: 0.1, seed: 1 },
+        }];
+        let model_3d = crate::fill::LstModel { mesh, sources, patches: vec![patch], tet_patches };
+        let filled = crate::tui::FillPreview {
+            model: model_3d,
+            textures: Textures::new(&[marble], &[mask]),
+            summary: "s".into(),
+        };
+        let mut m = model();
+        m.screen = Screen::Fill(crate::tui::model::FillView {
+            name: "marble".into(),
+            filled: Some(Arc::new(filled)),
+            axis: Axis::Z,
+            offset: 0.0,
+        });
+        let (text, buffer) = screen(&m, 80, 24);
+        assert!(text.contains("fill preview: marble  cut across z"), "{text}");
+        let painted = (0..80u16)
+            .flat_map(|x| (0..24u16).map(move |y| (x, y)))
+            .filter(|p| matches!(buffer[*p].fg, Color::Rgb(..)))
+            .count();
+        assert!(painted > 300, "{painted} cells of the cut");
     }
 }

@@ -1,0 +1,106 @@
+//! Format-preserving edits of the library manifest (toml_edit): list an entry's fields and
+//! set one value, keeping every comment, blank line and the order of keys. Pure: text in,
+//! text out; the caller validates the result with the manifest parser.
+
+use toml_edit::{DocumentMut, Item, Value};
+
+/// One editable field of an entry: its key and its value as TOML text.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Field {
+    /// The key.
+    pub key: String,
+    /// The value as it reads in the file (without surrounding comments).
+    pub value: String,
+}
+
+fn parse(text: &str) -> Result<DocumentMut, String> {
+    text.parse::<DocumentMut>().map_err(|e| format!("the manifest is not valid TOML: {e}"))
+}
+
+/// The fields of the `[[exemplar]]` named `name` (its `steps` are left out: they are
+/// listed as one read-only line by the editor).
+pub fn fields(text: &str, name: &str) -> Result<Vec<Field>, String> {
+    let doc = parse(text)?;
+    let table = entry(&doc, name)?;
+    Ok(table
+        .iter()
+        .filter(|(k, _)| *k != "steps")
+        .filter_map(|(k, item)| {
+            item.as_value().map(|v| Field { key: k.to_string(), value: v.to_string().trim().to_string() })
+        })
+        .collect())
+}
+
+/// How many steps the entry has.
+pub fn step_count(text: &str, name: &str) -> usize {
+    parse(text)
+        .ok()
+        .and_then(|doc| {
+            entry(&doc, name).ok().and_then(|t| t.get("steps").and_then(Item::as_array_of_tables).map(|a| a.len()))
+        })
+        .unwrap_or(0)
+}
+
+fn entry<'a>(doc: &'a DocumentMut, name: &str) -> Result<&'a toml_edit::Table, String> {
+    let list =
+        doc.get("exemplar").and_then(Item::as_array_of_tables).ok_or("the manifest has no [[exemplar]] entries")?;
+    list.iter()
+        .find(|t| t.get("name").and_then(Item::as_str) == Some(name))
+        .ok_or_else(|| format!("no exemplar named {name:?} in the manifest"))
+}
+
+/// The manifest with `key` of exemplar `name` set to the TOML value `value` (a new key is
+/// appended). Everything else — comments, spacing, order — stays as it was.
+pub fn set(text: &str, name: &str, key: &str, value: &str) -> Result<String, String> {
+    let parsed: Value = value
+        .trim()
+        .parse()
+        .map_err(|_| format!("{key} = {value}: not a TOML value (quote text: \"...\"; numbers and [lists] as is)"))?;
+    let mut doc = parse(text)?;
+    let list = doc
+        .get_mut("exemplar")
+        .and_then(Item::as_array_of_tables_mut)
+        .ok_or("the manifest has no [[exemplar]] entries")?;
+    let table = list
+        .iter_mut()
+        .find(|t| t.get("name").and_then(Item::as_str) == Some(name))
+        .ok_or_else(|| format!("no exemplar named {name:?} in the manifest"))?;
+    match table.get_mut(key).and_then(Item::as_value_mut) {
+        Some(old) => {
+            let decor = old.decor().clone();
+            *old = parsed;
+            *old.decor_mut() = decor;
+        }
+        None => {
+            table.insert(key, toml_edit::value(parsed));
+        }
+    }
+    Ok(doc.to_string())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const TEXT: &str = "# the library\n\n[[exemplar]]\nname = \"a\"   # first\nrecipe = \"procedural:marble\"\nsize = 64\n\n[[exemplar]]\nname = \"b\"\nrecipe = \"procedural:strata\"\nsize = 32\n  [[exemplar.steps]]\n  blur = \"1,1,1\"\n  radius = 2\n";
+
+    #[test]
+    fn fields_are_listed_per_entry() {
+        let f = fields(TEXT, "b").unwrap();
+        assert_eq!(f.iter().map(|f| f.key.as_str()).collect::<Vec<_>>(), ["name", "recipe", "size"]);
+        assert_eq!(f[2].value, "32");
+        assert_eq!(step_count(TEXT, "b"), 1);
+        assert!(fields(TEXT, "zz").unwrap_err().contains("zz"));
+    }
+
+    #[test]
+    fn setting_a_value_keeps_comments_and_layout() {
+        let out = set(TEXT, "a", "size", "48").unwrap();
+        assert_eq!(out, TEXT.replace("size = 64", "size = 48"));
+        let out = set(TEXT, "a", "name", "\"c\"").unwrap();
+        assert!(out.contains("name = \"c\"   # first"), "{out}");
+        let out = set(TEXT, "b", "seed", "7").unwrap();
+        assert!(out.contains("size = 32\nseed = 7\n") && out.contains("# the library"), "{out}");
+        assert!(set(TEXT, "a", "size", "sixty").unwrap_err().contains("not a TOML value"));
+    }
+}

@@ -1,0 +1,288 @@
+//! `update` for the recipe editor and the fill preview. Pure: every change to the manifest
+//! text is validated with the manifest parser before it is kept, and saving, previewing and
+//! filling are effects run by workers.
+
+use super::edit;
+use super::message::Effect;
+use super::model::{Editor, FillView, Model, Screen};
+use crate::io::manifest;
+use crate::volume::Axis;
+use std::path::Path;
+
+/// Open the editor on the selected exemplar; the text arrives with `EditorReady`.
+pub fn open_editor(model: &mut Model) -> Vec<Effect> {
+    let Some(item) = model.items.get(model.selected) else { return Vec::new() };
+    model.screen = Screen::Editor(Editor { name: item.name.clone(), ..Editor::default() });
+    model.status = format!("editing {}: enter edits a value, s saves, u undoes, r redoes", item.name);
+    vec![Effect::ReadManifest]
+}
+
+/// The manifest text arrived.
+pub fn editor_ready(model: &mut Model, result: Result<String, String>) -> Vec<Effect> {
+    let Screen::Editor(editor) = &mut model.screen else { return Vec::new() };
+    match result {
+        Ok(text) => {
+            editor.saved = text.clone();
+            editor.text = Some(text);
+            preview(editor)
+        }
+        Err(e) => {
+            model.status = format!("cannot edit: {e}");
+            model.screen = Screen::Library;
+            Vec::new()
+        }
+    }
+}
+
+fn preview(editor: &mut Editor) -> Vec<Effect> {
+    let Some(text) = &editor.text else { return Vec::new() };
+    editor.generation += 1;
+    editor.previewing = true;
+    vec![Effect::Preview { name: editor.name.clone(), text: text.clone(), generation: editor.generation }]
+}
+
+/// Enter: start editing the selected value, or commit the typed one.
+pub fn commit(model: &mut Model) -> Vec<Effect> {
+    let folder = model.manifest.parent().unwrap_or(Path::new(".")).to_path_buf();
+    let Screen::Editor(editor) = &mut model.screen else { return Vec::new() };
+    let Some(text) = editor.text.clone() else { return Vec::new() };
+    let fields = edit::fields(&text, &editor.name).unwrap_or_default();
+    let Some(field) = fields.get(editor.selected) else { return Vec::new() };
+    let Some(input) = editor.input.clone() else {
+        editor.input = Some(field.value.clone());
+        editor.error = None;
+        return Vec::new();
+    };
+    if field.key == "name" {
+        editor.error = Some("the name is the exemplar's identity: rename it in the file".into());
+        return Vec::new();
+    }
+    match edit::set(&text, &editor.name, &field.key, &input).and_then(|t| check(&t, &folder).map(|_| t)) {
+        Ok(new_text) => {
+            editor.undo.push(text);
+            editor.redo.clear();
+            editor.text = Some(new_text);
+            editor.input = None;
+            editor.error = None;
+            model.status = format!("{} = {input}; previewing", field.key);
+            let Screen::Editor(editor) = &mut model.screen else { return Vec::new() };
+            preview(editor)
+        }
+        Err(e) => {
+            editor.error = Some(e);
+            Vec::new()
+        }
+    }
+}
+
+/// The manifest parser's verdict on `text`.
+fn check(text: &str, folder: &Path) -> Result<(), String> {
+    manifest::parse_plan(text, folder).map(|_| ()).map_err(|e| e.to_string())
+}
+
+/// Typing into the value.
+pub fn input(model: &mut Model, c: Option<char>) {
+    if let Screen::Editor(Editor { input: Some(value), .. }) = &mut model.screen {
+        match c {
+            Some(c) => value.push(c),
+            None => {
+                value.pop();
+            }
+        }
+    }
+}
+
+/// Esc while typing: drop the value. Returns false when there was nothing to cancel.
+pub fn cancel(model: &mut Model) -> bool {
+    match &mut model.screen {
+        Screen::Editor(editor) if editor.input.is_some() || editor.error.is_some() => {
+            editor.input = None;
+            editor.error = None;
+            true
+        }
+        _ => false,
+    }
+}
+
+/// Undo (or redo, with `redo`) one edit.
+pub fn undo(model: &mut Model, redo: bool) -> Vec<Effect> {
+    let Screen::Editor(editor) = &mut model.screen else { return Vec::new() };
+    let Some(current) = editor.text.clone() else { return Vec::new() };
+    let (from, to) = if redo { (&mut editor.redo, &mut editor.undo) } else { (&mut editor.undo, &mut editor.redo) };
+    let Some(previous) = from.pop() else {
+        model.status = format!("nothing to {}", if redo { "redo" } else { "undo" });
+        return Vec::new();
+    };
+    to.push(current);
+    editor.text = Some(previous);
+    editor.input = None;
+    model.status = if redo { "redone".into() } else { "undone".into() };
+    let Screen::Editor(editor) = &mut model.screen else { return Vec::new() };
+    preview(editor)
+}
+
+/// Save the edited text.
+pub fn save(model: &mut Model) -> Vec<Effect> {
+    let Screen::Editor(editor) = &model.screen else { return Vec::new() };
+    match &editor.text {
+        Some(text) if *text != editor.saved => vec![Effect::Save(text.clone())],
+        _ => {
+            model.status = "nothing to save".into();
+            Vec::new()
+        }
+    }
+}
+
+/// The save finished.
+pub fn saved(model: &mut Model, result: Result<String, String>) {
+    match (result, &mut model.screen) {
+        (Ok(text), Screen::Editor(editor)) => {
+            editor.saved = text;
+            model.status = format!("saved {}", model.manifest.display());
+        }
+        (Ok(_), _) => model.status = format!("saved {}", model.manifest.display()),
+        (Err(e), _) => model.status = format!("not saved: {e}"),
+    }
+}
+
+/// A preview arrived; older generations are dropped.
+pub fn previewed(model: &mut Model, generation: u64, result: Result<std::sync::Arc<crate::Volume>, String>) {
+    let Screen::Editor(editor) = &mut model.screen else { return };
+    if generation != editor.generation {
+        return;
+    }
+    editor.previewing = false;
+    match result {
+        Ok(volume) => editor.preview = Some(volume),
+        Err(e) => model.status = format!("preview failed: {e}"),
+    }
+}
+
+/// Open the fill preview of the exemplar on screen.
+pub fn open_fill(model: &mut Model) -> Vec<Effect> {
+    let Screen::Exemplar(view) = &model.screen else { return Vec::new() };
+    let name = view.name.clone();
+    model.screen = Screen::Fill(FillView { name: name.clone(), filled: None, axis: Axis::X, offset: 0.0 });
+    model.status = format!("filling a shape with {name}...");
+    vec![Effect::Fill(name)]
+}
+
+/// A fill preview arrived.
+pub fn filled(model: &mut Model, name: &str, result: Result<std::sync::Arc<super::model::FillPreview>, String>) {
+    let Screen::Fill(view) = &mut model.screen else { return };
+    if view.name != name {
+        return;
+    }
+    match result {
+        Ok(preview) => {
+            model.status = format!("{}; x/y/z choose the cut, arrows move it", preview.summary);
+            view.filled = Some(preview);
+        }
+        Err(e) => {
+            model.status = format!("cannot fill with {name}: {e}");
+            model.screen = Screen::Library;
+        }
+    }
+}
+
+/// Move or turn the cut plane.
+pub fn plane(model: &mut Model, axis: Option<Axis>, step: f32) {
+    if let Screen::Fill(view) = &mut model.screen {
+        if let Some(axis) = axis {
+            view.axis = axis;
+        }
+        view.offset = (view.offset + step).clamp(-0.98, 0.98);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::tui::message::Message;
+    use crate::tui::model::Item;
+    use crate::tui::update;
+    use std::path::PathBuf;
+
+    const TEXT: &str =
+        "# my library\n[[exemplar]]\nname = \"m\"\nrecipe = \"procedural:marble\"  # veins\nsize = 16\nseed = 3\n";
+
+    fn editing() -> Model {
+        let item = Item { name: "m".into(), declared: None, size: None, state: crate::tui::BuildState::NotBuilt };
+        let mut m = Model::new(PathBuf::from("lib/library.toml"), PathBuf::from("out"), vec![item], Vec::new());
+        assert_eq!(update(&mut m, Message::Edit), vec![Effect::ReadManifest]);
+        let effects = update(&mut m, Message::EditorReady(Ok(TEXT.into())));
+        assert!(matches!(&effects[..], [Effect::Preview { generation: 1, .. }]));
+        m
+    }
+
+    fn editor(m: &Model) -> &Editor {
+        let Screen::Editor(e) = &m.screen else { panic!("the editor is open") };
+        e
+    }
+
+    fn type_value(m: &mut Model, value: &str) -> Vec<Effect> {
+        update(m, Message::Commit);
+        for _ in 0..10 {
+            update(m, Message::InputBack);
+        }
+        value.chars().for_each(|c| {
+            update(m, Message::Input(c));
+        });
+        update(m, Message::Commit)
+    }
+
+    #[test]
+    fn an_edit_is_validated_kept_with_its_comments_and_previewed() {
+        let mut m = editing();
+        update(&mut m, Message::Down);
+        update(&mut m, Message::Down);
+        let effects = type_value(&mut m, "24");
+        let text = editor(&m).text.clone().unwrap();
+        assert_eq!(text, TEXT.replace("size = 16", "size = 24"));
+        assert!(matches!(&effects[..], [Effect::Preview { generation: 2, .. }]));
+        // size 0 is refused by the manifest rules, in place, and nothing changes
+        assert!(type_value(&mut m, "0").is_empty());
+        let e = editor(&m);
+        assert!(e.error.as_deref().unwrap_or("").contains("size"), "{:?}", e.error);
+        assert_eq!(e.text.as_deref(), Some(text.as_str()));
+        assert!(e.input.is_some(), "the value stays open for a fix");
+        update(&mut m, Message::Cancel);
+        assert!(editor(&m).input.is_none() && matches!(m.screen, Screen::Editor(_)));
+    }
+
+    #[test]
+    fn undo_redo_save_and_stale_previews() {
+        let mut m = editing();
+        update(&mut m, Message::Down);
+        update(&mut m, Message::Down);
+        type_value(&mut m, "32");
+        update(&mut m, Message::Undo);
+        assert_eq!(editor(&m).text.as_deref(), Some(TEXT));
+        assert!(update(&mut m, Message::Save).is_empty(), "nothing to save after undoing");
+        update(&mut m, Message::Redo);
+        let edited = TEXT.replace("size = 16", "size = 32");
+        assert_eq!(update(&mut m, Message::Save), vec![Effect::Save(edited.clone())]);
+        update(&mut m, Message::Saved(Ok(edited)));
+        assert!(m.status.starts_with("saved"));
+        let stale = std::sync::Arc::new(crate::Volume::new([2; 3], crate::Channel::rgb()).unwrap());
+        update(&mut m, Message::Previewed(1, Ok(stale)));
+        assert!(editor(&m).preview.is_none(), "an old generation is dropped");
+        // the name is not edited here
+        update(&mut m, Message::Up);
+        update(&mut m, Message::Up);
+        type_value(&mut m, "\"x\"");
+        assert!(editor(&m).error.as_deref().unwrap_or("").contains("name"));
+    }
+
+    #[test]
+    fn leaving_with_unsaved_changes_asks_first() {
+        let mut m = editing();
+        update(&mut m, Message::Down);
+        update(&mut m, Message::Down);
+        type_value(&mut m, "20");
+        update(&mut m, Message::Back);
+        assert!(matches!(m.screen, Screen::Editor(_)) && m.status.starts_with("unsaved"));
+        update(&mut m, Message::Back);
+        assert!(matches!(m.screen, Screen::Library));
+    }
+}

@@ -1,0 +1,125 @@
+//! Drawing the recipe editor and the fill preview.
+
+use super::edit;
+use super::model::{Editor, FillView};
+use super::view::HalfBlocks;
+use crate::fill::render::{self, View};
+use crate::render::to_u8;
+use crate::volume::Axis;
+use glam::Vec3;
+use ratatui::Frame;
+use ratatui::buffer::Buffer;
+use ratatui::layout::{Constraint, Layout, Rect};
+use ratatui::style::{Color, Modifier, Style};
+use ratatui::text::Line;
+use ratatui::widgets::{Block, Borders, Paragraph, Widget, Wrap};
+
+/// The editor: the entry's fields on the left, the live preview on the right.
+pub fn editor(frame: &mut Frame, editor: &Editor, area: Rect) {
+    let modified = editor.text.as_ref().is_some_and(|t| *t != editor.saved);
+    let title = format!(" recipe: {}{} ", editor.name, if modified { " [modified]" } else { "" });
+    let hint = " enter edit  s save  u undo  r redo  esc back ";
+    let block = Block::default().borders(Borders::ALL).title(title).title_bottom(hint);
+    let inner = block.inner(area);
+    frame.render_widget(block, area);
+    let Some(text) = &editor.text else {
+        frame.render_widget(Paragraph::new("reading the manifest..."), inner);
+        return;
+    };
+    let [left, right] = Layout::horizontal([Constraint::Percentage(45), Constraint::Percentage(55)]).areas(inner);
+    frame.render_widget(Paragraph::new(field_lines(editor, text)).wrap(Wrap { trim: false }), left);
+    preview(frame, editor, right);
+}
+
+fn field_lines<'a>(editor: &'a Editor, text: &str) -> Vec<Line<'a>> {
+    let fields = edit::fields(text, &editor.name).unwrap_or_default();
+    let mut lines: Vec<Line> = fields
+        .iter()
+        .enumerate()
+        .map(|(i, f)| {
+            let selected = i == editor.selected;
+            match (&editor.input, selected) {
+                (Some(input), true) => Line::styled(
+                    format!("{} = {input}_", f.key),
+                    Style::new().fg(Color::Yellow).add_modifier(Modifier::BOLD),
+                ),
+                (_, true) => {
+                    Line::styled(format!("{} = {}", f.key, f.value), Style::new().add_modifier(Modifier::REVERSED))
+                }
+                _ => Line::from(format!("{} = {}", f.key, f.value)),
+            }
+        })
+        .collect();
+    let steps = edit::step_count(text, &editor.name);
+    if steps > 0 {
+        lines.push(Line::styled(format!("steps: {steps} (edit them in the file)"), Style::new().fg(Color::DarkGray)));
+    }
+    if let Some(error) = &editor.error {
+        lines.push(Line::from(""));
+        lines.push(Line::styled(error.clone(), Style::new().fg(Color::Red)));
+    }
+    lines
+}
+
+fn preview(frame: &mut Frame, editor: &Editor, area: Rect) {
+    let label = if editor.previewing { " preview (updating...) " } else { " preview (low resolution) " };
+    let block = Block::default().borders(Borders::LEFT).title(label);
+    let inner = block.inner(area);
+    frame.render_widget(block, area);
+    let Some(volume) = &editor.preview else { return };
+    let panels = Layout::vertical([Constraint::Ratio(1, 2); 2]).split(inner);
+    let top = Layout::horizontal([Constraint::Ratio(1, 2); 2]).split(panels[0]);
+    let d = volume.dims();
+    for (panel, axis) in [top[0], top[1], panels[1]].iter().zip([Axis::Z, Axis::Y, Axis::X]) {
+        if let Ok(image) = volume.slice(axis, d[axis.index()] / 2) {
+            frame.render_widget(HalfBlocks { image: &image, channel: 0 }, *panel);
+        }
+    }
+}
+
+/// The fill preview: a cut through the filled shape.
+pub fn fill(frame: &mut Frame, view: &FillView, area: Rect) {
+    let title = format!(" fill preview: {}  cut across {} ", view.name, view.axis);
+    let block =
+        Block::default().borders(Borders::ALL).title(title).title_bottom(" x/y/z cut axis  arrows move  esc back ");
+    let inner = block.inner(area);
+    frame.render_widget(block, area);
+    match &view.filled {
+        None => frame.render_widget(Paragraph::new("filling (tet mesh, field, patches)..."), inner),
+        Some(filled) => frame.render_widget(CutWidget { view, filled }, inner),
+    }
+}
+
+struct CutWidget<'a> {
+    view: &'a FillView,
+    filled: &'a super::model::FillPreview,
+}
+
+impl Widget for CutWidget<'_> {
+    fn render(self, area: Rect, buf: &mut Buffer) {
+        let size = (area.width as usize).min(2 * area.height as usize);
+        let models = [(&self.filled.model, &self.filled.textures)];
+        let (lo, hi) = render::bounds(&models);
+        let mut normal = Vec3::ZERO;
+        normal[self.view.axis.index()] = 1.0;
+        let point = (lo + hi) / 2.0 + normal * (hi - lo) / 2.0 * self.view.offset;
+        let Ok(plane) = View::framing((lo, hi), point, normal, size.max(8)) else { return };
+        let cut = render::cut_many(&models, &plane);
+        let px = |x: usize, y: usize| {
+            let p = cut.pixels[y * cut.width + x];
+            (p[3] > 0.0).then(|| Color::Rgb(to_u8(p[0]), to_u8(p[1]), to_u8(p[2])))
+        };
+        let x0 = area.x + (area.width.saturating_sub(cut.width as u16)) / 2;
+        for cy in 0..(cut.height / 2).min(area.height as usize) {
+            for cx in 0..cut.width.min(area.width as usize) {
+                let (top, bottom) = (px(cx, 2 * cy), px(cx, 2 * cy + 1));
+                if top.is_none() && bottom.is_none() {
+                    continue;
+                }
+                if let Some(cell) = buf.cell_mut((x0 + cx as u16, area.y + cy as u16)) {
+                    cell.set_symbol("▀").set_fg(top.unwrap_or(Color::Reset)).set_bg(bottom.unwrap_or(Color::Reset));
+                }
+            }
+        }
+    }
+}
