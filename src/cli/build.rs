@@ -12,6 +12,7 @@ use crate::render;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
+use std::sync::Mutex;
 use std::time::Instant;
 
 /// The arguments of `solidtex build`.
@@ -37,6 +38,10 @@ pub struct BuildArgs {
     /// Merge the output folders of shard builds into the output folder, with one report.
     #[arg(long, num_args = 1..)]
     pub merge: Vec<PathBuf>,
+    /// Print machine-readable progress lines (`progress<TAB>NAME<TAB>FRACTION<TAB>STAGE`)
+    /// on stderr, for the terminal UI's gauges.
+    #[arg(long, hide = true)]
+    pub progress_lines: bool,
 }
 
 /// Parse `K/N` or `auto/N` (K from the scheduler's environment).
@@ -110,8 +115,7 @@ pub fn run(args: &BuildArgs) -> Result<()> {
     let budget = io::budget_from_env()?;
     let mut outcomes: Vec<Outcome> = Vec::new();
     for batch in batches(&entries, budget) {
-        let done: Vec<Outcome> =
-            batch.par_iter().map(|entry| build_one(entry, folder, &args.output, args.force, &lines)).collect();
+        let done: Vec<Outcome> = batch.par_iter().map(|entry| build_one(entry, folder, args, &lines)).collect();
         outcomes.extend(done);
     }
     lines.finish();
@@ -213,6 +217,24 @@ fn batches<'a>(entries: &[&'a Entry], budget: u64) -> Vec<Vec<&'a Entry>> {
 }
 
 /// Progress: a bar above the result lines on a terminal, plain lines otherwise.
+/// Progress of one exemplar as `progress` lines on stderr (at most one per percent).
+struct LineProgress<'a> {
+    name: &'a str,
+    enabled: bool,
+    last: Mutex<i32>,
+}
+
+impl crate::progress::Progress for LineProgress<'_> {
+    fn update(&self, stage: &str, fraction: f32) {
+        let percent = (fraction.clamp(0.0, 1.0) * 100.0) as i32;
+        let mut last = self.last.lock().unwrap_or_else(|e| e.into_inner());
+        if self.enabled && percent != *last {
+            *last = percent;
+            eprintln!("progress\t{}\t{fraction:.3}\t{stage}", self.name);
+        }
+    }
+}
+
 struct Lines {
     bar: Option<indicatif::ProgressBar>,
 }
@@ -246,7 +268,8 @@ impl Lines {
     }
 }
 
-fn build_one(entry: &Entry, folder: &Path, output: &Path, force: bool, lines: &Lines) -> Outcome {
+fn build_one(entry: &Entry, folder: &Path, args: &BuildArgs, lines: &Lines) -> Outcome {
+    let (output, force) = (args.output.as_path(), args.force);
     let started = Instant::now();
     let result = (|| {
         let key = cache_key(entry, folder)?;
@@ -256,7 +279,8 @@ fn build_one(entry: &Entry, folder: &Path, output: &Path, force: bool, lines: &L
                 return Ok(Outcome::Cached(record));
             }
         }
-        let volume = make(entry)?;
+        let progress = LineProgress { name: &entry.name, enabled: args.progress_lines, last: Mutex::new(-1) };
+        let volume = super::recipe::make_with(entry, &progress)?;
         io::write_volume(&output.join(format!("{}.exr", entry.name)), &volume)?;
         io::write_rgb8(&output.join(format!("{}.sheet.png", entry.name)), &render::sheet(&volume, &entry.name))?;
         extras(entry, &volume, output)?;

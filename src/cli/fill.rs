@@ -224,6 +224,7 @@ fn ensure_built(spec: &FillSpec, names: &[String]) -> Result<()> {
         only: missing,
         shard: None,
         merge: Vec::new(),
+        progress_lines: false,
     })
 }
 

@@ -12,6 +12,12 @@ use std::path::Path;
 
 /// Make one entry's volume: its source, then its steps.
 pub fn make(entry: &Entry) -> Result<Volume> {
+    make_with(entry, &crate::progress::NoProgress)
+}
+
+/// [`make`], reporting a synthesis' progress (per pyramid level) to `progress`, which may
+/// also cancel it.
+pub fn make_with(entry: &Entry, progress: &dyn crate::progress::Progress) -> Result<Volume> {
     let mut volume = match &entry.source {
         Source::Procedural(recipe) => {
             let dims = entry.dims.ok_or_else(|| Error::invalid("size is missing"))?;
@@ -19,7 +25,7 @@ pub fn make(entry: &Entry) -> Result<Volume> {
         }
         Source::Sweep(spec) => swept(spec, entry.dims, entry.seed)?,
         Source::Synth(spec) => {
-            synthesized(spec, entry.dims.ok_or_else(|| Error::invalid("size is missing"))?, entry.seed)?
+            synthesized(spec, entry.dims.ok_or_else(|| Error::invalid("size is missing"))?, entry.seed, progress)?
         }
         Source::Load(path) => io::read_volume(path, io::budget_from_env()?)?,
     };
@@ -58,18 +64,17 @@ pub fn preview(manifest: &Path, name: &str, text: &str) -> Result<Volume> {
     make(&entry)
 }
 
-fn synthesized(spec: &SynthSpec, size: [usize; 3], seed: u64) -> Result<Volume> {
+fn synthesized(spec: &SynthSpec, size: [usize; 3], seed: u64, none: &dyn crate::progress::Progress) -> Result<Volume> {
     let read = |p: &Path| io::read_image_fit(p, spec.max_exemplar);
     let ex = read(&spec.image)?;
     let params = synth::SynthParams { size, levels: spec.levels, ..synth::SynthParams::default() };
-    let none = crate::progress::NoProgress;
     let volume = if spec.layered {
         let depth = spec.depth.as_deref().map(read).transpose()?;
-        synth::synthesize_layered(&ex, depth.as_ref(), &params, &synth::LayeredParams::default(), seed, &none)
+        synth::synthesize_layered(&ex, depth.as_ref(), &params, &synth::LayeredParams::default(), seed, none)
     } else {
         let ey = spec.ey.as_deref().map(read).transpose()?;
         let ez = spec.ez.as_deref().map(read).transpose()?;
-        synth::synthesize(synth::Exemplars { x: &ex, y: ey.as_ref(), z: ez.as_ref() }, &params, seed, &none)
+        synth::synthesize(synth::Exemplars { x: &ex, y: ey.as_ref(), z: ez.as_ref() }, &params, seed, none)
     };
     volume.map_err(|e| e.in_file(&spec.image))
 }

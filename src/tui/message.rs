@@ -60,6 +60,8 @@ pub enum Message {
     Filled(String, Result<Arc<super::model::FillPreview>, String>),
     /// Move the cut plane by this share of the model.
     MovePlane(f32),
+    /// A running build reported progress: exemplar, stage, fraction.
+    BuildProgress(String, String, f32),
 }
 
 /// Work `update` asks the runtime to start in a worker thread.
@@ -84,4 +86,6 @@ pub enum Effect {
     Save(String),
     /// Fill a drawn shape with this exemplar.
     Fill(String),
+    /// Stop every running build.
+    CancelBuilds,
 }

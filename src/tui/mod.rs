@@ -27,6 +27,7 @@ use crate::io;
 use crossterm::event::{self, Event, KeyEventKind};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
+use std::sync::Mutex;
 use std::sync::mpsc::{Receiver, Sender, channel};
 use std::time::Duration;
 
@@ -116,6 +117,7 @@ fn start(effects: Vec<Effect>, model: &Model, send: &Sender<Message>) {
                     crate::cli::preview_recipe(&manifest, &name, &text).map(Arc::new).map_err(|e| e.to_string());
                 let _ = send.send(Message::Previewed(generation, result));
             }
+            Effect::CancelBuilds => cancel_builds(),
             Effect::Fill(name) => {
                 let result =
                     crate::cli::preview_fill(&manifest, &output, &name).map(Arc::new).map_err(|e| e.to_string());
@@ -125,15 +127,23 @@ fn start(effects: Vec<Effect>, model: &Model, send: &Sender<Message>) {
     }
 }
 
-/// Build by running this program's own `build` (its output stays out of the screen).
+/// The builds running now, so `CancelBuilds` can stop them.
+static RUNNING: Mutex<Vec<std::process::Child>> = Mutex::new(Vec::new());
+
+/// Build by running this program's own `build` (its output stays out of the screen); its
+/// progress lines become `BuildProgress` messages.
 fn build(manifest: &Path, output: &Path, names: Vec<String>, send: &Sender<Message>) {
     let exe = std::env::current_exe().unwrap_or_else(|_| PathBuf::from("solidtex"));
     let mut cmd = std::process::Command::new(exe);
-    cmd.arg("build").arg(manifest).arg("-o").arg(output);
+    cmd.arg("build").arg(manifest).arg("-o").arg(output).arg("--progress-lines");
     for n in &names {
         cmd.arg("--only").arg(n);
     }
-    let log = cmd.output().map(|o| String::from_utf8_lossy(&o.stderr).into_owned()).unwrap_or_else(|e| e.to_string());
+    cmd.stderr(std::process::Stdio::piped()).stdout(std::process::Stdio::null());
+    let (log, cancelled) = match cmd.spawn() {
+        Ok(child) => follow(child, send),
+        Err(e) => (e.to_string(), false),
+    };
     let (items, _) = load_items(manifest, output);
     for name in names {
         let row = items.iter().find(|i| i.name == name);
@@ -141,9 +151,45 @@ fn build(manifest: &Path, output: &Path, names: Vec<String>, send: &Sender<Messa
             Some(row) if matches!(row.state, BuildState::Built(_)) && !log.contains(&format!("FAILED {name}:")) => {
                 Ok(row.clone())
             }
+            _ if cancelled => Err("cancelled".to_string()),
             _ => Err(failure(&log, &name)),
         };
         let _ = send.send(Message::Built(name, result));
+    }
+}
+
+/// Reads a build's stderr to the end, forwarding progress lines; returns the other lines
+/// and whether the build was killed.
+fn follow(mut child: std::process::Child, send: &Sender<Message>) -> (String, bool) {
+    use std::io::BufRead;
+    let stderr = child.stderr.take();
+    let id = child.id();
+    RUNNING.lock().unwrap_or_else(|e| e.into_inner()).push(child);
+    let mut log = String::new();
+    for line in stderr.into_iter().flat_map(|s| std::io::BufReader::new(s).lines().map_while(|l| l.ok())) {
+        let parts: Vec<&str> = line.splitn(4, '\t').collect();
+        match parts[..] {
+            ["progress", name, fraction, stage] => {
+                let fraction = fraction.parse().unwrap_or(0.0);
+                let _ = send.send(Message::BuildProgress(name.to_string(), stage.to_string(), fraction));
+            }
+            _ => {
+                log.push_str(&line);
+                log.push('\n');
+            }
+        }
+    }
+    let mut running = RUNNING.lock().unwrap_or_else(|e| e.into_inner());
+    let position = running.iter().position(|c| c.id() == id);
+    let status = position.map(|p| running.remove(p)).and_then(|mut c| c.wait().ok());
+    let killed = status.is_some_and(|s| s.code().is_none());
+    (log, killed)
+}
+
+/// Stops every running build.
+fn cancel_builds() {
+    for child in RUNNING.lock().unwrap_or_else(|e| e.into_inner()).iter_mut() {
+        let _ = child.kill();
     }
 }
 

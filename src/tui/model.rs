@@ -135,6 +135,8 @@ pub struct Model {
     pub status: String,
     /// Leave the program.
     pub quit: bool,
+    /// Progress of running builds: exemplar -> (stage, fraction).
+    pub progress: std::collections::BTreeMap<String, (String, f32)>,
 }
 
 impl Model {
@@ -151,6 +153,7 @@ impl Model {
             help: false,
             status,
             quit: false,
+            progress: Default::default(),
         }
     }
 }

@@ -10,7 +10,7 @@ pub fn update(model: &mut Model, message: Message) -> Vec<Effect> {
     match message {
         Message::Quit => model.quit = true,
         Message::Help => model.help = !model.help,
-        Message::Back => back(model),
+        Message::Back => return back(model),
         Message::Up => select(model, -1),
         Message::Down => select(model, 1),
         Message::Open => return open(model),
@@ -34,7 +34,7 @@ pub fn update(model: &mut Model, message: Message) -> Vec<Effect> {
         Message::InputBack => editing::input(model, None),
         Message::Cancel => {
             if !editing::cancel(model) {
-                back(model);
+                return back(model);
             }
         }
         Message::Undo => return editing::undo(model, false),
@@ -45,13 +45,21 @@ pub fn update(model: &mut Model, message: Message) -> Vec<Effect> {
         Message::FillPreview => return editing::open_fill(model),
         Message::Filled(name, result) => editing::filled(model, &name, result),
         Message::MovePlane(step) => editing::plane(model, None, step),
+        Message::BuildProgress(name, stage, fraction) => {
+            if model.items.iter().any(|i| i.name == name && i.state == BuildState::Building) {
+                model.progress.insert(name, (stage, fraction));
+            }
+        }
     }
     Vec::new()
 }
 
-fn back(model: &mut Model) {
+fn back(model: &mut Model) -> Vec<Effect> {
     if model.help {
         model.help = false;
+    } else if matches!(model.screen, Screen::Library) && model.items.iter().any(|i| i.state == BuildState::Building) {
+        model.status = "cancelling the running builds (esc again when they stop quits)".into();
+        return vec![Effect::CancelBuilds];
     } else if matches!(model.screen, Screen::Library) {
         model.quit = true;
     } else if unsaved(model) && !model.status.starts_with("unsaved") {
@@ -59,6 +67,7 @@ fn back(model: &mut Model) {
     } else {
         model.screen = Screen::Library;
     }
+    Vec::new()
 }
 
 fn select(model: &mut Model, step: i64) {
@@ -116,7 +125,7 @@ fn build(model: &mut Model, all: bool) -> Vec<Effect> {
     for item in model.items.iter_mut().filter(|i| names.contains(&i.name)) {
         item.state = BuildState::Building;
     }
-    model.status = format!("building {}", names.join(", "));
+    model.status = format!("building {} (esc cancels)", names.join(", "));
     vec![Effect::Build(names)]
 }
 
@@ -140,6 +149,7 @@ fn loaded(model: &mut Model, name: &str, result: Result<std::sync::Arc<crate::vo
 }
 
 fn built(model: &mut Model, name: &str, result: Result<crate::tui::model::Item, String>) {
+    model.progress.remove(name);
     if let Some(item) = model.items.iter_mut().find(|i| i.name == name) {
         match result {
             Ok(row) => {
@@ -206,6 +216,23 @@ mod tests {
         assert_eq!(view.index, [0, 3, 3]);
         update(&mut m, Message::Back);
         assert!(matches!(m.screen, Screen::Library));
+        update(&mut m, Message::Back);
+        assert!(m.quit);
+    }
+
+    #[test]
+    fn build_progress_shows_and_esc_cancels_running_builds() {
+        let mut m = model();
+        update(&mut m, Message::Down);
+        update(&mut m, Message::Build);
+        update(&mut m, Message::BuildProgress("b".into(), "level 2/3, iteration 1: searched".into(), 0.4));
+        update(&mut m, Message::BuildProgress("a".into(), "level 1/3".into(), 0.1));
+        assert_eq!(m.progress.len(), 1, "only running builds report");
+        assert_eq!(update(&mut m, Message::Back), vec![Effect::CancelBuilds]);
+        assert!(!m.quit && m.status.contains("cancelling"));
+        update(&mut m, Message::Built("b".into(), Err("cancelled".into())));
+        assert!(m.progress.is_empty());
+        assert_eq!(m.items[1].state, BuildState::Failed("cancelled".into()));
         update(&mut m, Message::Back);
         assert!(m.quit);
     }

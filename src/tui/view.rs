@@ -54,7 +54,7 @@ fn library(frame: &mut Frame, model: &Model, area: Rect) {
         let declared = item.declared.clone().unwrap_or_else(|| "-".into());
         let (state, measured) = match &item.state {
             BuildState::NotBuilt => ("not built".to_string(), "-".to_string()),
-            BuildState::Building => ("building...".to_string(), "-".to_string()),
+            BuildState::Building => (gauge(model.progress.get(&item.name)), "-".to_string()),
             BuildState::Built(t) => ("built".to_string(), t.clone()),
             BuildState::Failed(e) => (format!("failed: {e}"), "-".to_string()),
         };
@@ -72,6 +72,14 @@ fn library(frame: &mut Frame, model: &Model, area: Rect) {
     let header = Row::new(vec!["exemplar", "size", "declared", "measured", "state"])
         .style(Style::new().add_modifier(Modifier::BOLD));
     frame.render_widget(Table::new(rows, widths).header(header).block(block), area);
+}
+
+/// A build's state as a one-line gauge: `level 2/3 ####---- 48%`.
+fn gauge(progress: Option<&(String, f32)>) -> String {
+    let Some((stage, fraction)) = progress else { return "building...".into() };
+    let filled = (fraction.clamp(0.0, 1.0) * 8.0).round() as usize;
+    let level = stage.split(',').next().unwrap_or(stage);
+    format!("{level} {}{} {:.0}%", "#".repeat(filled), "-".repeat(8 - filled), fraction * 100.0)
 }
 
 fn exemplar(frame: &mut Frame, view: &ExemplarView, area: Rect) {
@@ -202,6 +210,11 @@ mod tests {
         assert!(text.contains("kiwi") && text.contains("64x64x64") && text.contains("1-b (differs)"), "{text}");
         assert!(text.contains("marble") && text.contains("not built"), "{text}");
         assert!(text.contains("? help"), "{text}");
+        let mut m = model();
+        m.items[1].state = BuildState::Building;
+        m.progress.insert("marble".into(), ("level 2/3, iteration 1: searched".into(), 0.48));
+        let (text, _) = screen(&m, 80, 24);
+        assert!(text.contains("level 2/3 ####---- 48%"), "{text}");
     }
 
     #[test]
