@@ -59,6 +59,18 @@ grep -q "^size = 32" "$out/lib/library.toml" || { echo "tui e2e: the edit was no
 grep -q "^# The default exemplar library" "$out/lib/library.toml" || { echo "tui e2e: comments were lost"; exit 1; }
 tmux send-keys -t "$session" Escape
 wait_for "solidtex library" 5
+# stamp mode: a seed moved, stamped and saved as a manifest step
+tmux send-keys -t "$session" Enter
+wait_for "XY z=" 10
+tmux send-keys -t "$session" m
+wait_for "stamp mode (kiwi_seed.obj)" 10
+tmux send-keys -t "$session" Right Right r + Enter
+wait_for "stamped" 5
+tmux send-keys -t "$session" s
+wait_for "saved the steps" 5
+grep -q '^stamp = "kiwi_seed.obj"' "$out/lib/library.toml" || { echo "tui e2e: the stamp step was not saved"; exit 1; }
+tmux send-keys -t "$session" Escape
+wait_for "solidtex library" 5
 tmux send-keys -t "$session" q
 sleep 0.5
 if tmux has-session -t "$session" 2>/dev/null; then echo "tui e2e: q did not quit"; exit 1; fi

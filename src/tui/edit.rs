@@ -78,6 +78,52 @@ pub fn set(text: &str, name: &str, key: &str, value: &str) -> Result<String, Str
     Ok(doc.to_string())
 }
 
+/// The manifest with `steps` appended to exemplar `name`'s `[[exemplar.steps]]`, each a
+/// `stamp` or `scatter` of the seed mesh `file` in the dark seed colour.
+pub fn append_steps(text: &str, name: &str, steps: &[super::model::StampStep], file: &str) -> Result<String, String> {
+    let mut doc = parse(text)?;
+    let list = doc
+        .get_mut("exemplar")
+        .and_then(Item::as_array_of_tables_mut)
+        .ok_or("the manifest has no [[exemplar]] entries")?;
+    let table = list
+        .iter_mut()
+        .find(|t| t.get("name").and_then(Item::as_str) == Some(name))
+        .ok_or_else(|| format!("no exemplar named {name:?} in the manifest"))?;
+    let existing = table.entry("steps").or_insert(Item::ArrayOfTables(toml_edit::ArrayOfTables::new()));
+    let array = existing.as_array_of_tables_mut().ok_or("steps is not a list of [[exemplar.steps]] tables")?;
+    for step in steps {
+        array.push(step_table(step, file));
+    }
+    Ok(doc.to_string())
+}
+
+fn step_table(step: &super::model::StampStep, file: &str) -> toml_edit::Table {
+    use super::model::StampStep;
+    let mut t = toml_edit::Table::new();
+    let colour = super::stamping::SEED_COLOUR.map(|c| format!("{:02x}", (c * 255.0).round() as u8)).concat();
+    match step {
+        StampStep::Stamp(p) => {
+            let (axis, angle) = p.rotation.to_axis_angle();
+            t.insert("stamp", toml_edit::value(file));
+            t.insert("at", toml_edit::value(format!("{:.1},{:.1},{:.1}", p.at.x, p.at.y, p.at.z)));
+            t.insert(
+                "rotate",
+                toml_edit::value(format!("{:.4},{:.4},{:.4},{:.2}", axis.x, axis.y, axis.z, angle.to_degrees())),
+            );
+            t.insert("scale", toml_edit::value(format!("{:.4}", p.scale.x)));
+        }
+        StampStep::Scatter { count, scale, seed } => {
+            t.insert("scatter", toml_edit::value(file));
+            t.insert("count", toml_edit::value(*count as i64));
+            t.insert("scale", toml_edit::value(format!("{:.4}..{:.4}", scale.0, scale.1)));
+            t.insert("seed", toml_edit::value(*seed as i64));
+        }
+    }
+    t.insert("color", toml_edit::value(format!("#{colour}")));
+    t
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -102,5 +148,30 @@ mod tests {
         let out = set(TEXT, "b", "seed", "7").unwrap();
         assert!(out.contains("size = 32\nseed = 7\n") && out.contains("# the library"), "{out}");
         assert!(set(TEXT, "a", "size", "sixty").unwrap_err().contains("not a TOML value"));
+    }
+
+    #[test]
+    fn stamps_become_steps_the_manifest_accepts() {
+        use crate::stamp::Placement;
+        use crate::tui::model::StampStep;
+        let placement = Placement {
+            at: glam::Vec3::new(10.0, 12.0, 14.0),
+            rotation: glam::Quat::from_rotation_z(0.5),
+            scale: glam::Vec3::splat(3.0),
+        };
+        let steps = [StampStep::Stamp(placement), StampStep::Scatter { count: 10, scale: (2.0, 3.0), seed: 4 }];
+        let out = append_steps(TEXT, "b", &steps, "seed.obj").unwrap();
+        assert!(out.starts_with("# the library") && out.contains("  blur = \"1,1,1\""), "{out}");
+        let plan = crate::io::manifest::parse_plan(&out, std::path::Path::new("lib")).unwrap();
+        let b = &plan.entries[1];
+        assert_eq!(b.steps.len(), 3);
+        let crate::io::manifest::Step::Stamp { placement: p, .. } = &b.steps[1] else { panic!("a stamp step") };
+        assert!((p.at - placement.at).length() < 0.01 && (p.rotation.dot(placement.rotation).abs() - 1.0).abs() < 1e-4);
+        assert!(matches!(b.steps[2], crate::io::manifest::Step::Scatter { count: 10, seed: 4, .. }));
+        let out = append_steps(TEXT, "a", &steps[..1], "seed.obj").unwrap();
+        assert_eq!(
+            crate::io::manifest::parse_plan(&out, std::path::Path::new("lib")).unwrap().entries[0].steps.len(),
+            1
+        );
     }
 }

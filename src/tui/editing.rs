@@ -140,6 +140,13 @@ pub fn saved(model: &mut Model, result: Result<String, String>) {
             editor.saved = text;
             model.status = format!("saved {}", model.manifest.display());
         }
+        (Ok(_), Screen::Exemplar(view)) => {
+            if let Some(stamp) = &mut view.stamp {
+                stamp.steps.clear();
+                stamp.undo.clear();
+            }
+            model.status = format!("saved the steps into {}", model.manifest.display());
+        }
         (Ok(_), _) => model.status = format!("saved {}", model.manifest.display()),
         (Err(e), _) => model.status = format!("not saved: {e}"),
     }

@@ -22,6 +22,7 @@ pub fn key(screen: &Screen, event: KeyEvent) -> Option<Message> {
     let esc = |m: Option<Message>| if event.code == KeyCode::Esc { Some(Message::Cancel) } else { m };
     match screen {
         Screen::Library => common.or(library(event.code)),
+        Screen::Exemplar(v) if v.stamp.is_some() => common.or(stamping(event.code)).or(exemplar(event.code)),
         Screen::Exemplar(_) => common.or(exemplar(event.code)),
         Screen::Editor(_) => esc(common).or(editor(event.code)),
         Screen::Fill(_) => common.or(fill(event.code)),
@@ -36,6 +37,26 @@ fn library(code: KeyCode) -> Option<Message> {
         KeyCode::Char('b') => Some(Message::Build),
         KeyCode::Char('B') => Some(Message::BuildAll),
         KeyCode::Char('e') => Some(Message::Edit),
+        _ => None,
+    }
+}
+
+fn stamping(code: KeyCode) -> Option<Message> {
+    match code {
+        KeyCode::Right | KeyCode::Char('l') => Some(Message::MoveSeed([1, 0, 0])),
+        KeyCode::Left | KeyCode::Char('h') => Some(Message::MoveSeed([-1, 0, 0])),
+        KeyCode::Up | KeyCode::Char('k') => Some(Message::MoveSeed([0, 1, 0])),
+        KeyCode::Down | KeyCode::Char('j') => Some(Message::MoveSeed([0, -1, 0])),
+        KeyCode::PageUp => Some(Message::MoveSeed([0, 0, 1])),
+        KeyCode::PageDown => Some(Message::MoveSeed([0, 0, -1])),
+        KeyCode::Char('r') => Some(Message::TurnSeed(15.0)),
+        KeyCode::Char('R') => Some(Message::TurnSeed(-15.0)),
+        KeyCode::Char('+') | KeyCode::Char('=') => Some(Message::ScaleSeed(1.15)),
+        KeyCode::Char('-') => Some(Message::ScaleSeed(1.0 / 1.15)),
+        KeyCode::Enter => Some(Message::Stamp),
+        KeyCode::Char('n') => Some(Message::Scatter),
+        KeyCode::Char('u') => Some(Message::Undo),
+        KeyCode::Char('s') => Some(Message::SaveSteps),
         _ => None,
     }
 }
@@ -87,13 +108,14 @@ fn exemplar(code: KeyCode) -> Option<Message> {
         KeyCode::PageDown => Some(Message::MoveSlice(-8)),
         KeyCode::Char('c') => Some(Message::NextChannel),
         KeyCode::Char('f') => Some(Message::FillPreview),
+        KeyCode::Char('m') => Some(Message::StampMode),
         KeyCode::Backspace => Some(Message::Back),
         _ => None,
     }
 }
 
 /// The help text: one line per key.
-pub const HELP: [&str; 16] = [
+pub const HELP: [&str; 18] = [
     "up/down, j/k   choose an exemplar",
     "enter          open its slices",
     "b / B          build it / build all",
@@ -104,6 +126,8 @@ pub const HELP: [&str; 16] = [
     "c              cycle colour and single channels",
     "f              fill a shape with it, then",
     "               x/y/z + arrows move the cut",
+    "m              stamp mode: arrows move the seed,",
+    "               r turn, +/- scale, enter, n, u, s",
     "esc            back",
     "?              this help",
     "q, ctrl-c      quit",
@@ -137,6 +161,7 @@ mod tests {
             index: [0; 3],
             axis: Axis::Z,
             channel: 0,
+            stamp: None,
         });
         assert!(matches!(key(&view, press(KeyCode::Char('x'))), Some(Message::SelectAxis(Axis::X))));
         assert!(matches!(key(&view, press(KeyCode::PageUp)), Some(Message::MoveSlice(8))));

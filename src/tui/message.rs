@@ -60,12 +60,28 @@ pub enum Message {
     Filled(String, Result<Arc<super::model::FillPreview>, String>),
     /// Move the cut plane by this share of the model.
     MovePlane(f32),
+    /// Enter or leave stamp mode.
+    StampMode,
+    /// The seed mesh for stamp mode arrived: mesh and its file.
+    SeedLoaded(Result<(Arc<crate::mesh::Mesh>, Option<String>), String>),
+    /// Move the seed by voxels along (the slice's right, up, the slice axis).
+    MoveSeed([i32; 3]),
+    /// Turn the seed by degrees about the slice axis.
+    TurnSeed(f32),
+    /// Scale the seed by a factor.
+    ScaleSeed(f32),
+    /// Stamp the seed.
+    Stamp,
+    /// Scatter ten seeds.
+    Scatter,
+    /// Save the stamps as manifest steps.
+    SaveSteps,
     /// A running build reported progress: exemplar, stage, fraction.
     BuildProgress(String, String, f32),
 }
 
 /// Work `update` asks the runtime to start in a worker thread.
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq)]
 pub enum Effect {
     /// Load the built volume of this exemplar.
     Load(String),
@@ -88,4 +104,8 @@ pub enum Effect {
     Fill(String),
     /// Stop every running build.
     CancelBuilds,
+    /// Find the seed mesh for stamping exemplar `name`.
+    LoadSeed(String),
+    /// Append stamp steps to exemplar `name` in the manifest and save it.
+    SaveSteps(String, Vec<super::model::StampStep>, String),
 }

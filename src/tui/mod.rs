@@ -13,6 +13,7 @@ mod editing;
 mod keymap;
 mod message;
 mod model;
+mod stamping;
 mod update;
 mod view;
 mod view_edit;
@@ -118,6 +119,12 @@ fn start(effects: Vec<Effect>, model: &Model, send: &Sender<Message>) {
                 let _ = send.send(Message::Previewed(generation, result));
             }
             Effect::CancelBuilds => cancel_builds(),
+            Effect::LoadSeed(name) => {
+                let _ = send.send(Message::SeedLoaded(find_seed(&manifest, &name).map_err(|e| e.to_string())));
+            }
+            Effect::SaveSteps(name, steps, file) => {
+                let _ = send.send(Message::Saved(save_steps(&manifest, &name, &steps, &file)));
+            }
             Effect::Fill(name) => {
                 let result =
                     crate::cli::preview_fill(&manifest, &output, &name).map(Arc::new).map_err(|e| e.to_string());
@@ -184,6 +191,46 @@ fn follow(mut child: std::process::Child, send: &Sender<Message>) -> (String, bo
     let status = position.map(|p| running.remove(p)).and_then(|mut c| c.wait().ok());
     let killed = status.is_some_and(|s| s.code().is_none());
     (log, killed)
+}
+
+/// The seed mesh for stamping into `name`: the mesh its steps already use, else the first
+/// mesh file beside the manifest, else the built-in seed (which has no file).
+fn find_seed(manifest: &Path, name: &str) -> Result<(Arc<crate::mesh::Mesh>, Option<String>)> {
+    let folder = manifest.parent().unwrap_or(Path::new("."));
+    let plan = io::manifest::read_plan(manifest)?;
+    let used = plan.entries.iter().filter(|e| e.name == name).flat_map(|e| e.steps.iter()).find_map(|s| match s {
+        io::manifest::Step::Stamp { mesh, .. } | io::manifest::Step::Scatter { mesh, .. } => Some(mesh.clone()),
+        _ => None,
+    });
+    let beside = || {
+        let mut files: Vec<PathBuf> =
+            std::fs::read_dir(folder).ok()?.filter_map(|e| e.ok().map(|e| e.path())).collect();
+        files.sort();
+        files.into_iter().find(|p| matches!(p.extension().and_then(|e| e.to_str()), Some("obj" | "stl" | "ply")))
+    };
+    match used.or_else(beside) {
+        Some(path) => {
+            let mesh = io::mesh_file::read_mesh(&path)?;
+            let relative = path.strip_prefix(folder).unwrap_or(&path).to_string_lossy().into_owned();
+            Ok((Arc::new(mesh), Some(relative)))
+        }
+        None => Ok((Arc::new(crate::sections::seed_mesh(32, 32)?), None)),
+    }
+}
+
+/// Appends stamp steps to the manifest, checks it and writes it atomically.
+fn save_steps(
+    manifest: &Path,
+    name: &str,
+    steps: &[model::StampStep],
+    file: &str,
+) -> std::result::Result<String, String> {
+    let text = std::fs::read_to_string(manifest).map_err(|e| format!("{}: {e}", manifest.display()))?;
+    let text = edit::append_steps(&text, name, steps, file)?;
+    let folder = manifest.parent().unwrap_or(Path::new("."));
+    io::manifest::parse_plan(&text, folder).map_err(|e| e.to_string())?;
+    io::write_bytes(manifest, text.as_bytes()).map_err(|e| e.to_string())?;
+    Ok(text)
 }
 
 /// Stops every running build.

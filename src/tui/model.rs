@@ -43,6 +43,43 @@ pub struct ExemplarView {
     pub axis: Axis,
     /// Which channel view: 0 = colour, then each channel alone.
     pub channel: usize,
+    /// Stamp mode, when on.
+    pub stamp: Option<StampMode>,
+}
+
+/// A seed mesh placed over the slices, stamped with Enter.
+#[derive(Debug, Clone)]
+pub struct StampMode {
+    /// The seed mesh.
+    pub mesh: Arc<crate::mesh::Mesh>,
+    /// Its file, relative to the manifest's folder (None: the built-in seed, not saveable).
+    pub file: Option<String>,
+    /// Where it goes next.
+    pub placement: crate::stamp::Placement,
+    /// Its coverage at that placement (the outline on the slices).
+    pub outline: Arc<crate::mesh::Coverage>,
+    /// Volumes before each stamp or scatter, newest last.
+    pub undo: Vec<Arc<Volume>>,
+    /// The stamps and scatters made, as manifest steps (in order).
+    pub steps: Vec<StampStep>,
+    /// Seed of the next scatter.
+    pub next_seed: u64,
+}
+
+/// One stamp-mode action, to be saved as a manifest step.
+#[derive(Debug, Clone, PartialEq)]
+pub enum StampStep {
+    /// One seed at a placement.
+    Stamp(crate::stamp::Placement),
+    /// `count` seeds scattered with `seed` at scales `scale`.
+    Scatter {
+        /// How many.
+        count: usize,
+        /// Scale range.
+        scale: (f32, f32),
+        /// Seed.
+        seed: u64,
+    },
 }
 
 /// The recipe editor of one exemplar: the manifest text being edited, with undo and redo.

@@ -1,8 +1,8 @@
 //! `update`: the only place the model changes. Pure: returns the work to start.
 
-use super::editing;
 use super::message::{Effect, Message};
 use super::model::{BuildState, ExemplarView, Model, Screen};
+use super::{editing, stamping};
 use crate::volume::Axis;
 
 /// Apply `message` to `model`; returns the effects to run.
@@ -37,6 +37,7 @@ pub fn update(model: &mut Model, message: Message) -> Vec<Effect> {
                 return back(model);
             }
         }
+        Message::Undo if matches!(model.screen, Screen::Exemplar(_)) => stamping::undo(model),
         Message::Undo => return editing::undo(model, false),
         Message::Redo => return editing::undo(model, true),
         Message::Save => return editing::save(model),
@@ -45,6 +46,14 @@ pub fn update(model: &mut Model, message: Message) -> Vec<Effect> {
         Message::FillPreview => return editing::open_fill(model),
         Message::Filled(name, result) => editing::filled(model, &name, result),
         Message::MovePlane(step) => editing::plane(model, None, step),
+        Message::StampMode => return stamping::toggle(model),
+        Message::SeedLoaded(result) => stamping::seed_loaded(model, result),
+        Message::MoveSeed(step) => stamping::move_seed(model, step),
+        Message::TurnSeed(degrees) => stamping::turn(model, degrees),
+        Message::ScaleSeed(factor) => stamping::scale(model, factor),
+        Message::Stamp => stamping::stamp_seed(model),
+        Message::Scatter => stamping::scatter(model),
+        Message::SaveSteps => return stamping::save(model),
         Message::BuildProgress(name, stage, fraction) => {
             if model.items.iter().any(|i| i.name == name && i.state == BuildState::Building) {
                 model.progress.insert(name, (stage, fraction));
@@ -105,8 +114,14 @@ fn open(model: &mut Model) -> Vec<Effect> {
         return Vec::new();
     }
     let name = item.name.clone();
-    model.screen =
-        Screen::Exemplar(ExemplarView { name: name.clone(), volume: None, index: [0; 3], axis: Axis::Z, channel: 0 });
+    model.screen = Screen::Exemplar(ExemplarView {
+        name: name.clone(),
+        volume: None,
+        index: [0; 3],
+        axis: Axis::Z,
+        channel: 0,
+        stamp: None,
+    });
     model.status = format!("loading {name}");
     vec![Effect::Load(name)]
 }

@@ -83,7 +83,10 @@ fn gauge(progress: Option<&(String, f32)>) -> String {
 }
 
 fn exemplar(frame: &mut Frame, view: &ExemplarView, area: Rect) {
-    let title = format!(" {}  (x/y/z axis, arrows move, c channel, f fill preview, esc back) ", view.name);
+    let title = match &view.stamp {
+        Some(s) => format!(" {}  STAMP MODE: {} step(s) unsaved; m leaves ", view.name, s.steps.len()),
+        None => format!(" {}  (x/y/z axis, arrows move, c channel, f fill, m stamp, esc back) ", view.name),
+    };
     let block = Block::default().borders(Borders::ALL).title(title);
     let inner = block.inner(area);
     frame.render_widget(block, area);
@@ -113,7 +116,16 @@ fn exemplar(frame: &mut Frame, view: &ExemplarView, area: Rect) {
         let slice_area = block.inner(*panel);
         frame.render_widget(block, *panel);
         if let Ok(image) = volume.slice(axis, view.index[k]) {
-            frame.render_widget(HalfBlocks { image: &image, channel: view.channel }, slice_area);
+            let outline = view.stamp.as_ref().map(|s| s.outline.clone());
+            let index = view.index[k];
+            let seed = move |px: usize, py: usize| {
+                let mut v = [0usize; 3];
+                (v[k], v[a], v[b]) = (index, px, py);
+                outline.as_ref().is_some_and(|o| o.at(v[0], v[1], v[2]) > 0.5)
+            };
+            let overlay: Option<&dyn Fn(usize, usize) -> bool> =
+                view.stamp.as_ref().map(|_| &seed as &dyn Fn(usize, usize) -> bool);
+            frame.render_widget(HalfBlocks { image: &image, channel: view.channel, overlay }, slice_area);
         }
     }
 }
@@ -124,6 +136,8 @@ pub struct HalfBlocks<'a> {
     pub image: &'a Image2d,
     /// 0: natural colours; k: channel k - 1 as grey.
     pub channel: usize,
+    /// Pixels to tint yellow (the seed in stamp mode).
+    pub overlay: Option<&'a dyn Fn(usize, usize) -> bool>,
 }
 
 impl Widget for HalfBlocks<'_> {
@@ -141,6 +155,10 @@ impl Widget for HalfBlocks<'_> {
             let (px, py) = ((x / scale) as usize, (y / scale) as usize);
             (px < self.image.width() && py < self.image.height()).then(|| {
                 let [r, g, b] = map.colour(self.image.pixel(px, py));
+                if self.overlay.is_some_and(|seed| seed(px, py)) {
+                    let tint = |c: u8, t: u8| ((c as u16 * 2 + t as u16 * 3) / 5) as u8;
+                    return Color::Rgb(tint(r, 255), tint(g, 220), tint(b, 0));
+                }
                 Color::Rgb(r, g, b)
             })
         };
@@ -238,6 +256,7 @@ mod tests {
             index: [4; 3],
             axis: Axis::Z,
             channel: 0,
+            stamp: None,
         });
         let (text, buffer) = screen(&m, 80, 24);
         assert!(text.contains("XY z=4/7") && text.contains("XZ y=4/7") && text.contains("YZ x=4/7"), "{text}");

@@ -1,0 +1,225 @@
+//! `update` for stamp mode: a seed mesh placed over the exemplar's slices, moved, turned and
+//! scaled with keys; Enter stamps it into the volume, `n` scatters ten, `u` undoes, `s`
+//! saves what was stamped as manifest steps. Pure: the stamping is plain computation, the
+//! mesh loading and the saving are effects.
+
+use super::message::Effect;
+use super::model::{ExemplarView, Model, Screen, StampMode, StampStep};
+use crate::mesh::{Mesh, voxelize};
+use crate::stamp::{self, Placement, Region, Scatter};
+use glam::{Quat, Vec3};
+use std::sync::Arc;
+
+/// The colour stamped seeds get (a dark seed).
+pub const SEED_COLOUR: [f32; 3] = [0.09, 0.067, 0.043];
+/// Seeds per scatter.
+pub const SCATTER_COUNT: usize = 10;
+
+fn view(model: &mut Model) -> Option<&mut ExemplarView> {
+    match &mut model.screen {
+        Screen::Exemplar(v) if v.volume.is_some() => Some(v),
+        _ => None,
+    }
+}
+
+/// `m`: ask for the seed mesh, or leave stamp mode.
+pub fn toggle(model: &mut Model) -> Vec<Effect> {
+    let Some(v) = view(model) else { return Vec::new() };
+    if v.stamp.take().is_some() {
+        model.status = "stamp mode off".into();
+        return Vec::new();
+    }
+    let name = v.name.clone();
+    model.status = "loading the seed mesh...".into();
+    vec![Effect::LoadSeed(name)]
+}
+
+/// The seed mesh arrived: place it at the volume's centre, a tenth of its size.
+pub fn seed_loaded(model: &mut Model, result: Result<(Arc<Mesh>, Option<String>), String>) {
+    let Some(v) = view(model) else { return };
+    let (mesh, file) = match result {
+        Ok(found) => found,
+        Err(e) => {
+            model.status = format!("no seed mesh: {e}");
+            return;
+        }
+    };
+    let dims = v.volume.as_ref().map(|vol| vol.dims()).unwrap_or([1; 3]);
+    let (_, radius) = stamp::bounding_sphere(&mesh);
+    let size = *dims.iter().min().unwrap_or(&1) as f32 / 10.0;
+    let at = Vec3::new(dims[0] as f32, dims[1] as f32, dims[2] as f32) / 2.0;
+    let placement = Placement { at, rotation: Quat::IDENTITY, scale: Vec3::splat(size / radius.max(1e-6)) };
+    let outline = Arc::new(voxelize(&mesh.transformed(placement.matrix()), dims, 1));
+    let source = file.clone().unwrap_or_else(|| "the built-in seed".into());
+    v.stamp = Some(StampMode { mesh, file, placement, outline, undo: Vec::new(), steps: Vec::new(), next_seed: 1 });
+    follow(v);
+    model.status = format!(
+        "stamp mode ({source}): arrows/pgup/pgdn move, r/R turn, +/- scale, enter stamps, n scatters, u undo, s saves"
+    );
+}
+
+/// Keep the slices through the seed and its outline current.
+fn follow(v: &mut ExemplarView) {
+    let Some(s) = &mut v.stamp else { return };
+    let dims = v.volume.as_ref().map(|vol| vol.dims()).unwrap_or([1; 3]);
+    s.outline = Arc::new(voxelize(&s.mesh.transformed(s.placement.matrix()), dims, 1));
+    for (k, (index, side)) in v.index.iter_mut().zip(dims).enumerate() {
+        *index = (s.placement.at[k].round().max(0.0) as usize).min(side - 1);
+    }
+}
+
+/// Move the seed: `step` is (right, up, along) the current slice axis, in voxels.
+pub fn move_seed(model: &mut Model, step: [i32; 3]) {
+    let Some(v) = view(model) else { return };
+    let (a, b) = v.axis.plane_axes();
+    let k = v.axis.index();
+    if let Some(s) = &mut v.stamp {
+        s.placement.at[a] += step[0] as f32;
+        s.placement.at[b] += step[1] as f32;
+        s.placement.at[k] += step[2] as f32;
+        follow(v);
+    }
+}
+
+/// Turn the seed about the current slice axis.
+pub fn turn(model: &mut Model, degrees: f32) {
+    let Some(v) = view(model) else { return };
+    let mut axis = Vec3::ZERO;
+    axis[v.axis.index()] = 1.0;
+    if let Some(s) = &mut v.stamp {
+        s.placement.rotation = Quat::from_axis_angle(axis, degrees.to_radians()) * s.placement.rotation;
+        follow(v);
+    }
+}
+
+/// Scale the seed.
+pub fn scale(model: &mut Model, factor: f32) {
+    let Some(v) = view(model) else { return };
+    if let Some(s) = &mut v.stamp {
+        s.placement.scale = (s.placement.scale * factor).clamp(Vec3::splat(0.05), Vec3::splat(1000.0));
+        follow(v);
+    }
+}
+
+/// Enter: stamp the seed into the volume.
+pub fn stamp_seed(model: &mut Model) {
+    let Some(v) = view(model) else { return };
+    let (Some(s), Some(volume)) = (&mut v.stamp, &v.volume) else { return };
+    let mut next = (**volume).clone();
+    let result = stamp::stamp(&mut next, &s.mesh, &s.placement, SEED_COLOUR);
+    model.status = match result {
+        Ok(done) => {
+            s.undo.push(volume.clone());
+            s.steps.push(StampStep::Stamp(s.placement));
+            v.volume = Some(Arc::new(next));
+            format!("stamped {} voxels ({} step(s) to save with s)", done.voxels, s.steps.len())
+        }
+        Err(e) => format!("not stamped: {e}"),
+    };
+}
+
+/// `n`: scatter ten seeds around the current scale.
+pub fn scatter(model: &mut Model) {
+    let Some(v) = view(model) else { return };
+    let (Some(s), Some(volume)) = (&mut v.stamp, &v.volume) else { return };
+    let mut next = (**volume).clone();
+    let d = next.dims();
+    let scale = s.placement.scale.x;
+    let region = Region::Box(Vec3::ZERO, Vec3::new(d[0] as f32, d[1] as f32, d[2] as f32));
+    let params =
+        Scatter { count: SCATTER_COUNT, region, scale: (scale * 0.8, scale * 1.2), colour: SEED_COLOUR, attempts: 200 };
+    let seed = s.next_seed;
+    model.status = match stamp::scatter(&mut next, &s.mesh, &params, seed) {
+        Ok(done) => {
+            s.undo.push(volume.clone());
+            s.steps.push(StampStep::Scatter { count: SCATTER_COUNT, scale: params.scale, seed });
+            s.next_seed += 1;
+            v.volume = Some(Arc::new(next));
+            format!("scattered {} seeds (seed {seed})", done.placed.len())
+        }
+        Err(e) => format!("not scattered: {e}"),
+    };
+}
+
+/// `u`: take back the last stamp or scatter.
+pub fn undo(model: &mut Model) {
+    let Some(v) = view(model) else { return };
+    let Some(s) = &mut v.stamp else { return };
+    match s.undo.pop() {
+        Some(previous) => {
+            s.steps.pop();
+            v.volume = Some(previous);
+            model.status = format!("undone ({} step(s) left)", s.steps.len());
+        }
+        None => model.status = "nothing to undo".into(),
+    }
+}
+
+/// `s`: append the stamps and scatters to the manifest as steps.
+pub fn save(model: &mut Model) -> Vec<Effect> {
+    let Some(v) = view(model) else { return Vec::new() };
+    let name = v.name.clone();
+    let Some(s) = &v.stamp else { return Vec::new() };
+    let (steps, file) = (s.steps.clone(), s.file.clone());
+    match (steps.is_empty(), file) {
+        (true, _) => model.status = "nothing stamped yet".into(),
+        (false, None) => {
+            model.status =
+                "the built-in seed has no file: put a seed mesh (.obj) beside the manifest to save steps".into()
+        }
+        (false, Some(file)) => {
+            model.status = format!("saving {} step(s) into the manifest", steps.len());
+            return vec![Effect::SaveSteps(name, steps, file)];
+        }
+    }
+    Vec::new()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::tui::message::Message;
+    use crate::tui::model::{BuildState, Item};
+    use crate::tui::update;
+    use crate::volume::{Axis, Channel, Volume};
+    use std::path::PathBuf;
+
+    fn stamping() -> Model {
+        let item = Item { name: "a".into(), declared: None, size: None, state: BuildState::Built("0".into()) };
+        let mut m = Model::new(PathBuf::from("lib.toml"), PathBuf::from("out"), vec![item], Vec::new());
+        update(&mut m, Message::Open);
+        let grey = Volume::from_fn([32; 3], Channel::rgb(), |_, _, _, o| o.fill(0.8)).unwrap();
+        update(&mut m, Message::Loaded("a".into(), Ok(Arc::new(grey))));
+        assert_eq!(update(&mut m, Message::StampMode), vec![Effect::LoadSeed("a".into())]);
+        let ball = crate::mesh::shapes::ellipsoid(Vec3::ONE, 8, 16);
+        update(&mut m, Message::SeedLoaded(Ok((Arc::new(ball), Some("seed.obj".into())))));
+        m
+    }
+
+    fn view_of(m: &Model) -> &ExemplarView {
+        let Screen::Exemplar(v) = &m.screen else { panic!("the exemplar view") };
+        v
+    }
+
+    #[test]
+    fn the_seed_moves_with_the_slices_stamps_and_undoes() {
+        let mut m = stamping();
+        assert_eq!(view_of(&m).index, [16, 16, 16]);
+        update(&mut m, Message::SelectAxis(Axis::Z));
+        update(&mut m, Message::MoveSeed([3, -2, 1]));
+        assert_eq!(view_of(&m).index, [19, 14, 17], "the slices follow the seed");
+        assert!(!view_of(&m).stamp.as_ref().unwrap().outline.is_empty());
+        update(&mut m, Message::Stamp);
+        let dark = view_of(&m).volume.as_ref().unwrap().get(19, 14, 17, 0);
+        assert!(dark < 0.2, "the seed's colour at its centre: {dark}");
+        assert_eq!(update(&mut m, Message::SaveSteps).len(), 1);
+        update(&mut m, Message::Undo);
+        assert_eq!(view_of(&m).volume.as_ref().unwrap().get(19, 14, 17, 0), 0.8);
+        assert!(update(&mut m, Message::SaveSteps).is_empty());
+        update(&mut m, Message::Scatter);
+        let s = view_of(&m).stamp.as_ref().unwrap();
+        assert!(matches!(s.steps[..], [StampStep::Scatter { count: 10, seed: 1, .. }]), "{:?}", s.steps);
+        update(&mut m, Message::StampMode);
+        assert!(view_of(&m).stamp.is_none());
+    }
+}
