@@ -9,6 +9,10 @@ pub trait Progress: Sync {
     fn cancelled(&self) -> bool {
         false
     }
+
+    /// A level of multi-resolution work finished: `level` of `levels` (from 1), its samples
+    /// (`dims`, `channels` per voxel, x fastest), e.g. to show a preview. Default: ignore.
+    fn level_done(&self, _level: usize, _levels: usize, _dims: [usize; 3], _channels: usize, _data: &[f32]) {}
 }
 
 /// Progress that goes nowhere.

@@ -218,10 +218,13 @@ fn batches<'a>(entries: &[&'a Entry], budget: u64) -> Vec<Vec<&'a Entry>> {
 
 /// Progress: a bar above the result lines on a terminal, plain lines otherwise.
 /// Progress of one exemplar as `progress` lines on stderr (at most one per percent).
+/// With `--progress-lines`, each finished pyramid level is also written as a small volume
+/// (`DIR/.cache/NAME.preview.exr`) and announced as `preview<TAB>NAME<TAB>PATH`.
 struct LineProgress<'a> {
     name: &'a str,
     enabled: bool,
     last: Mutex<i32>,
+    preview: PathBuf,
 }
 
 impl crate::progress::Progress for LineProgress<'_> {
@@ -231,6 +234,19 @@ impl crate::progress::Progress for LineProgress<'_> {
         if self.enabled && percent != *last {
             *last = percent;
             eprintln!("progress\t{}\t{fraction:.3}\t{stage}", self.name);
+        }
+    }
+
+    fn level_done(&self, level: usize, levels: usize, dims: [usize; 3], channels: usize, data: &[f32]) {
+        if !self.enabled {
+            return;
+        }
+        let roles = if channels >= 3 { crate::Channel::rgb() } else { crate::Channel::grey() };
+        let keep = roles.len();
+        let samples: Vec<f32> = data.chunks_exact(channels).flat_map(|v| v[..keep].iter().copied()).collect();
+        let written = crate::Volume::from_data(dims, roles, samples).and_then(|v| io::write_volume(&self.preview, &v));
+        if written.is_ok() {
+            eprintln!("preview\t{}\t{}\t{level}/{levels}", self.name, self.preview.display());
         }
     }
 }
@@ -279,7 +295,8 @@ fn build_one(entry: &Entry, folder: &Path, args: &BuildArgs, lines: &Lines) -> O
                 return Ok(Outcome::Cached(record));
             }
         }
-        let progress = LineProgress { name: &entry.name, enabled: args.progress_lines, last: Mutex::new(-1) };
+        let preview = output.join(".cache").join(format!("{}.preview.exr", entry.name));
+        let progress = LineProgress { name: &entry.name, enabled: args.progress_lines, last: Mutex::new(-1), preview };
         let volume = super::recipe::make_with(entry, &progress)?;
         io::write_volume(&output.join(format!("{}.exr", entry.name)), &volume)?;
         io::write_rgb8(&output.join(format!("{}.sheet.png", entry.name)), &render::sheet(&volume, &entry.name))?;

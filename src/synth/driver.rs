@@ -76,6 +76,7 @@ pub fn run(job: &Job, params: &SynthParams, seed: u64, progress: &dyn Progress) 
             }
             previous = mean;
         }
+        progress.level_done(level + 1, levels.len(), grid.dims, grid.channels, &grid.data);
         state = Some((grid, matches));
     }
     progress.update("done", 1.0);

@@ -76,6 +76,8 @@ pub enum Message {
     Scatter,
     /// Save the stamps as manifest steps.
     SaveSteps,
+    /// A running synthesis finished a pyramid level: exemplar, `level/levels`, the level.
+    BuildPreview(String, String, Arc<Volume>),
     /// A running build reported progress: exemplar, stage, fraction.
     BuildProgress(String, String, f32),
 }

@@ -180,6 +180,11 @@ fn follow(mut child: std::process::Child, send: &Sender<Message>) -> (String, bo
                 let fraction = fraction.parse().unwrap_or(0.0);
                 let _ = send.send(Message::BuildProgress(name.to_string(), stage.to_string(), fraction));
             }
+            ["preview", name, path, level] => {
+                if let Ok(volume) = io::read_volume(Path::new(path), u64::MAX) {
+                    let _ = send.send(Message::BuildPreview(name.to_string(), level.to_string(), Arc::new(volume)));
+                }
+            }
             _ => {
                 log.push_str(&line);
                 log.push('\n');

@@ -174,6 +174,8 @@ pub struct Model {
     pub quit: bool,
     /// Progress of running builds: exemplar -> (stage, fraction).
     pub progress: std::collections::BTreeMap<String, (String, f32)>,
+    /// The latest pyramid level a synthesis build finished: exemplar -> (`2/3`, volume).
+    pub previews: std::collections::BTreeMap<String, (String, Arc<Volume>)>,
 }
 
 impl Model {
@@ -191,6 +193,7 @@ impl Model {
             status,
             quit: false,
             progress: Default::default(),
+            previews: Default::default(),
         }
     }
 }

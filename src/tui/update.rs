@@ -54,6 +54,9 @@ pub fn update(model: &mut Model, message: Message) -> Vec<Effect> {
         Message::Stamp => stamping::stamp_seed(model),
         Message::Scatter => stamping::scatter(model),
         Message::SaveSteps => return stamping::save(model),
+        Message::BuildPreview(name, level, volume) => {
+            model.previews.insert(name, (level, volume));
+        }
         Message::BuildProgress(name, stage, fraction) => {
             if model.items.iter().any(|i| i.name == name && i.state == BuildState::Building) {
                 model.progress.insert(name, (stage, fraction));

@@ -71,7 +71,23 @@ fn library(frame: &mut Frame, model: &Model, area: Rect) {
     ];
     let header = Row::new(vec!["exemplar", "size", "declared", "measured", "state"])
         .style(Style::new().add_modifier(Modifier::BOLD));
-    frame.render_widget(Table::new(rows, widths).header(header).block(block), area);
+    let selected = model.items.get(model.selected).and_then(|i| model.previews.get(&i.name));
+    let (table, side) = match selected {
+        Some(preview) if area.width >= 100 => {
+            let [t, s] = Layout::horizontal([Constraint::Min(60), Constraint::Length(34)]).areas(area);
+            (t, Some((s, preview)))
+        }
+        _ => (area, None),
+    };
+    frame.render_widget(Table::new(rows, widths).header(header).block(block), table);
+    if let Some((rect, (level, volume))) = side {
+        let block = Block::default().borders(Borders::ALL).title(format!(" level {level} (z middle) "));
+        let inner = block.inner(rect);
+        frame.render_widget(block, rect);
+        if let Ok(image) = volume.slice(Axis::Z, volume.dims()[2] / 2) {
+            frame.render_widget(HalfBlocks { image: &image, channel: 0, overlay: None }, inner);
+        }
+    }
 }
 
 /// A build's state as a one-line gauge: `level 2/3 ####---- 48%`.
@@ -233,6 +249,17 @@ mod tests {
         m.progress.insert("marble".into(), ("level 2/3, iteration 1: searched".into(), 0.48));
         let (text, _) = screen(&m, 80, 24);
         assert!(text.contains("level 2/3 ####---- 48%"), "{text}");
+        m.selected = 1;
+        let level =
+            Volume::from_fn([8, 8, 8], Channel::rgb(), |_, _, _, o| o.copy_from_slice(&[0.0, 0.0, 1.0])).unwrap();
+        m.previews.insert("marble".into(), ("2/3".into(), Arc::new(level)));
+        let (text, buffer) = screen(&m, 110, 24);
+        assert!(text.contains("level 2/3 (z middle)"), "{text}");
+        let blue = (0..110u16)
+            .flat_map(|x| (0..24u16).map(move |y| (x, y)))
+            .filter(|p| buffer[*p].fg == Color::Rgb(0, 0, 255))
+            .count();
+        assert!(blue > 50, "{blue} cells of the level preview");
     }
 
     #[test]

@@ -200,3 +200,33 @@ fn an_interrupted_build_resumes_and_ends_identical() {
     assert!(a == b, "a resumed build differs from a clean one");
     assert!(!a.iter().any(|f| f.0.ends_with(".tmp")), "no temporaries are left");
 }
+
+#[test]
+fn progress_lines_report_each_synthesis_level_with_a_preview() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let image =
+        image::RgbImage::from_fn(24, 24, |x, y| image::Rgb([(x * 10) as u8, (y * 10) as u8, ((x ^ y) * 8) as u8]));
+    image.save(d.join("ex.png")).unwrap();
+    let manifest = d.join("lib.toml");
+    std::fs::write(
+        &manifest,
+        "[[exemplar]]\nname = \"s\"\nrecipe = \"synth\"\nimage = \"ex.png\"\nsize = 16\nlevels = 2\n",
+    )
+    .unwrap();
+    let out = at(d, "out");
+    let run = solidtex(&["build", &manifest.to_string_lossy(), "-o", &out, "--progress-lines"]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let err = stderr(&run);
+    assert!(err.lines().any(|l| l.starts_with("progress\ts\t") && l.contains("level 2/2")), "{err}");
+    for level in ["1/2", "2/2"] {
+        assert!(
+            err.lines().any(|l| l.starts_with("preview\ts\t") && l.ends_with(level)),
+            "no level {level} preview in {err}"
+        );
+    }
+    let preview = solidtex::io::read_volume(&d.join("out/.cache/s.preview.exr"), u64::MAX).unwrap();
+    assert_eq!(preview.dims(), [16; 3], "the last preview is the finest level");
+    let quiet = solidtex(&["build", &manifest.to_string_lossy(), "-o", &out, "--force"]);
+    assert!(!stderr(&quiet).contains("progress\t"), "no progress lines unless asked");
+}
