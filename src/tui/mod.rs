@@ -10,6 +10,7 @@
 
 mod edit;
 mod editing;
+mod graphics;
 mod keymap;
 mod message;
 mod model;
@@ -62,7 +63,11 @@ pub fn run(manifest: &Path, output: &Path) -> Result<()> {
     let mut model = Model::new(manifest.to_path_buf(), output.to_path_buf(), items, errors);
     let (send, receive) = channel();
     let mut terminal = ratatui::init();
-    let result = event_loop(&mut terminal, &mut model, &send, &receive);
+    let mut graphics = graphics::Graphics::detect();
+    if let Some(g) = &graphics {
+        model.status = format!("{} (pictures: {})", model.status, g.name());
+    }
+    let result = event_loop(&mut terminal, &mut model, &send, &receive, graphics.as_mut());
     ratatui::restore();
     result
 }
@@ -72,10 +77,11 @@ fn event_loop(
     model: &mut Model,
     send: &Sender<Message>,
     receive: &Receiver<Message>,
+    mut graphics: Option<&mut graphics::Graphics>,
 ) -> Result<()> {
     let fail = |e: std::io::Error| Error::io("terminal", e);
     while !model.quit {
-        terminal.draw(|f| draw(f, model)).map_err(fail)?;
+        terminal.draw(|f| view::draw_with(f, model, graphics.as_deref_mut())).map_err(fail)?;
         if event::poll(Duration::from_millis(100)).map_err(fail)? {
             if let Event::Key(key) = event::read().map_err(fail)? {
                 if key.kind == KeyEventKind::Press {

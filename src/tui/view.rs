@@ -15,8 +15,13 @@ use ratatui::widgets::{Block, Borders, Clear, Paragraph, Row, Table, Widget};
 /// Smallest usable terminal.
 pub const MIN_SIZE: (u16, u16) = (60, 16);
 
-/// Draw the whole screen.
+/// Draw the whole screen with half-block pictures.
 pub fn draw(frame: &mut Frame, model: &Model) {
+    draw_with(frame, model, None);
+}
+
+/// Draw the whole screen; slices use `graphics` (sixel, kitty, iTerm2) when given.
+pub fn draw_with(frame: &mut Frame, model: &Model, graphics: Option<&mut super::graphics::Graphics>) {
     let area = frame.area();
     if area.width < MIN_SIZE.0 || area.height < MIN_SIZE.1 {
         let text = format!(
@@ -29,7 +34,7 @@ pub fn draw(frame: &mut Frame, model: &Model) {
     let [main, status] = Layout::vertical([Constraint::Min(3), Constraint::Length(1)]).areas(area);
     match &model.screen {
         Screen::Library => library(frame, model, main),
-        Screen::Exemplar(view) => exemplar(frame, view, main),
+        Screen::Exemplar(view) => exemplar(frame, view, main, graphics),
         Screen::Editor(editor) => super::view_edit::editor(frame, editor, main),
         Screen::Fill(view) => super::view_edit::fill(frame, view, main),
     }
@@ -98,7 +103,7 @@ fn gauge(progress: Option<&(String, f32)>) -> String {
     format!("{level} {}{} {:.0}%", "#".repeat(filled), "-".repeat(8 - filled), fraction * 100.0)
 }
 
-fn exemplar(frame: &mut Frame, view: &ExemplarView, area: Rect) {
+fn exemplar(frame: &mut Frame, view: &ExemplarView, area: Rect, mut graphics: Option<&mut super::graphics::Graphics>) {
     let title = match &view.stamp {
         Some(s) => format!(" {}  STAMP MODE: {} step(s) unsaved; m leaves ", view.name, s.steps.len()),
         None => format!(" {}  (x/y/z axis, arrows move, c channel, f fill, m stamp, esc back) ", view.name),
@@ -131,7 +136,14 @@ fn exemplar(frame: &mut Frame, view: &ExemplarView, area: Rect) {
         let block = Block::default().borders(Borders::ALL).title(label).border_style(style);
         let slice_area = block.inner(*panel);
         frame.render_widget(block, *panel);
-        if let Ok(image) = volume.slice(axis, view.index[k]) {
+        let Ok(image) = volume.slice(axis, view.index[k]) else { continue };
+        if let (Some(g), None) = (graphics.as_deref_mut(), &view.stamp) {
+            let key =
+                format!("{}:{axis}:{}:{}:{:p}", view.name, view.index[k], view.channel, std::sync::Arc::as_ptr(volume));
+            g.draw(frame, slice_area, key, &image, view.channel);
+            continue;
+        }
+        {
             let outline = view.stamp.as_ref().map(|s| s.outline.clone());
             let index = view.index[k];
             let seed = move |px: usize, py: usize| {
