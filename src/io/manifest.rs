@@ -249,6 +249,28 @@ pub fn parse_plan(text: &str, folder: &Path) -> Result<Plan> {
     Ok(Plan { entries })
 }
 
+/// Like [`parse_plan`], but keeps going past bad entries: the valid entries, and one
+/// message per bad one (or one for the whole text when it is not valid TOML).
+pub fn parse_plan_lenient(text: &str, folder: &Path) -> (Vec<Entry>, Vec<String>) {
+    let raw: RawManifest = match toml::from_str(text) {
+        Ok(raw) => raw,
+        Err(e) => return (Vec::new(), vec![format!("invalid manifest: {e}")]),
+    };
+    let (mut entries, mut errors): (Vec<Entry>, Vec<String>) = (Vec::new(), Vec::new());
+    for (i, e) in raw.exemplar.into_iter().enumerate() {
+        let name = e.name.clone();
+        let line = entry_line(text, i);
+        match validate(e, folder) {
+            Ok(entry) if entries.iter().any(|x| x.name == entry.name) => {
+                errors.push(format!("line {line}: exemplar[{i}].name = {name:?} is used twice; names must be unique"))
+            }
+            Ok(entry) => entries.push(entry),
+            Err(err) => errors.push(format!("line {line}: exemplar[{i}] ({name}): {err}")),
+        }
+    }
+    (entries, errors)
+}
+
 /// The line (from 1) of the `i`-th `[[exemplar]]` header.
 fn entry_line(text: &str, i: usize) -> usize {
     text.lines().enumerate().filter(|(_, l)| l.trim() == "[[exemplar]]").nth(i).map_or(0, |(n, _)| n + 1)
@@ -454,6 +476,18 @@ pub fn region(text: &str) -> Result<Region> {
 
 #[cfg(test)]
 mod tests {
+
+    #[test]
+    fn lenient_parsing_keeps_the_valid_entries_and_names_each_bad_one() {
+        let text = "[[exemplar]]\nname = \"a\"\nrecipe = \"procedural:marble\"\nsize = 8\n\n[[exemplar]]\nname = \"b\"\nrecipe = \"procedural:nope\"\nsize = 8\n\n[[exemplar]]\nname = \"a\"\nrecipe = \"procedural:wood\"\nsize = 8\n";
+        let (entries, errors) = parse_plan_lenient(text, Path::new("."));
+        assert_eq!(entries.iter().map(|e| e.name.as_str()).collect::<Vec<_>>(), ["a"]);
+        assert_eq!(errors.len(), 2, "{errors:?}");
+        assert!(errors[0].starts_with("line 6: exemplar[1] (b): recipe"), "{errors:?}");
+        assert!(errors[1].contains("line 11") && errors[1].contains("used twice"), "{errors:?}");
+        let (none, broken) = parse_plan_lenient("[[exemplar]\n", Path::new("."));
+        assert!(none.is_empty() && broken[0].contains("invalid manifest"));
+    }
     use super::*;
 
     fn plan(text: &str) -> Result<Plan> {

@@ -35,10 +35,14 @@ use std::time::Duration;
 
 /// The library items of a manifest, with their build state read from `output`.
 pub fn load_items(manifest: &Path, output: &Path) -> (Vec<Item>, Vec<String>) {
-    match io::manifest::read_plan(manifest) {
-        Err(e) => (Vec::new(), vec![e.to_string()]),
-        Ok(plan) => (plan.entries.iter().map(|e| item(e, output)).collect(), Vec::new()),
-    }
+    let text = match std::fs::read_to_string(manifest) {
+        Ok(text) => text,
+        Err(e) => return (Vec::new(), vec![Error::io(manifest, e).to_string()]),
+    };
+    let folder = manifest.parent().unwrap_or(Path::new("."));
+    let (entries, errors) = io::manifest::parse_plan_lenient(&text, folder);
+    let shown = manifest.display();
+    (entries.iter().map(|e| item(e, output)).collect(), errors.into_iter().map(|e| format!("{shown}: {e}")).collect())
 }
 
 fn item(entry: &io::manifest::Entry, output: &Path) -> Item {

@@ -160,7 +160,7 @@ pub struct Model {
     pub output: PathBuf,
     /// The exemplars.
     pub items: Vec<Item>,
-    /// Manifest errors, shown instead of the list when it cannot be read.
+    /// Manifest errors, listed under the exemplars that are valid.
     pub errors: Vec<String>,
     /// Selected row of the library list.
     pub selected: usize,

@@ -49,11 +49,18 @@ pub fn draw_with(frame: &mut Frame, model: &Model, graphics: Option<&mut super::
 fn library(frame: &mut Frame, model: &Model, area: Rect) {
     let block =
         Block::default().borders(Borders::ALL).title(format!(" solidtex library: {} ", model.manifest.display()));
-    if !model.errors.is_empty() {
-        let text: Vec<Line> = model.errors.iter().map(|e| Line::from(e.as_str())).collect();
-        frame.render_widget(Paragraph::new(text).block(block.title_bottom(" the manifest has errors ")), area);
-        return;
-    }
+    let area = if model.errors.is_empty() {
+        area
+    } else {
+        let lines = (model.errors.len() as u16 + 2).min(area.height / 2).max(3);
+        let [list, errors] = Layout::vertical([Constraint::Min(3), Constraint::Length(lines)]).areas(area);
+        let text: Vec<Line> =
+            model.errors.iter().map(|e| Line::styled(e.as_str(), Style::new().fg(Color::Red))).collect();
+        let title = format!(" the manifest has {} error(s); the other exemplars work ", model.errors.len());
+        let box_ = Block::default().borders(Borders::ALL).title(title);
+        frame.render_widget(Paragraph::new(text).wrap(ratatui::widgets::Wrap { trim: false }).block(box_), errors);
+        list
+    };
     let rows = model.items.iter().enumerate().map(|(i, item)| {
         let size = item.size.map(|[x, y, z]| format!("{x}x{y}x{z}")).unwrap_or_else(|| "-".into());
         let declared = item.declared.clone().unwrap_or_else(|| "-".into());
@@ -304,10 +311,10 @@ mod tests {
             .filter(|p| buffer[*p].fg == Color::Rgb(255, 0, 0))
             .count();
         assert!(red > 100, "{red} red half-blocks");
-        let m2 =
-            Model { errors: vec!["lib.toml: exemplar[0] (a): size is missing".into()], items: Vec::new(), ..model() };
+        let m2 = Model { errors: vec!["lib.toml: line 9: exemplar[2] (a): size is missing".into()], ..model() };
         let (text, _) = screen(&m2, 80, 24);
-        assert!(text.contains("size is missing") && text.contains("the manifest has errors"), "{text}");
+        assert!(text.contains("size is missing") && text.contains("the manifest has 1 error(s)"), "{text}");
+        assert!(text.contains("kiwi") && text.contains("marble"), "the valid exemplars stay listed: {text}");
     }
 
     #[test]
