@@ -109,13 +109,16 @@ fn exemplar(code: KeyCode) -> Option<Message> {
         KeyCode::Char('c') => Some(Message::NextChannel),
         KeyCode::Char('f') => Some(Message::FillPreview),
         KeyCode::Char('m') => Some(Message::StampMode),
+        KeyCode::Char('+') | KeyCode::Char('=') => Some(Message::Zoom(true)),
+        KeyCode::Char('-') => Some(Message::Zoom(false)),
+        KeyCode::Char('a') => Some(Message::NextLayer),
         KeyCode::Backspace => Some(Message::Back),
         _ => None,
     }
 }
 
 /// The help text: one line per key.
-pub const HELP: [&str; 18] = [
+pub const HELP: [&str; 19] = [
     "up/down, j/k   choose an exemplar",
     "enter          open its slices",
     "b / B          build it / build all",
@@ -124,6 +127,7 @@ pub const HELP: [&str; 18] = [
     "x, y, z        choose the slice axis",
     "left/right     move the slice (page up/down: 8)",
     "c              cycle colour and single channels",
+    "+/-, a         zoom; show the masks in turn",
     "f              fill a shape with it, then",
     "               x/y/z + arrows move the cut",
     "m              stamp mode: arrows move the seed,",
@@ -162,6 +166,9 @@ mod tests {
             axis: Axis::Z,
             channel: 0,
             stamp: None,
+            zoom: 1,
+            layers: Vec::new(),
+            layer: 0,
         });
         assert!(matches!(key(&view, press(KeyCode::Char('x'))), Some(Message::SelectAxis(Axis::X))));
         assert!(matches!(key(&view, press(KeyCode::PageUp)), Some(Message::MoveSlice(8))));

@@ -60,6 +60,12 @@ pub enum Message {
     Filled(String, Result<Arc<super::model::FillPreview>, String>),
     /// Move the cut plane by this share of the model.
     MovePlane(f32),
+    /// Zoom the slices in (true) or out.
+    Zoom(bool),
+    /// Show the next of the exemplar and its masks.
+    NextLayer,
+    /// The masks of the exemplar on screen arrived: (label, volume) each.
+    MasksLoaded(String, Result<Vec<(String, Arc<Volume>)>, String>),
     /// Enter or leave stamp mode.
     StampMode,
     /// The seed mesh for stamp mode arrived: mesh and its file.
@@ -106,6 +112,8 @@ pub enum Effect {
     Fill(String),
     /// Stop every running build.
     CancelBuilds,
+    /// Load the built masks of exemplar `name`.
+    LoadMasks(String),
     /// Find the seed mesh for stamping exemplar `name`.
     LoadSeed(String),
     /// Append stamp steps to exemplar `name` in the manifest and save it.

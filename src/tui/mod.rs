@@ -129,6 +129,9 @@ fn start(effects: Vec<Effect>, model: &Model, send: &Sender<Message>) {
                 let _ = send.send(Message::Previewed(generation, result));
             }
             Effect::CancelBuilds => cancel_builds(),
+            Effect::LoadMasks(name) => {
+                let _ = send.send(Message::MasksLoaded(name.clone(), load_masks(&output, &name)));
+            }
             Effect::LoadSeed(name) => {
                 let _ = send.send(Message::SeedLoaded(find_seed(&manifest, &name).map_err(|e| e.to_string())));
             }
@@ -246,6 +249,21 @@ fn save_steps(
     io::manifest::parse_plan(&text, folder).map_err(|e| e.to_string())?;
     io::write_bytes(manifest, text.as_bytes()).map_err(|e| e.to_string())?;
     Ok(text)
+}
+
+/// The built masks of `name`: `NAME.mask.exr` and `NAME.masks/{outer,middle,inner}.exr`.
+fn load_masks(output: &Path, name: &str) -> std::result::Result<Vec<(String, Arc<crate::volume::Volume>)>, String> {
+    let budget = io::budget_from_env().unwrap_or(u64::MAX);
+    let mut files = vec![("splotch mask".to_string(), output.join(format!("{name}.mask.exr")))];
+    for layer in crate::mask::Layer::ALL {
+        let file = output.join(format!("{name}.masks")).join(format!("{}.exr", layer.name()));
+        files.push((format!("{} mask", layer.name()), file));
+    }
+    files
+        .into_iter()
+        .filter(|(_, f)| f.exists())
+        .map(|(label, f)| io::read_volume(&f, budget).map(|v| (label, Arc::new(v))).map_err(|e| e.to_string()))
+        .collect()
 }
 
 /// Stops every running build.

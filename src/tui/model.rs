@@ -45,6 +45,12 @@ pub struct ExemplarView {
     pub channel: usize,
     /// Stamp mode, when on.
     pub stamp: Option<StampMode>,
+    /// Magnification of the slices: 1, 2 or 4 (around each slice's centre).
+    pub zoom: usize,
+    /// The exemplar and its masks once loaded (`a` cycles through them), and which shows.
+    pub layers: Vec<(String, Arc<Volume>)>,
+    /// Index into `layers` of the volume on screen.
+    pub layer: usize,
 }
 
 /// A seed mesh placed over the slices, stamped with Enter.

@@ -46,6 +46,14 @@ pub fn update(model: &mut Model, message: Message) -> Vec<Effect> {
         Message::FillPreview => return editing::open_fill(model),
         Message::Filled(name, result) => editing::filled(model, &name, result),
         Message::MovePlane(step) => editing::plane(model, None, step),
+        Message::Zoom(closer) => {
+            with_view(model, |v| v.zoom = if closer { (v.zoom * 2).min(4) } else { (v.zoom / 2).max(1) })
+        }
+        Message::NextLayer => return next_layer(model),
+        Message::MasksLoaded(name, result) => masks_loaded(model, &name, result),
+        Message::StampMode if showing_mask(model) => {
+            model.status = "stamping works on the exemplar, not on a mask: press a".into()
+        }
         Message::StampMode => return stamping::toggle(model),
         Message::SeedLoaded(result) => stamping::seed_loaded(model, result),
         Message::MoveSeed(step) => stamping::move_seed(model, step),
@@ -93,6 +101,52 @@ fn select(model: &mut Model, step: i64) {
     *row = (*row as i64 + step).clamp(0, count.saturating_sub(1) as i64) as usize;
 }
 
+fn showing_mask(model: &Model) -> bool {
+    matches!(&model.screen, Screen::Exemplar(v) if v.layer > 0)
+}
+
+/// `a`: load the masks the first time, then cycle exemplar -> masks -> exemplar.
+fn next_layer(model: &mut Model) -> Vec<Effect> {
+    let Screen::Exemplar(v) = &mut model.screen else { return Vec::new() };
+    let Some(volume) = v.volume.clone() else { return Vec::new() };
+    if v.stamp.is_some() {
+        model.status = "leave stamp mode (m) to look at the masks".into();
+        return Vec::new();
+    }
+    if v.layers.is_empty() {
+        v.layers.push(("exemplar".into(), volume));
+        return vec![Effect::LoadMasks(v.name.clone())];
+    }
+    if v.layers.len() == 1 {
+        model.status =
+            format!("{} has no built masks (add masks = [\"splotch\"] or [\"layered\"] to its entry)", v.name);
+        return Vec::new();
+    }
+    v.layer = (v.layer + 1) % v.layers.len();
+    v.volume = Some(v.layers[v.layer].1.clone());
+    v.channel = 0;
+    model.status = format!("showing {} of {} (a: next)", v.layers[v.layer].0, v.name);
+    Vec::new()
+}
+
+fn masks_loaded(
+    model: &mut Model,
+    name: &str,
+    result: Result<Vec<(String, std::sync::Arc<crate::volume::Volume>)>, String>,
+) {
+    let Screen::Exemplar(v) = &mut model.screen else { return };
+    if v.name != name {
+        return;
+    }
+    match result {
+        Ok(masks) => {
+            v.layers.extend(masks);
+            next_layer(model);
+        }
+        Err(e) => model.status = format!("cannot load the masks: {e}"),
+    }
+}
+
 fn unsaved(model: &Model) -> bool {
     matches!(&model.screen, Screen::Editor(e) if e.text.as_ref().is_some_and(|t| *t != e.saved))
 }
@@ -124,6 +178,9 @@ fn open(model: &mut Model) -> Vec<Effect> {
         axis: Axis::Z,
         channel: 0,
         stamp: None,
+        zoom: 1,
+        layers: Vec::new(),
+        layer: 0,
     });
     model.status = format!("loading {name}");
     vec![Effect::Load(name)]
@@ -253,5 +310,27 @@ mod tests {
         assert_eq!(m.items[1].state, BuildState::Failed("cancelled".into()));
         update(&mut m, Message::Back);
         assert!(m.quit);
+    }
+
+    #[test]
+    fn zoom_is_bounded_and_a_cycles_through_the_masks() {
+        let mut m = model();
+        update(&mut m, Message::Open);
+        let v = Arc::new(Volume::new([8, 8, 8], Channel::rgb()).unwrap());
+        update(&mut m, Message::Loaded("a".into(), Ok(v.clone())));
+        for _ in 0..3 {
+            update(&mut m, Message::Zoom(true));
+        }
+        update(&mut m, Message::Zoom(false));
+        assert_eq!(update(&mut m, Message::NextLayer), vec![Effect::LoadMasks("a".into())]);
+        let mask = Arc::new(Volume::new([8, 8, 8], Channel::grey()).unwrap());
+        update(&mut m, Message::MasksLoaded("a".into(), Ok(vec![("splotch mask".into(), mask.clone())])));
+        let Screen::Exemplar(view) = &m.screen else { panic!("the exemplar view") };
+        assert_eq!(view.zoom, 2);
+        assert!(Arc::ptr_eq(view.volume.as_ref().unwrap(), &mask) && m.status.contains("splotch mask"));
+        assert!(update(&mut m, Message::StampMode).is_empty() && m.status.contains("not on a mask"));
+        update(&mut m, Message::NextLayer);
+        let Screen::Exemplar(view) = &m.screen else { panic!("the exemplar view") };
+        assert!(Arc::ptr_eq(view.volume.as_ref().unwrap(), &v), "back to the exemplar");
     }
 }

@@ -113,7 +113,11 @@ fn gauge(progress: Option<&(String, f32)>) -> String {
 fn exemplar(frame: &mut Frame, view: &ExemplarView, area: Rect, mut graphics: Option<&mut super::graphics::Graphics>) {
     let title = match &view.stamp {
         Some(s) => format!(" {}  STAMP MODE: {} step(s) unsaved; m leaves ", view.name, s.steps.len()),
-        None => format!(" {}  (x/y/z axis, arrows move, c channel, f fill, m stamp, esc back) ", view.name),
+        None => {
+            let shown = view.layers.get(view.layer).map_or("exemplar", |l| l.0.as_str());
+            let zoom = if view.zoom > 1 { format!(" x{}", view.zoom) } else { String::new() };
+            format!(" {} {shown}{zoom}  (x/y/z, arrows, c channel, +/- zoom, a masks, f fill, m stamp) ", view.name)
+        }
     };
     let block = Block::default().borders(Borders::ALL).title(title);
     let inner = block.inner(area);
@@ -143,10 +147,17 @@ fn exemplar(frame: &mut Frame, view: &ExemplarView, area: Rect, mut graphics: Op
         let block = Block::default().borders(Borders::ALL).title(label).border_style(style);
         let slice_area = block.inner(*panel);
         frame.render_widget(block, *panel);
-        let Ok(image) = volume.slice(axis, view.index[k]) else { continue };
+        let Ok(full) = volume.slice(axis, view.index[k]) else { continue };
+        let (image, ox, oy) = crop(&full, view.zoom);
         if let (Some(g), None) = (graphics.as_deref_mut(), &view.stamp) {
-            let key =
-                format!("{}:{axis}:{}:{}:{:p}", view.name, view.index[k], view.channel, std::sync::Arc::as_ptr(volume));
+            let key = format!(
+                "{}:{axis}:{}:{}:{}:{:p}",
+                view.name,
+                view.index[k],
+                view.channel,
+                view.zoom,
+                std::sync::Arc::as_ptr(volume)
+            );
             g.draw(frame, slice_area, key, &image, view.channel);
             continue;
         }
@@ -155,7 +166,7 @@ fn exemplar(frame: &mut Frame, view: &ExemplarView, area: Rect, mut graphics: Op
             let index = view.index[k];
             let seed = move |px: usize, py: usize| {
                 let mut v = [0usize; 3];
-                (v[k], v[a], v[b]) = (index, px, py);
+                (v[k], v[a], v[b]) = (index, px + ox, py + oy);
                 outline.as_ref().is_some_and(|o| o.at(v[0], v[1], v[2]) > 0.5)
             };
             let overlay: Option<&dyn Fn(usize, usize) -> bool> =
@@ -163,6 +174,16 @@ fn exemplar(frame: &mut Frame, view: &ExemplarView, area: Rect, mut graphics: Op
             frame.render_widget(HalfBlocks { image: &image, channel: view.channel, overlay }, slice_area);
         }
     }
+}
+
+/// The middle `1/zoom` of `image` in each direction, and where it starts.
+fn crop(image: &Image2d, zoom: usize) -> (Image2d, usize, usize) {
+    let (w, h) = (image.width(), image.height());
+    let (cw, ch) = ((w / zoom.max(1)).max(1), (h / zoom.max(1)).max(1));
+    let (ox, oy) = ((w - cw) / 2, (h - ch) / 2);
+    let data = (oy..oy + ch).flat_map(|y| (ox..ox + cw).flat_map(move |x| image.pixel(x, y).to_vec())).collect();
+    let cropped = Image2d::from_data(cw, ch, image.channels().to_vec(), data).unwrap_or_else(|_| image.clone());
+    (cropped, ox, oy)
 }
 
 /// A 2D image drawn with half-block characters, scaled to fit (nearest voxel).
@@ -303,9 +324,16 @@ mod tests {
             axis: Axis::Z,
             channel: 0,
             stamp: None,
+            zoom: 1,
+            layers: Vec::new(),
+            layer: 0,
         });
         let (text, buffer) = screen(&m, 80, 24);
         assert!(text.contains("XY z=4/7") && text.contains("XZ y=4/7") && text.contains("YZ x=4/7"), "{text}");
+        let ramp =
+            Image2d::from_data(8, 1, crate::volume::Channel::grey(), (0..8).map(|x| x as f32).collect()).unwrap();
+        let (zoomed, ox, _) = crop(&ramp, 4);
+        assert_eq!((zoomed.width(), ox, zoomed.data()), (2, 3, &[3.0, 4.0][..]), "zoom 4 keeps the middle quarter");
         let red = (0..80u16)
             .flat_map(|x| (0..24u16).map(move |y| (x, y)))
             .filter(|p| buffer[*p].fg == Color::Rgb(255, 0, 0))
