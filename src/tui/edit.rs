@@ -17,28 +17,35 @@ fn parse(text: &str) -> Result<DocumentMut, String> {
     text.parse::<DocumentMut>().map_err(|e| format!("the manifest is not valid TOML: {e}"))
 }
 
-/// The fields of the `[[exemplar]]` named `name` (its `steps` are left out: they are
-/// listed as one read-only line by the editor).
+/// The fields of the `[[exemplar]]` named `name`, then those of its steps as
+/// `steps[i].KEY`.
 pub fn fields(text: &str, name: &str) -> Result<Vec<Field>, String> {
     let doc = parse(text)?;
     let table = entry(&doc, name)?;
-    Ok(table
-        .iter()
-        .filter(|(k, _)| *k != "steps")
-        .filter_map(|(k, item)| {
-            item.as_value().map(|v| Field { key: k.to_string(), value: v.to_string().trim().to_string() })
-        })
-        .collect())
+    let values = |t: &toml_edit::Table, prefix: &str| -> Vec<Field> {
+        t.iter()
+            .filter_map(|(k, item)| {
+                item.as_value().map(|v| Field { key: format!("{prefix}{k}"), value: v.to_string().trim().to_string() })
+            })
+            .collect()
+    };
+    let mut out = values(table, "");
+    if let Some(steps) = table.get("steps").and_then(Item::as_array_of_tables) {
+        for (i, step) in steps.iter().enumerate() {
+            out.extend(values(step, &format!("steps[{i}].")));
+        }
+    }
+    Ok(out)
 }
 
-/// How many steps the entry has.
-pub fn step_count(text: &str, name: &str) -> usize {
-    parse(text)
-        .ok()
-        .and_then(|doc| {
-            entry(&doc, name).ok().and_then(|t| t.get("steps").and_then(Item::as_array_of_tables).map(|a| a.len()))
-        })
-        .unwrap_or(0)
+/// Splits `steps[3].count` into (Some(3), "count"); a plain key into (None, key).
+fn step_key(key: &str) -> (Option<usize>, &str) {
+    let parsed =
+        key.strip_prefix("steps[").and_then(|rest| rest.split_once("].")).and_then(|(i, k)| Some((i.parse().ok()?, k)));
+    match parsed {
+        Some((i, k)) => (Some(i), k),
+        None => (None, key),
+    }
 }
 
 fn entry<'a>(doc: &'a DocumentMut, name: &str) -> Result<&'a toml_edit::Table, String> {
@@ -61,10 +68,19 @@ pub fn set(text: &str, name: &str, key: &str, value: &str) -> Result<String, Str
         .get_mut("exemplar")
         .and_then(Item::as_array_of_tables_mut)
         .ok_or("the manifest has no [[exemplar]] entries")?;
-    let table = list
+    let entry = list
         .iter_mut()
         .find(|t| t.get("name").and_then(Item::as_str) == Some(name))
         .ok_or_else(|| format!("no exemplar named {name:?} in the manifest"))?;
+    let (step, key) = step_key(key);
+    let table = match step {
+        None => entry,
+        Some(i) => entry
+            .get_mut("steps")
+            .and_then(Item::as_array_of_tables_mut)
+            .and_then(|steps| steps.get_mut(i))
+            .ok_or_else(|| format!("{name} has no step {i}"))?,
+    };
     match table.get_mut(key).and_then(Item::as_value_mut) {
         Some(old) => {
             let decor = old.decor().clone();
@@ -133,9 +149,9 @@ mod tests {
     #[test]
     fn fields_are_listed_per_entry() {
         let f = fields(TEXT, "b").unwrap();
-        assert_eq!(f.iter().map(|f| f.key.as_str()).collect::<Vec<_>>(), ["name", "recipe", "size"]);
+        let keys: Vec<&str> = f.iter().map(|f| f.key.as_str()).collect();
+        assert_eq!(keys, ["name", "recipe", "size", "steps[0].blur", "steps[0].radius"]);
         assert_eq!(f[2].value, "32");
-        assert_eq!(step_count(TEXT, "b"), 1);
         assert!(fields(TEXT, "zz").unwrap_err().contains("zz"));
     }
 
@@ -148,6 +164,9 @@ mod tests {
         let out = set(TEXT, "b", "seed", "7").unwrap();
         assert!(out.contains("size = 32\nseed = 7\n") && out.contains("# the library"), "{out}");
         assert!(set(TEXT, "a", "size", "sixty").unwrap_err().contains("not a TOML value"));
+        let out = set(TEXT, "b", "steps[0].radius", "5").unwrap();
+        assert_eq!(out, TEXT.replace("radius = 2", "radius = 5"));
+        assert!(set(TEXT, "b", "steps[3].radius", "5").unwrap_err().contains("no step 3"));
     }
 
     #[test]

@@ -27,13 +27,26 @@ pub fn editor(frame: &mut Frame, editor: &Editor, area: Rect) {
         return;
     };
     let [left, right] = Layout::horizontal([Constraint::Percentage(45), Constraint::Percentage(55)]).areas(inner);
-    frame.render_widget(Paragraph::new(field_lines(editor, text)).wrap(Wrap { trim: false }), left);
+    let (fields, error) = match &editor.error {
+        Some(e) => {
+            let [f, e_area] = Layout::vertical([Constraint::Min(3), Constraint::Length(6)]).areas(left);
+            let message = Paragraph::new(e.as_str()).style(Style::new().fg(Color::Red)).wrap(Wrap { trim: true });
+            (f, Some((e_area, message)))
+        }
+        None => (left, None),
+    };
+    // keep the selected field in view
+    let offset = (editor.selected + 2).saturating_sub(fields.height as usize) as u16;
+    frame.render_widget(Paragraph::new(field_lines(editor, text)).scroll((offset, 0)), fields);
+    if let Some((area, message)) = error {
+        frame.render_widget(message.block(Block::default().borders(Borders::TOP)), area);
+    }
     preview(frame, editor, right);
 }
 
-fn field_lines<'a>(editor: &'a Editor, text: &str) -> Vec<Line<'a>> {
+fn field_lines(editor: &Editor, text: &str) -> Vec<Line<'static>> {
     let fields = edit::fields(text, &editor.name).unwrap_or_default();
-    let mut lines: Vec<Line> = fields
+    fields
         .iter()
         .enumerate()
         .map(|(i, f)| {
@@ -49,16 +62,7 @@ fn field_lines<'a>(editor: &'a Editor, text: &str) -> Vec<Line<'a>> {
                 _ => Line::from(format!("{} = {}", f.key, f.value)),
             }
         })
-        .collect();
-    let steps = edit::step_count(text, &editor.name);
-    if steps > 0 {
-        lines.push(Line::styled(format!("steps: {steps} (edit them in the file)"), Style::new().fg(Color::DarkGray)));
-    }
-    if let Some(error) = &editor.error {
-        lines.push(Line::from(""));
-        lines.push(Line::styled(error.clone(), Style::new().fg(Color::Red)));
-    }
-    lines
+        .collect()
 }
 
 fn preview(frame: &mut Frame, editor: &Editor, area: Rect) {
