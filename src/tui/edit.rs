@@ -56,6 +56,16 @@ fn entry<'a>(doc: &'a DocumentMut, name: &str) -> Result<&'a toml_edit::Table, S
         .ok_or_else(|| format!("no exemplar named {name:?} in the manifest"))
 }
 
+fn entry_mut<'a>(doc: &'a mut DocumentMut, name: &str) -> Result<&'a mut toml_edit::Table, String> {
+    let list = doc
+        .get_mut("exemplar")
+        .and_then(Item::as_array_of_tables_mut)
+        .ok_or("the manifest has no [[exemplar]] entries")?;
+    list.iter_mut()
+        .find(|t| t.get("name").and_then(Item::as_str) == Some(name))
+        .ok_or_else(|| format!("no exemplar named {name:?} in the manifest"))
+}
+
 /// The manifest with `key` of exemplar `name` set to the TOML value `value` (a new key is
 /// appended). Everything else — comments, spacing, order — stays as it was.
 pub fn set(text: &str, name: &str, key: &str, value: &str) -> Result<String, String> {
@@ -64,14 +74,7 @@ pub fn set(text: &str, name: &str, key: &str, value: &str) -> Result<String, Str
         .parse()
         .map_err(|_| format!("{key} = {value}: not a TOML value (quote text: \"...\"; numbers and [lists] as is)"))?;
     let mut doc = parse(text)?;
-    let list = doc
-        .get_mut("exemplar")
-        .and_then(Item::as_array_of_tables_mut)
-        .ok_or("the manifest has no [[exemplar]] entries")?;
-    let entry = list
-        .iter_mut()
-        .find(|t| t.get("name").and_then(Item::as_str) == Some(name))
-        .ok_or_else(|| format!("no exemplar named {name:?} in the manifest"))?;
+    let entry = entry_mut(&mut doc, name)?;
     let (step, key) = step_key(key);
     let table = match step {
         None => entry,
@@ -98,14 +101,7 @@ pub fn set(text: &str, name: &str, key: &str, value: &str) -> Result<String, Str
 /// `stamp` or `scatter` of the seed mesh `file` in the dark seed colour.
 pub fn append_steps(text: &str, name: &str, steps: &[super::model::StampStep], file: &str) -> Result<String, String> {
     let mut doc = parse(text)?;
-    let list = doc
-        .get_mut("exemplar")
-        .and_then(Item::as_array_of_tables_mut)
-        .ok_or("the manifest has no [[exemplar]] entries")?;
-    let table = list
-        .iter_mut()
-        .find(|t| t.get("name").and_then(Item::as_str) == Some(name))
-        .ok_or_else(|| format!("no exemplar named {name:?} in the manifest"))?;
+    let table = entry_mut(&mut doc, name)?;
     let existing = table.entry("steps").or_insert(Item::ArrayOfTables(toml_edit::ArrayOfTables::new()));
     let array = existing.as_array_of_tables_mut().ok_or("steps is not a list of [[exemplar.steps]] tables")?;
     for step in steps {

@@ -159,17 +159,7 @@ mod tests {
         assert!(matches!(key(&Screen::Library, press(KeyCode::Char('b'))), Some(Message::Build)));
         assert!(matches!(key(&Screen::Library, press(KeyCode::Down)), Some(Message::Down)));
         assert!(key(&Screen::Library, press(KeyCode::Char('x'))).is_none());
-        let view = Screen::Exemplar(super::super::model::ExemplarView {
-            name: "a".into(),
-            volume: None,
-            index: [0; 3],
-            axis: Axis::Z,
-            channel: 0,
-            stamp: None,
-            zoom: 1,
-            layers: Vec::new(),
-            layer: 0,
-        });
+        let view = Screen::Exemplar(super::super::model::ExemplarView::new("a"));
         assert!(matches!(key(&view, press(KeyCode::Char('x'))), Some(Message::SelectAxis(Axis::X))));
         assert!(matches!(key(&view, press(KeyCode::PageUp)), Some(Message::MoveSlice(8))));
         assert!(matches!(key(&view, press(KeyCode::Char('?'))), Some(Message::Help)));

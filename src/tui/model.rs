@@ -53,6 +53,23 @@ pub struct ExemplarView {
     pub layer: usize,
 }
 
+impl ExemplarView {
+    /// The view of exemplar `name` before its volume has loaded.
+    pub fn new(name: &str) -> ExemplarView {
+        ExemplarView {
+            name: name.to_string(),
+            volume: None,
+            index: [0; 3],
+            axis: Axis::Z,
+            channel: 0,
+            stamp: None,
+            zoom: 1,
+            layers: Vec::new(),
+            layer: 0,
+        }
+    }
+}
+
 /// A seed mesh placed over the slices, stamped with Enter.
 #[derive(Debug, Clone)]
 pub struct StampMode {

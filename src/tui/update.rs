@@ -3,7 +3,6 @@
 use super::message::{Effect, Message};
 use super::model::{BuildState, ExemplarView, Model, Screen};
 use super::{editing, stamping};
-use crate::volume::Axis;
 
 /// Apply `message` to `model`; returns the effects to run.
 pub fn update(model: &mut Model, message: Message) -> Vec<Effect> {
@@ -171,17 +170,7 @@ fn open(model: &mut Model) -> Vec<Effect> {
         return Vec::new();
     }
     let name = item.name.clone();
-    model.screen = Screen::Exemplar(ExemplarView {
-        name: name.clone(),
-        volume: None,
-        index: [0; 3],
-        axis: Axis::Z,
-        channel: 0,
-        stamp: None,
-        zoom: 1,
-        layers: Vec::new(),
-        layer: 0,
-    });
+    model.screen = Screen::Exemplar(ExemplarView::new(&name));
     model.status = format!("loading {name}");
     vec![Effect::Load(name)]
 }
@@ -245,7 +234,7 @@ fn built(model: &mut Model, name: &str, result: Result<crate::tui::model::Item, 
 mod tests {
     use super::*;
     use crate::tui::model::Item;
-    use crate::volume::{Channel, Volume};
+    use crate::volume::{Axis, Channel, Volume};
     use std::path::PathBuf;
     use std::sync::Arc;
 

@@ -318,15 +318,9 @@ mod tests {
             Volume::from_fn([8, 8, 8], Channel::rgb(), |_, _, _, o| o.copy_from_slice(&[1.0, 0.0, 0.0])).unwrap();
         let mut m = model();
         m.screen = Screen::Exemplar(ExemplarView {
-            name: "kiwi".into(),
             volume: Some(Arc::new(volume)),
             index: [4; 3],
-            axis: Axis::Z,
-            channel: 0,
-            stamp: None,
-            zoom: 1,
-            layers: Vec::new(),
-            layer: 0,
+            ..ExemplarView::new("kiwi")
         });
         let (text, buffer) = screen(&m, 80, 24);
         assert!(text.contains("XY z=4/7") && text.contains("XZ y=4/7") && text.contains("YZ x=4/7"), "{text}");
