@@ -101,19 +101,7 @@ pub fn seed_mesh(rings: usize, segments: usize) -> Result<crate::mesh::Mesh> {
         }
     }
     vertices.push(Vec3::new(0.0, 0.0, 1.0));
-    let last = (vertices.len() - 1) as u32;
-    let ring = |i: usize, j: usize| (1 + (i - 1) * segments + j % segments) as u32;
-    let mut triangles = Vec::new();
-    for j in 0..segments {
-        triangles.push([0, ring(1, j + 1), ring(1, j)]);
-        triangles.push([last, ring(rings - 1, j), ring(rings - 1, j + 1)]);
-    }
-    for i in 1..rings - 1 {
-        for j in 0..segments {
-            triangles.push([ring(i, j), ring(i, j + 1), ring(i + 1, j + 1)]);
-            triangles.push([ring(i, j), ring(i + 1, j + 1), ring(i + 1, j)]);
-        }
-    }
+    let triangles = crate::mesh::shapes::pole_rings(rings, segments);
     Ok(crate::mesh::Mesh::new(vertices, triangles)?.oriented())
 }
 

@@ -19,8 +19,15 @@ pub fn ellipsoid(radii: Vec3, rings: usize, segments: usize) -> Mesh {
         }
     }
     vertices.push(Vec3::new(0.0, 0.0, radii.z));
+    let triangles = pole_rings(rings, segments);
+    Mesh::new(vertices, triangles).expect("a valid ellipsoid").oriented()
+}
+
+/// The triangles of a closed surface of revolution laid out as: a bottom pole (vertex 0),
+/// `rings - 1` rings of `segments` vertices each, and a top pole (the last vertex).
+pub fn pole_rings(rings: usize, segments: usize) -> Vec<[u32; 3]> {
     let ring = |i: usize, j: usize| (1 + (i - 1) * segments + j % segments) as u32;
-    let top = vertices.len() as u32 - 1;
+    let top = ring(rings - 1, segments - 1) + 1;
     let mut triangles = Vec::new();
     for j in 0..segments {
         triangles.push([0, ring(1, j + 1), ring(1, j)]);
@@ -32,7 +39,7 @@ pub fn ellipsoid(radii: Vec3, rings: usize, segments: usize) -> Mesh {
             triangles.push([ring(i, j), ring(i + 1, j + 1), ring(i + 1, j)]);
         }
     }
-    Mesh::new(vertices, triangles).expect("a valid ellipsoid").oriented()
+    triangles
 }
 
 /// A torus around the z axis: `major` radius to the tube centre, `minor` tube radius.
