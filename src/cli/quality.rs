@@ -53,14 +53,31 @@ fn table(r: &Report) -> String {
     for a in &r.axes {
         out += &format!("  {:<4} {:>9.4} {:>9.4} {:>9.4} {:>16.2}\n", a.axis, a.volume, a.random, a.exemplar, a.ratio);
     }
+    for a in r.axes.iter().filter(|a| !a.repeats.is_empty()) {
+        let offsets: Vec<String> = a.repeats.iter().map(|o| format!("({}, {})", o[0], o[1])).collect();
+        out += &format!(
+            "  note: along {} the exemplar repeats itself at offsets {}; its baseline skips those copies \
+             (with them: {:.4})\n",
+            a.axis,
+            offsets.join(", "),
+            a.exemplar_with_copies.unwrap_or(a.exemplar)
+        );
+    }
     out += "histogram distance (L1 over 32 bins; 0 = equal, 2 = disjoint)\n";
     for h in &r.histograms {
         out += &format!("  {:<12} {:.4}\n", h.channel, h.distance);
     }
     if let Some(l) = &r.layered {
         out += &format!(
-            "layered\n  depth error     {:.4}\n  depth monotonic {}\n  sweeping index  {:.4} (share of voxels whose x and y matches coincide)\n",
-            l.depth_error, l.depth_monotonic, l.sweeping_index
+            "layered\n  depth error     {:.4}\n  depth monotonic {}{}\n  sweeping index  {:.4} (share of voxels whose x and y matches coincide)\n",
+            l.depth_error,
+            l.depth_monotonic,
+            if l.depth_monotonic {
+                String::new()
+            } else {
+                format!(" (largest fall between slices {:.5})", l.depth_largest_drop)
+            },
+            l.sweeping_index
         );
     }
     out

@@ -145,10 +145,14 @@ impl<'a> PlaneView<'a> {
         let (a, b) = Axis::ALL[axis].plane_axes();
         let (n, h) = (ex.n, ex.half() as i64);
         let table = |k: usize| -> Vec<u32> {
+            // Along an axis that does not wrap, only neighbours whose whole neighbourhood
+            // lies inside predict: a clamped neighbourhood's match is placed wrongly.
+            let len = grid.dims[k] as i64;
+            let whole = |u: usize| grid.wrap[k] || len < n as i64 || (h..=len - n as i64 + h).contains(&(u as i64));
             (0..grid.dims[k] * n)
                 .map(|i| {
                     let (c, d) = ((i / n) as i64, (i % n) as i64);
-                    grid.inside(k, c - (d - h)).map_or(u32::MAX, |u| u as u32)
+                    grid.inside(k, c - (d - h)).filter(|u| whole(*u)).map_or(u32::MAX, |u| u as u32)
                 })
                 .collect()
         };

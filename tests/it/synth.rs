@@ -158,3 +158,25 @@ fn bad_synthesis_input_is_refused_with_a_clear_message() {
         message(synthesize_layered(&ex, Some(&depth), &small([8, 8, 8]), &LayeredParams::default(), 1, &NoProgress));
     assert!(err.contains("depth image is 20x40") && err.contains("40x40"), "{err}");
 }
+
+/// An exemplar made by tiling one patch would give a split-half baseline of copies; the
+/// quality report finds the repeat and measures the baseline away from the copies.
+#[test]
+fn the_quality_baseline_skips_the_copies_of_a_tiled_exemplar() {
+    let tile = blobs(1, 5);
+    let data: Vec<f32> = (0..80 * 80).map(|i| tile.pixel((i % 80) % 40, (i / 80) % 40)[0]).collect();
+    let tiled = Image2d::from_data(80, 80, Channel::grey(), data.clone()).unwrap();
+    let volume = Volume::from_fn([16, 16, 16], Channel::grey(), |x, y, z, o| o[0] = data[(y + z) * 80 + x]).unwrap();
+    let report = quality::assess(&volume, [Some(&tiled), None, None], false).unwrap();
+    let x = &report.axes[0];
+    let is_period = |o: &[i64; 2]| o.iter().all(|c| c.abs() % 40 == 0);
+    assert!(!x.repeats.is_empty() && x.repeats.iter().all(is_period), "{:?}", x.repeats);
+    let with_copies = x.exemplar_with_copies.expect("a repeated exemplar keeps the plain figure");
+    assert!(with_copies < 1e-3, "the copies match exactly: {with_copies}");
+    assert!(x.exemplar > 20.0 * with_copies.max(1e-4), "baseline away from copies {}", x.exemplar);
+
+    let plain = blobs(1, 5);
+    let report = quality::assess(&volume, [Some(&plain), None, None], false).unwrap();
+    assert!(report.axes[0].repeats.is_empty(), "{:?}", report.axes[0].repeats);
+    assert_eq!(report.axes[0].exemplar_with_copies, None);
+}
