@@ -120,12 +120,13 @@ impl Prepared {
         out
     }
 
-    /// Slot (index into `centres`) of a valid centre pixel; `None` if not valid.
-    pub fn slot(&self, pixel: u32) -> Option<usize> {
-        let (x, y) = (pixel as usize % self.width, pixel as usize / self.width);
-        let h = self.half();
-        let (vw, vh) = (self.width + 1 - self.n, self.height + 1 - self.n);
-        (x >= h && y >= h && x - h < vw && y - h < vh).then(|| (y - h) * vw + (x - h))
+    /// The slot of the valid centre nearest to pixel (x, y) (no division: the search's
+    /// inner loop calls this for every candidate source).
+    #[inline]
+    pub fn clamped_slot(&self, x: i64, y: i64) -> usize {
+        let (vw, vh) = ((self.width + 1 - self.n) as i64, (self.height + 1 - self.n) as i64);
+        let h = self.half() as i64;
+        ((y - h).clamp(0, vh - 1) * vw + (x - h).clamp(0, vw - 1)) as usize
     }
 
     /// The valid centre nearest to pixel (x, y), given as signed coordinates.

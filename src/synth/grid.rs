@@ -122,7 +122,8 @@ mod tests {
         let (mut scratch, mut out) = (Vec::new(), Vec::new());
         let (x, y) = (7, 9);
         grid.project_row(&ex, Axis::Z, y, 0, &mut scratch, &mut out);
-        let slot = ex.slot((y * w + x) as u32).unwrap();
+        let slot = ex.clamped_slot(x as i64, y as i64);
+        assert_eq!(ex.centres[slot] as usize, y * w + x);
         for k in 0..ex.pca.dims {
             assert!((out[k * w + x] - ex.projection(slot)[k]).abs() < 1e-4, "component {k}");
         }

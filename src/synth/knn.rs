@@ -69,12 +69,16 @@ impl KdTree {
     pub fn nearest(&self, query: &[f32], k: usize) -> Vec<Hit> {
         let mut best: Vec<Hit> = Vec::with_capacity(k + 1);
         if !self.nodes.is_empty() && k > 0 {
-            self.visit(0, query, k, &mut best);
+            let mut offsets = vec![0.0; self.dims];
+            self.visit(0, query, k, &mut best, 0.0, &mut offsets);
         }
         best
     }
 
-    fn visit(&self, node: u32, query: &[f32], k: usize, best: &mut Vec<Hit>) {
+    /// Search below `node`, whose cell lies at squared distance at least `reach` from the
+    /// query; `offsets` holds the per-axis query-to-cell offsets that make up `reach`
+    /// (Arya and Mount's incremental distance: a tighter bound than the split plane alone).
+    fn visit(&self, node: u32, query: &[f32], k: usize, best: &mut Vec<Hit>, reach: f32, offsets: &mut [f32]) {
         match self.nodes[node as usize] {
             Node::Leaf { start, end } => {
                 for &i in &self.order[start as usize..end as usize] {
@@ -83,11 +87,16 @@ impl KdTree {
                 }
             }
             Node::Split { axis, value, left, right } => {
-                let diff = query[axis as usize] - value;
+                let axis = axis as usize;
+                let diff = query[axis] - value;
                 let (near, far) = if diff < 0.0 { (left, right) } else { (right, left) };
-                self.visit(near, query, k, best);
-                if best.len() < k || diff * diff <= best[best.len() - 1].0 {
-                    self.visit(far, query, k, best);
+                self.visit(near, query, k, best, reach, offsets);
+                let old = offsets[axis];
+                let far_reach = reach - old * old + diff * diff;
+                if best.len() < k || far_reach <= best[best.len() - 1].0 {
+                    offsets[axis] = diff;
+                    self.visit(far, query, k, best, far_reach, offsets);
+                    offsets[axis] = old;
                 }
             }
         }

@@ -134,18 +134,27 @@ fn best_two(grid: &Grid, cx: &Context, v: [usize; 3], query: &[f32], seen: &mut 
         let d = super::knn::squared(query, ex.projection(slot));
         insert(top, (d, ex.centres[slot]));
     };
+    let step = |k: usize, d: i64| -> Option<usize> {
+        let (c, len) = (v[k] as i64 + d, grid.dims[k] as i64);
+        match (c < 0, c >= len, grid.wrap[k]) {
+            (false, false, _) => Some(c as usize),
+            (true, _, true) => Some((c + len) as usize),
+            (_, true, true) => Some((c - len) as usize),
+            _ => None,
+        }
+    };
+    let width = ex.width as u32;
     for db in -1i64..=1 {
+        let Some(ub) = step(b, db) else { continue };
         for da in -1i64..=1 {
-            let mut u = [v[0] as i64, v[1] as i64, v[2] as i64];
-            u[a] += da;
-            u[b] += db;
-            let (Some(ux), Some(uy), Some(uz)) = (grid.inside(0, u[0]), grid.inside(1, u[1]), grid.inside(2, u[2]))
-            else {
-                continue;
-            };
-            let p = previous.pixel[grid.index(ux, uy, uz)] as usize;
-            let predicted = ex.clamp_centre((p % ex.width) as i64 - da, (p / ex.width) as i64 - db);
-            let slot = ex.slot(predicted).expect("clamped centres are valid");
+            let Some(ua) = step(a, da) else { continue };
+            let mut u = v;
+            u[a] = ua;
+            u[b] = ub;
+            let p = previous.pixel[grid.index(u[0], u[1], u[2])];
+            let py = (p / width) as i64;
+            let px = p as i64 - py * width as i64;
+            let slot = ex.clamped_slot(px - da, py - db);
             for &c in &ex.coherence[slot * ex.k..(slot + 1) * ex.k] {
                 consider(c as usize, &mut top);
             }
