@@ -44,12 +44,13 @@ pub fn optimize(grid: &Grid, matches: &[Matches; 3], exemplars: [Option<&Prepare
     let current = densities(&grid.data, grid.channels, hist.bins);
     let factors: Vec<Vec<f32>> =
         exemplars.iter().map(|ex| ex.map(|ex| pixel_factors(ex, &current, hist)).unwrap_or_default()).collect();
-    let weights: Vec<Vec<f32>> =
-        matches.iter().map(|m| m.dist.iter().map(|d| (d + 1e-3).powf(-1.2)).collect()).collect();
+    // Match pixel and blending weight side by side: one memory access per prediction.
+    let packed: Vec<Vec<(u32, f32)>> = matches
+        .iter()
+        .map(|m| m.pixel.iter().zip(&m.dist).map(|(p, d)| (*p, (d + 1e-3).powf(-1.2))).collect())
+        .collect();
     let planes: Vec<Option<PlaneView>> = (0..3)
-        .map(|axis| {
-            exemplars[axis].map(|ex| PlaneView::new(grid, ex, &matches[axis], &weights[axis], &factors[axis], axis))
-        })
+        .map(|axis| exemplars[axis].map(|ex| PlaneView::new(grid, ex, &packed[axis], &factors[axis], axis)))
         .collect();
     let plane = grid.dims[0] * grid.dims[1] * grid.channels;
     let mut out = vec![0.0; grid.data.len()];
@@ -122,8 +123,8 @@ fn pixel_factors(ex: &Prepared, current: &[Vec<f32>], hist: &Histograms) -> Vec<
 /// neighbour sits (folded once into tables) and how far its match pixel is shifted.
 struct PlaneView<'a> {
     ex: &'a Prepared,
-    matches: &'a Matches,
-    weights: &'a [f32],
+    /// Per voxel: its match's centre pixel and blending weight.
+    matches: &'a [(u32, f32)],
     factors: &'a [f32],
     axes: (usize, usize),
     /// `fold_a[c * n + dx]`: the neighbour's coordinate along the first plane axis, or `u32::MAX`.
@@ -134,14 +135,7 @@ struct PlaneView<'a> {
 }
 
 impl<'a> PlaneView<'a> {
-    fn new(
-        grid: &Grid,
-        ex: &'a Prepared,
-        matches: &'a Matches,
-        weights: &'a [f32],
-        factors: &'a [f32],
-        axis: usize,
-    ) -> Self {
+    fn new(grid: &Grid, ex: &'a Prepared, matches: &'a [(u32, f32)], factors: &'a [f32], axis: usize) -> Self {
         let (a, b) = Axis::ALL[axis].plane_axes();
         let (n, h) = (ex.n, ex.half() as i64);
         let table = |k: usize| -> Vec<u32> {
@@ -157,7 +151,7 @@ impl<'a> PlaneView<'a> {
                 .collect()
         };
         let shift = (0..n * n).map(|i| ((i / n) as i64 - h) * ex.width as i64 + (i % n) as i64 - h).collect();
-        PlaneView { ex, matches, weights, factors, axes: (a, b), fold_a: table(a), fold_b: table(b), shift }
+        PlaneView { ex, matches, factors, axes: (a, b), fold_a: table(a), fold_b: table(b), shift }
     }
 
     /// Call `f(weight, colour)` for every prediction this axis makes for voxel `v`: the
@@ -180,8 +174,9 @@ impl<'a> PlaneView<'a> {
                 u[a] = ua as usize;
                 u[b] = ub as usize;
                 let at = grid.index(u[0], u[1], u[2]);
-                let pix = (self.matches.pixel[at] as i64 + self.shift[dy * n + dx]) as usize;
-                f(self.weights[at] * self.factors[pix], &self.ex.colours[pix * c_n..(pix + 1) * c_n]);
+                let (centre, weight) = self.matches[at];
+                let pix = (centre as i64 + self.shift[dy * n + dx]) as usize;
+                f(weight * self.factors[pix], &self.ex.colours[pix * c_n..(pix + 1) * c_n]);
             }
         }
     }
