@@ -243,8 +243,7 @@ impl<'a> Measure<'a> {
     /// past the excluded square around the query are not repeats: a texture uniform along
     /// one direction finds itself there.
     fn repeats(&self) -> Vec<[i64; 2]> {
-        let w = self.ex.width as i64;
-        let at = |p: u32| (p as i64 % w, p as i64 / w);
+        let at = |p: u32| pixel_xy(p, self.ex.width);
         let count = REPEAT_SAMPLES.min(self.ex.centres.len());
         let mut q = Vec::new();
         let offsets: Vec<[i64; 2]> = (0..count)
@@ -286,7 +285,8 @@ impl<'a> Measure<'a> {
         let (w, n) = (self.ex.width, N);
         let middle = w / 2;
         let copy = |q: u32, p: u32| {
-            let (dx, dy) = (p as i64 % w as i64 - q as i64 % w as i64, p as i64 / w as i64 - q as i64 / w as i64);
+            let ((qx, qy), (px, py)) = (pixel_xy(q, w), pixel_xy(p, w));
+            let (dx, dy) = (px - qx, py - qy);
             repeats.iter().any(|o| {
                 let near = |sx: i64, sy: i64| (dx - sx).abs().max((dy - sy).abs()) < (n / 2) as i64;
                 near(o[0], o[1]) || near(-o[0], -o[1])
@@ -304,6 +304,11 @@ impl<'a> Measure<'a> {
         }
         sum / samples.max(1) as f64
     }
+}
+
+/// Column and row of a pixel index.
+fn pixel_xy(p: u32, width: usize) -> (i64, i64) {
+    (p as i64 % width as i64, p as i64 / width as i64)
 }
 
 fn histogram_distances(volume: &Volume, exemplar: &Image2d, picks: &[usize]) -> Vec<HistogramDistance> {

@@ -33,9 +33,10 @@ impl Grid {
     }
 
     /// Like [`Grid::fold`], but `None` for a clamped axis out of range.
+    #[inline]
     pub fn inside(&self, axis: usize, c: i64) -> Option<usize> {
         let len = self.dims[axis] as i64;
-        if self.wrap[axis] { Some(c.rem_euclid(len) as usize) } else { (0..len).contains(&c).then_some(c as usize) }
+        if (0..len).contains(&c) { Some(c as usize) } else { self.wrap[axis].then(|| c.rem_euclid(len) as usize) }
     }
 
     /// Voxel index.

@@ -134,20 +134,11 @@ fn best_two(grid: &Grid, cx: &Context, v: [usize; 3], query: &[f32], seen: &mut 
         let d = super::knn::squared(query, ex.projection(slot));
         insert(top, (d, ex.centres[slot]));
     };
-    let step = |k: usize, d: i64| -> Option<usize> {
-        let (c, len) = (v[k] as i64 + d, grid.dims[k] as i64);
-        match (c < 0, c >= len, grid.wrap[k]) {
-            (false, false, _) => Some(c as usize),
-            (true, _, true) => Some((c + len) as usize),
-            (_, true, true) => Some((c - len) as usize),
-            _ => None,
-        }
-    };
     let width = ex.width as u32;
     for db in -1i64..=1 {
-        let Some(ub) = step(b, db) else { continue };
+        let Some(ub) = grid.inside(b, v[b] as i64 + db) else { continue };
         for da in -1i64..=1 {
-            let Some(ua) = step(a, da) else { continue };
+            let Some(ua) = grid.inside(a, v[a] as i64 + da) else { continue };
             let mut u = v;
             u[a] = ua;
             u[b] = ub;
