@@ -131,10 +131,7 @@ impl Prepared {
 
     /// The valid centre nearest to pixel (x, y), given as signed coordinates.
     pub fn clamp_centre(&self, x: i64, y: i64) -> u32 {
-        let h = self.half() as i64;
-        let x = x.clamp(h, (self.width - self.n) as i64 + h);
-        let y = y.clamp(h, (self.height - self.n) as i64 + h);
-        (y * self.width as i64 + x) as u32
+        self.centres[self.clamped_slot(x, y)]
     }
 
     /// The projected neighbourhood of the centre in `slot`.
