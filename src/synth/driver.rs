@@ -3,7 +3,7 @@
 
 use super::exemplar::{PrepareOptions, Prepared};
 use super::grid::Grid;
-use super::optimize::{Histograms, densities, optimize, transfer_histograms};
+use super::optimize::{Histograms, densities, optimize, transfer_histograms, transfer_histograms_by_depth};
 use super::params::SynthParams;
 use super::search::{Matches, SearchSetup, pass_seed, search};
 use crate::error::{Error, Result};
@@ -65,7 +65,11 @@ pub fn run(job: &Job, params: &SynthParams, seed: u64, progress: &dyn Progress) 
             grid.data = optimize(&grid, &matches, ex, &histograms(&ex, params));
             if params.histogram_strength > 0.0 {
                 let first = ex.iter().flatten().next().expect("at least one axis is searched");
-                transfer_histograms(&mut grid.data, grid.channels, &first.colours);
+                if job.init == Init::ByDepth {
+                    transfer_histograms_by_depth(&mut grid.data, grid.dims, grid.channels, &first.colours);
+                } else {
+                    transfer_histograms(&mut grid.data, grid.channels, &first.colours);
+                }
             }
             done += work[level];
             progress.update(&format!("{stage}: optimized"), (done / total_work) as f32);

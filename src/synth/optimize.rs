@@ -85,9 +85,14 @@ pub fn optimize(grid: &Grid, matches: &[Matches; 3], exemplars: [Option<&Prepare
 /// of the same quantile of the exemplar samples (ties broken by position, so the result
 /// is deterministic). Keeps the order of values, restores the exemplar's contrast.
 pub fn transfer_histograms(data: &mut [f32], channels: usize, exemplar: &[f32]) {
+    transfer_channels(data, channels, exemplar, 0..channels);
+}
+
+/// The exact transfer of [`transfer_histograms`] for the channels in `which`.
+fn transfer_channels(data: &mut [f32], channels: usize, exemplar: &[f32], which: std::ops::Range<usize>) {
     let count = data.len() / channels;
     let targets = exemplar.len() / channels;
-    for c in 0..channels {
+    for c in which {
         let mut target: Vec<f32> = exemplar.iter().skip(c).step_by(channels).copied().collect();
         target.sort_by(f32::total_cmp);
         let mut order: Vec<u32> = (0..count as u32).collect();
@@ -99,6 +104,31 @@ pub fn transfer_histograms(data: &mut [f32], channels: usize, exemplar: &[f32]) 
             data[v as usize * channels + c] = target[q.min(targets - 1)];
         }
     }
+}
+
+/// Layered histogram transfer: every z-slice's colour channels take the histogram of the
+/// exemplar pixels whose depth (the last channel) is nearest to the slice's depth
+/// `z / (Z - 1)`, a band of about three slices' worth of pixels. A global transfer would
+/// match the spread between layers and leave each layer flat; per depth it restores the
+/// contrast inside each layer. The depth channel keeps the global transfer.
+pub fn transfer_histograms_by_depth(data: &mut [f32], dims: [usize; 3], channels: usize, exemplar: &[f32]) {
+    let pixels = exemplar.len() / channels;
+    let mut order: Vec<(f32, u32)> = (0..pixels).map(|p| (exemplar[p * channels + channels - 1], p as u32)).collect();
+    order.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    let band = (3 * pixels / dims[2].max(1)).clamp(pixels.min(64), pixels);
+    let plane = dims[0] * dims[1] * channels;
+    let mut band_colours = Vec::with_capacity(band * channels);
+    for (z, slice) in data.chunks_exact_mut(plane).enumerate() {
+        let target = if dims[2] > 1 { z as f32 / (dims[2] - 1) as f32 } else { 0.5 };
+        let at = order.partition_point(|e| e.0 < target);
+        let start = at.saturating_sub(band / 2).min(pixels - band);
+        band_colours.clear();
+        for &(_, p) in &order[start..start + band] {
+            band_colours.extend_from_slice(&exemplar[p as usize * channels..(p as usize + 1) * channels]);
+        }
+        transfer_channels(slice, channels, &band_colours, 0..channels - 1);
+    }
+    transfer_channels(data, channels, exemplar, channels - 1..channels);
 }
 
 /// Histogram weight factor of every exemplar pixel.
@@ -187,6 +217,54 @@ mod tests {
     use super::*;
     use crate::synth::exemplar::PrepareOptions;
     use crate::volume::{Channel, Image2d};
+
+    /// Inside each z-slice the order of colours is kept; the depth channel is matched over
+    /// the whole exemplar.
+    #[test]
+    fn the_layered_transfer_keeps_order_and_matches_depth_globally() {
+        // 4 rows of 16 pixels: row r has colours r + 0.01 * x, depth r / 3. The band (at
+        // least 64 pixels) is the whole exemplar here, so every slice gets the same values.
+        let exemplar: Vec<f32> =
+            (0..64).flat_map(|i| [(i / 16) as f32 + 0.01 * (i % 16) as f32, (i / 16) as f32 / 3.0]).collect();
+        let mut data: Vec<f32> = (0..64).flat_map(|i| [1.5 + 0.001 * ((i * 37) % 64) as f32, 0.5]).collect();
+        let before = data.clone();
+        transfer_histograms_by_depth(&mut data, [4, 4, 4], 2, &exemplar);
+        let sorted = |z: usize| {
+            let mut s: Vec<f32> = (0..16).map(|i| data[(z * 16 + i) * 2]).collect();
+            s.sort_by(f32::total_cmp);
+            s
+        };
+        for z in 0..4 {
+            assert_eq!(sorted(z), sorted(0), "slice {z}");
+            for i in 1..16 {
+                let (a, b) = ((z * 16 + i - 1) * 2, (z * 16 + i) * 2);
+                assert_eq!(before[a] < before[b], data[a] < data[b], "slice {z}, voxel {i}");
+            }
+        }
+        let mut depths: Vec<f32> = data.iter().skip(1).step_by(2).copied().collect();
+        depths.sort_by(f32::total_cmp);
+        assert_eq!((depths[0], depths[63]), (0.0, 1.0), "depth spans the exemplar's depths");
+    }
+
+    /// With more rows than the band, slices at different depths get different colours.
+    #[test]
+    fn the_layered_transfer_separates_depths() {
+        // 32 rows of 8 pixels: colour = row / 31 + tiny jitter, depth = row / 31.
+        let exemplar: Vec<f32> = (0..256)
+            .flat_map(|i| {
+                let r = (i / 8) as f32 / 31.0;
+                [r + 0.001 * (i % 8) as f32, r]
+            })
+            .collect();
+        let mut data: Vec<f32> = (0..8 * 8 * 32).flat_map(|i| [0.5 + 0.0001 * (i % 97) as f32, 0.5]).collect();
+        transfer_histograms_by_depth(&mut data, [8, 8, 32], 2, &exemplar);
+        for z in 0..32 {
+            let mean = (0..64).map(|i| data[(z * 64 + i) * 2]).sum::<f32>() / 64.0;
+            let ideal = z as f32 / 31.0;
+            // The band is 64 pixels (8 rows), so a slice's colours lie within 4 rows of its own.
+            assert!((mean - ideal).abs() < 4.5 / 31.0, "slice {z}: mean {mean}, ideal {ideal}");
+        }
+    }
 
     /// When every voxel's match is the exemplar pixel it copies, the blend is that copy.
     #[test]

@@ -83,6 +83,39 @@ fn layered_depth_rises_along_z() {
     assert_eq!(v.meta.texture_type, Some(solidtex::TextureType::T1b));
 }
 
+/// Mean over rows (or z-slices) of the standard deviation of channel 0 inside the row.
+fn within_layer_spread(rows: impl Iterator<Item = Vec<f32>>) -> f32 {
+    let spreads: Vec<f32> = rows
+        .map(|r| {
+            let mean = r.iter().sum::<f32>() / r.len() as f32;
+            (r.iter().map(|v| (v - mean) * (v - mean)).sum::<f32>() / r.len() as f32).sqrt()
+        })
+        .collect();
+    spreads.iter().sum::<f32>() / spreads.len() as f32
+}
+
+/// Each layer keeps the variation the exemplar has along its rows: a volume whose layers
+/// are flat (what a global histogram transfer leaves) has nothing to show across depth.
+#[test]
+fn layered_synthesis_keeps_the_contrast_inside_each_layer() {
+    // Rows of strong fBm texture on a brightness that rises with the row.
+    let data = (0..48 * 48)
+        .flat_map(|i| {
+            let (x, y) = ((i % 48) as f32, (i / 48) as f32);
+            let n = noise::fbm(11, glam::Vec3::new(x / 6.0, y / 6.0, 0.0), [8; 3], 3);
+            let v = (0.15 + 0.6 * y / 47.0 + 0.25 * n).clamp(0.0, 1.0);
+            [v, v, v]
+        })
+        .collect();
+    let ex = Image2d::from_data(48, 48, Channel::rgb(), data).unwrap();
+    let rows = within_layer_spread((0..48).map(|y| (0..48).map(|x| ex.pixel(x, y)[0]).collect()));
+    let params = SynthParams { size: [24, 24, 48], levels: 2, max_iterations: 3, ..SynthParams::default() };
+    let v = synthesize_layered(&ex, None, &params, &LayeredParams::default(), 3, &NoProgress).unwrap();
+    let slices = within_layer_spread((0..48).map(|z| (0..24 * 24).map(|i| v.get(i % 24, i / 24, z, 0)).collect()));
+    assert!(slices > 0.6 * rows, "spread inside a layer: volume {slices}, exemplar rows {rows}");
+    assert!(slices < 1.4 * rows, "spread inside a layer: volume {slices}, exemplar rows {rows}");
+}
+
 #[test]
 fn the_anti_sweeping_rule_lowers_the_sweeping_index() {
     let ex = bands();
