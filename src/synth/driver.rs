@@ -1,6 +1,7 @@
 //! The multi-resolution loop: prepare exemplar pyramids, initialize the coarsest
 //! volume, then per level {search, optimize} until converged, and upsample.
 
+use super::depth;
 use super::exemplar::{PrepareOptions, Prepared};
 use super::grid::Grid;
 use super::optimize::{Histograms, densities, optimize, transfer_histograms, transfer_histograms_by_depth};
@@ -196,17 +197,13 @@ fn init(
 /// Valid centres sorted by their depth (the last channel), as (depth, pixel).
 fn depth_order(ex: &Prepared) -> Vec<(f32, u32)> {
     let c = ex.channels;
-    let mut order: Vec<(f32, u32)> = ex.centres.iter().map(|&p| (ex.colours[p as usize * c + c - 1], p)).collect();
-    order.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-    order
+    depth::sorted_by_depth(ex.centres.iter().map(|&p| (ex.colours[p as usize * c + c - 1], p)).collect())
 }
 
 /// A random centre among those whose depth is nearest to slice z's depth.
 fn pick_by_depth(order: &[(f32, u32)], z: usize, depth: usize, hash: u64) -> u32 {
-    let target = if depth > 1 { z as f32 / (depth - 1) as f32 } else { 0.5 };
-    let at = order.partition_point(|e| e.0 < target);
     let window = (order.len() / depth.max(1)).clamp(1, order.len());
-    let start = at.saturating_sub(window / 2).min(order.len() - window);
+    let start = depth::band(order, depth::slice_depth(z, depth), window).start;
     order[start + (hash % window as u64) as usize].1
 }
 

@@ -16,6 +16,7 @@
 //! voxel, axis), and every pass computes each voxel from the previous state only, so
 //! the output is bit-identical on any number of threads.
 
+mod depth;
 mod driver;
 pub(crate) mod exemplar;
 mod grid;

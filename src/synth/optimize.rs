@@ -6,6 +6,7 @@
 //! (histogram matching, Fig. 4.6). Each voxel is computed from the previous state
 //! only, so the result does not depend on the order or the threads.
 
+use super::depth;
 use super::exemplar::Prepared;
 use super::grid::Grid;
 use super::search::Matches;
@@ -113,17 +114,14 @@ fn transfer_channels(data: &mut [f32], channels: usize, exemplar: &[f32], which:
 /// contrast inside each layer. The depth channel keeps the global transfer.
 pub fn transfer_histograms_by_depth(data: &mut [f32], dims: [usize; 3], channels: usize, exemplar: &[f32]) {
     let pixels = exemplar.len() / channels;
-    let mut order: Vec<(f32, u32)> = (0..pixels).map(|p| (exemplar[p * channels + channels - 1], p as u32)).collect();
-    order.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-    let band = (3 * pixels / dims[2].max(1)).clamp(pixels.min(64), pixels);
+    let order =
+        depth::sorted_by_depth((0..pixels).map(|p| (exemplar[p * channels + channels - 1], p as u32)).collect());
+    let width = (3 * pixels / dims[2].max(1)).clamp(pixels.min(64), pixels);
     let plane = dims[0] * dims[1] * channels;
-    let mut band_colours = Vec::with_capacity(band * channels);
+    let mut band_colours = Vec::with_capacity(width * channels);
     for (z, slice) in data.chunks_exact_mut(plane).enumerate() {
-        let target = if dims[2] > 1 { z as f32 / (dims[2] - 1) as f32 } else { 0.5 };
-        let at = order.partition_point(|e| e.0 < target);
-        let start = at.saturating_sub(band / 2).min(pixels - band);
         band_colours.clear();
-        for &(_, p) in &order[start..start + band] {
+        for &(_, p) in &order[depth::band(&order, depth::slice_depth(z, dims[2]), width)] {
             band_colours.extend_from_slice(&exemplar[p as usize * channels..(p as usize + 1) * channels]);
         }
         transfer_channels(slice, channels, &band_colours, 0..channels - 1);
