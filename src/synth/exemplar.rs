@@ -39,8 +39,8 @@ pub struct Prepared {
     pub centres: Vec<u32>,
     /// The PCA projection of neighbourhood vectors.
     pub pca: Pca,
-    /// `centres.len() x pca.dims` projected neighbourhoods.
-    pub projected: Vec<f32>,
+    /// The projected neighbourhood of every centre, one row per slot.
+    pub projected: LineRows,
     /// `centres.len() x k` slots (indices into `centres`): the k-coherence set of each centre.
     pub coherence: Vec<u32>,
     /// Size of each coherence set.
@@ -77,7 +77,7 @@ impl Prepared {
             n: opt.n,
             centres,
             pca: Pca { input: 0, dims: 0, mean: vec![], basis: vec![], explained: 0.0 },
-            projected: Vec::new(),
+            projected: LineRows::new(&[], 1),
             coherence: Vec::new(),
             k: opt.k,
         };
@@ -86,7 +86,7 @@ impl Prepared {
         let stride = (prepared.centres.len() / PCA_SAMPLES).max(1);
         let sample: Vec<f32> = vectors.chunks_exact(m).step_by(stride).flatten().copied().collect();
         prepared.pca = Pca::fit(&sample, m, opt.variance, opt.max_dims);
-        prepared.projected = project_all(&prepared.pca, &vectors, m);
+        prepared.projected = LineRows::new(&project_all(&prepared.pca, &vectors, m), prepared.pca.dims);
         if opt.k > 0 {
             prepared.coherence = prepared.coherence_sets();
         }
@@ -136,7 +136,7 @@ impl Prepared {
 
     /// The projected neighbourhood of the centre in `slot`.
     pub fn projection(&self, slot: usize) -> &[f32] {
-        &self.projected[slot * self.pca.dims..(slot + 1) * self.pca.dims]
+        self.projected.row(slot)
     }
 
     /// A pseudo-random valid centre from a hash value.
@@ -154,7 +154,8 @@ impl Prepared {
     fn coherence_sets(&self) -> Vec<u32> {
         let dims = self.pca.dims;
         let low = dims.min(TREE_DIMS);
-        let points: Vec<f32> = self.projected.chunks_exact(dims).flat_map(|p| p[..low].iter().copied()).collect();
+        let points: Vec<f32> =
+            (0..self.centres.len()).flat_map(|s| self.projection(s)[..low].iter().copied()).collect();
         let tree = KdTree::build(points, low);
         let k = self.k;
         let away = (self.n / 2).max(2) as i64;
@@ -183,6 +184,55 @@ impl Prepared {
     }
 }
 
+/// Rows of equal length laid out on 64-byte cache lines: a row of up to 16 values lies
+/// inside one line, a longer one starts a line, so reading one candidate's projection
+/// never touches the end of one line and the start of the next.
+#[derive(Debug)]
+pub struct LineRows {
+    data: Vec<f32>,
+    start: usize,
+    stride: usize,
+    width: usize,
+}
+
+/// f32 values per cache line.
+const LINE: usize = 16;
+
+impl LineRows {
+    /// Lay out the rows of `width` values in `values`.
+    pub fn new(values: &[f32], width: usize) -> LineRows {
+        // Rows of up to a line take a power-of-two share of one (6 values: half a line).
+        let stride = if width <= LINE { width.max(1).next_power_of_two() } else { width.div_ceil(LINE) * LINE };
+        let count = values.len() / width.max(1);
+        let mut data = vec![0.0; count * stride + LINE];
+        let misaligned = (data.as_ptr() as usize / std::mem::size_of::<f32>()) % LINE;
+        let start = (LINE - misaligned) % LINE;
+        for (i, row) in values.chunks_exact(width.max(1)).enumerate() {
+            data[start + i * stride..start + i * stride + width].copy_from_slice(row);
+        }
+        LineRows { data, start, stride, width }
+    }
+
+    /// Row `i`.
+    #[inline]
+    pub fn row(&self, i: usize) -> &[f32] {
+        let at = self.start + i * self.stride;
+        &self.data[at..at + self.width]
+    }
+
+    fn len(&self) -> usize {
+        (self.data.len() - LINE) / self.stride
+    }
+}
+
+impl Clone for LineRows {
+    /// A copy aligned for its own allocation.
+    fn clone(&self) -> LineRows {
+        let values: Vec<f32> = (0..self.len()).flat_map(|i| self.row(i).iter().copied()).collect();
+        LineRows::new(&values, self.width)
+    }
+}
+
 fn project_all(pca: &Pca, vectors: &[f32], m: usize) -> Vec<f32> {
     let dims = pca.dims;
     let mut out = vec![0.0; vectors.len() / m * dims];
@@ -194,3 +244,25 @@ fn project_all(pca: &Pca, vectors: &[f32], m: usize) -> Vec<f32> {
     out
 }
 pub use super::knn::squared;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Rows read back unchanged and never cross a cache line, copies included.
+    #[test]
+    fn line_rows_keep_values_inside_lines() {
+        for width in [1, 3, 6, 8, 16, 20] {
+            let values: Vec<f32> = (0..width * 37).map(|i| i as f32 * 0.5).collect();
+            let rows = LineRows::new(&values, width);
+            for copy in [&rows, &rows.clone()] {
+                for i in 0..37 {
+                    let row = copy.row(i);
+                    assert_eq!(row, &values[i * width..(i + 1) * width], "width {width}, row {i}");
+                    let at = row.as_ptr() as usize % 64;
+                    assert!(if width <= LINE { at + 4 * width <= 64 } else { at == 0 }, "width {width}, row {i}");
+                }
+            }
+        }
+    }
+}

@@ -1,9 +1,10 @@
 //! Neighbourhood search with k-coherence candidates.
 //!
 //! For voxel v and axis i, the candidates are the coherence sets of the exemplar
-//! pixels its in-plane neighbours' matches predict for v (`P[u] + (v - u)`), plus one
-//! random centre. The best (and second best) by PCA distance win. In layered mode the
-//! two-best-match rule keeps the x and y matches from pointing at the same pixel.
+//! pixels that v's own match and its four in-plane edge neighbours' matches predict for
+//! v (`P[u] + (v - u)`), plus one random centre. The best (and second best) by PCA
+//! distance win. In layered mode the two-best-match rule keeps the x and y matches from
+//! pointing at the same pixel.
 
 use super::exemplar::Prepared;
 use super::grid::Grid;
@@ -36,6 +37,11 @@ struct Best {
     first: (f32, u32),
     second: (f32, u32),
 }
+
+/// The in-plane neighbours whose matches propose candidates: the voxel and its four
+/// edge neighbours. The four diagonal ones cost 45 % more distances and gave the same
+/// slice energy on the photos (within 0.01; docs/PERFORMANCE.md, session 5).
+const SOURCES: [(i64, i64); 5] = [(0, -1), (-1, 0), (0, 0), (1, 0), (0, 1)];
 
 /// How many of the closest candidates are kept to find a second best elsewhere.
 const TOP: usize = 6;
@@ -78,7 +84,7 @@ fn search_slice(grid: &Grid, previous: &[Matches; 3], setup: &SearchSetup, z: us
     let mut out: [Vec<(f32, u32)>; 3] = Default::default();
     let mut seen: [Vec<u32>; 3] = Default::default();
     let mut stamp = 0u32;
-    let (mut scratch, mut proj, mut query) = (Vec::new(), Vec::new(), Vec::new());
+    let (mut taps, mut proj, mut query) = (Vec::new(), Vec::new(), Vec::new());
     let mut sum = 0.0f64;
     for axis in 0..3 {
         if let Some(ex) = setup.exemplars[axis] {
@@ -90,7 +96,7 @@ fn search_slice(grid: &Grid, previous: &[Matches; 3], setup: &SearchSetup, z: us
     for y in 0..dy {
         for axis in 0..3 {
             let Some(ex) = setup.exemplars[axis] else { continue };
-            grid.project_row(ex, Axis::ALL[axis], y, z, &mut scratch, &mut proj);
+            grid.project_row(ex, Axis::ALL[axis], y, z, &mut taps, &mut proj);
             for (x, best) in bests.iter_mut().enumerate() {
                 query.clear();
                 query.extend((0..ex.pca.dims).map(|k| proj[k * dx + x]));
@@ -135,20 +141,19 @@ fn best_two(grid: &Grid, cx: &Context, v: [usize; 3], query: &[f32], seen: &mut 
         insert(top, (d, ex.centres[slot]));
     };
     let width = ex.width as u32;
-    for db in -1i64..=1 {
-        let Some(ub) = grid.inside(b, v[b] as i64 + db) else { continue };
-        for da in -1i64..=1 {
-            let Some(ua) = grid.inside(a, v[a] as i64 + da) else { continue };
-            let mut u = v;
-            u[a] = ua;
-            u[b] = ub;
-            let p = previous.pixel[grid.index(u[0], u[1], u[2])];
-            let py = (p / width) as i64;
-            let px = p as i64 - py * width as i64;
-            let slot = ex.clamped_slot(px - da, py - db);
-            for &c in &ex.coherence[slot * ex.k..(slot + 1) * ex.k] {
-                consider(c as usize, &mut top);
-            }
+    for (da, db) in SOURCES {
+        let (Some(ua), Some(ub)) = (grid.inside(a, v[a] as i64 + da), grid.inside(b, v[b] as i64 + db)) else {
+            continue;
+        };
+        let mut u = v;
+        u[a] = ua;
+        u[b] = ub;
+        let p = previous.pixel[grid.index(u[0], u[1], u[2])];
+        let py = (p / width) as i64;
+        let px = p as i64 - py * width as i64;
+        let slot = ex.clamped_slot(px - da, py - db);
+        for &c in &ex.coherence[slot * ex.k..(slot + 1) * ex.k] {
+            consider(c as usize, &mut top);
         }
     }
     let voxel = grid.index(v[0], v[1], v[2]) as i64;
