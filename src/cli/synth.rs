@@ -60,6 +60,10 @@ pub struct SynthArgs {
     /// Weight of the depth channel in neighbourhood distances (with --layered).
     #[arg(long, default_value_t = 1.0, requires = "layered")]
     pub depth_weight: f32,
+    /// Start from this volume (same size; the exemplar's channels) instead of random
+    /// pixels, and refine it: e.g. a sweep whose cuts should look like the photo.
+    #[arg(long)]
+    pub start: Option<PathBuf>,
     /// Output size: N for a cube, or XxYxZ.
     #[arg(long, default_value = "64")]
     pub size: String,
@@ -127,9 +131,13 @@ pub fn run(args: &SynthArgs) -> Result<()> {
         coherence: args.coherence,
         max_pca_dims: args.pca_dims,
         budget_bytes: io::budget_from_env()?,
+        start: args.start.as_deref().map(|p| io::read_volume(p, io::budget_from_env()?)).transpose()?,
         ..SynthParams::default()
     };
     let ex = args.others.load(&args.exemplar, "exemplar")?;
+    if let Some(path) = &args.start {
+        synth::check_start(&params, ex.channels(), args.layered).map_err(|e| e.in_file(path))?;
+    }
     let started = Instant::now();
     let bar = Bar { bar: ProgressBar::new(1000), verbose: args.verbose, started };
     bar.bar.set_style(

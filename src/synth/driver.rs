@@ -4,6 +4,7 @@
 use super::depth;
 use super::exemplar::{PrepareOptions, Prepared};
 use super::grid::Grid;
+use super::knn::KdTree;
 use super::optimize::{Histograms, densities, optimize, transfer_histograms, transfer_histograms_by_depth};
 use super::params::SynthParams;
 use super::search::{Matches, SearchSetup, pass_seed, search};
@@ -32,6 +33,9 @@ pub struct Job<'a> {
     pub init: Init,
     /// Two-best-match rule between x and y.
     pub anti_sweeping: bool,
+    /// Finest-level samples to start from instead of random pixels (size and channels of
+    /// the output).
+    pub start: Option<&'a [f32]>,
 }
 
 /// Run the synthesis; returns the finest level's samples.
@@ -45,7 +49,10 @@ pub fn run(job: &Job, params: &SynthParams, seed: u64, progress: &dyn Progress) 
     for (level, dims) in levels.iter().enumerate() {
         let ex = level_exemplars(&pyramids, level);
         let (mut grid, mut matches) = match state.take() {
-            None => init(job, &ex, *dims, params, seed),
+            None => match job.start {
+                Some(start) => init_from(job, &ex, *dims, params, start),
+                None => init(job, &ex, *dims, params, seed),
+            },
             Some((g, m)) => upsample_level(&g, &m, &ex, *dims, &pyramids, level),
         };
         let mut previous = f64::INFINITY;
@@ -192,6 +199,54 @@ fn init(
         None => Matches::default(),
     });
     (Grid { dims, channels, data, wrap: wraps(job, params) }, matches)
+}
+
+/// The coarsest level from a start volume: its samples shrunk to the level's size, and
+/// for every voxel and axis the exemplar neighbourhood nearest to the voxel's own (exact
+/// search over all centres), so the first search refines what the volume already shows.
+fn init_from(
+    job: &Job,
+    ex: &[Option<&Prepared>; 3],
+    dims: [usize; 3],
+    params: &SynthParams,
+    start: &[f32],
+) -> (Grid, [Matches; 3]) {
+    let first = ex.iter().flatten().next().expect("at least one axis is searched");
+    let wrap = wraps(job, params);
+    let names = (0..first.channels).map(|i| crate::volume::Channel::Named(format!("c{i}"))).collect();
+    let mut volume = Volume::from_data(params.size, names, start.to_vec()).expect("the start volume was checked");
+    let edge = if wrap[0] { Edge::Wrap } else { Edge::Clamp };
+    while volume.dims() != dims {
+        volume = downsample(&volume, edge).expect("a smaller volume fits the budget");
+    }
+    let grid = Grid { dims, channels: first.channels, data: volume.into_data(), wrap };
+    let matches = [0, 1, 2].map(|a| ex[a].map(|e| nearest_matches(&grid, e, a)).unwrap_or_default());
+    (grid, matches)
+}
+
+/// Every voxel's nearest exemplar neighbourhood on one axis.
+fn nearest_matches(grid: &Grid, ex: &Prepared, axis: usize) -> Matches {
+    let dims = ex.pca.dims;
+    let points: Vec<f32> = (0..ex.centres.len()).flat_map(|s| ex.projection(s).to_vec()).collect();
+    let tree = KdTree::build(points, dims);
+    let [dx, dy, dz] = grid.dims;
+    let rows: Vec<Vec<(f32, u32)>> = (0..dy * dz)
+        .into_par_iter()
+        .map(|r| {
+            let (mut taps, mut proj) = (Vec::new(), Vec::new());
+            grid.project_row(ex, crate::volume::Axis::ALL[axis], r % dy, r / dy, &mut taps, &mut proj);
+            (0..dx)
+                .map(|x| {
+                    let query: Vec<f32> = (0..dims).map(|k| proj[k * dx + x]).collect();
+                    let (d, slot) = tree.nearest(&query, 1)[0];
+                    (d.sqrt(), ex.centres[slot as usize])
+                })
+                .collect()
+        })
+        .collect();
+    let flat = rows.into_iter().flatten();
+    let (dist, pixel) = flat.unzip();
+    Matches { pixel, dist }
 }
 
 /// Valid centres sorted by their depth (the last channel), as (depth, pixel).

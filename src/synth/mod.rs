@@ -54,7 +54,14 @@ pub fn synthesize(ex: Exemplars, params: &SynthParams, seed: u64, progress: &dyn
     let images = [ex.x, ey, ez];
     check_exemplars(&images, &["Ex", "Ey", "Ez"], params)?;
     let weights = vec![1.0; ex.x.channel_count()];
-    let job = Job { images: [Some(ex.x), Some(ey), Some(ez)], weights, init: Init::Random, anti_sweeping: false };
+    let start = start_samples(params, ex.x.channels(), false)?;
+    let job = Job {
+        images: [Some(ex.x), Some(ey), Some(ez)],
+        weights,
+        init: Init::Random,
+        anti_sweeping: false,
+        start: start.as_deref(),
+    };
     let data = driver::run(&job, params, seed, progress)?;
     let kind = match (ex.y, ex.z) {
         (None, None) => TextureType::T0,
@@ -80,11 +87,13 @@ pub fn synthesize_layered(
     let with_depth = add_depth(exemplar, depth)?;
     let mut weights = vec![1.0; exemplar.channel_count()];
     weights.push(layered.depth_weight);
+    let start = start_samples(params, exemplar.channels(), true)?;
     let job = Job {
         images: [Some(&with_depth), Some(&with_depth), None],
         weights,
         init: Init::ByDepth,
         anti_sweeping: layered.anti_sweeping,
+        start: start.as_deref(),
     };
     let data = driver::run(&job, params, seed, progress)?;
     finish(params, with_depth.channels().to_vec(), data, TextureType::T1b, "synth-layered", seed)
@@ -103,6 +112,56 @@ fn finish(
     meta.set("seed", seed.to_string());
     meta.set("levels", params.levels.to_string());
     Ok(Volume::from_data(params.size, channels, data)?.with_meta(meta))
+}
+
+/// The start volume's samples with the exemplar's `channels` (layered: plus a Depth
+/// channel `z / (Z - 1)`, replacing any it has), or `None` without a start volume.
+fn start_samples(params: &SynthParams, channels: &[Channel], layered: bool) -> Result<Option<Vec<f32>>> {
+    check_start(params, channels, layered)?;
+    let Some(start) = &params.start else { return Ok(None) };
+    let colours = start_channels(start, layered);
+    let [dx, dy, dz] = start.dims();
+    let per = start.channel_count();
+    let mut out = Vec::with_capacity(dx * dy * dz * (channels.len() + usize::from(layered)));
+    for (v, voxel) in start.data().chunks_exact(per).enumerate() {
+        out.extend(colours.iter().map(|&c| voxel[c]));
+        if layered {
+            out.push((v / (dx * dy)) as f32 / (dz - 1).max(1) as f32);
+        }
+    }
+    Ok(Some(out))
+}
+
+/// The start volume's channels that synthesis reads (layered: all but Depth).
+fn start_channels(start: &Volume, layered: bool) -> Vec<usize> {
+    (0..start.channel_count()).filter(|&c| !(layered && start.channels()[c] == Channel::Depth)).collect()
+}
+
+/// Whether `params.start` (if any) fits an exemplar with `channels`: the asked size, as
+/// many channels (layered: a Depth channel aside), finite samples.
+pub fn check_start(params: &SynthParams, channels: &[Channel], layered: bool) -> Result<()> {
+    let Some(start) = &params.start else { return Ok(()) };
+    if start.dims() != params.size {
+        let [x, y, z] = start.dims();
+        let [sx, sy, sz] = params.size;
+        return Err(Error::invalid(format!(
+            "the start volume is {x}x{y}x{z} voxels but the size asked is {sx}x{sy}x{sz}; they must be equal"
+        )));
+    }
+    if start_channels(start, layered).len() != channels.len() {
+        return Err(Error::invalid(format!(
+            "the start volume has channels {} but the exemplar has {}; they must have as many{}",
+            crate::volume::channel_names(start.channels()),
+            crate::volume::channel_names(channels),
+            if layered { " (a Depth channel aside)" } else { "" }
+        )));
+    }
+    match start.first_non_finite() {
+        Some([x, y, z, c]) => {
+            Err(Error::invalid(format!("the start volume: voxel ({x}, {y}, {z}) channel {c} is not finite")))
+        }
+        None => Ok(()),
+    }
 }
 
 /// Channel counts agree, samples are finite, and the coarsest level holds a neighbourhood.

@@ -32,6 +32,10 @@ pub struct SynthParams {
     pub tileable: bool,
     /// Voxel budget in bytes for the output.
     pub budget_bytes: u64,
+    /// Start from this volume instead of random exemplar pixels (`None`): its size must
+    /// be `size`, its channels the exemplar's (layered: without Depth, which is set from z).
+    /// Synthesis then refines it, e.g. a hand-made sweep whose cuts should look like a photo.
+    pub start: Option<crate::volume::Volume>,
 }
 
 impl Default for SynthParams {
@@ -50,6 +54,7 @@ impl Default for SynthParams {
             histogram_strength: 1.0,
             tileable: true,
             budget_bytes: crate::volume::DEFAULT_BUDGET_BYTES,
+            start: None,
         }
     }
 }

@@ -228,5 +228,14 @@ fn synth_refuses_bad_exemplars_and_sizes_and_writes_nothing() {
     let d = depth.to_string_lossy().into_owned();
     let run = solidtex(&["synth", &s, "--layered", "--depth", &d, "--levels", "1", "--size", "8", "-o", &out]);
     assert_fails(&run, &["depth image is 20x12", "12x12"]);
-    assert_eq!(listing(dir.path()), ["depth.png", "nan.exr", "small.png"]);
+    let start = at(dir.path(), "start.exr");
+    assert!(solidtex(&["make", "marble", "--size", "8", "-o", &start]).status.success());
+    let run = solidtex(&["synth", &s, "--levels", "1", "--size", "10", "--start", &start, "-o", &out]);
+    assert_fails(&run, &["start.exr", "8x8x8", "10x10x10"]);
+    let grey = dir.path().join("grey.png");
+    image::GrayImage::from_pixel(12, 12, image::Luma([90])).save(&grey).unwrap();
+    let g = grey.to_string_lossy().into_owned();
+    let run = solidtex(&["synth", &g, "--levels", "1", "--size", "8", "--start", &start, "-o", &out]);
+    assert_fails(&run, &["start.exr", "channels R,G,B", "exemplar has"]);
+    assert_eq!(listing(dir.path()), ["depth.png", "grey.png", "nan.exr", "small.png", "start.exr"]);
 }

@@ -129,6 +129,41 @@ fn the_anti_sweeping_rule_lowers_the_sweeping_index() {
     assert!(with < without, "with the rule {with}, without {without}");
 }
 
+/// A start volume sets the layout: starting from a volume dark in its left half and bright
+/// in its right half, the synthesized volume keeps that split (the exemplar has both dark
+/// and bright areas); from random pixels it does not.
+#[test]
+fn synthesis_refines_a_start_volume() {
+    let ex = blobs(1, 4);
+    let size = [24, 16, 16];
+    let (dark, bright) = quantiles(&ex, 0.2, 0.8);
+    let data = (0..24 * 16 * 16).map(|i| if i % 24 < 12 { dark } else { bright }).collect();
+    let start = Volume::from_data(size, Channel::grey(), data).unwrap();
+    let halves = |v: &Volume| {
+        let mean = |left: bool| {
+            let picked: Vec<f32> =
+                v.data().iter().enumerate().filter(|(i, _)| (i % 24 < 12) == left).map(|s| *s.1).collect();
+            picked.iter().sum::<f32>() / picked.len() as f32
+        };
+        mean(false) - mean(true)
+    };
+    let run = |start: Option<Volume>| {
+        let params = SynthParams { start, ..small(size) };
+        synthesize(Exemplars { x: &ex, y: None, z: None }, &params, 5, &NoProgress).unwrap()
+    };
+    let (refined, free) = (halves(&run(Some(start))), halves(&run(None)));
+    assert!(refined > 0.5 * (bright - dark), "split kept: {refined} of {}", bright - dark);
+    assert!(free.abs() < 0.25 * (bright - dark), "split from random pixels: {free}");
+}
+
+/// The exemplar values at two quantiles.
+fn quantiles(ex: &Image2d, a: f32, b: f32) -> (f32, f32) {
+    let mut values = ex.data().to_vec();
+    values.sort_by(f32::total_cmp);
+    let at = |q: f32| values[(q * (values.len() - 1) as f32) as usize];
+    (at(a), at(b))
+}
+
 #[test]
 fn histogram_matching_lowers_the_histogram_distance() {
     let ex = blobs(1, 9);
