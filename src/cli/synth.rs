@@ -61,7 +61,7 @@ pub struct SynthArgs {
     #[arg(long, default_value_t = 1.0, requires = "layered")]
     pub depth_weight: f32,
     /// Start from this volume (same size; the exemplar's channels) instead of random
-    /// pixels, and refine it: e.g. a sweep whose cuts should look like the photo.
+    /// pixels, and refine it: its coarse layout stays, the exemplar's look comes in.
     #[arg(long)]
     pub start: Option<PathBuf>,
     /// Output size: N for a cube, or XxYxZ.
@@ -121,6 +121,7 @@ impl Progress for Bar {
 pub fn run(args: &SynthArgs) -> Result<()> {
     io::Format::of(&args.output)?;
     io::check_folder(&args.output)?;
+    let budget = io::budget_from_env()?;
     let params = SynthParams {
         size: super::commands::parse_size(&args.size)?,
         levels: args.levels,
@@ -130,8 +131,8 @@ pub fn run(args: &SynthArgs) -> Result<()> {
         tolerance: args.tolerance,
         coherence: args.coherence,
         max_pca_dims: args.pca_dims,
-        budget_bytes: io::budget_from_env()?,
-        start: args.start.as_deref().map(|p| io::read_volume(p, io::budget_from_env()?)).transpose()?,
+        budget_bytes: budget,
+        start: args.start.as_deref().map(|p| io::read_volume(p, budget)).transpose()?,
         ..SynthParams::default()
     };
     let ex = args.others.load(&args.exemplar, "exemplar")?;

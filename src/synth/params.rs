@@ -34,7 +34,7 @@ pub struct SynthParams {
     pub budget_bytes: u64,
     /// Start from this volume instead of random exemplar pixels (`None`): its size must
     /// be `size`, its channels the exemplar's (layered: without Depth, which is set from z).
-    /// Synthesis then refines it, e.g. a hand-made sweep whose cuts should look like a photo.
+    /// Synthesis then refines it: the start's coarse layout stays, the exemplar's look comes in.
     pub start: Option<crate::volume::Volume>,
 }
 
