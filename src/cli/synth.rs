@@ -91,6 +91,9 @@ pub struct SynthArgs {
     /// Most PCA dimensions of the neighbourhood search (fewer: faster, coarser matches).
     #[arg(long, default_value_t = 16)]
     pub pca_dims: usize,
+    /// Share of the neighbourhood variance the PCA keeps, up to --pca-dims dimensions.
+    #[arg(long, default_value_t = 0.95)]
+    pub pca_variance: f32,
     /// Print every stage with the time it was reached.
     #[arg(long, short)]
     pub verbose: bool,
@@ -131,6 +134,7 @@ pub fn run(args: &SynthArgs) -> Result<()> {
         tolerance: args.tolerance,
         coherence: args.coherence,
         max_pca_dims: args.pca_dims,
+        pca_variance: args.pca_variance,
         budget_bytes: budget,
         start: args.start.as_deref().map(|p| io::read_volume(p, budget)).transpose()?,
         ..SynthParams::default()

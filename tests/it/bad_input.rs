@@ -218,6 +218,8 @@ fn synth_refuses_bad_exemplars_and_sizes_and_writes_nothing() {
     let s = small.to_string_lossy().into_owned();
     assert_fails(&solidtex(&["synth", &s, "--size", "8", "-o", &out]), &["small.png", "12x12 pixels", "neighbourhood"]);
     assert_fails(&solidtex(&["synth", &s, "--size", "0", "-o", &out]), &["\"0\"", "at least 1"]);
+    let run = solidtex(&["synth", &s, "--levels", "1", "--size", "8", "--pca-variance", "1.5", "-o", &out]);
+    assert_fails(&run, &["pca_variance = 1.5", "at most 1"]);
     let big = solidtex_env(
         &["synth", &s, "--levels", "1", "--size", "4096", "-o", &out],
         &[("SOLIDTEX_MAX_BYTES", "1000000")],
