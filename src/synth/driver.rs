@@ -213,11 +213,9 @@ fn init_from(
 ) -> (Grid, [Matches; 3]) {
     let first = ex.iter().flatten().next().expect("at least one axis is searched");
     let wrap = wraps(job, params);
-    let names = (0..first.channels).map(|i| crate::volume::Channel::Named(format!("c{i}"))).collect();
-    let mut volume = Volume::from_data(params.size, names, start.to_vec()).expect("the start volume was checked");
-    let edge = if wrap[0] { Edge::Wrap } else { Edge::Clamp };
+    let mut volume = as_volume(params.size, first.channels, start.to_vec());
     while volume.dims() != dims {
-        volume = downsample(&volume, edge).expect("a smaller volume fits the budget");
+        volume = downsample(&volume, edge(wrap)).expect("a smaller volume fits the budget");
     }
     let grid = Grid { dims, channels: first.channels, data: volume.into_data(), wrap };
     let matches = [0, 1, 2].map(|a| ex[a].map(|e| nearest_matches(&grid, e, a)).unwrap_or_default());
@@ -227,17 +225,17 @@ fn init_from(
 /// Every voxel's nearest exemplar neighbourhood on one axis.
 fn nearest_matches(grid: &Grid, ex: &Prepared, axis: usize) -> Matches {
     let dims = ex.pca.dims;
-    let points: Vec<f32> = (0..ex.centres.len()).flat_map(|s| ex.projection(s).to_vec()).collect();
-    let tree = KdTree::build(points, dims);
+    let tree = KdTree::build(ex.projected.packed(dims), dims);
     let [dx, dy, dz] = grid.dims;
     let rows: Vec<Vec<(f32, u32)>> = (0..dy * dz)
         .into_par_iter()
         .map(|r| {
-            let (mut taps, mut proj) = (Vec::new(), Vec::new());
+            let (mut taps, mut proj, mut query) = (Vec::new(), Vec::new(), Vec::new());
             grid.project_row(ex, crate::volume::Axis::ALL[axis], r % dy, r / dy, &mut taps, &mut proj);
             (0..dx)
                 .map(|x| {
-                    let query: Vec<f32> = (0..dims).map(|k| proj[k * dx + x]).collect();
+                    query.clear();
+                    query.extend((0..dims).map(|k| proj[k * dx + x]));
                     let (d, slot) = tree.nearest(&query, 1)[0];
                     (d.sqrt(), ex.centres[slot as usize])
                 })
@@ -287,10 +285,19 @@ fn upsample_level(
 }
 
 fn upsample_samples(coarse: &Grid, dims: [usize; 3]) -> Vec<f32> {
-    let channels = (0..coarse.channels).map(|i| crate::volume::Channel::Named(format!("c{i}"))).collect();
-    let volume = Volume::from_data(coarse.dims, channels, coarse.data.clone()).expect("grid sizes are consistent");
-    let edge = if coarse.wrap[0] { Edge::Wrap } else { Edge::Clamp };
-    upsample(&volume, dims, edge).expect("the finer level fits the budget checked up front").into_data()
+    let volume = as_volume(coarse.dims, coarse.channels, coarse.data.clone());
+    upsample(&volume, dims, edge(coarse.wrap)).expect("the finer level fits the budget checked up front").into_data()
+}
+
+/// Samples as a volume (placeholder channel names) for the pyramid's resamplers.
+fn as_volume(dims: [usize; 3], channels: usize, data: Vec<f32>) -> Volume {
+    let names = (0..channels).map(|i| crate::volume::Channel::Named(format!("c{i}"))).collect();
+    Volume::from_data(dims, names, data).expect("grid sizes are consistent")
+}
+
+/// The resamplers' edge rule: that of the first axis (x and y always agree).
+fn edge(wrap: [bool; 3]) -> Edge {
+    if wrap[0] { Edge::Wrap } else { Edge::Clamp }
 }
 
 fn finer_match(

@@ -154,9 +154,7 @@ impl Prepared {
     fn coherence_sets(&self) -> Vec<u32> {
         let dims = self.pca.dims;
         let low = dims.min(TREE_DIMS);
-        let points: Vec<f32> =
-            (0..self.centres.len()).flat_map(|s| self.projection(s)[..low].iter().copied()).collect();
-        let tree = KdTree::build(points, low);
+        let tree = KdTree::build(self.projected.packed(low), low);
         let k = self.k;
         let away = (self.n / 2).max(2) as i64;
         (0..self.centres.len())
@@ -220,16 +218,17 @@ impl LineRows {
         &self.data[at..at + self.width]
     }
 
-    fn len(&self) -> usize {
-        (self.data.len() - LINE) / self.stride
+    /// The first `width` values of every row, packed one row after another.
+    pub fn packed(&self, width: usize) -> Vec<f32> {
+        let rows = (self.data.len() - LINE) / self.stride;
+        (0..rows).flat_map(|i| self.row(i)[..width].iter().copied()).collect()
     }
 }
 
 impl Clone for LineRows {
     /// A copy aligned for its own allocation.
     fn clone(&self) -> LineRows {
-        let values: Vec<f32> = (0..self.len()).flat_map(|i| self.row(i).iter().copied()).collect();
-        LineRows::new(&values, self.width)
+        LineRows::new(&self.packed(self.width), self.width)
     }
 }
 

@@ -28,7 +28,8 @@ impl KdTree {
         let mut tree = KdTree { dims, points, order: (0..count as u32).collect(), nodes: Vec::new() };
         tree.split(0, count);
         // Store the points in leaf order, so a leaf's points are read one after another.
-        tree.points = tree.order.iter().flat_map(|&i| tree.point(i).to_vec()).collect();
+        let leaf_order = tree.order.iter().flat_map(|&i| tree.point(i).iter().copied()).collect();
+        tree.points = leaf_order;
         tree
     }
 
