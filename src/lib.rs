@@ -32,7 +32,7 @@
 //! # Ok::<(), solidtex::Error>(())
 //! ```
 
-#![forbid(unsafe_code)]
+#![deny(unsafe_code)]
 #![warn(missing_docs)]
 
 pub mod classify;

@@ -48,6 +48,7 @@ impl Grid {
     /// (`dims x row length`, component-major), using `taps` for one neighbourhood row's
     /// gathered values. Every lane adds its terms in the same order (tap by tap), so the
     /// result does not depend on how the row is split into blocks.
+    #[inline(always)]
     pub fn project_row(&self, ex: &Prepared, axis: Axis, y: usize, z: usize, taps: &mut Vec<f32>, out: &mut Vec<f32>) {
         let (row, c_n, n) = (self.dims[0], self.channels, ex.n);
         let (m, dims, span) = (ex.pca.input, ex.pca.dims, n * c_n);
@@ -67,6 +68,7 @@ impl Grid {
 
     /// Gather the weighted, mean-centred values of one tap (offset `d` in the plane) for
     /// the row (y, z): `taps[c * row + x]`.
+    #[inline(always)]
     fn gather_tap(&self, ex: &Prepared, axis: Axis, d: [usize; 2], yz: [usize; 2], taps: &mut [f32]) {
         let (row, c_n, h) = (self.dims[0], self.channels, ex.half() as i64);
         let (a, b) = axis.plane_axes();
@@ -103,6 +105,7 @@ impl Grid {
 /// For every component k: `out[k][x] += sum_j basis[k][j] * taps[j][x]` over the taps
 /// `js`, term by term in j order. Up to four components and eight lanes at a time stay
 /// in registers, so each gathered value is loaded once per four components.
+#[inline(always)]
 fn add_taps(out: &mut [f32], taps: &[f32], basis: &[f32], js: std::ops::Range<usize>, m: usize) {
     let row = taps.len() / js.len();
     let dims = out.len() / row;
@@ -119,6 +122,7 @@ fn add_taps(out: &mut [f32], taps: &[f32], basis: &[f32], js: std::ops::Range<us
 }
 
 /// [`add_taps`] for the `G` components whose rows start `out`; returns `G`.
+#[inline(always)]
 fn add_group<const G: usize>(out: &mut [f32], taps: &[f32], coef: [&[f32]; G]) -> usize {
     const LANES: usize = 8;
     let row = taps.len() / coef[0].len();

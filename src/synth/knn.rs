@@ -111,6 +111,7 @@ impl KdTree {
 /// Squared Euclidean distance, summed in eight independent lanes (the search's hottest
 /// loop: one long chain of additions would wait on each one in turn). The lane order is
 /// fixed, so the result is the same on every machine.
+#[inline(always)]
 pub fn squared(a: &[f32], b: &[f32]) -> f32 {
     const LANES: usize = 8;
     let mut acc = [0.0f32; LANES];

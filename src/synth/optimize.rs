@@ -56,26 +56,25 @@ pub fn optimize(grid: &Grid, matches: &[Matches; 3], exemplars: [Option<&Prepare
     let plane = grid.dims[0] * grid.dims[1] * grid.channels;
     let mut out = vec![0.0; grid.data.len()];
     out.par_chunks_mut(plane).enumerate().for_each(|(z, slice)| {
-        let mut acc = vec![0.0f32; grid.channels];
-        for (i, voxel) in slice.chunks_exact_mut(grid.channels).enumerate() {
-            let v = [i % grid.dims[0], i / grid.dims[0], z];
+        // Per voxel of a row: its colour sums, then its weight sum (the last of c + 1).
+        let mut acc = vec![0.0f32; grid.dims[0] * (grid.channels + 1)];
+        for (y, voxels) in slice.chunks_exact_mut(grid.dims[0] * grid.channels).enumerate() {
             acc.fill(0.0);
-            let mut total = 0.0f32;
             for view in planes.iter().flatten() {
-                view.predictions(grid, v, |w, pixel| {
-                    for (s, c) in acc.iter_mut().zip(pixel) {
-                        *s += w * c;
-                    }
-                    total += w * pixel[grid.channels];
-                });
+                view.add_row(grid, y, z, &mut acc);
             }
-            if total <= 0.0 {
-                let keep = grid.index(v[0], v[1], v[2]) * grid.channels;
-                voxel.copy_from_slice(&grid.data[keep..keep + grid.channels]);
-                continue;
-            }
-            for (o, a) in voxel.iter_mut().zip(&acc) {
-                *o = a / total;
+            for (x, (voxel, sums)) in
+                voxels.chunks_exact_mut(grid.channels).zip(acc.chunks_exact(grid.channels + 1)).enumerate()
+            {
+                let total = sums[grid.channels];
+                if total <= 0.0 {
+                    let keep = grid.index(x, y, z) * grid.channels;
+                    voxel.copy_from_slice(&grid.data[keep..keep + grid.channels]);
+                    continue;
+                }
+                for (o, a) in voxel.iter_mut().zip(sums) {
+                    *o = a / total;
+                }
             }
         }
     });
@@ -165,7 +164,8 @@ struct PlaneView<'a> {
     /// Per exemplar pixel: its colour times its histogram factor, then the factor.
     weighted: &'a [f32],
     axes: (usize, usize),
-    /// `fold_a[c * n + dx]`: the neighbour's coordinate along the first plane axis, or `u32::MAX`.
+    /// `fold_a[dx * len + c]`: the neighbour's coordinate along the first plane axis, or
+    /// `u32::MAX` (`len`: the volume's size along it).
     fold_a: Vec<u32>,
     fold_b: Vec<u32>,
     /// Exemplar pixel offset of each (dy, dx).
@@ -183,7 +183,7 @@ impl<'a> PlaneView<'a> {
             let whole = |u: usize| grid.wrap[k] || len < n as i64 || (h..=len - n as i64 + h).contains(&(u as i64));
             (0..grid.dims[k] * n)
                 .map(|i| {
-                    let (c, d) = ((i / n) as i64, (i % n) as i64);
+                    let (d, c) = ((i / grid.dims[k]) as i64, (i % grid.dims[k]) as i64);
                     grid.inside(k, c - (d - h)).filter(|u| whole(*u)).map_or(u32::MAX, |u| u as u32)
                 })
                 .collect()
@@ -192,31 +192,57 @@ impl<'a> PlaneView<'a> {
         PlaneView { ex, matches, weighted, axes: (a, b), fold_a: table(a), fold_b: table(b), shift }
     }
 
-    /// Call `f(weight, pixel)` for every prediction this axis makes for voxel `v`: the
-    /// exemplar pixel that each in-plane neighbour's match puts at v's position, as its
-    /// weighted colour and histogram factor (see [`weighted_pixels`]).
-    #[inline]
-    fn predictions(&self, grid: &Grid, v: [usize; 3], mut f: impl FnMut(f32, &[f32])) {
+    /// Add the predictions this axis makes for the voxels of row (y, z) to their sums in
+    /// `acc` (c + 1 per voxel): for each in-plane neighbour, the exemplar pixel its match
+    /// puts at the voxel's position, as weighted colour and histogram factor (see
+    /// [`weighted_pixels`]). Each voxel adds its predictions in the same order whatever
+    /// the row: offset by offset, so the sums do not depend on how voxels are grouped.
+    fn add_row(&self, grid: &Grid, y: usize, z: usize, acc: &mut [f32]) {
         let (a, b) = self.axes;
-        let (n, c_n) = (self.ex.n, self.ex.channels);
+        let (n, row, c1) = (self.ex.n, grid.dims[0], self.ex.channels + 1);
+        let v = [0, y, z];
         for dy in 0..n {
-            let ub = self.fold_b[v[b] * n + dy];
+            let ub = self.fold_b[dy * grid.dims[b] + v[b]];
             if ub == u32::MAX {
                 continue;
             }
             for dx in 0..n {
-                let ua = self.fold_a[v[a] * n + dx];
-                if ua == u32::MAX {
-                    continue;
-                }
+                let shift = self.shift[dy * n + dx];
                 let mut u = v;
-                u[a] = ua as usize;
                 u[b] = ub as usize;
-                let at = grid.index(u[0], u[1], u[2]);
-                let (centre, weight) = self.matches[at];
-                let pix = (centre as i64 + self.shift[dy * n + dx]) as usize;
-                f(weight, &self.weighted[pix * (c_n + 1)..(pix + 1) * (c_n + 1)]);
+                if a == 0 {
+                    // The plane holds the row: each voxel's neighbour lies along it.
+                    let base = grid.index(0, u[1], u[2]);
+                    let along = &self.fold_a[dx * row..(dx + 1) * row];
+                    for (sums, &ua) in acc.chunks_exact_mut(c1).zip(along) {
+                        if ua != u32::MAX {
+                            self.add(base + ua as usize, shift, sums);
+                        }
+                    }
+                } else {
+                    // The plane crosses the row: every voxel's neighbour has the same offset.
+                    let ua = self.fold_a[dx * grid.dims[a] + v[a]];
+                    if ua == u32::MAX {
+                        continue;
+                    }
+                    u[a] = ua as usize;
+                    let base = grid.index(0, u[1], u[2]);
+                    for (x, sums) in acc.chunks_exact_mut(c1).enumerate() {
+                        self.add(base + x, shift, sums);
+                    }
+                }
             }
+        }
+    }
+
+    /// Add the prediction of the match at voxel `at`, shifted by `shift` pixels, to `sums`.
+    #[inline(always)]
+    fn add(&self, at: usize, shift: i64, sums: &mut [f32]) {
+        let c1 = sums.len();
+        let (centre, weight) = self.matches[at];
+        let pix = (centre as i64 + shift) as usize;
+        for (s, p) in sums.iter_mut().zip(&self.weighted[pix * c1..(pix + 1) * c1]) {
+            *s += weight * p;
         }
     }
 }
