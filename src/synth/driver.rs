@@ -1,5 +1,14 @@
 //! The multi-resolution loop: prepare exemplar pyramids, initialize the coarsest
 //! volume, then per level {search, optimize} until converged, and upsample.
+//!
+//! A finer level takes the coarser volume's colours (interpolated on the sample grid the
+//! exemplar pyramid uses: coarse voxel i at fine voxel 2i) but not its matches. Doubled matches (each coarse match predicting a 2x2 block of fine ones) lock
+//! the finer level into blocks: each voxel's own block predicts it coherently, so the
+//! blend keeps a step at every block border, a 2- and 4-voxel grid that the finest
+//! iterations hardly remove (docs/synthesis.md). Instead, a homogeneous level's first
+//! search looks every voxel up in the whole exemplar; a layered level starts from random
+//! pixels of the voxel's depth (a lookup would give a voxel's x and y planes, alike in a
+//! smooth volume, the same pixel: the coincidence the anti-sweeping rule is there to stop).
 
 use super::depth;
 use super::exemplar::{PrepareOptions, Prepared};
@@ -11,7 +20,7 @@ use super::search::{Matches, SearchSetup, pass_seed, search};
 use crate::error::{Error, Result};
 use crate::noise::hash3;
 use crate::progress::Progress;
-use crate::volume::{Edge, Image2d, Volume, downsample, upsample};
+use crate::volume::{Edge, Image2d, Volume, downsample, upsample_on_samples};
 use rayon::prelude::*;
 
 /// How the coarsest volume starts.
@@ -53,7 +62,7 @@ pub fn run(job: &Job, params: &SynthParams, seed: u64, progress: &dyn Progress) 
                 Some(start) => init_from(job, &ex, *dims, params, start),
                 None => init(job, &ex, *dims, params, seed),
             },
-            Some((g, m)) => upsample_level(&g, &m, &ex, *dims, &pyramids, level),
+            Some((coarse, _)) => upsample_level(job, &coarse, &ex, *dims, level_seed(seed, level)),
         };
         let mut previous = f64::INFINITY;
         let iterations = params.iterations_at(level);
@@ -65,6 +74,7 @@ pub fn run(job: &Job, params: &SynthParams, seed: u64, progress: &dyn Progress) 
                 exemplars: ex,
                 anti_sweeping: job.anti_sweeping,
                 seed: pass_seed(seed, level, iteration),
+                fresh: level > 0 && iteration == 0 && job.init == Init::Random,
             };
             let (found, energy) = search(&grid, &matches, &setup);
             matches = found;
@@ -172,11 +182,25 @@ fn init(
     params: &SynthParams,
     seed: u64,
 ) -> (Grid, [Matches; 3]) {
-    let count = dims.iter().product::<usize>();
+    let picks = random_picks(job, ex, dims, seed);
     let first = ex.iter().flatten().next().expect("at least one axis is searched");
     let channels = first.channels;
+    let mut data = Vec::with_capacity(picks.len() * channels);
+    for (v, p) in picks.iter().enumerate() {
+        let axes: Vec<usize> = (0..3).filter(|a| ex[*a].is_some()).collect();
+        let a = axes[(hash3(seed, v as i64, 7, 2) % axes.len() as u64) as usize];
+        let e = ex[a].expect("chosen among searched axes");
+        data.extend_from_slice(&e.colours[p[a] as usize * channels..(p[a] as usize + 1) * channels]);
+    }
+    (Grid { dims, channels, data, wrap: wraps(job, params) }, as_matches(ex, &picks))
+}
+
+/// A random centre per voxel and searched axis (of the voxel's depth in layered runs).
+fn random_picks(job: &Job, ex: &[Option<&Prepared>; 3], dims: [usize; 3], seed: u64) -> Vec<[u32; 3]> {
+    let count = dims.iter().product::<usize>();
+    let first = ex.iter().flatten().next().expect("at least one axis is searched");
     let by_depth = (job.init == Init::ByDepth).then(|| depth_order(first));
-    let picks: Vec<[u32; 3]> = (0..count)
+    (0..count)
         .into_par_iter()
         .map(|v| {
             let z = v / (dims[0] * dims[1]);
@@ -186,19 +210,20 @@ fn init(
                 (Some(_), Some(order)) => pick_by_depth(order, z, dims[2], hash3(seed, v as i64, a as i64, 1)),
             })
         })
-        .collect();
-    let mut data = Vec::with_capacity(count * channels);
-    for (v, p) in picks.iter().enumerate() {
-        let axes: Vec<usize> = (0..3).filter(|a| ex[*a].is_some()).collect();
-        let a = axes[(hash3(seed, v as i64, 7, 2) % axes.len() as u64) as usize];
-        let e = ex[a].expect("chosen among searched axes");
-        data.extend_from_slice(&e.colours[p[a] as usize * channels..(p[a] as usize + 1) * channels]);
-    }
-    let matches = [0, 1, 2].map(|a| match ex[a] {
-        Some(_) => Matches { pixel: picks.iter().map(|p| p[a]).collect(), dist: vec![1.0; count] },
+        .collect()
+}
+
+/// Picks as matches of unknown distance.
+fn as_matches(ex: &[Option<&Prepared>; 3], picks: &[[u32; 3]]) -> [Matches; 3] {
+    [0, 1, 2].map(|a| match ex[a] {
+        Some(_) => Matches { pixel: picks.iter().map(|p| p[a]).collect(), dist: vec![1.0; picks.len()] },
         None => Matches::default(),
-    });
-    (Grid { dims, channels, data, wrap: wraps(job, params) }, matches)
+    })
+}
+
+/// The seed of a level's fresh random matches.
+fn level_seed(seed: u64, level: usize) -> u64 {
+    hash3(seed, level as i64, 0, 3)
 }
 
 /// The coarsest level from a start volume: its samples shrunk to the level's size, and
@@ -260,33 +285,25 @@ fn pick_by_depth(order: &[(f32, u32)], z: usize, depth: usize, hash: u64) -> u32
     order[start + (hash % window as u64) as usize].1
 }
 
-/// Move to the next finer level: colours by linear upsampling, matches by coordinate
-/// doubling (each coarse match predicts four fine ones).
+/// Move to the next finer level: colours interpolated, matches drawn afresh
+/// (see the module notes for why they are not carried over).
 fn upsample_level(
+    job: &Job,
     coarse: &Grid,
-    matches: &[Matches; 3],
     ex: &[Option<&Prepared>; 3],
     dims: [usize; 3],
-    pyramids: &Pyramids,
-    level: usize,
+    seed: u64,
 ) -> (Grid, [Matches; 3]) {
     let fine = upsample_samples(coarse, dims);
-    let count = dims.iter().product::<usize>();
-    let moved = [0, 1, 2].map(|a| match (ex[a], pyramids[a].as_ref()) {
-        (Some(e), Some(p)) => {
-            let c_ex = &p[level - 1];
-            let pixel =
-                (0..count).into_par_iter().map(|v| finer_match(coarse, &matches[a], c_ex, e, a, dims, v)).collect();
-            Matches { pixel, dist: vec![1.0; count] }
-        }
-        _ => Matches::default(),
-    });
-    (Grid { dims, channels: coarse.channels, data: fine, wrap: coarse.wrap }, moved)
+    let matches = as_matches(ex, &random_picks(job, ex, dims, seed));
+    (Grid { dims, channels: coarse.channels, data: fine, wrap: coarse.wrap }, matches)
 }
 
 fn upsample_samples(coarse: &Grid, dims: [usize; 3]) -> Vec<f32> {
     let volume = as_volume(coarse.dims, coarse.channels, coarse.data.clone());
-    upsample(&volume, dims, edge(coarse.wrap)).expect("the finer level fits the budget checked up front").into_data()
+    upsample_on_samples(&volume, dims, edge(coarse.wrap))
+        .expect("the finer level fits the budget checked up front")
+        .into_data()
 }
 
 /// Samples as a volume (placeholder channel names) for the pyramid's resamplers.
@@ -298,22 +315,4 @@ fn as_volume(dims: [usize; 3], channels: usize, data: Vec<f32>) -> Volume {
 /// The resamplers' edge rule: that of the first axis (x and y always agree).
 fn edge(wrap: [bool; 3]) -> Edge {
     if wrap[0] { Edge::Wrap } else { Edge::Clamp }
-}
-
-fn finer_match(
-    coarse: &Grid,
-    m: &Matches,
-    c_ex: &Prepared,
-    f_ex: &Prepared,
-    axis: usize,
-    dims: [usize; 3],
-    v: usize,
-) -> u32 {
-    let p = [v % dims[0], (v / dims[0]) % dims[1], v / (dims[0] * dims[1])];
-    let c: [usize; 3] = std::array::from_fn(|k| (p[k] / 2).min(coarse.dims[k] - 1));
-    let pix = m.pixel[coarse.index(c[0], c[1], c[2])] as usize;
-    let (a, b) = crate::volume::Axis::ALL[axis].plane_axes();
-    let x = 2 * (pix % c_ex.width) as i64 + (p[a] % 2) as i64;
-    let y = 2 * (pix / c_ex.width) as i64 + (p[b] % 2) as i64;
-    f_ex.clamp_centre(x, y)
 }

@@ -20,6 +20,11 @@ const PCA_SAMPLES: usize = 4096;
 /// Leading PCA dimensions the coherence kd-tree splits on (candidates are re-ranked in all).
 const TREE_DIMS: usize = 6;
 
+/// Leading PCA dimensions of the lookup tree that starts each finer level's search. Two
+/// (roughly a neighbourhood's mean and slope) matched the photos as well as four at a
+/// quarter of the cost (docs/synthesis.md).
+const LOOKUP_DIMS: usize = 2;
+
 /// An exemplar level ready for neighbourhood search.
 #[derive(Debug, Clone)]
 pub struct Prepared {
@@ -45,6 +50,9 @@ pub struct Prepared {
     pub coherence: Vec<u32>,
     /// Size of each coherence set.
     pub k: usize,
+    /// Every centre's slot by its first [`LOOKUP_DIMS`] projected components: the
+    /// nearest-neighbour lookup over the whole exemplar.
+    pub lookup: KdTree,
 }
 
 /// What preparing needs besides the image.
@@ -80,6 +88,7 @@ impl Prepared {
             projected: LineRows::new(&[], 1),
             coherence: Vec::new(),
             k: opt.k,
+            lookup: KdTree::build(Vec::new(), 0),
         };
         let vectors = prepared.all_vectors();
         let m = opt.n * opt.n * channels;
@@ -87,6 +96,8 @@ impl Prepared {
         let sample: Vec<f32> = vectors.chunks_exact(m).step_by(stride).flatten().copied().collect();
         prepared.pca = Pca::fit(&sample, m, opt.variance, opt.max_dims);
         prepared.projected = LineRows::new(&project_all(&prepared.pca, &vectors, m), prepared.pca.dims);
+        let low = prepared.pca.dims.min(LOOKUP_DIMS);
+        prepared.lookup = KdTree::build(prepared.projected.packed(low), low);
         if opt.k > 0 {
             prepared.coherence = prepared.coherence_sets();
         }
@@ -127,11 +138,6 @@ impl Prepared {
         let (vw, vh) = ((self.width + 1 - self.n) as i64, (self.height + 1 - self.n) as i64);
         let h = self.half() as i64;
         ((y - h).clamp(0, vh - 1) * vw + (x - h).clamp(0, vw - 1)) as usize
-    }
-
-    /// The valid centre nearest to pixel (x, y), given as signed coordinates.
-    pub fn clamp_centre(&self, x: i64, y: i64) -> u32 {
-        self.centres[self.clamped_slot(x, y)]
     }
 
     /// The projected neighbourhood of the centre in `slot`.

@@ -70,6 +70,11 @@ impl KdTree {
             .1
     }
 
+    /// Dimensions.
+    pub fn dims(&self) -> usize {
+        self.dims
+    }
+
     /// The `k` nearest points to `query`, nearest first.
     pub fn nearest(&self, query: &[f32], k: usize) -> Vec<Hit> {
         let mut best: Vec<Hit> = Vec::with_capacity(k + 1);
@@ -78,6 +83,46 @@ impl KdTree {
             self.visit(0, query, k, &mut best, 0.0, &mut offsets);
         }
         best
+    }
+
+    /// The nearest point to `query` (`None` for an empty tree): [`KdTree::nearest`] for
+    /// k = 1 without allocating, for searches that ask it once per voxel.
+    pub fn nearest_one(&self, query: &[f32]) -> Option<Hit> {
+        const MAX: usize = 32;
+        if self.nodes.is_empty() || self.dims > MAX {
+            return self.nearest(query, 1).first().copied();
+        }
+        let mut best = (f32::INFINITY, u32::MAX);
+        let mut offsets = [0.0f32; MAX];
+        self.visit_one(0, query, &mut best, 0.0, &mut offsets[..self.dims]);
+        Some(best)
+    }
+
+    /// [`KdTree::visit`] for the single nearest point.
+    fn visit_one(&self, node: u32, query: &[f32], best: &mut Hit, reach: f32, offsets: &mut [f32]) {
+        match self.nodes[node as usize] {
+            Node::Leaf { start, end } => {
+                for at in start..end {
+                    let hit = (squared(self.point(at), query), self.order[at as usize]);
+                    if hit.0 < best.0 || (hit.0 == best.0 && hit.1 < best.1) {
+                        *best = hit;
+                    }
+                }
+            }
+            Node::Split { axis, value, left, right } => {
+                let axis = axis as usize;
+                let diff = query[axis] - value;
+                let (near, far) = if diff < 0.0 { (left, right) } else { (right, left) };
+                self.visit_one(near, query, best, reach, offsets);
+                let old = offsets[axis];
+                let far_reach = reach - old * old + diff * diff;
+                if far_reach <= best.0 {
+                    offsets[axis] = diff;
+                    self.visit_one(far, query, best, far_reach, offsets);
+                    offsets[axis] = old;
+                }
+            }
+        }
     }
 
     /// Search below `node`, whose cell lies at squared distance at least `reach` from the
@@ -157,6 +202,7 @@ mod tests {
                 (0..180).map(|i| (squared(&points[i * dims..(i + 1) * dims], &query), i as u32)).collect();
             all.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
             assert_eq!(got, all[..4].to_vec());
+            assert_eq!(tree.nearest_one(&query), Some(all[0]));
         }
     }
 }

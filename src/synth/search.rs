@@ -5,6 +5,10 @@
 //! v (`P[u] + (v - u)`), plus one random centre. The best (and second best) by PCA
 //! distance win. In layered mode the two-best-match rule keeps the x and y matches from
 //! pointing at the same pixel.
+//!
+//! A fresh pass (the first at a finer level of a homogeneous run) ignores the previous
+//! matches: its candidates are the exemplar's nearest neighbourhood by the leading PCA
+//! components (a kd-tree lookup over all centres) and the random centre.
 
 use super::exemplar::Prepared;
 use super::grid::Grid;
@@ -29,6 +33,8 @@ pub struct SearchSetup<'a> {
     pub anti_sweeping: bool,
     /// Seed for the random candidates of this pass.
     pub seed: u64,
+    /// Look candidates up in the whole exemplar instead of following the previous matches.
+    pub fresh: bool,
 }
 
 /// The best match and the best one that lies elsewhere in the exemplar (`u32::MAX`: none).
@@ -122,7 +128,7 @@ fn search_slice_in(grid: &Grid, previous: &[Matches; 3], setup: &SearchSetup, z:
                 query.extend((0..ex.pca.dims).map(|k| proj[k * dx + x]));
                 stamp += 1;
                 let v = [x, y, z];
-                let context = Context { ex, previous: &previous[axis], axis, seed: setup.seed };
+                let context = Context { ex, previous: &previous[axis], axis, seed: setup.seed, fresh: setup.fresh };
                 best[axis] = Some(best_two(grid, &context, v, &query, &mut seen[axis], stamp));
             }
         }
@@ -145,6 +151,7 @@ struct Context<'a> {
     previous: &'a Matches,
     axis: usize,
     seed: u64,
+    fresh: bool,
 }
 
 /// The two best distinct candidates for voxel `v` on the context's axis.
@@ -155,7 +162,13 @@ fn best_two(grid: &Grid, cx: &Context, v: [usize; 3], query: &[f32], seen: &mut 
     let mut top = [(f32::INFINITY, u32::MAX); TOP];
     let mut seen = Seen { marks: seen, stamp };
     let width = ex.width as u32;
-    for (da, db) in SOURCES {
+    let sources: &[(i64, i64)] = if cx.fresh { &[] } else { &SOURCES };
+    if cx.fresh {
+        if let Some((_, slot)) = ex.lookup.nearest_one(&query[..ex.lookup.dims()]) {
+            consider(ex, query, &mut seen, slot as usize, &mut top);
+        }
+    }
+    for &(da, db) in sources {
         let (Some(ua), Some(ub)) = (grid.inside(a, v[a] as i64 + da), grid.inside(b, v[b] as i64 + db)) else {
             continue;
         };
@@ -252,7 +265,7 @@ mod tests {
         let damaged: Vec<u32> = truth.iter().enumerate().map(|(i, p)| if i % 7 == 3 { centre } else { *p }).collect();
         let mut previous =
             [Matches::default(), Matches::default(), Matches { pixel: damaged, dist: vec![1.0; gw * gh] }];
-        let setup = SearchSetup { exemplars: [None, None, Some(&ex)], anti_sweeping: false, seed: 1 };
+        let setup = SearchSetup { exemplars: [None, None, Some(&ex)], anti_sweeping: false, seed: 1, fresh: false };
         let (found, _) = search(&grid, &previous, &setup);
         previous = found;
         let inner = |i: usize| (2..gw - 2).contains(&(i % gw)) && (2..gh - 2).contains(&(i / gw));
@@ -285,8 +298,8 @@ mod tests {
                 .collect(),
             dist: vec![1.0; count],
         });
-        let setup = SearchSetup { exemplars: [Some(&ex); 3], anti_sweeping: true, seed: 5 };
-        for z in 0..dims[2] {
+        for (z, fresh) in (0..dims[2]).flat_map(|z| [(z, false), (z, true)]) {
+            let setup = SearchSetup { exemplars: [Some(&ex); 3], anti_sweeping: true, seed: 5, fresh };
             // SAFETY: AVX2 was detected above.
             #[allow(unsafe_code)]
             let (fast, sum_fast) = unsafe { search_slice_avx2(&grid, &previous, &setup, z) };

@@ -19,7 +19,7 @@ mod stats;
 
 pub use channel::{Channel, join as channel_names};
 pub use image2d::Image2d;
-pub use pyramid::{downsample, upsample};
+pub use pyramid::{downsample, upsample, upsample_on_samples};
 pub use sample::Edge;
 pub use slice::{Axis, Plane};
 pub use stats::{ChannelStats, stats_of};

@@ -47,6 +47,23 @@ pub fn upsample(volume: &Volume, dims: [usize; 3], edge: Edge) -> Result<Volume>
     Ok(out.with_meta(volume.meta.clone()))
 }
 
+/// Double each side's resolution on the grid [`downsample`] keeps: fine voxel 2i lies on
+/// coarse voxel i, fine voxel 2i + 1 halfway between i and i + 1 (their mean). `dims`
+/// is at most twice the volume's size per axis; sides already at their size stay.
+pub fn upsample_on_samples(volume: &Volume, dims: [usize; 3], edge: Edge) -> Result<Volume> {
+    let mut out = volume.clone();
+    for (axis, &target) in dims.iter().enumerate() {
+        if out.dims()[axis] == target {
+            continue;
+        }
+        let taps: Vec<Vec<(i64, f32)>> = (0..target as i64)
+            .map(|i| if i % 2 == 0 { vec![(i / 2, 1.0)] } else { vec![(i / 2, 0.5), (i / 2 + 1, 0.5)] })
+            .collect();
+        out = resample_axis(&out, axis, &taps, edge)?;
+    }
+    Ok(out.with_meta(volume.meta.clone()))
+}
+
 /// Resample one axis: output position i along `axis` is the weighted sum of `taps[i]`.
 fn resample_axis(volume: &Volume, axis: usize, taps: &[Vec<(i64, f32)>], edge: Edge) -> Result<Volume> {
     let src = volume.dims();
@@ -97,6 +114,17 @@ mod tests {
         .unwrap();
         let d = downsample(&v, Edge::Wrap).unwrap();
         assert!(d.data().iter().all(|v| (v - 0.5).abs() < 1e-6));
+    }
+
+    /// Upsampling on the kept samples inverts the sampling of `downsample`: even voxels
+    /// take the coarse values, odd ones the mean of their two coarse neighbours.
+    #[test]
+    fn upsampling_on_samples_puts_coarse_voxels_on_even_positions() {
+        let v = Volume::from_fn([3, 1, 1], Channel::grey(), |x, _, _, o| o[0] = [0.0, 1.0, 4.0][x]).unwrap();
+        let wrapped = upsample_on_samples(&v, [6, 1, 1], Edge::Wrap).unwrap();
+        assert_eq!(wrapped.data(), &[0.0, 0.5, 1.0, 2.5, 4.0, 2.0]);
+        let clamped = upsample_on_samples(&v, [5, 1, 1], Edge::Clamp).unwrap();
+        assert_eq!(clamped.data(), &[0.0, 0.5, 1.0, 2.5, 4.0]);
     }
 
     #[test]
