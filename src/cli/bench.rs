@@ -1,7 +1,7 @@
 //! `solidtex bench`: timed workloads on exemplars the project makes itself, so anyone
 //! can measure on any machine from a fresh clone. Prints the median of several runs.
 
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::procedural::{Recipe, generate};
 use crate::progress::NoProgress;
 use crate::synth::{Exemplars, LayeredParams, SynthParams, synthesize, synthesize_layered};
@@ -37,11 +37,23 @@ const WORKLOADS: [Workload; 3] = [
 
 /// Run `solidtex bench`.
 pub fn run(args: &BenchArgs) -> Result<()> {
-    say!("{:<30} {:>5} {:>9} {:>9}", "workload", "runs", "median s", "min s");
-    for (name, work) in hand_made()? {
-        if args.only.as_ref().is_some_and(|o| !name.contains(o.as_str())) {
-            continue;
+    if let Some(only) = &args.only {
+        let mut names: Vec<String> =
+            HAND_MADE.iter().chain(WORKLOADS.iter().map(|w| &w.name)).map(|n| n.to_string()).collect();
+        names.extend(super::bench_fill::names());
+        if !names.iter().any(|n| n.contains(only.as_str())) {
+            return Err(Error::invalid(format!(
+                "--only {only:?} matches no workload; the workloads: {}",
+                names.join(", ")
+            )));
         }
+    }
+    let wanted = |name: &str| args.only.as_ref().is_none_or(|o| name.contains(o.as_str()));
+    let works: Vec<_> = hand_made()?.into_iter().filter(|(name, _)| wanted(name)).collect();
+    if !works.is_empty() {
+        say!("{:<30} {:>5} {:>9} {:>9}", "workload", "runs", "median s", "min s");
+    }
+    for (name, work) in works {
         let mut times = Vec::new();
         for _ in 0..args.runs.max(1) {
             let started = Instant::now();
@@ -56,6 +68,9 @@ pub fn run(args: &BenchArgs) -> Result<()> {
 }
 
 type Work = Box<dyn Fn() -> Result<()>>;
+
+/// The names of the hand-made workloads, in the order [`hand_made`] returns them.
+const HAND_MADE: [&str; 3] = ["stamp/2k-tri/128cube (+clone)", "scatter/100-seeds/128cube", "sweep+noise+skin/128cube"];
 
 /// The hand-made workloads of issue 4: stamp, scatter, sweep + noise + skin at 128³.
 fn hand_made() -> Result<Vec<(&'static str, Work)>> {
@@ -93,19 +108,20 @@ fn hand_made() -> Result<Vec<(&'static str, Work)>> {
         };
         crate::sweep::sweep(&section, &params, 1).map(|_| ())
     });
-    Ok(vec![
-        ("stamp/2k-tri/128cube (+clone)", stamp_one),
-        ("scatter/100-seeds/128cube", scatter),
-        ("sweep+noise+skin/128cube", sweep),
-    ])
+    Ok(HAND_MADE.into_iter().zip([stamp_one, scatter, sweep]).collect())
 }
 
 /// The synthesis workloads of issue 3.
 fn synthesis(args: &BenchArgs) -> Result<()> {
+    let works: Vec<&Workload> =
+        WORKLOADS.iter().filter(|w| args.only.as_ref().is_none_or(|o| w.name.contains(o.as_str()))).collect();
+    if works.is_empty() {
+        return Ok(());
+    }
     let marble = exemplar(Recipe::Marble, Axis::Z)?;
     let strata = exemplar(Recipe::Strata, Axis::Y)?;
     say!("{:<30} {:>5} {:>9} {:>9} {:>12} {:>10}", "workload", "runs", "median s", "min s", "voxels/s", "peak MiB");
-    for w in WORKLOADS.iter().filter(|w| args.only.as_ref().is_none_or(|o| w.name.contains(o.as_str()))) {
+    for w in works {
         let mut times = Vec::new();
         for run in 0..args.runs.max(1) {
             let params = SynthParams { size: w.size, ..SynthParams::default() };

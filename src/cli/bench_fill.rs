@@ -19,8 +19,20 @@ use std::time::Instant;
 /// The meshes of ../shared/data/meshes worth timing, by file name.
 const OTHERS: [&str; 4] = ["libigl_bunny.obj", "cgal_sphere.obj", "cgal_dragknob.obj", "cgal_pipe.obj"];
 
+/// The filling workloads of one mesh (`{}`: the mesh's name).
+const NAMES: [&str; 5] = ["tetmesh/{}/5k", "paste/{}/5k", "cut/{}/512", "view/{}/512", "bake/{}/64"];
+
+/// The names of all filling workloads (those of the optional meshes too).
+pub fn names() -> Vec<String> {
+    let cases = ["fruit-2b", "pipe-0"].into_iter().chain(OTHERS.map(|n| n.trim_end_matches(".obj")));
+    cases.flat_map(|case| NAMES.map(|n| format!("fill/{}", n.replace("{}", case)))).collect()
+}
+
 /// Run the filling workloads.
 pub fn run(args: &BenchArgs) -> Result<()> {
+    if !names().iter().any(|n| wanted(args, n)) {
+        return Ok(());
+    }
     say!("{:<30} {:>5} {:>9} {:>9}  {}", "workload", "runs", "median s", "min s", "figures");
     let marble = generate(Recipe::Marble, [64; 3], 5)?;
     let fruit = shapes::named("fruit").expect("a drawn shape");
@@ -37,8 +49,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         }
     }
     for (name, mesh, case) in &cases {
-        let names = ["tetmesh/{}/5k", "paste/{}/5k", "cut/{}/512", "view/{}/512", "bake/{}/64"];
-        if !names.iter().any(|n| wanted(args, &format!("fill/{}", n.replace("{}", name)))) {
+        if !NAMES.iter().any(|n| wanted(args, &format!("fill/{}", n.replace("{}", name)))) {
             continue;
         }
         timed(args, &format!("fill/tetmesh/{name}/5k"), || {

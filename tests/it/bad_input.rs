@@ -241,3 +241,11 @@ fn synth_refuses_bad_exemplars_and_sizes_and_writes_nothing() {
     assert_fails(&run, &["start.exr", "channels R,G,B", "exemplar has"]);
     assert_eq!(listing(dir.path()), ["depth.png", "grey.png", "nan.exr", "small.png", "start.exr"]);
 }
+
+/// `bench --only` with a text no workload name contains is an error that lists the names,
+/// not a silent run of nothing.
+#[test]
+fn bench_refuses_an_only_that_matches_nothing() {
+    let run = solidtex(&["bench", "--runs", "1", "--only", "no-such-workload"]);
+    assert_fails(&run, &["--only \"no-such-workload\" matches no workload", "synth/64cube/128px-rgb"]);
+}

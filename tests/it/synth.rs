@@ -139,6 +139,23 @@ fn the_anti_sweeping_rule_lowers_the_sweeping_index() {
     assert!(with < 0.92 * without, "with the rule {with}, without {without}");
 }
 
+/// No voxel grid: a finer level that inherited its coarser level's matches doubled kept
+/// a step at every 2-voxel block border. Colour steps between neighbours along x must be
+/// as large at odd positions as at even ones (the old synthesis: 1.2 to 2 times larger).
+#[test]
+fn synthesis_leaves_no_grid_of_blocks() {
+    let ex = blobs(3, 5);
+    let n = 32;
+    let params = SynthParams { size: [n; 3], levels: 3, ..SynthParams::default() };
+    let v = synthesize(Exemplars { x: &ex, y: None, z: None }, &params, 2, &NoProgress).unwrap();
+    let mut steps = [0.0f64; 2];
+    for (y, z, x) in (0..n).flat_map(|y| (0..n).flat_map(move |z| (0..n - 1).map(move |x| (y, z, x)))) {
+        steps[x % 2] += (v.get(x + 1, y, z, 0) - v.get(x, y, z, 0)).abs() as f64;
+    }
+    let ratio = steps[1] / steps[0];
+    assert!((0.9..1.1).contains(&ratio), "steps at odd x / even x: {ratio}");
+}
+
 /// A start volume sets the layout: starting from a volume dark in its left half and bright
 /// in its right half, the synthesized volume keeps that split (the exemplar has both dark
 /// and bright areas); from random pixels it does not.
