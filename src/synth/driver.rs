@@ -2,13 +2,14 @@
 //! volume, then per level {search, optimize} until converged, and upsample.
 //!
 //! A finer level takes the coarser volume's colours (interpolated on the sample grid the
-//! exemplar pyramid uses: coarse voxel i at fine voxel 2i) but not its matches. Doubled matches (each coarse match predicting a 2x2 block of fine ones) lock
-//! the finer level into blocks: each voxel's own block predicts it coherently, so the
-//! blend keeps a step at every block border, a 2- and 4-voxel grid that the finest
-//! iterations hardly remove (docs/synthesis.md). Instead, a homogeneous level's first
-//! search looks every voxel up in the whole exemplar; a layered level starts from random
-//! pixels of the voxel's depth (a lookup would give a voxel's x and y planes, alike in a
-//! smooth volume, the same pixel: the coincidence the anti-sweeping rule is there to stop).
+//! exemplar pyramid uses: coarse voxel i at fine voxel 2i) but not its matches. Doubled
+//! matches (each coarse match predicting a 2x2 block of fine ones) lock the finer level
+//! into blocks: each voxel's own block predicts it coherently, so the blend keeps a step
+//! at every block border, a 2- and 4-voxel grid that the finest iterations hardly remove
+//! (docs/synthesis.md). Instead, a homogeneous level's first search looks every voxel up
+//! in the whole exemplar; a layered level starts from random pixels of the voxel's depth
+//! (a lookup would give a voxel's x and y planes, alike in a smooth volume, the same
+//! pixel: the coincidence the anti-sweeping rule is there to stop).
 
 use super::depth;
 use super::exemplar::{PrepareOptions, Prepared};
