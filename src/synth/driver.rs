@@ -286,8 +286,8 @@ fn pick_by_depth(order: &[(f32, u32)], z: usize, depth: usize, hash: u64) -> u32
     order[start + (hash % window as u64) as usize].1
 }
 
-/// Move to the next finer level: colours interpolated, matches drawn afresh
-/// (see the module notes for why they are not carried over).
+/// Move to the next finer level: colours interpolated; matches not carried over (see the
+/// module notes): random pixels of each voxel's depth for layered runs, none otherwise.
 fn upsample_level(
     job: &Job,
     coarse: &Grid,
@@ -296,7 +296,11 @@ fn upsample_level(
     seed: u64,
 ) -> (Grid, [Matches; 3]) {
     let fine = upsample_samples(coarse, dims);
-    let matches = as_matches(ex, &random_picks(job, ex, dims, seed));
+    // A homogeneous level's first search looks every voxel up and reads no matches.
+    let matches = match job.init {
+        Init::ByDepth => as_matches(ex, &random_picks(job, ex, dims, seed)),
+        Init::Random => Default::default(),
+    };
     (Grid { dims, channels: coarse.channels, data: fine, wrap: coarse.wrap }, matches)
 }
 
@@ -307,7 +311,8 @@ fn upsample_samples(coarse: &Grid, dims: [usize; 3]) -> Vec<f32> {
         .into_data()
 }
 
-/// Samples as a volume (placeholder channel names) for the pyramid's resamplers.
+/// Samples as a volume for the pyramid's resamplers (channels named c0, c1, ...: the
+/// resamplers read only the samples).
 fn as_volume(dims: [usize; 3], channels: usize, data: Vec<f32>) -> Volume {
     let names = (0..channels).map(|i| crate::volume::Channel::Named(format!("c{i}"))).collect();
     Volume::from_data(dims, names, data).expect("grid sizes are consistent")

@@ -85,46 +85,6 @@ impl KdTree {
         best
     }
 
-    /// The nearest point to `query` (`None` for an empty tree): [`KdTree::nearest`] for
-    /// k = 1 without allocating, for searches that ask it once per voxel.
-    pub fn nearest_one(&self, query: &[f32]) -> Option<Hit> {
-        const MAX: usize = 32;
-        if self.nodes.is_empty() || self.dims > MAX {
-            return self.nearest(query, 1).first().copied();
-        }
-        let mut best = (f32::INFINITY, u32::MAX);
-        let mut offsets = [0.0f32; MAX];
-        self.visit_one(0, query, &mut best, 0.0, &mut offsets[..self.dims]);
-        Some(best)
-    }
-
-    /// [`KdTree::visit`] for the single nearest point.
-    fn visit_one(&self, node: u32, query: &[f32], best: &mut Hit, reach: f32, offsets: &mut [f32]) {
-        match self.nodes[node as usize] {
-            Node::Leaf { start, end } => {
-                for at in start..end {
-                    let hit = (squared(self.point(at), query), self.order[at as usize]);
-                    if hit.0 < best.0 || (hit.0 == best.0 && hit.1 < best.1) {
-                        *best = hit;
-                    }
-                }
-            }
-            Node::Split { axis, value, left, right } => {
-                let axis = axis as usize;
-                let diff = query[axis] - value;
-                let (near, far) = if diff < 0.0 { (left, right) } else { (right, left) };
-                self.visit_one(near, query, best, reach, offsets);
-                let old = offsets[axis];
-                let far_reach = reach - old * old + diff * diff;
-                if far_reach <= best.0 {
-                    offsets[axis] = diff;
-                    self.visit_one(far, query, best, far_reach, offsets);
-                    offsets[axis] = old;
-                }
-            }
-        }
-    }
-
     /// Search below `node`, whose cell lies at squared distance at least `reach` from the
     /// query; `offsets` holds the per-axis query-to-cell offsets that make up `reach`
     /// (Arya and Mount's incremental distance: a tighter bound than the split plane alone).
@@ -202,7 +162,6 @@ mod tests {
                 (0..180).map(|i| (squared(&points[i * dims..(i + 1) * dims], &query), i as u32)).collect();
             all.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
             assert_eq!(got, all[..4].to_vec());
-            assert_eq!(tree.nearest_one(&query), Some(all[0]));
         }
     }
 }

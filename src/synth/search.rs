@@ -164,7 +164,7 @@ fn best_two(grid: &Grid, cx: &Context, v: [usize; 3], query: &[f32], seen: &mut 
     let width = ex.width as u32;
     let sources: &[(i64, i64)] = if cx.fresh { &[] } else { &SOURCES };
     if cx.fresh {
-        if let Some((_, slot)) = ex.lookup.nearest_one(&query[..ex.lookup.dims()]) {
+        for (_, slot) in ex.lookup.nearest(&query[..ex.lookup.dims()], 1) {
             consider(ex, query, &mut seen, slot as usize, &mut top);
         }
     }

@@ -27,39 +27,38 @@ pub fn downsample(volume: &Volume, edge: Edge) -> Result<Volume> {
 
 /// Linear interpolation to `dims` (voxel centres aligned, as for image resizing).
 pub fn upsample(volume: &Volume, dims: [usize; 3], edge: Edge) -> Result<Volume> {
-    let mut out = volume.clone();
-    for (axis, &target) in dims.iter().enumerate() {
-        let len = out.dims()[axis];
-        if len == target {
-            continue;
-        }
-        let scale = len as f32 / target as f32;
-        let taps: Vec<Vec<(i64, f32)>> = (0..target)
-            .map(|i| {
-                let s = (i as f32 + 0.5) * scale - 0.5;
-                let base = s.floor();
-                let t = s - base;
-                vec![(base as i64, 1.0 - t), (base as i64 + 1, t)]
-            })
-            .collect();
-        out = resample_axis(&out, axis, &taps, edge)?;
-    }
-    Ok(out.with_meta(volume.meta.clone()))
+    resize(volume, dims, edge, |i, len, target| {
+        let s = (i as f32 + 0.5) * len as f32 / target as f32 - 0.5;
+        let (base, t) = (s.floor(), s - s.floor());
+        vec![(base as i64, 1.0 - t), (base as i64 + 1, t)]
+    })
 }
 
 /// Double each side's resolution on the grid [`downsample`] keeps: fine voxel 2i lies on
 /// coarse voxel i, fine voxel 2i + 1 halfway between i and i + 1 (their mean). `dims`
 /// is at most twice the volume's size per axis; sides already at their size stay.
 pub fn upsample_on_samples(volume: &Volume, dims: [usize; 3], edge: Edge) -> Result<Volume> {
+    resize(volume, dims, edge, |i, _, _| {
+        let i = i as i64;
+        if i % 2 == 0 { vec![(i / 2, 1.0)] } else { vec![(i / 2, 0.5), (i / 2 + 1, 0.5)] }
+    })
+}
+
+/// Resample every axis whose size differs from `dims`; `taps(i, len, target)` gives output
+/// position i's (source, weight) list along an axis of `len` voxels resized to `target`.
+fn resize(
+    volume: &Volume,
+    dims: [usize; 3],
+    edge: Edge,
+    taps: impl Fn(usize, usize, usize) -> Vec<(i64, f32)>,
+) -> Result<Volume> {
     let mut out = volume.clone();
     for (axis, &target) in dims.iter().enumerate() {
-        if out.dims()[axis] == target {
-            continue;
+        let len = out.dims()[axis];
+        if len != target {
+            let list: Vec<Vec<(i64, f32)>> = (0..target).map(|i| taps(i, len, target)).collect();
+            out = resample_axis(&out, axis, &list, edge)?;
         }
-        let taps: Vec<Vec<(i64, f32)>> = (0..target as i64)
-            .map(|i| if i % 2 == 0 { vec![(i / 2, 1.0)] } else { vec![(i / 2, 0.5), (i / 2 + 1, 0.5)] })
-            .collect();
-        out = resample_axis(&out, axis, &taps, edge)?;
     }
     Ok(out.with_meta(volume.meta.clone()))
 }
