@@ -27,6 +27,9 @@ pub enum Error {
     /// A parameter or value is outside what is allowed.
     #[error("{0}")]
     Invalid(String),
+    /// A command-line option or argument is malformed or out of its range (exit code 2).
+    #[error("{0}")]
+    Usage(String),
     /// A volume would need more memory than the voxel budget allows.
     #[error(
         "a {}x{}x{} volume with {channels} channel(s) needs {needed} bytes, over the voxel budget of {budget} bytes \
@@ -55,6 +58,19 @@ impl Error {
     /// An [`Error::Invalid`] from anything printable.
     pub fn invalid(message: impl Into<String>) -> Self {
         Error::Invalid(message.into())
+    }
+
+    /// An [`Error::Usage`]: a command-line value the user must correct.
+    pub fn usage(message: impl Into<String>) -> Self {
+        Error::Usage(message.into())
+    }
+
+    /// The process exit code for this error: 2 for usage errors, else 1.
+    pub fn exit_code(&self) -> u8 {
+        match self {
+            Error::Usage(_) => 2,
+            _ => 1,
+        }
     }
 
     /// An [`Error::File`] for `path` with `message`.

@@ -8,8 +8,8 @@ fn main() -> ExitCode {
     match solidtex::cli::run(cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(error) => {
-            eprintln!("error: {error}");
-            ExitCode::from(1)
+            eprintln!("error: {}", solidtex::cli::clip(&error.to_string()));
+            ExitCode::from(error.exit_code())
         }
     }
 }

@@ -88,6 +88,21 @@ pub struct Record {
     pub classified: String,
     /// Seconds the build took.
     pub seconds: f64,
+    /// Every file the build wrote (relative to the output folder), with its size and
+    /// blake3 hash: an entry is cached only while they are all unchanged.
+    #[serde(default)]
+    pub files: Vec<Written>,
+}
+
+/// One file a build wrote.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Written {
+    /// Path relative to the output folder.
+    pub path: String,
+    /// Size in bytes.
+    pub bytes: u64,
+    /// blake3 of the content (hex, 32 characters).
+    pub hash: String,
 }
 
 enum Outcome {
@@ -108,7 +123,7 @@ pub fn run(args: &BuildArgs) -> Result<()> {
         entries.retain(|e| shard_of(&e.name, n) == k);
         eprintln!("shard {k} of {n}: {} exemplar(s)", entries.len());
     }
-    std::fs::create_dir_all(args.output.join(".cache")).map_err(|e| Error::io(&args.output, e))?;
+    let _lock = lock_output(&args.output)?;
     remove_stale_temporaries(&args.output);
     let folder = args.manifest.parent().unwrap_or(Path::new("."));
     let lines = Lines::new(entries.len());
@@ -125,7 +140,7 @@ pub fn run(args: &BuildArgs) -> Result<()> {
 
 /// Copy the outputs of shard builds into `output` and write the combined report.
 fn merge(entries: &[Entry], folders: &[PathBuf], output: &Path) -> Result<()> {
-    std::fs::create_dir_all(output.join(".cache")).map_err(|e| Error::io(output, e))?;
+    let _lock = lock_output(output)?;
     let mut outcomes = Vec::new();
     for entry in entries {
         let name = &entry.name;
@@ -139,23 +154,47 @@ fn merge(entries: &[Entry], folders: &[PathBuf], output: &Path) -> Result<()> {
         for file in files {
             copy(&folder.join(&file), &output.join(&file))?;
         }
-        let record: Record = serde_json::from_slice(
-            &std::fs::read(output.join(format!(".cache/{name}.json"))).map_err(|e| Error::io(output, e))?,
-        )
-        .map_err(|e| Error::file(folder.join(".cache"), format!("unreadable cache record: {e}")))?;
+        let record: Record =
+            serde_json::from_slice(&io::atomic::read_bytes(&output.join(format!(".cache/{name}.json")))?)
+                .map_err(|e| Error::file(folder.join(".cache"), format!("unreadable cache record: {e}")))?;
         outcomes.push(Outcome::Cached(record));
     }
     write_report(output, &outcomes)?;
     summarize(&outcomes, output)
 }
 
-/// Remove the temporaries an interrupted build left (`.NAME.PID.tmp`, files or folders).
+/// Create the output folder and its cache, and hold the build lock on it (released when
+/// the returned file closes): a second build on the same folder stops with a clear message
+/// instead of removing the first one's temporaries.
+fn lock_output(output: &Path) -> Result<std::fs::File> {
+    let cache = output.join(".cache");
+    std::fs::create_dir_all(&cache).map_err(|e| Error::io(output, e))?;
+    let path = cache.join("build.lock");
+    let file = std::fs::OpenOptions::new()
+        .create(true)
+        .truncate(false)
+        .write(true)
+        .open(&path)
+        .map_err(|e| Error::io(&path, e))?;
+    match file.try_lock() {
+        Ok(()) => Ok(file),
+        Err(std::fs::TryLockError::WouldBlock) => Err(Error::file(
+            output,
+            "another solidtex build is writing into this folder (it holds .cache/build.lock); \
+             wait for it to finish or build into another folder with -o",
+        )),
+        Err(std::fs::TryLockError::Error(e)) => Err(Error::io(&path, e)),
+    }
+}
+
+/// Remove the temporaries an interrupted build left (names solidtex gives them:
+/// `.NAME.solidtex-XXXXXX.tmp`, files or folders). Only called under the build lock.
 fn remove_stale_temporaries(output: &Path) {
     for folder in [output.to_path_buf(), output.join(".cache")] {
         let Ok(entries) = std::fs::read_dir(&folder) else { continue };
         for path in entries.filter_map(|e| e.ok().map(|e| e.path())) {
             let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-            if name.starts_with('.') && name.ends_with(".tmp") {
+            if io::atomic::is_temporary_name(&name) {
                 let _ = if path.is_dir() { std::fs::remove_dir_all(&path) } else { std::fs::remove_file(&path) };
             }
         }
@@ -171,8 +210,7 @@ fn copy(from: &Path, to: &Path) -> Result<()> {
             entries.iter().try_for_each(|f| copy(f, &dir.join(f.file_name().unwrap_or_default())))
         });
     }
-    let bytes = std::fs::read(from).map_err(|e| Error::io(from, e))?;
-    io::write_bytes(to, &bytes)
+    io::write_bytes(to, &io::atomic::read_bytes(from)?)
 }
 
 fn select<'a>(entries: &'a [Entry], only: &[String], manifest: &Path) -> Result<Vec<&'a Entry>> {
@@ -284,10 +322,33 @@ impl Lines {
     }
 }
 
+/// Build one entry; an error or a panic fails this entry only.
 fn build_one(entry: &Entry, folder: &Path, args: &BuildArgs, lines: &Lines) -> Outcome {
+    let run = std::panic::AssertUnwindSafe(|| build_entry(entry, folder, args));
+    let result = std::panic::catch_unwind(run).unwrap_or_else(|panic| {
+        let what = panic
+            .downcast_ref::<&str>()
+            .map(|s| s.to_string())
+            .or_else(|| panic.downcast_ref::<String>().cloned())
+            .unwrap_or_else(|| "no message".to_string());
+        Err(Error::invalid(format!("internal error while building (please report it): {what}")))
+    });
+    let outcome = result.unwrap_or_else(|e: Error| Outcome::Failed(entry.name.clone(), super::clip(&e.to_string())));
+    lines.line(match &outcome {
+        Outcome::Built(r) => {
+            let [x, y, z] = r.dims;
+            format!("built  {} {x}x{y}x{z} in {:.2} s", r.name, r.seconds)
+        }
+        Outcome::Cached(r) => format!("cached {} (recipe and inputs unchanged)", r.name),
+        Outcome::Failed(name, why) => format!("FAILED {name}: {why}"),
+    });
+    outcome
+}
+
+fn build_entry(entry: &Entry, folder: &Path, args: &BuildArgs) -> Result<Outcome> {
     let (output, force) = (args.output.as_path(), args.force);
     let started = Instant::now();
-    let result = (|| {
+    {
         let key = cache_key(entry, folder)?;
         let record_path = output.join(".cache").join(format!("{}.json", entry.name));
         if !force {
@@ -310,28 +371,49 @@ fn build_one(entry: &Entry, folder: &Path, args: &BuildArgs, lines: &Lines) -> O
             declared: volume.meta.texture_type.map(|t| t.to_string()),
             classified,
             seconds: started.elapsed().as_secs_f64(),
+            files: written(output, entry)?,
         };
         let json = serde_json::to_string_pretty(&record).expect("a record always serializes");
         io::write_bytes(&record_path, json.as_bytes())?;
         Ok(Outcome::Built(record))
-    })();
-    let outcome = result.unwrap_or_else(|e: Error| Outcome::Failed(entry.name.clone(), e.to_string()));
-    lines.line(match &outcome {
-        Outcome::Built(r) => {
-            let [x, y, z] = r.dims;
-            format!("built  {} {x}x{y}x{z} in {:.2} s", r.name, r.seconds)
-        }
-        Outcome::Cached(r) => format!("cached {} (recipe and inputs unchanged)", r.name),
-        Outcome::Failed(name, why) => format!("FAILED {name}: {why}"),
-    });
-    outcome
+    }
 }
 
-/// The record of an up-to-date build, if the key matches and every output exists.
+/// The record of an up-to-date build: the key matches and every output the build wrote is
+/// still there with its recorded size and hash (a truncated or edited output rebuilds).
 fn cached(record_path: &Path, key: &str, output: &Path, entry: &Entry) -> Option<Record> {
-    let record: Record = serde_json::from_slice(&std::fs::read(record_path).ok()?).ok()?;
-    let present = outputs(entry).iter().all(|f| output.join(f).exists());
-    (record.key == key && present).then_some(record)
+    let record: Record = serde_json::from_slice(&io::atomic::read_bytes(record_path).ok()?).ok()?;
+    if record.key != key || record.files.is_empty() {
+        return None;
+    }
+    let now = written(output, entry).ok()?;
+    (now == record.files).then_some(record)
+}
+
+/// Size and hash of every file an entry's outputs hold now, in a fixed order.
+fn written(output: &Path, entry: &Entry) -> Result<Vec<Written>> {
+    let mut files = Vec::new();
+    for name in outputs(entry) {
+        let path = output.join(&name);
+        if path.is_dir() {
+            let mut inner: Vec<String> = std::fs::read_dir(&path)
+                .map_err(|e| Error::io(&path, e))?
+                .filter_map(|e| e.ok().map(|e| e.file_name().to_string_lossy().into_owned()))
+                .collect();
+            inner.sort();
+            files.extend(inner.into_iter().map(|f| format!("{name}/{f}")));
+        } else {
+            files.push(name);
+        }
+    }
+    files
+        .into_iter()
+        .map(|name| {
+            let bytes = io::atomic::read_bytes(&output.join(&name))?;
+            let hash = blake3::hash(&bytes).to_hex()[..32].to_string();
+            Ok(Written { path: name, bytes: bytes.len() as u64, hash })
+        })
+        .collect()
 }
 
 /// The files and folders an entry's build writes (relative to the output folder).
@@ -357,7 +439,7 @@ fn cache_key(entry: &Entry, folder: &Path) -> Result<String> {
     let recipe = format!("{entry:?}").replace(&folder.display().to_string(), "");
     hasher.update(recipe.as_bytes());
     for input in inputs(entry) {
-        hasher.update(&std::fs::read(&input).map_err(|e| Error::io(&input, e))?);
+        hasher.update(&io::atomic::read_bytes(&input)?);
     }
     Ok(hasher.finalize().to_hex()[..32].to_string())
 }

@@ -202,3 +202,17 @@ pub fn write_out(text: &str) {
         std::process::exit(0);
     }
 }
+
+/// An error message cut to a readable length: input echoed in a message (a 4 MB line of a
+/// broken file, say) keeps its first and last characters and says how much was left out.
+pub fn clip(message: &str) -> String {
+    const HEAD: usize = 300;
+    const TAIL: usize = 120;
+    let chars: Vec<char> = message.chars().collect();
+    if chars.len() <= HEAD + TAIL + 40 {
+        return message.to_string();
+    }
+    let head: String = chars[..HEAD].iter().collect();
+    let tail: String = chars[chars.len() - TAIL..].iter().collect();
+    format!("{head} [... {} characters left out ...] {tail}", chars.len() - HEAD - TAIL)
+}

@@ -1,10 +1,28 @@
-//! Atomic writes: write a temporary file in the target folder, then rename it over
-//! the target. A crash or an error never leaves half a file under the real name.
+//! Safe writes and bounded reads.
+//!
+//! A file is written to a fresh temporary file in its own folder (a unique, unpredictable
+//! name, created exclusively, so a planted link cannot redirect it) that is then renamed
+//! over the target: a crash or an error never leaves half a file under the real name.
+//!
+//! A folder (a PNG slice stack, a set of masks) is written as a whole the same way, and
+//! only where solidtex may write: a new or empty folder, or one holding just the files
+//! solidtex listed there before in [`FOLDER_LIST`]. The new folder takes the old one's
+//! place in one step, and only the files of that list are removed afterwards: solidtex
+//! never deletes a file it did not write.
+//!
+//! Reads take regular files only (a pipe would block, a device never ends) and stop at a
+//! size cap that follows from the voxel budget.
 
 use crate::error::{Error, Result};
 use std::fs::{self, File};
-use std::io::{BufWriter, Write};
+use std::io::{BufWriter, Read, Write};
 use std::path::{Path, PathBuf};
+
+/// The file in a folder solidtex wrote that lists the files it wrote there.
+pub const FOLDER_LIST: &str = "solidtex-folder.txt";
+
+/// The largest text file (manifest, fill spec, snapshot) solidtex reads.
+pub const TEXT_CAP: u64 = 64 << 20;
 
 /// The folder a path lives in (`.` for a bare file name).
 fn folder_of(path: &Path) -> &Path {
@@ -12,6 +30,29 @@ fn folder_of(path: &Path) -> &Path {
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),
     }
+}
+
+/// The last component of `path` as text, for temporary names.
+fn name_of(path: &Path) -> String {
+    path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_else(|| "output".to_string())
+}
+
+/// A temporary file for `path`, named `.NAME.solidtex-XXXXXX.tmp` (random letters), created
+/// exclusively in the folder of `path`.
+fn temporary_file(path: &Path) -> Result<tempfile::NamedTempFile> {
+    let prefix = format!(".{}.solidtex-", name_of(path));
+    tempfile::Builder::new().prefix(&prefix).suffix(".tmp").tempfile_in(folder_of(path)).map_err(|e| Error::io(path, e))
+}
+
+/// A temporary folder beside `path`, named like [`temporary_file`].
+fn temporary_folder(path: &Path) -> Result<tempfile::TempDir> {
+    let prefix = format!(".{}.solidtex-", name_of(path));
+    tempfile::Builder::new().prefix(&prefix).suffix(".tmp").tempdir_in(folder_of(path)).map_err(|e| Error::io(path, e))
+}
+
+/// Whether a file name is one of solidtex's temporaries (left behind by a killed run).
+pub fn is_temporary_name(name: &str) -> bool {
+    name.starts_with('.') && name.ends_with(".tmp") && name.contains(".solidtex-")
 }
 
 /// Fail with a clear message unless the folder of `path` exists.
@@ -27,29 +68,23 @@ pub fn check_folder(path: &Path) -> Result<()> {
     }
 }
 
-/// A temporary sibling name for `path`.
-fn temp_name(path: &Path) -> PathBuf {
-    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-    folder_of(path).join(format!(".{name}.{}.tmp", std::process::id()))
-}
-
 /// Write `path` atomically with `body` filling a buffered writer.
 pub fn write_file(path: &Path, body: impl FnOnce(&mut BufWriter<File>) -> Result<()>) -> Result<()> {
     check_folder(path)?;
-    let temp = temp_name(path);
-    let result = (|| {
-        let file = File::create(&temp).map_err(|e| Error::io(path, e))?;
-        let mut writer = BufWriter::new(file);
-        body(&mut writer)?;
-        writer.flush().map_err(|e| Error::io(path, e))?;
-        let file = writer.into_inner().map_err(|e| Error::io(path, e.into_error()))?;
-        file.sync_all().map_err(|e| Error::io(path, e))?;
-        fs::rename(&temp, path).map_err(|e| Error::io(path, e))
-    })();
-    if result.is_err() {
-        let _ = fs::remove_file(&temp);
+    if path.is_dir() {
+        return Err(Error::file(
+            path,
+            "is a folder; name a file to write (solidtex does not replace folders by files)",
+        ));
     }
-    result
+    let temp = temporary_file(path)?;
+    let file = temp.as_file().try_clone().map_err(|e| Error::io(path, e))?;
+    let mut writer = BufWriter::new(file);
+    body(&mut writer)?;
+    writer.flush().map_err(|e| Error::io(path, e))?;
+    temp.as_file().sync_all().map_err(|e| Error::io(path, e))?;
+    temp.persist(path).map_err(|e| Error::io(path, e.error))?;
+    Ok(())
 }
 
 /// Write `bytes` to `path` atomically.
@@ -57,30 +92,219 @@ pub fn write_bytes(path: &Path, bytes: &[u8]) -> Result<()> {
     write_file(path, |w| w.write_all(bytes).map_err(|e| Error::io(path, e)))
 }
 
-/// Fill a folder atomically: `body` writes into a temporary sibling folder, which then
-/// replaces `path` (an existing folder at `path` is removed only after success).
+/// Fill the folder `path` as a whole: `body` writes into a new sibling folder, which then
+/// takes the place of `path`. Refused unless [`writable_folder`] allows `path`.
 pub fn write_folder(path: &Path, body: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
     check_folder(path)?;
-    if path.exists() && !path.is_dir() {
-        return Err(Error::file(path, "exists and is not a folder"));
-    }
-    let temp = temp_name(path);
-    let _ = fs::remove_dir_all(&temp);
-    let result = (|| {
-        fs::create_dir(&temp).map_err(|e| Error::io(&temp, e))?;
-        body(&temp)?;
-        if path.exists() {
-            fs::remove_dir_all(path).map_err(|e| Error::io(path, e))?;
+    let old = writable_folder(path)?;
+    let temp = temporary_folder(path)?;
+    body(temp.path())?;
+    write_list(temp.path()).map_err(|e| e.in_file(path))?;
+    let temp = temp.keep();
+    let placed = match &old {
+        None => fs::rename(&temp, path).map_err(|e| Error::io(path, e)),
+        Some(_) => swap_folders(&temp, path),
+    };
+    match (placed, old) {
+        (Err(e), _) => {
+            let _ = fs::remove_dir_all(&temp);
+            Err(e)
         }
-        fs::rename(&temp, path).map_err(|e| Error::io(path, e))
-    })();
-    if result.is_err() {
-        let _ = fs::remove_dir_all(&temp);
+        // `temp` now holds the previous folder.
+        (Ok(()), Some(names)) => remove_listed(&temp, &names, path),
+        (Ok(()), None) => Ok(()),
     }
-    result
 }
 
-/// Read a whole file, naming it on failure.
+/// The names a folder holds, or `None` when there is no folder at `path`; an error unless
+/// solidtex may replace it: a real folder (not a link), not the current folder or one above
+/// it, and holding nothing but the files its [`FOLDER_LIST`] names.
+pub fn writable_folder(path: &Path) -> Result<Option<Vec<String>>> {
+    let meta = match fs::symlink_metadata(path) {
+        Ok(meta) => meta,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
+        Err(e) => return Err(Error::io(path, e)),
+    };
+    if meta.file_type().is_symlink() {
+        return Err(Error::file(path, "is a symbolic link; solidtex writes a folder output only at a real folder"));
+    }
+    if !meta.is_dir() {
+        return Err(Error::file(path, "exists and is not a folder; solidtex does not replace it by a folder"));
+    }
+    if holds_current_folder(path) {
+        return Err(Error::file(
+            path,
+            "is the current folder (or holds it); write a folder output into a new folder, e.g. slices/",
+        ));
+    }
+    let names = folder_names(path)?;
+    let listed = listed_names(path);
+    let foreign: Vec<&String> = names.iter().filter(|n| *n != FOLDER_LIST && !listed.contains(n)).collect();
+    if let Some(first) = foreign.first() {
+        return Err(Error::file(
+            path,
+            format!(
+                "holds {} file(s) solidtex did not write there (e.g. {first:?}); solidtex writes a folder output \
+                 only where the folder is new, empty, or holds what it wrote before (listed in {FOLDER_LIST}); \
+                 choose a new folder",
+                foreign.len()
+            ),
+        ));
+    }
+    Ok(Some(names))
+}
+
+/// Whether the current working folder is `path` or lies inside it.
+fn holds_current_folder(path: &Path) -> bool {
+    match (fs::canonicalize(path), std::env::current_dir().and_then(fs::canonicalize)) {
+        (Ok(folder), Ok(current)) => current.starts_with(folder),
+        _ => false,
+    }
+}
+
+/// The entry names of a folder, sorted.
+fn folder_names(path: &Path) -> Result<Vec<String>> {
+    let mut names = Vec::new();
+    for entry in fs::read_dir(path).map_err(|e| Error::io(path, e))? {
+        let entry = entry.map_err(|e| Error::io(path, e))?;
+        names.push(entry.file_name().to_string_lossy().into_owned());
+    }
+    names.sort();
+    Ok(names)
+}
+
+/// The plain file names the folder's [`FOLDER_LIST`] names (none when it has no list).
+fn listed_names(path: &Path) -> Vec<String> {
+    let list = path.join(FOLDER_LIST);
+    let is_small_file = fs::symlink_metadata(&list).is_ok_and(|m| m.is_file() && m.len() <= TEXT_CAP);
+    let text = if is_small_file { fs::read_to_string(&list).unwrap_or_default() } else { String::new() };
+    text.lines()
+        .map(str::trim)
+        .filter(|l| !l.is_empty() && !l.starts_with('#') && !l.contains('/') && *l != "." && *l != "..")
+        .filter(|l| fs::symlink_metadata(path.join(l)).is_ok_and(|m| m.is_file()))
+        .map(str::to_string)
+        .collect()
+}
+
+/// Write the [`FOLDER_LIST`] of a freshly written folder.
+fn write_list(folder: &Path) -> Result<()> {
+    let mut text = String::from(
+        "# Written by solidtex. It replaces the files listed here as a whole when it writes this\n\
+         # folder again, and refuses to write here while any other file is present.\n",
+    );
+    for name in folder_names(folder)?.into_iter().filter(|n| n != FOLDER_LIST) {
+        text.push_str(&name);
+        text.push('\n');
+    }
+    fs::write(folder.join(FOLDER_LIST), text).map_err(|e| Error::io(folder.join(FOLDER_LIST), e))
+}
+
+/// Put the folder `fresh` at `path` and the folder that was at `path` at `fresh`, in one
+/// step where the system allows it; otherwise move the old folder aside first and back on
+/// failure.
+fn swap_folders(fresh: &Path, path: &Path) -> Result<()> {
+    #[cfg(target_os = "linux")]
+    {
+        use rustix::fs::{CWD, RenameFlags, renameat_with};
+        if renameat_with(CWD, fresh, CWD, path, RenameFlags::EXCHANGE).is_ok() {
+            return Ok(());
+        }
+    }
+    let aside = temporary_folder(path)?.keep();
+    fs::rename(path, &aside).map_err(|e| Error::io(path, e))?;
+    if let Err(e) = fs::rename(fresh, path) {
+        let _ = fs::rename(&aside, path);
+        return Err(Error::io(path, e));
+    }
+    fs::rename(&aside, fresh).map_err(|e| Error::io(fresh, e))
+}
+
+/// Remove the previous folder, now at `old`: only the files it was checked to hold.
+fn remove_listed(old: &Path, names: &[String], path: &Path) -> Result<()> {
+    for name in names {
+        let file = old.join(name);
+        if fs::symlink_metadata(&file).is_ok_and(|m| m.is_file()) {
+            let _ = fs::remove_file(file);
+        }
+    }
+    fs::remove_dir(old).map_err(|_| {
+        Error::file(
+            path,
+            format!(
+                "written; the previous folder was moved to {} and kept, because files appeared in it while \
+                 solidtex wrote (look there)",
+                old.display()
+            ),
+        )
+    })
+}
+
+/// The size cap for a volume file read within `budget` bytes of samples: the samples,
+/// a quarter more for file overheads, and a megabyte for headers.
+pub fn file_cap(budget: u64) -> u64 {
+    budget.saturating_add(budget / 4).saturating_add(1 << 20)
+}
+
+/// Read a whole regular file of at most `cap` bytes, naming it on failure.
+pub fn read_bytes_within(path: &Path, cap: u64) -> Result<Vec<u8>> {
+    let file = open_regular(path, cap)?;
+    let mut bytes = Vec::new();
+    file.take(cap.saturating_add(1)).read_to_end(&mut bytes).map_err(|e| Error::io(path, e))?;
+    if bytes.len() as u64 > cap {
+        return Err(too_large(path, cap));
+    }
+    Ok(bytes)
+}
+
+/// Read a whole regular file within the cap of the voxel budget (`SOLIDTEX_MAX_BYTES`).
 pub fn read_bytes(path: &Path) -> Result<Vec<u8>> {
-    fs::read(path).map_err(|e| Error::io(path, e))
+    read_bytes_within(path, file_cap(super::budget_from_env()?))
+}
+
+/// Read a UTF-8 text file of at most [`TEXT_CAP`] bytes; `what` names the kind of file
+/// (e.g. "manifest") in the error. A file that is not text is not quoted.
+pub fn read_text(path: &Path, what: &str) -> Result<String> {
+    let bytes = read_bytes_within(path, TEXT_CAP)?;
+    String::from_utf8(bytes).map_err(|e| {
+        Error::file(
+            path,
+            format!(
+                "is not UTF-8 text (invalid byte at offset {}); a {what} is a text file",
+                e.utf8_error().valid_up_to()
+            ),
+        )
+    })
+}
+
+/// Open `path` for reading if it is a regular file of at most `cap` bytes.
+pub fn open_regular(path: &Path, cap: u64) -> Result<File> {
+    let meta = fs::metadata(path).map_err(|e| Error::io(path, e))?;
+    if !meta.is_file() {
+        let kind = if meta.is_dir() { "a folder" } else { "not a regular file (a device, pipe or socket)" };
+        return Err(Error::file(path, format!("is {kind}; solidtex reads this input only from a regular file")));
+    }
+    if meta.len() > cap {
+        return Err(too_large(path, cap));
+    }
+    let file = File::open(path).map_err(|e| Error::io(path, e))?;
+    let opened = file.metadata().map_err(|e| Error::io(path, e))?;
+    if !opened.is_file() {
+        return Err(Error::file(path, "is not a regular file; solidtex reads this input only from a regular file"));
+    }
+    Ok(file)
+}
+
+fn too_large(path: &Path, cap: u64) -> Error {
+    Error::file(
+        path,
+        format!(
+            "is larger than {cap} bytes, the most solidtex reads for this kind of file (for volumes, meshes and \
+             models the limit follows the voxel budget, SOLIDTEX_MAX_BYTES)"
+        ),
+    )
+}
+
+/// A path's canonical form when it exists.
+pub fn canonical(path: &Path) -> Option<PathBuf> {
+    fs::canonicalize(path).ok()
 }

@@ -48,9 +48,10 @@ pub fn write(path: &Path, volume: &Volume) -> Result<()> {
     })
 }
 
-fn text(path_free: &str) -> Result<Text> {
-    Text::new_or_none(path_free)
-        .ok_or_else(|| Error::invalid(format!("{path_free:?} cannot be stored in an EXR attribute (use plain ASCII)")))
+/// An EXR text: one byte a character, so characters outside Latin-1 become `?`.
+fn text(value: &str) -> Result<Text> {
+    let latin1: String = value.chars().map(|c| if (c as u32) < 256 { c } else { '?' }).collect();
+    Text::new_or_none(&latin1).ok_or_else(|| Error::invalid(format!("{value:?} cannot be stored in an EXR attribute")))
 }
 
 fn attributes_of(volume: &Volume) -> Result<HashMap<Text, AttributeValue>> {
@@ -64,16 +65,26 @@ fn attributes_of(volume: &Volume) -> Result<HashMap<Text, AttributeValue>> {
 /// Read an EXR atlas written by [`write`] (or by another tool that sets the same attribute).
 pub fn read(path: &Path, budget: u64) -> Result<Volume> {
     let fail = |m: String| Error::file(path, m);
-    let image = read_all(path)?;
+    let image = read_all(path, budget)?;
     let layer = &image.layer_data;
     let lines = description(&layer.attributes.other).ok_or_else(|| {
         fail(format!("no {ATTRIBUTE:?} attribute: this EXR is a 2D image, not a solidtex volume atlas"))
     })?;
     let described = fields::parse(&lines).map_err(|e| e.in_file(path))?;
     let dims = described.dims.ok_or_else(|| fail("the solidtex description has no dims".to_string()))?;
+    let stored = stored_channels(layer).map_err(|e| e.in_file(path))?;
     let channels = match described.channels {
-        Some(list) => list,
-        None => stored_channels(layer).map_err(|e| e.in_file(path))?,
+        Some(list) if list.len() == stored.len() => list,
+        Some(list) => {
+            return Err(fail(format!(
+                "the description lists {} channel(s) ({}) but the file stores {} ({}); they must be the same",
+                list.len(),
+                crate::volume::channel_names(&list),
+                stored.len(),
+                crate::volume::channel_names(&stored)
+            )));
+        }
+        None => stored,
     };
     crate::volume::check_size(dims, channels.len(), budget).map_err(|e| e.in_file(path))?;
     check_tiles(&lines, dims).map_err(|e| e.in_file(path))?;
@@ -109,8 +120,10 @@ fn check_tiles(lines: &[(String, String)], dims: [usize; 3]) -> Result<()> {
 
 type ExrImage = Image<Layer<AnyChannels<FlatSamples>>>;
 
-fn read_all(path: &Path) -> Result<ExrImage> {
-    let bytes = super::atomic::read_bytes(path)?;
+/// Read the first layer, after checking the header's size against the budget.
+fn read_all(path: &Path, budget: u64) -> Result<ExrImage> {
+    let bytes = super::atomic::read_bytes_within(path, super::atomic::file_cap(budget))?;
+    check_header(&bytes, budget).map_err(|e| e.in_file(path))?;
     exr::prelude::read()
         .no_deep_data()
         .largest_resolution_level()
@@ -119,6 +132,25 @@ fn read_all(path: &Path) -> Result<ExrImage> {
         .all_attributes()
         .from_buffered(std::io::Cursor::new(bytes))
         .map_err(|e| Error::file(path, format!("cannot read EXR (corrupt or truncated?): {e}")))
+}
+
+/// Every layer the header declares must fit in the budget as f32 samples.
+fn check_header(bytes: &[u8], budget: u64) -> Result<()> {
+    let meta = exr::meta::MetaData::read_from_buffered(std::io::Cursor::new(bytes), false)
+        .map_err(|e| Error::invalid(format!("cannot read EXR header (corrupt or truncated?): {e}")))?;
+    for header in meta.headers.iter() {
+        let size = header.layer_size;
+        let channels = header.channels.list.len();
+        let needed = size.0 as u128 * size.1 as u128 * channels.max(1) as u128 * 4;
+        if needed > budget as u128 {
+            return Err(Error::invalid(format!(
+                "the EXR header declares a {}x{} layer with {channels} channel(s): {needed} bytes of samples, over \
+                 the voxel budget of {budget} bytes (raise it with SOLIDTEX_MAX_BYTES)",
+                size.0, size.1
+            )));
+        }
+    }
+    Ok(())
 }
 
 /// The `key: value` lines of the `solidtex` attribute.

@@ -50,7 +50,7 @@ pub fn write(path: &Path, volume: &Volume, name: &str) -> Result<()> {
 
 /// Read a `.vol` file (u8 or f32 samples).
 pub fn read(path: &Path, budget: u64) -> Result<Volume> {
-    let bytes = super::atomic::read_bytes(path)?;
+    let bytes = super::atomic::read_bytes_within(path, super::atomic::file_cap(budget))?;
     parse(&bytes, budget).map_err(|e| e.in_file(path))
 }
 
@@ -107,11 +107,13 @@ fn parse(bytes: &[u8], budget: u64) -> Result<Volume> {
     Ok(volume)
 }
 
-/// The texture name stored in a `.vol` header.
+/// The texture name stored in a `.vol` header: a C string of single-byte characters,
+/// read as Latin-1 (so every byte is a character that EXR and PNG text can hold),
+/// control characters left out.
 fn name_of(bytes: &[u8]) -> String {
     let raw = &bytes[8..264.min(bytes.len())];
     let end = raw.iter().position(|b| *b == 0).unwrap_or(raw.len());
-    String::from_utf8_lossy(&raw[..end]).into_owned()
+    raw[..end].iter().map(|b| char::from(*b)).filter(|c| !c.is_control()).collect()
 }
 
 #[cfg(test)]
@@ -132,6 +134,8 @@ mod tests {
         assert_eq!(v.dims(), [2, 2, 2]);
         assert_eq!(v.get(1, 0, 0, 0), 0.2);
         assert_eq!(name_of(&bytes), "kiwi");
+        bytes[8..12].copy_from_slice(b"k\xe9w\xed");
+        assert_eq!(name_of(&bytes), "k\u{e9}w\u{ed}", "a Latin-1 name reads as its characters");
         bytes[4] = 3;
         assert!(parse(&bytes, u64::MAX).unwrap_err().to_string().contains("version 3"));
     }

@@ -8,10 +8,11 @@
 //! | `.png`           | 8-bit flipbook atlas with a description chunk     |
 //! | a folder (no extension, or ending in `/`) | 8-bit PNG slice stack    |
 //!
-//! See `docs/formats.md` for the byte-level layouts.
+//! See `docs/formats.md` for the byte-level layouts. Reads take regular files within a
+//! size cap; writes never touch a file solidtex did not write (see [`atomic`]).
 
 mod atlas;
-mod atomic;
+pub mod atomic;
 mod exr_file;
 mod fields;
 pub mod fill_spec;
@@ -25,7 +26,7 @@ pub mod snapshot_file;
 pub mod values;
 
 pub use atlas::layout as atlas_layout;
-pub use atomic::{check_folder, write_bytes, write_folder};
+pub use atomic::{check_folder, read_text, write_bytes, write_folder};
 pub use fields::parse_dims;
 pub use png_file::{write_image, write_rgb8};
 
@@ -87,6 +88,9 @@ pub fn read_volume(path: &Path, budget: u64) -> Result<Volume> {
     if !path.exists() {
         return Err(Error::file(path, "no such file or folder"));
     }
+    if Format::of(path)? != Format::PngStack {
+        atomic::open_regular(path, atomic::file_cap(budget))?;
+    }
     match Format::of(path)? {
         Format::Exr => exr_file::read(path, budget),
         Format::Nrrd => nrrd::read(path, budget),
@@ -94,6 +98,36 @@ pub fn read_volume(path: &Path, budget: u64) -> Result<Volume> {
         Format::PngAtlas => png_file::read_atlas(path, budget),
         Format::PngStack => png_file::read_stack(path, budget),
     }
+}
+
+/// Check, before any work, that a command may write `output` given the files it reads:
+/// a file output's folder exists and the output is not a folder; a folder output is one
+/// solidtex may write ([`atomic::writable_folder`]) and holds none of the inputs.
+pub fn check_output(output: &Path, inputs: &[&Path]) -> Result<()> {
+    if Format::of(output)? != Format::PngStack {
+        check_folder(output)?;
+        if output.is_dir() {
+            return Err(Error::file(output, "is a folder; name a file to write"));
+        }
+        return Ok(());
+    }
+    check_folder_output(output, inputs)
+}
+
+/// [`check_output`] for an output that is a folder whatever its name (a set of masks).
+pub fn check_folder_output(output: &Path, inputs: &[&Path]) -> Result<()> {
+    check_folder(output)?;
+    atomic::writable_folder(output)?;
+    let Some(folder) = atomic::canonical(output) else { return Ok(()) };
+    for input in inputs {
+        if atomic::canonical(input).is_some_and(|i| i.starts_with(&folder)) {
+            return Err(Error::file(
+                output,
+                format!("holds the input {}; write the output into another folder", input.display()),
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// Write a volume in the format its path names (atomically).
@@ -118,11 +152,24 @@ pub fn read_image(path: &Path) -> Result<Image2d> {
 
 /// [`read_image`], shrunk (Lanczos, aspect kept) so its longer side is at most `max_side`.
 pub fn read_image_fit(path: &Path, max_side: Option<usize>) -> Result<Image2d> {
-    let bytes = atomic::read_bytes(path)?;
-    let reader =
+    let budget = budget_from_env()?;
+    let bytes = atomic::read_bytes_within(path, atomic::file_cap(budget))?;
+    let mut reader =
         image::ImageReader::new(std::io::Cursor::new(bytes)).with_guessed_format().map_err(|e| Error::io(path, e))?;
-    let decoded = reader.decode().map_err(|e| {
-        Error::file(path, format!("cannot decode image (corrupt, truncated, or not PNG/JPEG/EXR/TIFF/HDR): {e}"))
+    let mut limits = image::Limits::default();
+    // The decoded pixels become f32 samples, four times the bytes of 8-bit ones.
+    limits.max_alloc = Some(budget / 4);
+    reader.limits(limits);
+    let decoded = reader.decode().map_err(|e| match e {
+        image::ImageError::Limits(_) => Error::file(
+            path,
+            format!(
+                "image is too large: decoding it needs more than {} bytes, a quarter of the voxel budget \
+                 (raise it with SOLIDTEX_MAX_BYTES)",
+                budget / 4
+            ),
+        ),
+        e => Error::file(path, format!("cannot decode image (corrupt, truncated, or not PNG/JPEG/EXR/TIFF/HDR): {e}")),
     })?;
     let decoded = match max_side {
         Some(0) => return Err(Error::invalid("the largest exemplar side must be at least 1 pixel")),

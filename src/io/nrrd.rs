@@ -49,7 +49,7 @@ fn header(volume: &Volume) -> String {
 
 /// Read a NRRD file with attached raw data.
 pub fn read(path: &Path, budget: u64) -> Result<Volume> {
-    let bytes = super::atomic::read_bytes(path)?;
+    let bytes = super::atomic::read_bytes_within(path, super::atomic::file_cap(budget))?;
     parse(&bytes, budget).map_err(|e| e.in_file(path))
 }
 
@@ -88,8 +88,7 @@ fn parse(bytes: &[u8], budget: u64) -> Result<Volume> {
     })?;
     let text = String::from_utf8_lossy(&bytes[..end.0]);
     let header = parse_header(&text)?;
-    let (dims, channels) = shape(&header)?;
-    crate::volume::check_size(dims, channels.len(), budget)?;
+    let (dims, channels) = shape(&header, budget)?;
     let body = &bytes[end.1..];
     let count = dims.iter().product::<usize>() * channels.len();
     let need = count * header.sample.bytes();
@@ -174,8 +173,8 @@ fn parse_sizes(value: &str) -> Result<Vec<usize>> {
         .collect()
 }
 
-/// Dims and default channel roles from the sizes.
-fn shape(header: &Header) -> Result<([usize; 3], Vec<Channel>)> {
+/// Dims and default channel roles from the sizes, checked against the budget first.
+fn shape(header: &Header, budget: u64) -> Result<([usize; 3], Vec<Channel>)> {
     let s = &header.sizes;
     let (dims, n) = match s.len() {
         3 => ([s[0], s[1], s[2]], 1),
@@ -185,6 +184,7 @@ fn shape(header: &Header) -> Result<([usize; 3], Vec<Channel>)> {
     if dims.contains(&0) || n == 0 {
         return Err(Error::invalid(format!("NRRD sizes {s:?} contain a zero; every size must be at least 1")));
     }
+    crate::volume::check_size(dims, n, budget)?;
     Ok((dims, default_channels(n)))
 }
 
@@ -237,6 +237,18 @@ mod tests {
         let v = parse(&bytes, u64::MAX).unwrap();
         assert_eq!(v.data(), &[0.0, 1.0]);
         assert_eq!(v.channels(), Channel::grey().as_slice());
+    }
+
+    #[test]
+    fn huge_sizes_are_refused_before_allocation() {
+        for sizes in ["2147483647 1 1 1", "9223372036854775807 1 1 1", "100000000 1 1", "1 4294967295 4294967295 2"] {
+            let text = format!(
+                "NRRD0004\ntype: float\ndimension: {}\nsizes: {sizes}\nencoding: raw\n\n",
+                sizes.split(' ').count()
+            );
+            let err = parse(text.as_bytes(), 1 << 20).unwrap_err().to_string();
+            assert!(err.contains("over the voxel budget"), "{sizes}: {err}");
+        }
     }
 
     #[test]

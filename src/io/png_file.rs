@@ -43,12 +43,17 @@ fn write_png(
         encoder.set_color(colour);
         encoder.set_depth(png::BitDepth::Eight);
         if let Some(text) = text {
-            encoder.add_text_chunk(KEYWORD.to_string(), text).map_err(fail)?;
+            encoder.add_text_chunk(KEYWORD.to_string(), latin1(&text)).map_err(fail)?;
         }
         let mut writer = encoder.write_header().map_err(fail)?;
         writer.write_image_data(bytes).map_err(fail)?;
         writer.finish().map_err(fail)
     })
+}
+
+/// `text` with every character outside Latin-1 (which a tEXt chunk cannot hold) as `?`.
+fn latin1(text: &str) -> String {
+    text.chars().map(|c| if (c as u32) < 256 { c } else { '?' }).collect()
 }
 
 /// Write the volume's flipbook atlas as an 8-bit PNG.
@@ -98,13 +103,29 @@ struct Decoded {
     text: Option<String>,
 }
 
-fn decode(path: &Path) -> Result<Decoded> {
+/// Decode a PNG whose samples, as f32, fit in `budget` bytes; the size in its header is
+/// checked before any pixel memory is taken.
+fn decode(path: &Path, budget: u64) -> Result<Decoded> {
     let fail = |e: png::DecodingError| Error::file(path, format!("cannot read PNG (corrupt or truncated?): {e}"));
-    let file = fs::File::open(path).map_err(|e| Error::io(path, e))?;
-    let mut decoder = png::Decoder::new(std::io::BufReader::new(file));
+    let file = super::atomic::open_regular(path, super::atomic::file_cap(budget))?;
+    let limits = png::Limits { bytes: usize::try_from(budget).unwrap_or(usize::MAX) };
+    let mut decoder = png::Decoder::new_with_limits(std::io::BufReader::new(file), limits);
     decoder.set_transformations(png::Transformations::EXPAND);
     let mut reader = decoder.read_info().map_err(fail)?;
     let text = reader.info().uncompressed_latin1_text.iter().find(|t| t.keyword == KEYWORD).map(|t| t.text.clone());
+    let (width, height) = reader.info().size();
+    let (colour, _) = reader.output_color_type();
+    let needed = width as u128 * height as u128 * colour.samples() as u128 * 4;
+    if needed > budget as u128 {
+        return Err(Error::file(
+            path,
+            format!(
+                "a {width}x{height} PNG with {} channel(s) needs {needed} bytes as samples, over the voxel budget of \
+                 {budget} bytes (raise it with SOLIDTEX_MAX_BYTES)",
+                colour.samples()
+            ),
+        ));
+    }
     let size = reader.output_buffer_size().ok_or_else(|| Error::file(path, "PNG is too large to decode"))?;
     let mut buf = vec![0u8; size];
     let info = reader.next_frame(&mut buf).map_err(fail)?;
@@ -121,7 +142,7 @@ fn decode(path: &Path) -> Result<Decoded> {
 
 /// Read a PNG atlas written by [`write_atlas`].
 pub fn read_atlas(path: &Path, budget: u64) -> Result<Volume> {
-    let png = decode(path)?;
+    let png = decode(path, budget)?;
     let text = png.text.as_deref().ok_or_else(|| {
         Error::file(path, "this PNG has no solidtex atlas description (tEXt 'solidtex'); it is a plain 2D image")
     })?;
@@ -146,7 +167,7 @@ fn channels_for(named: Option<Vec<Channel>>, stored: usize, path: &Path) -> Resu
 /// Read a folder of PNG slices (sorted by name) as a volume, z = file order.
 pub fn read_stack(path: &Path, budget: u64) -> Result<Volume> {
     let files = png_files(path)?;
-    let first = decode(&files[0])?;
+    let first = decode(&files[0], budget)?;
     let described = match &first.text {
         Some(t) => fields::parse(&fields::from_lines(t)).map_err(|e| e.in_file(&files[0]))?,
         None => fields::parse(&[])?,
@@ -156,7 +177,7 @@ pub fn read_stack(path: &Path, budget: u64) -> Result<Volume> {
     crate::volume::check_size(dims, channels.len(), budget).map_err(|e| e.in_file(path))?;
     let mut data = Vec::with_capacity(dims.iter().product::<usize>() * channels.len());
     for file in &files {
-        let slice = if file == &files[0] { first_samples(&first) } else { decode(file)? };
+        let slice = if file == &files[0] { first_samples(&first) } else { decode(file, budget)? };
         if (slice.width, slice.height, slice.channels) != (first.width, first.height, first.channels) {
             return Err(Error::file(
                 file,

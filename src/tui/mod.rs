@@ -35,9 +35,9 @@ use std::time::Duration;
 
 /// The library items of a manifest, with their build state read from `output`.
 pub fn load_items(manifest: &Path, output: &Path) -> (Vec<Item>, Vec<String>) {
-    let text = match std::fs::read_to_string(manifest) {
+    let text = match io::read_text(manifest, "manifest") {
         Ok(text) => text,
-        Err(e) => return (Vec::new(), vec![Error::io(manifest, e).to_string()]),
+        Err(e) => return (Vec::new(), vec![e.to_string()]),
     };
     let folder = manifest.parent().unwrap_or(Path::new("."));
     let (entries, errors) = io::manifest::parse_plan_lenient(&text, folder);
@@ -46,7 +46,7 @@ pub fn load_items(manifest: &Path, output: &Path) -> (Vec<Item>, Vec<String>) {
 }
 
 fn item(entry: &io::manifest::Entry, output: &Path) -> Item {
-    let record = std::fs::read(output.join(".cache").join(format!("{}.json", entry.name)))
+    let record = io::atomic::read_bytes(&output.join(".cache").join(format!("{}.json", entry.name)))
         .ok()
         .and_then(|b| serde_json::from_slice::<crate::cli::build::Record>(&b).ok())
         .filter(|_| output.join(format!("{}.exr", entry.name)).exists());
@@ -63,6 +63,13 @@ fn item(entry: &io::manifest::Entry, output: &Path) -> Item {
 
 /// Open the UI on `manifest`, with builds going to `output`.
 pub fn run(manifest: &Path, output: &Path) -> Result<()> {
+    use std::io::IsTerminal;
+    if !(std::io::stdin().is_terminal() && std::io::stdout().is_terminal()) {
+        return Err(Error::usage(
+            "the terminal UI needs a terminal (its input and output are not one here); \
+             build the library without it with `solidtex build`, or see `solidtex --help`",
+        ));
+    }
     let (items, errors) = load_items(manifest, output);
     let mut model = Model::new(manifest.to_path_buf(), output.to_path_buf(), items, errors);
     let (send, receive) = channel();
@@ -116,7 +123,7 @@ fn start(effects: Vec<Effect>, model: &Model, send: &Sender<Message>) {
             }
             Effect::Build(names) => build(&manifest, &output, names, &send),
             Effect::ReadManifest => {
-                let text = std::fs::read_to_string(&manifest).map_err(|e| format!("{}: {e}", manifest.display()));
+                let text = io::read_text(&manifest, "manifest").map_err(|e| e.to_string());
                 let _ = send.send(Message::EditorReady(text));
             }
             Effect::Save(text) => {
@@ -243,7 +250,7 @@ fn save_steps(
     steps: &[model::StampStep],
     file: &str,
 ) -> std::result::Result<String, String> {
-    let text = std::fs::read_to_string(manifest).map_err(|e| format!("{}: {e}", manifest.display()))?;
+    let text = io::read_text(manifest, "manifest").map_err(|e| e.to_string())?;
     let text = edit::append_steps(&text, name, steps, file)?;
     let folder = manifest.parent().unwrap_or(Path::new("."));
     io::manifest::parse_plan(&text, folder).map_err(|e| e.to_string())?;

@@ -65,7 +65,10 @@ pub struct Volume {
     pub meta: Meta,
 }
 
-/// Check dims and channels against the budget; returns the sample count.
+/// The most channels a volume may have.
+pub const MAX_CHANNELS: usize = 64;
+
+/// Check dims and channel count against the voxel budget before any allocation; returns the sample count.
 pub fn check_size(dims: [usize; 3], channels: usize, budget_bytes: u64) -> Result<usize> {
     if dims.contains(&0) {
         return Err(Error::invalid(format!(
@@ -79,6 +82,9 @@ pub fn check_size(dims: [usize; 3], channels: usize, budget_bytes: u64) -> Resul
     let needed = dims.iter().fold(channels as u128 * 4, |n, d| n * *d as u128);
     if needed > budget_bytes as u128 {
         return Err(Error::Budget { dims, channels, needed, budget: budget_bytes as u128 });
+    }
+    if channels > MAX_CHANNELS {
+        return Err(Error::invalid(format!("a volume has at most {MAX_CHANNELS} channels; {channels} were asked for")));
     }
     Ok((needed / 4) as usize)
 }
