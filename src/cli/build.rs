@@ -324,15 +324,7 @@ impl Lines {
 
 /// Build one entry; an error or a panic fails this entry only.
 fn build_one(entry: &Entry, folder: &Path, args: &BuildArgs, lines: &Lines) -> Outcome {
-    let run = std::panic::AssertUnwindSafe(|| build_entry(entry, folder, args));
-    let result = std::panic::catch_unwind(run).unwrap_or_else(|panic| {
-        let what = panic
-            .downcast_ref::<&str>()
-            .map(|s| s.to_string())
-            .or_else(|| panic.downcast_ref::<String>().cloned())
-            .unwrap_or_else(|| "no message".to_string());
-        Err(Error::invalid(format!("internal error while building (please report it): {what}")))
-    });
+    let result = caught(|| build_entry(entry, folder, args));
     let outcome = result.unwrap_or_else(|e: Error| Outcome::Failed(entry.name.clone(), super::clip(&e.to_string())));
     lines.line(match &outcome {
         Outcome::Built(r) => {
@@ -343,6 +335,18 @@ fn build_one(entry: &Entry, folder: &Path, args: &BuildArgs, lines: &Lines) -> O
         Outcome::Failed(name, why) => format!("FAILED {name}: {why}"),
     });
     outcome
+}
+
+/// Run `work`, turning a panic into an error that says what it was.
+fn caught<T>(work: impl FnOnce() -> Result<T>) -> Result<T> {
+    std::panic::catch_unwind(std::panic::AssertUnwindSafe(work)).unwrap_or_else(|panic| {
+        let what = panic
+            .downcast_ref::<&str>()
+            .map(|s| s.to_string())
+            .or_else(|| panic.downcast_ref::<String>().cloned())
+            .unwrap_or_else(|| "no message".to_string());
+        Err(Error::invalid(format!("internal error (please report it): {what}")))
+    })
 }
 
 fn build_entry(entry: &Entry, folder: &Path, args: &BuildArgs) -> Result<Outcome> {
@@ -541,6 +545,13 @@ mod tests {
         assert_eq!(groups.iter().map(Vec::len).collect::<Vec<_>>(), [2, 2, 1]);
         assert_eq!(batches(&entries, 1).len(), 5, "an entry over the budget still builds, alone");
         assert_eq!(batches(&entries, u64::MAX).len(), 1);
+    }
+
+    #[test]
+    fn a_panic_in_one_entry_becomes_its_error() {
+        let err = caught(|| -> Result<()> { panic!("octaves out of hand") }).unwrap_err().to_string();
+        assert!(err.contains("internal error") && err.contains("octaves out of hand"), "{err}");
+        assert_eq!(caught(|| Ok(7)).unwrap(), 7);
     }
 
     #[test]

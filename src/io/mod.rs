@@ -90,6 +90,11 @@ pub fn read_volume(path: &Path, budget: u64) -> Result<Volume> {
     }
     if Format::of(path)? != Format::PngStack {
         atomic::open_regular(path, atomic::file_cap(budget))?;
+    } else if !path.is_dir() {
+        return Err(Error::file(
+            path,
+            "has no volume extension and is not a folder; allowed: .exr, .nrrd, .vol, .png, or a folder of PNG slices",
+        ));
     }
     match Format::of(path)? {
         Format::Exr => exr_file::read(path, budget),

@@ -99,6 +99,22 @@ fn an_output_that_is_a_link_is_replaced_not_followed() {
     assert!(std::fs::symlink_metadata(dir.path().join("out.nrrd")).unwrap().is_file());
 }
 
+#[test]
+fn planted_links_at_temporary_names_are_not_followed() {
+    let dir = tempfile::tempdir().unwrap();
+    let elsewhere = dir.path().join("elsewhere.txt");
+    std::fs::write(&elsewhere, "precious").unwrap();
+    let pid = std::process::id();
+    for name in [format!(".out.txt.{pid}.tmp"), format!(".out.txt.solidtex-{pid}.tmp"), ".out.txt.tmp".to_string()] {
+        std::os::unix::fs::symlink(&elsewhere, dir.path().join(name)).unwrap();
+    }
+    let out = dir.path().join("out.txt");
+    solidtex::io::write_bytes(&out, b"new").unwrap();
+    assert_eq!(std::fs::read_to_string(&elsewhere).unwrap(), "precious");
+    assert_eq!(std::fs::read_to_string(&out).unwrap(), "new");
+    assert!(std::fs::symlink_metadata(&out).unwrap().is_file(), "the output is a file, not a link");
+}
+
 /// A NRRD file with `sizes` and a few data bytes.
 fn nrrd(dir: &Path, sizes: &str) -> String {
     let dimension = sizes.split_whitespace().count();
@@ -113,7 +129,8 @@ fn huge_nrrd_sizes_are_refused_before_allocation() {
     let dir = tempfile::tempdir().unwrap();
     for sizes in ["2147483647 1 1 1", "9223372036854775807 1 1 1", "3 4096 4096 4096"] {
         let file = nrrd(dir.path(), sizes);
-        assert_fails(&solidtex(&["info", &file]), &["huge.nrrd", "voxel budget"]);
+        assert_fails(&solidtex(&["convert", &file, &at(dir.path(), "out.exr")]), &["huge.nrrd", "voxel budget"]);
+        assert_eq!(listing(dir.path()), ["huge.nrrd"], "nothing is left behind");
     }
     let within_budget = nrrd(dir.path(), "100000000 1 1");
     assert_fails(&solidtex(&["info", &within_budget]), &["huge.nrrd", "truncated", "400000000 bytes"]);
@@ -161,7 +178,9 @@ fn a_png_claiming_a_huge_size_is_refused_before_decoding() {
     let dir = tempfile::tempdir().unwrap();
     let atlas = dir.path().join("atlas.png");
     std::fs::write(&atlas, lying_png(1, 1 << 31)).unwrap();
-    assert_fails(&solidtex(&["info", &atlas.to_string_lossy()]), &["atlas.png", "voxel budget"]);
+    let convert = solidtex(&["convert", &atlas.to_string_lossy(), &at(dir.path(), "out.exr")]);
+    assert_fails(&convert, &["atlas.png", "voxel budget"]);
+    assert_eq!(listing(dir.path()), ["atlas.png"], "nothing is left behind");
     let stack = dir.path().join("stack");
     std::fs::create_dir(&stack).unwrap();
     std::fs::write(stack.join("z0000.png"), lying_png(1 << 20, 1 << 20)).unwrap();
