@@ -104,7 +104,41 @@ impl Snapshot {
                 _ => return Err(bad()),
             }
         }
+        snap.check_complete()?;
         Ok(snap)
+    }
+
+    /// A comparison reads every field: dims, the hash, and per channel one statistics
+    /// line and one full thumbnail. A file cut short misses some of them.
+    fn check_complete(&self) -> Result<()> {
+        let missing = |what: &str| Error::invalid(format!("snapshot has no {what} line (truncated?)"));
+        if self.dims.contains(&0) {
+            return Err(missing("dims"));
+        }
+        if self.channels.is_empty() {
+            return Err(missing("channels"));
+        }
+        if self.hash.is_empty() {
+            return Err(missing("hash"));
+        }
+        let n = self.channels.len();
+        if self.stats.len() != n || self.thumbs.len() != n {
+            return Err(Error::invalid(format!(
+                "snapshot names {n} channel(s) but has {} stat and {} thumb line(s); one of each per channel \
+                 is needed (truncated?)",
+                self.stats.len(),
+                self.thumbs.len()
+            )));
+        }
+        if let Some(c) = self.thumbs.iter().position(|t| t.len() != THUMB * THUMB) {
+            return Err(Error::invalid(format!(
+                "snapshot thumb line {} has {} values; {} are needed",
+                c + 1,
+                self.thumbs[c].len(),
+                THUMB * THUMB
+            )));
+        }
+        Ok(())
     }
 
     /// Differences from `expected`: none means equal (tolerance 0: the hash must match;
@@ -132,9 +166,15 @@ impl Snapshot {
             }
             return out;
         }
+        let worst = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max);
         for (c, name) in self.channels.iter().enumerate() {
-            let worst = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max);
-            let (s, t) = (worst(&self.stats[c], &expected.stats[c]), worst(&self.thumbs[c], &expected.thumbs[c]));
+            let (Some(a), Some(b), Some(e), Some(f)) =
+                (self.stats.get(c), self.thumbs.get(c), expected.stats.get(c), expected.thumbs.get(c))
+            else {
+                out.push(format!("channel {name}: statistics or thumbnail missing"));
+                continue;
+            };
+            let (s, t) = (worst(a, e), worst(b, f));
             if s > tolerance || t > tolerance {
                 out.push(format!(
                     "channel {name}: stats differ by {s:.4}, thumbnail by {t:.4} (tolerance {tolerance})"
@@ -188,5 +228,31 @@ mod tests {
         assert!(other.differences(&snap, 0.5).is_empty(), "within a loose tolerance");
         assert!(!other.differences(&snap, 0.001).is_empty());
         assert!(Snapshot::parse("hello").unwrap_err().to_string().contains("first line"));
+    }
+
+    #[test]
+    fn a_snapshot_cut_short_is_an_error_naming_what_is_missing() {
+        let v = Volume::from_fn([6, 5, 4], Channel::rgb(), |x, y, _, o| o.copy_from_slice(&[x as f32, y as f32, 0.5]))
+            .unwrap();
+        let text = Snapshot::of(&v).to_text();
+        let cases = [("stat G", "1 stat and 0 thumb"), ("thumb B", "3 stat and 2 thumb"), ("hash", "no hash")];
+        for (cut_before, want) in cases {
+            let short = &text[..text.find(cut_before).unwrap()];
+            let err = Snapshot::parse(short).unwrap_err().to_string();
+            assert!(err.contains(want), "cut before {cut_before:?}: {err}");
+        }
+        let thumb_cut = &text[..text.len() - 8];
+        assert!(Snapshot::parse(thumb_cut).unwrap_err().to_string().contains("thumb line 3 has 63 values"));
+    }
+
+    #[test]
+    fn differences_report_missing_channel_data_instead_of_panicking() {
+        let v = Volume::from_fn([4, 4, 4], Channel::rgb(), |x, _, _, o| o.copy_from_slice(&[x as f32; 3])).unwrap();
+        let snap = Snapshot::of(&v);
+        let mut short = snap.clone();
+        short.stats.truncate(1);
+        short.thumbs.truncate(1);
+        let found = snap.differences(&short, 0.01);
+        assert_eq!(found, ["channel G: statistics or thumbnail missing", "channel B: statistics or thumbnail missing"]);
     }
 }

@@ -56,7 +56,7 @@ impl MaskRef {
         let words: Vec<&str> = text.split(' ').collect();
         let num = |i: usize| words.get(i).ok_or_else(bad);
         match words[0] {
-            "file" => Ok(MaskRef::File(text[5..].to_string())),
+            "file" => text.strip_prefix("file ").map(|p| MaskRef::File(p.to_string())).ok_or_else(bad),
             "splotch" => Ok(MaskRef::Splotch {
                 size: num(1)?.parse().map_err(|_| bad())?,
                 falloff: num(2)?.parse().map_err(|_| bad())?,
@@ -154,4 +154,19 @@ pub struct FillReport {
     pub raised_scale: usize,
     /// The paste loop's figures.
     pub paste: Stats,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn mask_references_parse_back_and_a_bare_word_is_an_error() {
+        for text in ["file masks/a.exr", "splotch 32 0.1 7"] {
+            assert_eq!(MaskRef::parse(text).unwrap().to_text(), text);
+        }
+        for text in ["file", "splotch 32", "layered", ""] {
+            assert!(MaskRef::parse(text).unwrap_err().to_string().contains("mask reference"), "{text}");
+        }
+    }
 }

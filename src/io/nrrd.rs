@@ -241,7 +241,13 @@ mod tests {
 
     #[test]
     fn huge_sizes_are_refused_before_allocation() {
-        for sizes in ["2147483647 1 1 1", "9223372036854775807 1 1 1", "100000000 1 1", "1 4294967295 4294967295 2"] {
+        for sizes in [
+            "2147483647 1 1 1",
+            "9223372036854775807 1 1 1",
+            "100000000 1 1",
+            "1 4294967295 4294967295 2",
+            "18446744073709551615 9223372036854775807 3 2",
+        ] {
             let text = format!(
                 "NRRD0004\ntype: float\ndimension: {}\nsizes: {sizes}\nencoding: raw\n\n",
                 sizes.split(' ').count()

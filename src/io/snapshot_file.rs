@@ -14,7 +14,7 @@ pub fn write(path: &Path, volume: &Volume) -> Result<()> {
 
 /// Read a snapshot file.
 pub fn read(path: &Path) -> Result<Snapshot> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let text = super::atomic::read_text(path, "snapshot")?;
     Snapshot::parse(&text).map_err(|e| e.in_file(path))
 }
 

@@ -79,7 +79,7 @@ pub fn check_size(dims: [usize; 3], channels: usize, budget_bytes: u64) -> Resul
     if channels == 0 {
         return Err(Error::invalid("a volume needs at least one channel"));
     }
-    let needed = dims.iter().fold(channels as u128 * 4, |n, d| n * *d as u128);
+    let needed = dims.iter().fold(channels as u128 * 4, |n, d| n.saturating_mul(*d as u128));
     if needed > budget_bytes as u128 {
         return Err(Error::Budget { dims, channels, needed, budget: budget_bytes as u128 });
     }
