@@ -8,6 +8,9 @@
 //!   repeats itself (a photo made by tiling or cloning one patch) would make that baseline
 //!   a copy, not unseen texture: offsets at which most neighbourhoods find themselves again
 //!   are detected, and the baseline skips those copies (the plain figure is kept too).
+//! - **Sharpness** per axis ([`crate::sharpness`]): gradient and autocorrelation-length
+//!   ratios of the cuts against the exemplar, and the distance of their gradient histograms.
+//!   Slice energy alone rewards blur (a flat volume scores well); these fail it.
 //! - **Histogram distance** per channel: L1 between 32-bin histograms (0 = equal, 2 = disjoint).
 //! - For layered volumes: **depth error** (mean |Depth - z / (Z - 1)|), whether the mean depth
 //!   rises monotonically along z, and the **sweeping index**: the share of voxels whose best x
@@ -80,6 +83,8 @@ pub struct LayeredQuality {
 pub struct Report {
     /// One entry per measured axis.
     pub axes: Vec<AxisEnergy>,
+    /// Sharpness and feature size per measured axis (see [`crate::sharpness`]).
+    pub sharpness: Vec<crate::sharpness::AxisSharpness>,
     /// One entry per exemplar channel.
     pub histograms: Vec<HistogramDistance>,
     /// For layered volumes.
@@ -92,9 +97,11 @@ pub fn assess(volume: &Volume, exemplars: [Option<&Image2d>; 3], layered: bool) 
     let first = exemplars.iter().flatten().next().ok_or_else(|| Error::invalid("no exemplar to measure against"))?;
     let picks = channel_positions(volume, first.channels())?;
     let mut axes = Vec::new();
+    let mut sharpness = Vec::new();
     let mut best = [Vec::new(), Vec::new(), Vec::new()];
     for axis in Axis::ALL {
         let Some(image) = exemplars[axis.index()] else { continue };
+        sharpness.push(crate::sharpness::measure(volume, image, &picks, axis)?);
         let measure = Measure::new(image, volume, &picks, layered)?;
         let (energy, matches) = measure.volume_energy(volume, axis);
         let random = measure.random_energy();
@@ -114,7 +121,7 @@ pub fn assess(volume: &Volume, exemplars: [Option<&Image2d>; 3], layered: bool) 
     }
     let histograms = histogram_distances(volume, first, &picks);
     let layered = layered.then(|| layered_quality(volume, &best)).transpose()?;
-    Ok(Report { axes, histograms, layered })
+    Ok(Report { axes, sharpness, histograms, layered })
 }
 
 /// Positions in the volume of the exemplar's channels.

@@ -1,0 +1,319 @@
+//! A yardstick blur cannot pass: do the volume's cuts have the exemplar's sharpness and
+//! feature size?
+//!
+//! Both the cuts and the exemplar are turned to one grey image: every exemplar channel is
+//! standardized by the exemplar's own mean and deviation, then the channels are averaged.
+//! Per axis, on the cuts at 1/4, 1/2 and 3/4 of the axis, against the exemplar of that axis:
+//!
+//! - **gradient ratio**: mean gradient magnitude (central differences) of the cuts over the
+//!   exemplar's. Blur lowers it, noise raises it; 1 is right.
+//! - **autocorrelation-length ratio**: the lag at which the normalized autocorrelation first
+//!   falls to 1/e (averaged over the image's two directions) of the cuts over the
+//!   exemplar's. Blobs larger than the exemplar's features raise it, noise lowers it.
+//! - **gradient-histogram distance**: L1 distance (0 = equal, 2 = disjoint) between the
+//!   histograms of gradient magnitude, 32 bins over [0, 4 x the exemplar's mean]: it tells
+//!   whether the edges have the exemplar's mix of soft and hard.
+//!
+//! The autocorrelation is computed directly over all lags with the biased estimator
+//! (sum of products over the sum of squares), the same numbers a zero-padded FFT gives.
+
+use crate::error::{Error, Result};
+use crate::volume::{Axis, Image2d, Volume};
+use serde::Serialize;
+
+/// Gradient-magnitude histogram bins.
+const BINS: usize = 32;
+/// The histogram spans [0, SPAN x the exemplar's mean gradient magnitude].
+const SPAN: f64 = 4.0;
+
+/// The targets a synthesized volume should meet on every axis.
+pub const GRADIENT_RANGE: (f64, f64) = (0.8, 1.2);
+/// See [`GRADIENT_RANGE`].
+pub const LENGTH_RANGE: (f64, f64) = (0.7, 1.3);
+
+/// Sharpness of one axis's cuts against its exemplar.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct AxisSharpness {
+    /// `x`, `y` or `z`.
+    pub axis: String,
+    /// Mean gradient magnitude of the cuts over the exemplar's.
+    pub gradient_ratio: f64,
+    /// 1/e autocorrelation length of the cuts over the exemplar's.
+    pub length_ratio: f64,
+    /// L1 distance between the gradient-magnitude histograms.
+    pub gradient_histogram_distance: f64,
+    /// The exemplar's 1/e autocorrelation length in pixels.
+    pub exemplar_length: f64,
+}
+
+impl AxisSharpness {
+    /// Whether the gradient and length ratios lie in their target ranges.
+    pub fn in_range(&self) -> bool {
+        let inside = |v: f64, (lo, hi): (f64, f64)| v >= lo && v <= hi;
+        inside(self.gradient_ratio, GRADIENT_RANGE) && inside(self.length_ratio, LENGTH_RANGE)
+    }
+}
+
+/// Measure the cuts of `volume` across `axis` against `exemplar`; `picks[c]` is the volume
+/// channel that holds exemplar channel `c`.
+pub fn measure(volume: &Volume, exemplar: &Image2d, picks: &[usize], axis: Axis) -> Result<AxisSharpness> {
+    if exemplar.width() < 3 || exemplar.height() < 3 {
+        return Err(Error::invalid("measuring sharpness needs an exemplar of at least 3x3 pixels"));
+    }
+    let identity: Vec<usize> = (0..exemplar.channel_count()).collect();
+    let scale = Standard::of(exemplar);
+    let ex = scale.grey(exemplar, &identity);
+    let ex_gradient = gradients(&ex);
+    let ex_mean = mean(&ex_gradient.values);
+    let ex_length = length(&ex);
+    let top = SPAN * if ex_mean > 0.0 { ex_mean } else { 1.0 };
+    let side = volume.dims()[axis.index()];
+    let mut cut_means = Vec::new();
+    let mut cut_lengths = Vec::new();
+    let mut histogram = [0.0; BINS];
+    for quarter in 1..=3 {
+        let index = (side * quarter / 4).min(side - 1);
+        let cut = scale.grey(&volume.slice(axis, index)?, picks);
+        let g = gradients(&cut);
+        cut_means.push(mean(&g.values));
+        cut_lengths.push(length(&cut));
+        add_histogram(&mut histogram, &g.values, top);
+    }
+    let mut ex_histogram = [0.0; BINS];
+    add_histogram(&mut ex_histogram, &ex_gradient.values, top);
+    Ok(AxisSharpness {
+        axis: axis.to_string(),
+        gradient_ratio: ratio(mean(&cut_means), ex_mean),
+        length_ratio: ratio(mean(&cut_lengths), ex_length),
+        gradient_histogram_distance: l1(&normalized(&histogram), &normalized(&ex_histogram)),
+        exemplar_length: ex_length,
+    })
+}
+
+/// `a / b`, with 0/0 = 1 and a/0 = infinity.
+fn ratio(a: f64, b: f64) -> f64 {
+    if b > 0.0 {
+        a / b
+    } else if a > 0.0 {
+        f64::INFINITY
+    } else {
+        1.0
+    }
+}
+
+fn mean(values: &[f64]) -> f64 {
+    if values.is_empty() { 0.0 } else { values.iter().sum::<f64>() / values.len() as f64 }
+}
+
+/// The exemplar's per-channel mean and deviation.
+struct Standard {
+    mean: Vec<f64>,
+    deviation: Vec<f64>,
+}
+
+impl Standard {
+    fn of(image: &Image2d) -> Standard {
+        let n = image.channel_count();
+        let count = (image.width() * image.height()) as f64;
+        let mut sum = vec![0.0; n];
+        let mut squares = vec![0.0; n];
+        for pixel in image.data().chunks_exact(n) {
+            for (c, v) in pixel.iter().enumerate() {
+                sum[c] += *v as f64;
+                squares[c] += (*v as f64) * (*v as f64);
+            }
+        }
+        let mean: Vec<f64> = sum.iter().map(|s| s / count).collect();
+        let deviation = squares.iter().zip(&mean).map(|(q, m)| (q / count - m * m).max(0.0).sqrt()).collect();
+        Standard { mean, deviation }
+    }
+
+    /// The grey image of `image`: channel `picks[c]` standardized as exemplar channel `c`,
+    /// averaged over the channels (a channel with no deviation contributes nothing).
+    fn grey(&self, image: &Image2d, picks: &[usize]) -> Grey {
+        let n = image.channel_count();
+        let values = image
+            .data()
+            .chunks_exact(n)
+            .map(|pixel| {
+                let sum: f64 = picks
+                    .iter()
+                    .enumerate()
+                    .filter(|(c, _)| self.deviation[*c] > 1e-9)
+                    .map(|(c, &at)| (pixel[at] as f64 - self.mean[c]) / self.deviation[c])
+                    .sum();
+                sum / picks.len() as f64
+            })
+            .collect();
+        Grey { width: image.width(), height: image.height(), values }
+    }
+}
+
+/// One value per pixel, rows of `width`.
+struct Grey {
+    width: usize,
+    height: usize,
+    values: Vec<f64>,
+}
+
+impl Grey {
+    fn at(&self, x: usize, y: usize) -> f64 {
+        self.values[y * self.width + x]
+    }
+}
+
+/// Gradient magnitudes at the interior pixels (central differences).
+fn gradients(image: &Grey) -> Grey {
+    let (w, h) = (image.width, image.height);
+    let mut values = Vec::with_capacity(w.saturating_sub(2) * h.saturating_sub(2));
+    for y in 1..h.saturating_sub(1) {
+        for x in 1..w.saturating_sub(1) {
+            let gx = (image.at(x + 1, y) - image.at(x - 1, y)) / 2.0;
+            let gy = (image.at(x, y + 1) - image.at(x, y - 1)) / 2.0;
+            values.push((gx * gx + gy * gy).sqrt());
+        }
+    }
+    Grey { width: w.saturating_sub(2), height: h.saturating_sub(2), values }
+}
+
+/// The 1/e autocorrelation length in pixels, averaged over the two directions; a flat
+/// image has no features and gets the image's own size.
+fn length(image: &Grey) -> f64 {
+    let m = mean(&image.values);
+    let centred: Vec<f64> = image.values.iter().map(|v| v - m).collect();
+    let energy: f64 = centred.iter().map(|v| v * v).sum();
+    let along = |step: (usize, usize), size: usize| -> f64 {
+        if energy <= 1e-12 * centred.len() as f64 {
+            return size as f64;
+        }
+        let mut previous = 1.0;
+        for lag in 1..size {
+            let r = lagged_sum(&centred, image.width, image.height, (step.0 * lag, step.1 * lag)) / energy;
+            if r <= (-1.0f64).exp() {
+                let threshold = (-1.0f64).exp();
+                return (lag - 1) as f64 + (previous - threshold) / (previous - r);
+            }
+            previous = r;
+        }
+        size as f64
+    };
+    (along((1, 0), image.width) + along((0, 1), image.height)) / 2.0
+}
+
+/// Sum over pixels of value(p) x value(p + offset), for the pairs inside the image.
+fn lagged_sum(values: &[f64], width: usize, height: usize, (dx, dy): (usize, usize)) -> f64 {
+    let mut sum = 0.0;
+    for y in 0..height.saturating_sub(dy) {
+        let row = &values[y * width..y * width + width - dx];
+        let shifted = &values[(y + dy) * width + dx..(y + dy) * width + width];
+        sum += row.iter().zip(shifted).map(|(a, b)| a * b).sum::<f64>();
+    }
+    sum
+}
+
+fn add_histogram(histogram: &mut [f64; BINS], values: &[f64], top: f64) {
+    for v in values {
+        let bin = ((v / top) * BINS as f64) as usize;
+        histogram[bin.min(BINS - 1)] += 1.0;
+    }
+}
+
+fn normalized(histogram: &[f64; BINS]) -> [f64; BINS] {
+    let total: f64 = histogram.iter().sum();
+    histogram.map(|h| if total > 0.0 { h / total } else { 0.0 })
+}
+
+fn l1(a: &[f64; BINS], b: &[f64; BINS]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| (x - y).abs()).sum()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::noise::mix64;
+    use crate::volume::Channel;
+
+    /// A stationary volume with structure: dark veins in a light ground (the procedural
+    /// marble, softened by one voxel so that its features span a few voxels), measured
+    /// against its own central slices.
+    fn marble() -> Volume {
+        blurred(&crate::procedural::generate(crate::procedural::Recipe::Marble, [48, 48, 48], 5).unwrap(), 1.0)
+    }
+
+    fn measure_all(volume: &Volume, truth: &Volume) -> Vec<AxisSharpness> {
+        let picks: Vec<usize> = (0..truth.channel_count()).collect();
+        Axis::ALL
+            .iter()
+            .map(|&axis| {
+                let exemplar = truth.slice(axis, truth.dims()[axis.index()] / 2).unwrap();
+                measure(volume, &exemplar, &picks, axis).unwrap()
+            })
+            .collect()
+    }
+
+    /// A separable Gaussian blur of every channel, clamped at the borders.
+    fn blurred(volume: &Volume, sigma: f64) -> Volume {
+        let radius = (3.0 * sigma).ceil() as i64;
+        let kernel: Vec<f64> = (-radius..=radius).map(|i| (-(i * i) as f64 / (2.0 * sigma * sigma)).exp()).collect();
+        let total: f64 = kernel.iter().sum();
+        let dims = volume.dims();
+        let mut current = volume.clone();
+        for axis in 0..3 {
+            let source = current.clone();
+            current = Volume::from_fn(dims, volume.channels().to_vec(), |x, y, z, out| {
+                for (c, o) in out.iter_mut().enumerate() {
+                    let mut sum = 0.0;
+                    for (k, w) in kernel.iter().enumerate() {
+                        let mut p = [x as i64, y as i64, z as i64];
+                        p[axis] = (p[axis] + k as i64 - radius).clamp(0, dims[axis] as i64 - 1);
+                        sum += w * source.get(p[0] as usize, p[1] as usize, p[2] as usize, c) as f64;
+                    }
+                    *o = (sum / total) as f32;
+                }
+            })
+            .unwrap();
+        }
+        current
+    }
+
+    #[test]
+    fn the_truth_passes_and_blurred_flat_and_shuffled_volumes_fail() {
+        let truth = marble();
+        for s in measure_all(&truth, &truth) {
+            assert!(s.in_range(), "the volume against its own cuts: {s:?}");
+            assert!(s.gradient_histogram_distance < 0.2, "{s:?}");
+        }
+        for s in measure_all(&blurred(&truth, 1.5), &truth) {
+            assert!(!s.in_range() && s.gradient_ratio < GRADIENT_RANGE.0, "blurred: {s:?}");
+            assert!(s.gradient_histogram_distance > 0.3, "blurred: {s:?}");
+        }
+        let flat = Volume::from_fn(truth.dims(), truth.channels().to_vec(), |_, _, _, o| o.fill(0.5)).unwrap();
+        for s in measure_all(&flat, &truth) {
+            assert!(!s.in_range() && s.gradient_ratio == 0.0, "flat: {s:?}");
+        }
+        let n = truth.channel_count();
+        let count = truth.voxel_count();
+        let mut data = truth.data().to_vec();
+        for i in (1..count).rev() {
+            let j = (mix64(i as u64) % (i as u64 + 1)) as usize;
+            for c in 0..n {
+                data.swap(i * n + c, j * n + c);
+            }
+        }
+        let shuffled = Volume::from_data(truth.dims(), truth.channels().to_vec(), data).unwrap();
+        for s in measure_all(&shuffled, &truth) {
+            assert!(s.gradient_ratio > GRADIENT_RANGE.1 && s.length_ratio < LENGTH_RANGE.0, "shuffled: {s:?}");
+        }
+    }
+
+    #[test]
+    fn lengths_follow_the_feature_size() {
+        let stripes = |period: usize| {
+            let data = (0..64 * 64).map(|i| (((i % 64) / period + (i / 64) / period) % 2) as f32).collect();
+            Image2d::from_data(64, 64, Channel::grey(), data).unwrap()
+        };
+        let grey = |image: &Image2d| Standard::of(image).grey(image, &[0]);
+        let (narrow, wide) = (length(&grey(&stripes(2))), length(&grey(&stripes(8))));
+        assert!(wide > 2.0 * narrow, "{narrow} {wide}");
+    }
+}
