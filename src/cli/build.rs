@@ -355,10 +355,8 @@ fn build_entry(entry: &Entry, folder: &Path, args: &BuildArgs) -> Result<Outcome
     {
         let key = cache_key(entry, folder)?;
         let record_path = output.join(".cache").join(format!("{}.json", entry.name));
-        if !force {
-            if let Some(record) = cached(&record_path, &key, output, entry) {
-                return Ok(Outcome::Cached(record));
-            }
+        if !force && let Some(record) = cached(&record_path, &key, output, entry) {
+            return Ok(Outcome::Cached(record));
         }
         let preview = output.join(".cache").join(format!("{}.preview.exr", entry.name));
         let progress = LineProgress { name: &entry.name, enabled: args.progress_lines, last: Mutex::new(-1), preview };
@@ -483,7 +481,7 @@ fn summarize(outcomes: &[Outcome], output: &Path) -> Result<()> {
     eprintln!(
         "{built} built, {cached} cached, {} failed; report: {}",
         failed.len(),
-        output.join("report.md").display()
+        output.join("report.html").display()
     );
     if failed.is_empty() {
         Ok(())

@@ -226,13 +226,13 @@ fn insert(top: &mut [(f32, u32); TOP], hit: (f32, u32)) {
 /// best match elsewhere.
 fn choose(best: &[Option<Best>; 3], anti_sweeping: bool, ex: Option<&Prepared>) -> [Option<(f32, u32)>; 3] {
     let mut chosen = best.map(|b| b.map(|b| b.first));
-    if let (true, Some(bx), Some(by), Some(ex)) = (anti_sweeping, best[0], best[1], ex) {
-        if near(ex, bx.first.1, by.first.1) {
-            if bx.first.0 <= by.first.0 && by.second.1 != u32::MAX {
-                chosen[1] = Some(by.second);
-            } else if bx.second.1 != u32::MAX {
-                chosen[0] = Some(bx.second);
-            }
+    if let (true, Some(bx), Some(by), Some(ex)) = (anti_sweeping, best[0], best[1], ex)
+        && near(ex, bx.first.1, by.first.1)
+    {
+        if bx.first.0 <= by.first.0 && by.second.1 != u32::MAX {
+            chosen[1] = Some(by.second);
+        } else if bx.second.1 != u32::MAX {
+            chosen[0] = Some(bx.second);
         }
     }
     chosen

@@ -93,14 +93,12 @@ fn event_loop(
     let fail = |e: std::io::Error| Error::io("terminal", e);
     while !model.quit {
         terminal.draw(|f| view::draw_with(f, model, graphics.as_deref_mut())).map_err(fail)?;
-        if event::poll(Duration::from_millis(100)).map_err(fail)? {
-            if let Event::Key(key) = event::read().map_err(fail)? {
-                if key.kind == KeyEventKind::Press {
-                    if let Some(message) = keymap::key(&model.screen, key) {
-                        start(update(model, message), model, send);
-                    }
-                }
-            }
+        if event::poll(Duration::from_millis(100)).map_err(fail)?
+            && let Event::Key(key) = event::read().map_err(fail)?
+            && key.kind == KeyEventKind::Press
+            && let Some(message) = keymap::key(&model.screen, key)
+        {
+            start(update(model, message), model, send);
         }
         while let Ok(message) = receive.try_recv() {
             start(update(model, message), model, send);
