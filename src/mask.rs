@@ -50,8 +50,11 @@ impl Layer {
     }
 }
 
+/// Allowed mask sides, in voxels.
+pub const SIZE: (usize, usize) = (4, 512);
+
 fn check(size: usize, falloff: f32) -> Result<()> {
-    if !(4..=512).contains(&size) {
+    if !(SIZE.0..=SIZE.1).contains(&size) {
         return Err(Error::invalid(format!("mask size {size} is out of range; allowed 4 to 512 voxels")));
     }
     if falloff.is_nan() || falloff <= 0.0 || falloff >= 0.5 {

@@ -105,8 +105,9 @@ impl Fbm {
     pub fn new(seed: u64, period: [i64; 3], octaves: u32) -> Fbm {
         let tables = (0..octaves)
             .map(|o| {
-                let per = period.map(|v| (v << o).max(1));
-                if per.iter().product::<i64>() > TABLE_LIMIT {
+                let per = period.map(|v| v.saturating_mul(1 << o.min(62)).max(1));
+                let entries = per.iter().try_fold(1i64, |n, &p| n.checked_mul(p));
+                if entries.is_none_or(|n| n > TABLE_LIMIT) {
                     return Vec::new();
                 }
                 let s = seed.wrapping_add(o as u64);

@@ -14,6 +14,16 @@ use rand_pcg::Pcg64;
 
 /// Supersamples per axis for anti-aliased edges.
 pub const SUPERSAMPLE: usize = 4;
+/// Allowed scales, in voxels per mesh unit.
+pub const SCALE: (f32, f32) = (0.001, 10_000.0);
+/// Most seeds one scatter places: each try is checked against every seed placed, so the
+/// work grows with the square of the count.
+pub const MAX_COUNT: usize = 2000;
+/// Largest distance from the origin of a position, in voxels: far beyond any volume, small
+/// enough that differences of positions stay finite.
+pub const POSITION_LIMIT: f32 = 1.0e6;
+/// Allowed blur radii, in voxels: the blur costs 125 samples per voxel of its sphere's box.
+pub const RADIUS: (f32, f32) = (0.1, 64.0);
 
 /// Where and how big a seed goes.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -45,6 +55,21 @@ pub struct Stamped {
 /// Stamp `mesh` placed by `placement` into `volume`, blending `colour` (R, G, B) into the
 /// colour channels by coverage (anti-aliased edges). A seed wholly outside is an error.
 pub fn stamp(volume: &mut Volume, mesh: &Mesh, placement: &Placement, colour: [f32; 3]) -> Result<Stamped> {
+    let stamped = stamp_covered(volume, mesh, placement, colour)?;
+    if stamped.voxels == 0 {
+        let d = volume.dims();
+        return Err(Error::invalid(format!(
+            "the seed placed at ({}, {}, {}) lies wholly outside the {}x{}x{} volume",
+            placement.at.x, placement.at.y, placement.at.z, d[0], d[1], d[2]
+        )));
+    }
+    Ok(stamped)
+}
+
+/// [`stamp`] without the check that the seed covers some voxel (a scattered seed may be
+/// smaller than a sample spacing).
+fn stamp_covered(volume: &mut Volume, mesh: &Mesh, placement: &Placement, colour: [f32; 3]) -> Result<Stamped> {
+    check_placement(placement)?;
     let targets = colour_channels(volume)?;
     let placed = mesh.transformed(placement.matrix());
     let cover = voxelize(&placed, volume.dims(), SUPERSAMPLE);
@@ -58,14 +83,31 @@ pub fn stamp(volume: &mut Volume, mesh: &Mesh, placement: &Placement, colour: [f
         stamped.voxels += 1;
         stamped.volume += alpha as f64;
     }
-    if stamped.voxels == 0 {
-        let d = volume.dims();
+    Ok(stamped)
+}
+
+/// Whether every coordinate of `p` lies within [`POSITION_LIMIT`] of 0 (NaN never does).
+fn within_limit(p: Vec3) -> bool {
+    p.abs().max_element() <= POSITION_LIMIT && !p.is_nan()
+}
+
+/// A placement within the allowed positions and scales.
+fn check_placement(p: &Placement) -> Result<()> {
+    let limit = POSITION_LIMIT;
+    if !within_limit(p.at) {
         return Err(Error::invalid(format!(
-            "the seed placed at ({}, {}, {}) lies wholly outside the {}x{}x{} volume",
-            placement.at.x, placement.at.y, placement.at.z, d[0], d[1], d[2]
+            "seed position ({}, {}, {}) is out of range; allowed: each coordinate -{limit} to {limit}",
+            p.at.x, p.at.y, p.at.z
         )));
     }
-    Ok(stamped)
+    let (lo, hi) = SCALE;
+    if p.scale.is_nan() || !(p.scale.min_element() >= lo && p.scale.max_element() <= hi) {
+        return Err(Error::invalid(format!(
+            "seed scale ({}, {}, {}) is out of range; allowed: {lo} to {hi} voxels per mesh unit",
+            p.scale.x, p.scale.y, p.scale.z
+        )));
+    }
+    Ok(())
 }
 
 /// Positions of R, G and B (a grey volume takes the first channel for all three).
@@ -127,7 +169,7 @@ pub fn scatter(volume: &mut Volume, mesh: &Mesh, params: &Scatter, seed: u64) ->
             let sphere = (at + rotation * (centre * scale), radius * scale);
             if fits(volume, sphere) && spheres.iter().all(|s| s.0.distance(sphere.0) >= s.1 + sphere.1) {
                 let placement = Placement { at, rotation, scale: Vec3::splat(scale) };
-                stamp(volume, mesh, &placement, params.colour)?;
+                stamp_covered(volume, mesh, &placement, params.colour)?;
                 spheres.push(sphere);
                 out.placed.push(placement);
                 break;
@@ -139,11 +181,23 @@ pub fn scatter(volume: &mut Volume, mesh: &Mesh, params: &Scatter, seed: u64) ->
 }
 
 fn check_scatter(volume: &Volume, p: &Scatter) -> Result<()> {
-    if p.scale.0.is_nan() || p.scale.0 <= 0.0 || p.scale.0 > p.scale.1 {
+    if !(1..=MAX_COUNT).contains(&p.count) {
+        return Err(Error::invalid(format!("scatter count {} is out of range; allowed: 1 to {MAX_COUNT}", p.count)));
+    }
+    let (lo, hi) = SCALE;
+    if !(p.scale.0 >= lo && p.scale.0 <= p.scale.1 && p.scale.1 <= hi) {
         return Err(Error::invalid(format!(
-            "scatter scale {}..{} must be positive and the smaller first",
+            "scatter scale {}..{} is out of range; allowed: {lo} to {hi}, the smaller first",
             p.scale.0, p.scale.1
         )));
+    }
+    if let Region::Box(a, b) = p.region {
+        let limit = POSITION_LIMIT;
+        if !(within_limit(a) && within_limit(b)) {
+            return Err(Error::invalid(format!(
+                "scatter region box {a}..{b} is out of range; allowed: each coordinate -{limit} to {limit}"
+            )));
+        }
     }
     if let Region::Depth(lo, hi) = p.region {
         if volume.channel_index(&Channel::Depth).is_none() {
@@ -201,9 +255,18 @@ fn fits(volume: &Volume, (c, r): (Vec3, f32)) -> bool {
 /// A local blur: Gaussian-blurred values blended in inside a sphere, fully (times
 /// `strength`) at the centre and fading to nothing at the radius.
 pub fn blur(volume: &mut Volume, at: Vec3, radius: f32, strength: f32) -> Result<usize> {
-    if radius.is_nan() || radius <= 0.0 || !(0.0..=1.0).contains(&strength) {
+    let (lo, hi) = RADIUS;
+    if !((lo..=hi).contains(&radius) && (0.0..=1.0).contains(&strength)) {
         return Err(Error::invalid(format!(
-            "blur radius {radius} must be positive and strength {strength} between 0 and 1"
+            "blur radius {radius} or strength {strength} is out of range; allowed: radius {lo} to {hi} voxels, \
+             strength 0 to 1"
+        )));
+    }
+    let limit = POSITION_LIMIT;
+    if !within_limit(at) {
+        return Err(Error::invalid(format!(
+            "blur centre ({}, {}, {}) is out of range; allowed: each coordinate -{limit} to {limit}",
+            at.x, at.y, at.z
         )));
     }
     let d = volume.dims();
@@ -267,4 +330,52 @@ fn box_gaussian(volume: &Volume, lo: [usize; 3], hi: [usize; 3]) -> Vec<f32> {
         }
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn grey() -> Volume {
+        Volume::from_fn([8; 3], Channel::rgb(), |_, _, _, o| o.fill(0.5)).unwrap()
+    }
+
+    fn placed(at: Vec3, scale: f32) -> Placement {
+        Placement { at, rotation: Quat::IDENTITY, scale: Vec3::splat(scale) }
+    }
+
+    #[test]
+    fn values_out_of_range_are_refused_and_change_nothing() {
+        let seed = crate::sections::seed_mesh(8, 8).unwrap();
+        let mut v = grey();
+        let error = |r: Result<Stamped>| r.unwrap_err().to_string();
+        assert!(
+            error(stamp(&mut v, &seed, &placed(Vec3::new(f32::NAN, 1.0, 1.0), 1.0), [0.0; 3])).contains("position")
+        );
+        assert!(error(stamp(&mut v, &seed, &placed(Vec3::splat(4.0), 1.0e9), [0.0; 3])).contains("0.001 to 10000"));
+        let whole = Region::Box(Vec3::ZERO, Vec3::splat(8.0));
+        let many = Scatter { count: 10_000_000, region: whole, scale: (1.0, 1.0), colour: [0.0; 3], attempts: 200 };
+        assert!(scatter(&mut v, &seed, &many, 1).unwrap_err().to_string().contains("1 to 2000"));
+        let wide = Scatter { count: 1, region: Region::Box(Vec3::splat(-3.0e38), Vec3::splat(3.0e38)), ..many };
+        assert!(scatter(&mut v, &seed, &wide, 1).unwrap_err().to_string().contains("region box"));
+        assert!(blur(&mut v, Vec3::splat(4.0), 1.0e9, 1.0).unwrap_err().to_string().contains("0.1 to 64"));
+        assert!(blur(&mut v, Vec3::new(f32::NAN, 0.0, 0.0), 2.0, 1.0).unwrap_err().to_string().contains("centre"));
+        assert_eq!(v, grey());
+    }
+
+    #[test]
+    fn a_scattered_seed_smaller_than_a_sample_is_placed_without_error() {
+        let seed = crate::sections::seed_mesh(8, 8).unwrap();
+        let mut v = grey();
+        let tiny = Scatter {
+            count: 3,
+            region: Region::Box(Vec3::ZERO, Vec3::splat(8.0)),
+            scale: (0.001, 0.001),
+            colour: [0.0; 3],
+            attempts: 200,
+        };
+        assert_eq!(scatter(&mut v, &seed, &tiny, 1).unwrap().placed.len(), 3);
+        let outside = stamp(&mut v, &seed, &placed(Vec3::splat(500.0), 1.0), [0.0; 3]).unwrap_err();
+        assert!(outside.to_string().contains("wholly outside"), "{outside}");
+    }
 }

@@ -15,6 +15,15 @@ use crate::noise::{Fbm, fbm};
 use crate::volume::{Axis, Channel, Image2d, Meta, Volume};
 use glam::Vec3;
 
+/// Allowed displacement amplitudes, in voxels.
+pub const AMPLITUDE: (f32, f32) = (0.0, 64.0);
+/// Allowed noise frequencies, in cells across the longest side.
+pub const FREQUENCY: (f32, f32) = (0.0, 64.0);
+/// Allowed colour jitter amplitudes.
+pub const JITTER: (f32, f32) = (0.0, 1.0);
+/// Allowed skin widths and width noises, in voxels.
+pub const SKIN_WIDTH: (f32, f32) = (0.0, 64.0);
+
 /// Noise that displaces where the cross-section is sampled, plus colour jitter.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Noise {
@@ -104,28 +113,36 @@ fn check(image: &Image2d, params: &Sweep) -> Result<()> {
     if params.length == 0 {
         return Err(Error::invalid("sweep length 0: it must be at least 1 voxel"));
     }
-    if let Some(d) = params.depth_axis {
-        if d == params.axis {
-            return Err(Error::invalid(format!(
-                "the depth axis {d} is the sweep axis; depth must run along one of the cross-section's axes"
-            )));
-        }
+    if let Some(d) = params.depth_axis.filter(|d| *d == params.axis) {
+        return Err(Error::invalid(format!(
+            "the depth axis {d} is the sweep axis; depth must run along one of the cross-section's axes"
+        )));
     }
     if params.skin.is_some() && params.depth_axis.is_none() {
         return Err(Error::invalid("a skin needs a depth axis: it covers the depth-0 face"));
     }
+    if let Some(noise) = &params.noise {
+        within("noise amplitude", noise.amplitude, AMPLITUDE)?;
+        within("noise frequency", noise.frequency, FREQUENCY)?;
+        within("noise jitter", noise.jitter, JITTER)?;
+    }
     if let Some(skin) = &params.skin {
-        if !(skin.width >= 0.0 && skin.width_noise >= 0.0) {
-            return Err(Error::invalid(format!(
-                "skin width {} and width noise {} must be 0 or more voxels",
-                skin.width, skin.width_noise
-            )));
-        }
+        within("skin width", skin.width, SKIN_WIDTH)?;
+        within("skin width noise", skin.width_noise, SKIN_WIDTH)?;
     }
     if let Some([x, y, c]) = image.first_non_finite() {
         return Err(Error::invalid(format!("cross-section pixel ({x}, {y}) channel {c} is not finite")));
     }
     Ok(())
+}
+
+/// An error unless `value` lies in `min..=max` (NaN never does).
+fn within(name: &str, value: f32, (min, max): (f32, f32)) -> Result<()> {
+    if value >= min && value <= max {
+        Ok(())
+    } else {
+        Err(Error::invalid(format!("{name} {value} is out of range; allowed: {min} to {max}")))
+    }
 }
 
 /// Positions of the R, G, B roles (all channels for a grey image).
@@ -300,5 +317,12 @@ mod tests {
         let skin = Skin { look: SkinLook::Colour([0.0; 3]), width: 1.0, width_noise: 0.0 };
         let no_depth = Sweep { depth_axis: None, skin: Some(skin), ..plain(2) };
         assert!(sweep(&rows(), &no_depth, 1).unwrap_err().to_string().contains("needs a depth axis"));
+        for (amplitude, frequency, jitter, name) in
+            [(1.0, 2.0e6, 0.0, "noise frequency"), (f32::NAN, 1.0, 0.0, "noise amplitude"), (1.0, 1.0, 2.0, "jitter")]
+        {
+            let noisy = Sweep { noise: Some(Noise { amplitude, frequency, jitter }), ..plain(2) };
+            let e = sweep(&rows(), &noisy, 1).unwrap_err().to_string();
+            assert!(e.contains(name) && e.contains("out of range"), "{e}");
+        }
     }
 }

@@ -11,7 +11,7 @@ use std::time::Instant;
 /// The arguments of `solidtex bench`.
 #[derive(Debug, clap::Args)]
 pub struct BenchArgs {
-    /// Runs per workload (the median is reported).
+    /// Runs per workload, 1 to 100 (the median is reported).
     #[arg(long, default_value_t = 3)]
     pub runs: usize,
     /// Only workloads whose name contains this text (e.g. `fill`, `synth`, `/128`).
@@ -37,12 +37,13 @@ const WORKLOADS: [Workload; 3] = [
 
 /// Run `solidtex bench`.
 pub fn run(args: &BenchArgs) -> Result<()> {
+    crate::io::values::within("--runs", args.runs, 1, 100).map_err(super::commands::usage)?;
     if let Some(only) = &args.only {
         let mut names: Vec<String> =
             HAND_MADE.iter().chain(WORKLOADS.iter().map(|w| &w.name)).map(|n| n.to_string()).collect();
         names.extend(super::bench_fill::names());
         if !names.iter().any(|n| n.contains(only.as_str())) {
-            return Err(Error::invalid(format!(
+            return Err(Error::usage(format!(
                 "--only {only:?} matches no workload; the workloads: {}",
                 names.join(", ")
             )));

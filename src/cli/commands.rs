@@ -11,9 +11,21 @@ fn load(path: &Path) -> Result<Volume> {
     io::read_volume(path, io::budget_from_env()?)
 }
 
+/// Largest side of a volume asked for with `--size`, as in a manifest (the voxel budget
+/// may allow less).
+pub const MAX_SIDE: usize = io::manifest::MAX_SIDE;
+
+/// A value error of the command line as a usage error (exit code 2); other errors unchanged.
+pub fn usage(error: Error) -> Error {
+    match error {
+        Error::Invalid(message) => Error::Usage(message),
+        other => other,
+    }
+}
+
 /// `solidtex convert IN OUT`.
 pub fn convert(input: &Path, output: &Path) -> Result<()> {
-    io::Format::of(output)?;
+    io::check_output(output, &[input])?;
     let volume = load(input)?;
     io::write_volume(output, &volume)?;
     eprintln!("wrote {}", output.display());
@@ -22,7 +34,7 @@ pub fn convert(input: &Path, output: &Path) -> Result<()> {
 
 /// `solidtex slice FILE --axis A --index N -o out.png`.
 pub fn slice(file: &Path, axis: &str, index: Option<usize>, output: &Path) -> Result<()> {
-    let axis: Axis = axis.parse()?;
+    let axis: Axis = axis.parse().map_err(usage)?;
     io::check_folder(output)?;
     let volume = load(file)?;
     let index = index.unwrap_or(volume.dims()[axis.index()] / 2);
@@ -45,26 +57,28 @@ pub fn sheet(file: &Path, output: &Path, title: Option<String>) -> Result<()> {
 
 /// `solidtex make RECIPE --size N --seed S -o out.exr`.
 pub fn make(recipe: &str, size: &str, seed: u64, output: &Path) -> Result<()> {
-    let recipe: Recipe = recipe.parse()?;
+    let recipe: Recipe = recipe.parse().map_err(usage)?;
     let dims = parse_size(size)?;
-    io::Format::of(output)?;
-    io::check_folder(output)?;
-    crate::volume::check_size(dims, 4, io::budget_from_env()?)?;
+    crate::volume::check_size(dims, 4, io::budget_from_env()?).map_err(usage)?;
+    io::check_output(output, &[])?;
     let volume = procedural::generate(recipe, dims, seed)?;
     io::write_volume(output, &volume)?;
     eprintln!("wrote {}", output.display());
     Ok(())
 }
 
-/// `64` or `64x64x32` as dims.
+/// `64` or `64x64x32` as dims, each side 1 to [`MAX_SIDE`]; errors are usage errors.
 pub fn parse_size(text: &str) -> Result<[usize; 3]> {
     let dims = match text.parse::<usize>() {
         Ok(n) => [n; 3],
         Err(_) => io::parse_dims(text)
-            .map_err(|_| Error::invalid(format!("--size {text:?} is not N or XxYxZ (for example 64 or 64x64x32)")))?,
+            .map_err(|_| Error::usage(format!("--size {text:?} is not N or XxYxZ (for example 64 or 64x64x32)")))?,
     };
-    if dims.contains(&0) {
-        return Err(Error::invalid(format!("--size {text:?} contains a zero; every side must be at least 1")));
+    if dims.iter().any(|d| !(1..=MAX_SIDE).contains(d)) {
+        return Err(Error::usage(format!(
+            "--size {text:?} is out of range; allowed: each side at least 1 and at most {MAX_SIDE}, within the \
+             voxel budget"
+        )));
     }
     Ok(dims)
 }

@@ -1,6 +1,7 @@
 //! `solidtex fill`, `cut`, `bake` and `view`: fill a closed mesh with library exemplars and
 //! look at the result.
 
+use super::commands::usage;
 use crate::error::{Error, Result};
 use crate::fill::render::{self, Textures, View};
 use crate::fill::spec::{self, FillSpec};
@@ -28,10 +29,10 @@ pub struct FillArgs {
     /// Also write the fill's figures as JSON here.
     #[arg(long)]
     pub json: Option<PathBuf>,
-    /// Override the spec's target tet count.
+    /// Override the spec's target tet count (100 to 200000).
     #[arg(long)]
     pub tets: Option<usize>,
-    /// Override the spec's seed.
+    /// Override the spec's seed (any 64-bit whole number).
     #[arg(long)]
     pub seed: Option<u64>,
 }
@@ -42,10 +43,11 @@ pub struct CutArgs {
     /// One or more models (.lst); several are combined, the first listed wins where they overlap.
     #[arg(required = true)]
     pub models: Vec<PathBuf>,
-    /// The plane as PX,PY,PZ,NX,NY,NZ (a point and a normal; default: through the centre, normal z).
+    /// The plane as PX,PY,PZ,NX,NY,NZ (a point and a normal, each -1000000 to 1000000, the
+    /// normal not zero; default: through the centre, normal z).
     #[arg(long, allow_hyphen_values = true)]
     pub plane: Option<String>,
-    /// Picture size in pixels.
+    /// Picture size in pixels, 8 to 4096.
     #[arg(long, default_value_t = 512)]
     pub size: usize,
     /// The PNG to write.
@@ -59,7 +61,7 @@ pub struct BakeArgs {
     /// One or more models (.lst), combined as in `cut`.
     #[arg(required = true)]
     pub models: Vec<PathBuf>,
-    /// Voxels along the longest side.
+    /// Voxels along the longest side, 2 to 512.
     #[arg(long, default_value_t = 128)]
     pub res: usize,
     /// The volume to write (RGBA; alpha 1 inside the model).
@@ -72,13 +74,13 @@ pub struct BakeArgs {
 pub struct ViewArgs {
     /// The model (.lst).
     pub model: PathBuf,
-    /// Degrees around the vertical axis.
+    /// Degrees around the vertical axis, -360 to 360.
     #[arg(long, default_value_t = 35.0, allow_hyphen_values = true)]
     pub yaw: f32,
-    /// Degrees above the horizon.
+    /// Degrees above the horizon, -90 to 90.
     #[arg(long, default_value_t = 25.0, allow_hyphen_values = true)]
     pub pitch: f32,
-    /// Picture size in pixels.
+    /// Picture size in pixels, 8 to 4096.
     #[arg(long, default_value_t = 512)]
     pub size: usize,
     /// The PNG to write.
@@ -88,13 +90,14 @@ pub struct ViewArgs {
 
 /// Run `solidtex fill`.
 pub fn run_fill(args: &FillArgs) -> Result<()> {
+    if let Some(tets) = args.tets {
+        let (lo, hi) = (*fill_spec::TETS.start(), *fill_spec::TETS.end());
+        io::values::within("--tets", tets, lo, hi).map_err(usage)?;
+    }
     lst_check(&args.output)?;
     let mut spec = fill_spec::read_fill_spec(&args.spec)?;
     spec.tets = args.tets.unwrap_or(spec.tets);
     spec.seed = args.seed.unwrap_or(spec.seed);
-    if !fill_spec::TETS.contains(&spec.tets) {
-        return Err(Error::invalid(format!("--tets {} is out of range; allowed 100 to 2000000", spec.tets)));
-    }
     let surface = io::mesh_file::read_mesh(&args.mesh)?.canonical();
     let started = Instant::now();
     let tets = mesher::tetrahedralize(&surface, spec.tets).map_err(|e| e.in_file(&args.mesh))?;
@@ -138,7 +141,7 @@ pub fn run_fill(args: &FillArgs) -> Result<()> {
 
 fn lst_check(path: &Path) -> Result<()> {
     if path.extension().and_then(|e| e.to_str()) != Some("lst") {
-        return Err(Error::invalid(format!("{}: the model file must end in .lst", path.display())));
+        return Err(Error::usage(format!("{}: the model file must end in .lst", path.display())));
     }
     io::check_folder(path)
 }
@@ -297,19 +300,30 @@ fn pairs(loaded: &[Loaded]) -> Vec<(&LstModel, &Textures)> {
     loaded.iter().map(|l| (&l.model, &l.textures)).collect()
 }
 
+/// Largest picture side of `cut` and `view`, in pixels.
+const MAX_PICTURE: usize = 4096;
+
+/// The plane of `cut` (`None`: the default), every number checked against its range.
+fn cut_values(args: &CutArgs) -> Result<Option<(glam::Vec3, glam::Vec3)>> {
+    io::values::within("--size", args.size, 8, MAX_PICTURE)?;
+    let Some(text) = &args.plane else { return Ok(None) };
+    let v = io::values::numbers("--plane", text, &[6])?;
+    io::values::positions("--plane", text, &v)?;
+    let normal = glam::Vec3::new(v[3], v[4], v[5]);
+    if normal == glam::Vec3::ZERO {
+        return Err(Error::invalid(format!("--plane {text:?}: the normal NX,NY,NZ is zero")));
+    }
+    Ok(Some((glam::Vec3::new(v[0], v[1], v[2]), normal)))
+}
+
 /// Run `solidtex cut`.
 pub fn run_cut(args: &CutArgs) -> Result<()> {
+    let plane = cut_values(args).map_err(usage)?;
     io::check_folder(&args.output)?;
     let loaded = load_models(&args.models)?;
     let models = pairs(&loaded);
     let bounds = render::bounds(&models);
-    let (point, normal) = match &args.plane {
-        Some(text) => {
-            let v = io::values::numbers("--plane", text, &[6])?;
-            (glam::Vec3::new(v[0], v[1], v[2]), glam::Vec3::new(v[3], v[4], v[5]))
-        }
-        None => ((bounds.0 + bounds.1) / 2.0, glam::Vec3::Z),
-    };
+    let (point, normal) = plane.unwrap_or(((bounds.0 + bounds.1) / 2.0, glam::Vec3::Z));
     let view = View::framing(bounds, point, normal, args.size)?;
     let started = Instant::now();
     let cut = render::cut_many(&models, &view);
@@ -322,8 +336,9 @@ pub fn run_cut(args: &CutArgs) -> Result<()> {
 
 /// Run `solidtex bake`.
 pub fn run_bake(args: &BakeArgs) -> Result<()> {
-    io::Format::of(&args.output)?;
-    io::check_folder(&args.output)?;
+    io::values::within("--res", args.res, 2, 512).map_err(usage)?;
+    let models: Vec<&Path> = args.models.iter().map(PathBuf::as_path).collect();
+    io::check_output(&args.output, &models)?;
     let loaded = load_models(&args.models)?;
     let started = Instant::now();
     let volume = render::bake(&pairs(&loaded), args.res, io::budget_from_env()?)?;
@@ -335,10 +350,14 @@ pub fn run_bake(args: &BakeArgs) -> Result<()> {
 
 /// Run `solidtex view`.
 pub fn run_view(args: &ViewArgs) -> Result<()> {
+    let checks = || -> Result<()> {
+        io::values::within("--size", args.size, 8, MAX_PICTURE)?;
+        io::values::within("--yaw", args.yaw, -360.0, 360.0)?;
+        io::values::within("--pitch", args.pitch, -90.0, 90.0)?;
+        Ok(())
+    };
+    checks().map_err(usage)?;
     io::check_folder(&args.output)?;
-    if !((8..=8192).contains(&args.size) && args.yaw.is_finite() && args.pitch.is_finite()) {
-        return Err(Error::invalid(format!("--size {} must be 8 to 8192 and the angles finite", args.size)));
-    }
     let loaded = load_model(&args.model)?;
     let started = Instant::now();
     let picture = crate::fill::view::surface(&loaded.model, &loaded.textures, args.yaw, args.pitch, args.size);

@@ -1,10 +1,11 @@
 //! `solidtex sweep | stamp | scatter | blur | draw`: the hand-made exemplar steps.
 
+use super::commands::usage;
 use crate::error::{Error, Result};
 use crate::io;
 use crate::io::values as parse;
-use crate::stamp::{self, Placement, Region, Scatter};
-use crate::sweep::{self, Noise, Skin, SkinLook, Sweep};
+use crate::stamp::{self, MAX_COUNT, Placement, RADIUS, Region, SCALE, Scatter};
+use crate::sweep::{self, SKIN_WIDTH, Skin, SkinLook, Sweep};
 use crate::volume::{Axis, Volume};
 use std::path::{Path, PathBuf};
 
@@ -13,7 +14,7 @@ use std::path::{Path, PathBuf};
 pub struct SweepArgs {
     /// The cross-section image (its x runs along the first other axis, its y along the second).
     pub image: PathBuf,
-    /// Voxels along the sweep axis.
+    /// Voxels along the sweep axis: 1 to 512 (and within the voxel budget).
     #[arg(long)]
     pub length: usize,
     /// The axis to sweep along.
@@ -22,19 +23,20 @@ pub struct SweepArgs {
     /// Add a Depth channel running along this in-plane axis (0 at its first face).
     #[arg(long)]
     pub depth_axis: Option<String>,
-    /// Displacement noise: AMPLITUDE,FREQUENCY[,JITTER] (voxels, cells per side, colour).
+    /// Displacement noise: AMPLITUDE,FREQUENCY[,JITTER]: amplitude 0 to 64 voxels, frequency
+    /// 0 to 64 noise cells across the longest side (whole numbers tile), colour jitter 0 to 1.
     #[arg(long)]
     pub noise: Option<String>,
     /// Skin at the depth-0 face: a colour (R,G,B or #rrggbb) or an image file.
     #[arg(long, requires = "depth_axis")]
     pub skin: Option<String>,
-    /// Skin thickness in voxels.
+    /// Skin thickness in voxels, 0 to 64.
     #[arg(long, default_value_t = 2.0)]
     pub skin_width: f32,
-    /// How much the skin thickness varies, in voxels.
+    /// How much the skin thickness varies, in voxels, 0 to 64.
     #[arg(long, default_value_t = 0.0)]
     pub skin_noise: f32,
-    /// Seed for the noise.
+    /// Seed for the noise (any 64-bit whole number).
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
     /// The volume file to write.
@@ -42,18 +44,13 @@ pub struct SweepArgs {
     pub output: PathBuf,
 }
 
+/// Longest sweep, in voxels, as in a manifest.
+const MAX_LENGTH: usize = io::manifest::MAX_SIDE;
+
 /// Build the core parameters from the arguments (reads a skin image if one is named).
+/// Values out of range are usage errors.
 pub fn sweep_params(args: &SweepArgs) -> Result<Sweep> {
-    let axis: Axis = args.axis.parse()?;
-    let depth_axis = args.depth_axis.as_deref().map(str::parse::<Axis>).transpose()?;
-    let noise = args
-        .noise
-        .as_deref()
-        .map(|t| {
-            let v = parse::numbers("--noise", t, &[2, 3])?;
-            Ok::<_, Error>(Noise { amplitude: v[0], frequency: v[1], jitter: v.get(2).copied().unwrap_or(0.0) })
-        })
-        .transpose()?;
+    let (axis, depth_axis, noise) = sweep_values(args).map_err(usage)?;
     let skin = args
         .skin
         .as_deref()
@@ -61,7 +58,7 @@ pub fn sweep_params(args: &SweepArgs) -> Result<Sweep> {
             let look = match parse::colour("--skin", t) {
                 Ok(c) => SkinLook::Colour(c),
                 Err(_) if Path::new(t).exists() => SkinLook::Image(io::read_image(Path::new(t))?),
-                Err(e) => return Err(Error::invalid(format!("{e}; or name an image file that exists"))),
+                Err(e) => return Err(Error::usage(format!("{e}; or name an image file that exists"))),
             };
             Ok(Skin { look, width: args.skin_width, width_noise: args.skin_noise })
         })
@@ -69,10 +66,30 @@ pub fn sweep_params(args: &SweepArgs) -> Result<Sweep> {
     Ok(Sweep { length: args.length, axis, depth_axis, noise, skin })
 }
 
+/// The axes and noise of a sweep, every number checked against its range.
+fn sweep_values(args: &SweepArgs) -> Result<(Axis, Option<Axis>, Option<sweep::Noise>)> {
+    let axis: Axis = args.axis.parse()?;
+    let depth_axis = args.depth_axis.as_deref().map(str::parse::<Axis>).transpose()?;
+    parse::within("--length", args.length, 1, MAX_LENGTH)?;
+    parse::within("--skin-width", args.skin_width, SKIN_WIDTH.0, SKIN_WIDTH.1)?;
+    parse::within("--skin-noise", args.skin_noise, SKIN_WIDTH.0, SKIN_WIDTH.1)?;
+    let noise = args
+        .noise
+        .as_deref()
+        .map(|t| {
+            let v = parse::numbers("--noise", t, &[2, 3])?;
+            io::manifest::noise("--noise", v[0], v[1], v.get(2).copied().unwrap_or(0.0))
+        })
+        .transpose()?;
+    Ok((axis, depth_axis, noise))
+}
+
 /// Run `solidtex sweep`.
 pub fn run_sweep(args: &SweepArgs) -> Result<()> {
-    io::Format::of(&args.output)?;
-    io::check_folder(&args.output)?;
+    sweep_values(args).map_err(usage)?;
+    let skin_file = args.skin.as_deref().map(Path::new).filter(|p| p.exists());
+    let inputs: Vec<&Path> = [Some(args.image.as_path()), skin_file].into_iter().flatten().collect();
+    io::check_output(&args.output, &inputs)?;
     let params = sweep_params(args)?;
     let image = io::read_image(&args.image)?;
     let volume = sweep::sweep(&image, &params, args.seed).map_err(|e| e.in_file(&args.image))?;
@@ -97,13 +114,13 @@ pub struct StampArgs {
     pub volume: PathBuf,
     /// The seed mesh (OBJ, STL, PLY).
     pub mesh: PathBuf,
-    /// Voxel position X,Y,Z of the mesh origin.
-    #[arg(long)]
+    /// Voxel position X,Y,Z of the mesh origin, each -1000000 to 1000000.
+    #[arg(long, allow_hyphen_values = true)]
     pub at: String,
-    /// Rotation AX,AY,AZ,DEG (degrees about the axis).
-    #[arg(long)]
+    /// Rotation AX,AY,AZ,DEG: DEG degrees (-360 to 360) about the axis (not all zero).
+    #[arg(long, allow_hyphen_values = true)]
     pub rotate: Option<String>,
-    /// Voxels per mesh unit: S or SX,SY,SZ.
+    /// Voxels per mesh unit: S or SX,SY,SZ, each 0.001 to 10000.
     #[arg(long, default_value = "1")]
     pub scale: String,
     /// Fill colour R,G,B (0..1) or #rrggbb.
@@ -116,19 +133,31 @@ pub struct StampArgs {
 
 /// Run `solidtex stamp`.
 pub fn run_stamp(args: &StampArgs) -> Result<()> {
-    io::Format::of(&args.output)?;
-    io::check_folder(&args.output)?;
+    let (placement, colour) = stamp_values(args).map_err(usage)?;
+    io::check_output(&args.output, &[&args.volume, &args.mesh])?;
+    let mesh = read_seed(&args.mesh)?;
+    let mut volume = load(&args.volume)?;
+    let done = stamp::stamp(&mut volume, &mesh, &placement, colour).map_err(|e| about(e, &args.mesh, &args.volume))?;
+    eprintln!("stamped {} voxels ({:.1} voxels of volume)", done.voxels, done.volume);
+    write(&args.output, &volume)
+}
+
+/// The placement and colour of a stamp, every number checked against its range.
+fn stamp_values(args: &StampArgs) -> Result<(Placement, [f32; 3])> {
     let placement = Placement {
         at: parse::point("--at", &args.at)?,
         rotation: args.rotate.as_deref().map(|r| parse::rotation("--rotate", r)).transpose()?.unwrap_or_default(),
-        scale: parse::scale("--scale", &args.scale)?,
+        scale: parse::scale("--scale", &args.scale, SCALE.0, SCALE.1)?,
     };
-    let colour = parse::colour("--color", &args.color)?;
-    let mesh = read_seed(&args.mesh)?;
-    let mut volume = load(&args.volume)?;
-    let done = stamp::stamp(&mut volume, &mesh, &placement, colour)?;
-    eprintln!("stamped {} voxels ({:.1} voxels of volume)", done.voxels, done.volume);
-    write(&args.output, &volume)
+    Ok((placement, parse::colour("--color", &args.color)?))
+}
+
+/// An error of stamping `mesh` into the volume read from `volume`, naming both files.
+fn about(error: Error, mesh: &Path, volume: &Path) -> Error {
+    match error {
+        Error::Invalid(message) => Error::file(mesh, format!("{message} read from {}", volume.display())),
+        other => other,
+    }
 }
 
 /// A seed mesh, oriented, with a warning when it is not closed.
@@ -158,19 +187,20 @@ pub struct ScatterArgs {
     pub volume: PathBuf,
     /// The seed mesh (OBJ, STL, PLY).
     pub mesh: PathBuf,
-    /// How many seeds.
+    /// How many seeds, 1 to 2000.
     #[arg(long)]
     pub count: usize,
-    /// Where: `box:X0,Y0,Z0,X1,Y1,Z1` (voxels) or `depth:FROM,TO` (Depth channel values).
-    #[arg(long)]
+    /// Where: `box:X0,Y0,Z0,X1,Y1,Z1` (voxels, each -1000000 to 1000000) or `depth:FROM,TO`
+    /// (Depth channel values, 0 <= FROM <= TO <= 1).
+    #[arg(long, allow_hyphen_values = true)]
     pub region: Option<String>,
-    /// Voxels per mesh unit, drawn uniformly from MIN..MAX.
+    /// Voxels per mesh unit, drawn uniformly from MIN..MAX, both 0.001 to 10000.
     #[arg(long, default_value = "1")]
     pub scale: String,
     /// Fill colour R,G,B (0..1) or #rrggbb.
     #[arg(long)]
     pub color: String,
-    /// Seed for positions, orientations and scales.
+    /// Seed for positions, orientations and scales (any 64-bit whole number).
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
     /// The volume file to write.
@@ -188,20 +218,19 @@ pub fn region(text: Option<&str>, dims: [usize; 3]) -> Result<Region> {
 
 /// Run `solidtex scatter`.
 pub fn run_scatter(args: &ScatterArgs) -> Result<()> {
-    io::Format::of(&args.output)?;
-    io::check_folder(&args.output)?;
-    let colour = parse::colour("--color", &args.color)?;
-    let scale = parse::range("--scale", &args.scale)?;
+    let (colour, scale) = scatter_values(args).map_err(usage)?;
+    io::check_output(&args.output, &[&args.volume, &args.mesh])?;
     let mesh = read_seed(&args.mesh)?;
     let mut volume = load(&args.volume)?;
     let params = Scatter {
         count: args.count,
-        region: region(args.region.as_deref(), volume.dims())?,
+        region: region(args.region.as_deref(), volume.dims()).map_err(usage)?,
         scale,
         colour,
         attempts: 200,
     };
-    let done = stamp::scatter(&mut volume, &mesh, &params, args.seed)?;
+    let done =
+        stamp::scatter(&mut volume, &mesh, &params, args.seed).map_err(|e| about(e, &args.mesh, &args.volume))?;
     if done.placed.len() < args.count {
         eprintln!(
             "warning: placed {} of {} seeds: no room for the rest without overlaps",
@@ -213,18 +242,27 @@ pub fn run_scatter(args: &ScatterArgs) -> Result<()> {
     write(&args.output, &volume)
 }
 
+/// The colour and scale range of a scatter, every number checked against its range.
+fn scatter_values(args: &ScatterArgs) -> Result<([f32; 3], (f32, f32))> {
+    parse::within("--count", args.count, 1, MAX_COUNT)?;
+    if let Some(text) = &args.region {
+        region(Some(text), [1; 3])?;
+    }
+    Ok((parse::colour("--color", &args.color)?, parse::range("--scale", &args.scale, SCALE.0, SCALE.1)?))
+}
+
 /// `solidtex blur`.
 #[derive(Debug, clap::Args)]
 pub struct BlurArgs {
     /// The volume to blur.
     pub volume: PathBuf,
-    /// Centre X,Y,Z in voxels.
-    #[arg(long)]
+    /// Centre X,Y,Z in voxels, each -1000000 to 1000000.
+    #[arg(long, allow_hyphen_values = true)]
     pub at: String,
-    /// Radius in voxels.
+    /// Radius in voxels, 0.1 to 64.
     #[arg(long)]
     pub radius: f32,
-    /// How much at the centre, 0..1.
+    /// How much at the centre, 0 to 1.
     #[arg(long, default_value_t = 1.0)]
     pub strength: f32,
     /// The volume file to write.
@@ -234,13 +272,19 @@ pub struct BlurArgs {
 
 /// Run `solidtex blur`.
 pub fn run_blur(args: &BlurArgs) -> Result<()> {
-    io::Format::of(&args.output)?;
-    io::check_folder(&args.output)?;
-    let at = parse::point("--at", &args.at)?;
+    let at = blur_values(args).map_err(usage)?;
+    io::check_output(&args.output, &[&args.volume])?;
     let mut volume = load(&args.volume)?;
-    let changed = stamp::blur(&mut volume, at, args.radius, args.strength)?;
+    let changed = stamp::blur(&mut volume, at, args.radius, args.strength).map_err(|e| e.in_file(&args.volume))?;
     eprintln!("blurred {changed} voxels");
     write(&args.output, &volume)
+}
+
+/// The centre of a blur, with the radius and strength checked against their ranges.
+fn blur_values(args: &BlurArgs) -> Result<glam::Vec3> {
+    parse::within("--radius", args.radius, RADIUS.0, RADIUS.1)?;
+    parse::within("--strength", args.strength, 0.0, 1.0)?;
+    parse::point("--at", &args.at)
 }
 
 /// `solidtex draw`.
@@ -249,7 +293,7 @@ pub struct DrawArgs {
     /// kiwi, carrot or trunk (a cross-section image), seed (a seed mesh), or a closed shape
     /// to fill: fruit, pipe, log or block.
     pub what: String,
-    /// Image size WxH (columns around the object, rows from the outside in).
+    /// Image size WxH, each side 2 to 4096 (columns around the object, rows from the outside in).
     #[arg(long, default_value = "64x64")]
     pub size: String,
     /// Seed for the noise.
@@ -258,6 +302,17 @@ pub struct DrawArgs {
     /// The PNG (cross-section) or mesh file (.obj, .stl, .ply) to write.
     #[arg(short, long)]
     pub output: PathBuf,
+}
+
+/// `WxH` with each side 2 to 4096 pixels.
+fn draw_size(text: &str) -> Result<(usize, usize)> {
+    let bad = || Error::invalid(format!("--size {text:?} is out of range; allowed: WxH, each side 2 to 4096 pixels"));
+    let parts: Vec<usize> =
+        text.split('x').map(|p| p.trim().parse::<usize>()).collect::<Result<_, _>>().map_err(|_| bad())?;
+    match parts.as_slice() {
+        [w, h] if (2..=4096).contains(w) && (2..=4096).contains(h) => Ok((*w, *h)),
+        _ => Err(bad()),
+    }
 }
 
 /// Run `solidtex draw`.
@@ -274,13 +329,9 @@ pub fn run_draw(args: &DrawArgs) -> Result<()> {
         eprintln!("wrote {} ({} triangles)", args.output.display(), mesh.triangles.len());
         return Ok(());
     }
-    let parts = parse::numbers("--size", &args.size.replace('x', ","), &[2])?;
-    let (w, h) = (parts[0] as usize, parts[1] as usize);
-    if w < 2 || h < 2 || w > 4096 || h > 4096 {
-        return Err(Error::invalid(format!("--size {:?}: each side must be 2..=4096 pixels", args.size)));
-    }
+    let (w, h) = draw_size(&args.size).map_err(usage)?;
     let image = crate::sections::draw(&args.what, w, h, args.seed)
-        .map_err(|e| Error::invalid(format!("{e}, or seed, fruit, pipe, log, block")))?;
+        .map_err(|e| Error::usage(format!("{e}, or seed, fruit, pipe, log, block")))?;
     io::write_image(&args.output, &image)?;
     eprintln!("wrote {} ({w}x{h})", args.output.display());
     Ok(())

@@ -1,5 +1,6 @@
 //! `solidtex classify` and `solidtex mask ...`.
 
+use super::commands::usage;
 use crate::error::{Error, Result};
 use crate::io;
 use crate::mask::{self, Layer, MaskMeasures};
@@ -47,15 +48,25 @@ pub fn types() {
 /// The options every mask shares.
 #[derive(Debug, clap::Args)]
 pub struct Shape {
-    /// Side of the cubic mask in voxels.
+    /// Side of the cubic mask in voxels, 4 to 512.
     #[arg(long, default_value_t = 64)]
     pub size: usize,
-    /// Width of the soft band as a share of the size, in (0, 0.5).
+    /// Width of the soft band as a share of the size: over 0 and under 0.5.
     #[arg(long, default_value_t = mask::DEFAULT_FALLOFF)]
     pub falloff: f32,
-    /// Seed of the shape.
+    /// Seed of the shape (any 64-bit whole number).
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+}
+
+impl Shape {
+    /// Check the size and fall-off against their ranges (usage errors).
+    fn check(&self) -> Result<()> {
+        let (lo, hi) = mask::SIZE;
+        io::values::within("--size", self.size, lo, hi).map_err(usage)?;
+        io::values::falloff("--falloff", self.falloff).map_err(usage)?;
+        Ok(())
+    }
 }
 
 /// The `mask` subcommands.
@@ -104,12 +115,19 @@ pub enum MaskCommand {
 pub fn run(command: &MaskCommand) -> Result<()> {
     match command {
         MaskCommand::Splotch { shape, output } => {
+            shape.check()?;
+            io::check_output(output, &[])?;
             write_one(output, mask::splotch(shape.size, shape.falloff, shape.seed)?)
         }
         MaskCommand::Layered { shape, depth_axis, output } => {
-            write_layers(output, shape.size, shape.falloff, shape.seed, depth_axis.parse()?)
+            shape.check()?;
+            let depth: Axis = depth_axis.parse().map_err(usage)?;
+            io::check_folder_output(output, &[])?;
+            write_layers(output, shape.size, shape.falloff, shape.seed, depth)
         }
         MaskCommand::Mesh { mesh, shape, output } => {
+            shape.check()?;
+            io::check_output(output, &[mesh])?;
             let solid = io::mesh_file::read_mesh(mesh)?.oriented();
             write_one(output, mask::from_mesh(&solid, shape.size, shape.falloff).map_err(|e| e.in_file(mesh))?)
         }
@@ -172,23 +190,32 @@ fn default_falloff() -> f32 {
 }
 
 fn build_preset(path: &Path) -> Result<()> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-    let p: Preset = toml::from_str(&text).map_err(|e| Error::file(path, format!("invalid mask preset: {e}")))?;
+    let text = io::read_text(path, "mask preset")?;
+    let quote = io::manifest::has_toml_name(path);
+    let p: Preset =
+        toml::from_str(&text).map_err(|e| io::manifest::syntax_error(&text, &e, "mask preset", quote).in_file(path))?;
     let folder = path.parent().unwrap_or(Path::new("."));
     let stem = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
     let fail = |e: Error| e.in_file(path);
+    let (lo, hi) = mask::SIZE;
+    io::values::within("size =", p.size, lo, hi).map_err(fail)?;
+    io::values::falloff("falloff =", p.falloff).map_err(fail)?;
+    let file = folder.join(format!("{stem}.exr"));
     match p.kind.as_str() {
         "splotch" => {
-            write_one(&folder.join(format!("{stem}.exr")), mask::splotch(p.size, p.falloff, p.seed).map_err(fail)?)
+            io::check_output(&file, &[path])?;
+            write_one(&file, mask::splotch(p.size, p.falloff, p.seed).map_err(fail)?)
         }
         "layered" => {
             let depth: Axis = p.depth_axis.as_deref().unwrap_or("z").parse().map_err(fail)?;
+            io::check_folder_output(&folder.join(&stem), &[path])?;
             write_layers(&folder.join(&stem), p.size, p.falloff, p.seed, depth).map_err(fail)
         }
         "mesh" => {
             let mesh = folder.join(p.mesh.as_deref().ok_or_else(|| Error::file(path, "mesh = \"FILE\" is missing"))?);
+            io::check_output(&file, &[path, &mesh])?;
             let shape = io::mesh_file::read_mesh(&mesh)?.oriented();
-            write_one(&folder.join(format!("{stem}.exr")), mask::from_mesh(&shape, p.size, p.falloff).map_err(fail)?)
+            write_one(&file, mask::from_mesh(&shape, p.size, p.falloff).map_err(fail)?)
         }
         other => Err(Error::file(path, format!("kind = {other:?} is unknown; allowed: splotch, layered, mesh"))),
     }
@@ -196,6 +223,7 @@ fn build_preset(path: &Path) -> Result<()> {
 
 /// Run `solidtex snapshot VOLUME (-o NAME.snap | --check NAME.snap [--tolerance T])`.
 pub fn snapshot(volume: &Path, output: Option<&Path>, check: Option<&Path>, tolerance: f64) -> Result<()> {
+    io::values::within("--tolerance", tolerance, 0.0, 1.0e6).map_err(usage)?;
     let v = io::read_volume(volume, io::budget_from_env()?)?;
     match (output, check) {
         (Some(out), None) => {

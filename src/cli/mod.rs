@@ -56,7 +56,7 @@ pub enum Command {
         /// The axis the slice is across: x, y or z.
         #[arg(long, default_value = "z")]
         axis: String,
-        /// Index along the axis (default: the middle).
+        /// Index along the axis, 0 to the volume's side minus 1 (default: the middle).
         #[arg(long)]
         index: Option<usize>,
         /// The PNG to write.
@@ -78,10 +78,10 @@ pub enum Command {
     Make {
         /// marble, strata or wood.
         recipe: String,
-        /// Size: N for a cube, or XxYxZ.
+        /// Size: N for a cube, or XxYxZ; each side 1 to 512, within the voxel budget.
         #[arg(long, default_value = "64")]
         size: String,
-        /// Seed for the noise.
+        /// Seed for the noise (any 64-bit whole number).
         #[arg(long, default_value_t = 1)]
         seed: u64,
         /// The volume file to write.
@@ -114,7 +114,8 @@ pub enum Command {
         /// Compare with this snapshot (exit 1 with the differences when they differ).
         #[arg(long)]
         check: Option<PathBuf>,
-        /// Allowed difference of statistics and thumbnail values (0: the content hash must match).
+        /// Allowed difference of statistics and thumbnail values, 0 to 1000000 (0: the content
+        /// hash must match).
         #[arg(long, default_value_t = 0.0)]
         tolerance: f64,
     },

@@ -27,6 +27,7 @@ pub struct QualityArgs {
 
 /// Run `solidtex quality`.
 pub fn run(args: &QualityArgs) -> Result<()> {
+    args.others.check()?;
     let volume = io::read_volume(&args.volume, io::budget_from_env()?)?;
     let ex = args.others.load(&args.exemplar, "exemplar")?;
     let (ey, ez) = args.others.load_yz()?;
@@ -61,6 +62,23 @@ fn table(r: &Report) -> String {
             a.axis,
             offsets.join(", "),
             a.exemplar_with_copies.unwrap_or(a.exemplar)
+        );
+    }
+    let (g, l) = (crate::sharpness::GRADIENT_RANGE, crate::sharpness::LENGTH_RANGE);
+    out += &format!(
+        "sharpness of the cuts at 1/4, 1/2, 3/4 against the exemplar (targets: gradient {}-{}, length {}-{})\n  \
+         axis  gradient   length  gradient-histogram  exemplar length (px)\n",
+        g.0, g.1, l.0, l.1
+    );
+    for s in &r.sharpness {
+        out += &format!(
+            "  {:<4} {:>9.2} {:>8.2} {:>19.3} {:>21.2}{}\n",
+            s.axis,
+            s.gradient_ratio,
+            s.length_ratio,
+            s.gradient_histogram_distance,
+            s.exemplar_length,
+            if s.in_range() { "" } else { "  (outside the targets)" }
         );
     }
     out += "histogram distance (L1 over 32 bins; 0 = equal, 2 = disjoint)\n";

@@ -36,6 +36,9 @@ pub fn make_with(entry: &Entry, progress: &dyn crate::progress::Progress) -> Res
         volume.meta.texture_type = entry.texture_type;
     }
     volume.meta.set("name", entry.name.clone());
+    // Checked here, before any of the entry's files is written, for sizes the manifest
+    // does not state (a sweep's comes from its image, a loaded volume's from its file).
+    io::manifest::check_exports(&entry.exports, volume.dims())?;
     Ok(volume)
 }
 /// A quick, low-resolution build of exemplar `name` from manifest `text` (for the editor's

@@ -1,5 +1,6 @@
 //! `solidtex synth`: 2D exemplars to a solid texture, with a progress bar on a terminal.
 
+use super::commands::usage;
 use crate::error::{Error, Result};
 use crate::io;
 use crate::progress::Progress;
@@ -18,12 +19,19 @@ pub struct OtherExemplars {
     /// The cross-section orthogonal to z (default: Ey).
     #[arg(long)]
     pub ez: Option<PathBuf>,
-    /// Shrink exemplars whose longer side exceeds this many pixels (e.g. 128 for photos).
+    /// Shrink exemplars whose longer side exceeds this many pixels (8 to 4096; e.g. 128 for photos).
     #[arg(long)]
     pub max_exemplar: Option<usize>,
 }
 
 impl OtherExemplars {
+    /// Check `--max-exemplar` against its range (a usage error).
+    pub fn check(&self) -> Result<()> {
+        let (lo, hi) = SynthParams::EXEMPLAR_SIDE;
+        self.max_exemplar.map(|m| io::values::within("--max-exemplar", m, lo, hi)).transpose().map_err(usage)?;
+        Ok(())
+    }
+
     /// Load one image, shrunk as asked; `what` names it in errors.
     pub fn load(&self, path: &Path, what: &str) -> Result<Image2d> {
         io::read_image_fit(path, self.max_exemplar).map_err(|e| match e {
@@ -57,41 +65,42 @@ pub struct SynthArgs {
     /// Switch off the anti-sweeping rule (with --layered; for comparison).
     #[arg(long, requires = "layered")]
     pub no_anti_sweeping: bool,
-    /// Weight of the depth channel in neighbourhood distances (with --layered).
+    /// Weight of the depth channel in neighbourhood distances, 0 to 100 (with --layered).
     #[arg(long, default_value_t = 1.0, requires = "layered")]
     pub depth_weight: f32,
     /// Start from this volume (same size; the exemplar's channels) instead of random
     /// pixels, and refine it: its coarse layout stays, the exemplar's look comes in.
     #[arg(long)]
     pub start: Option<PathBuf>,
-    /// Output size: N for a cube, or XxYxZ.
+    /// Output size: N for a cube, or XxYxZ; each side 1 to 512, within the voxel budget.
     #[arg(long, default_value = "64")]
     pub size: String,
-    /// Seed: the same inputs and seed give the same volume on any machine and thread count.
+    /// Seed (any 64-bit whole number): the same inputs and seed give the same volume on any
+    /// machine and thread count.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Pyramid levels.
+    /// Pyramid levels, 1 to 8.
     #[arg(long, default_value_t = 3)]
     pub levels: usize,
-    /// Most iterations per level below the finest.
+    /// Most iterations per level below the finest, 1 to 16.
     #[arg(long, default_value_t = 4)]
     pub iterations: usize,
-    /// Most iterations at the finest level.
+    /// Most iterations at the finest level, 1 to 16.
     #[arg(long, default_value_t = 2)]
     pub finest_iterations: usize,
-    /// Stop a level when the mean match distance improves by less than this share.
+    /// Stop a level when the mean match distance improves by less than this share (0 to 1).
     #[arg(long, default_value_t = 0.01)]
     pub tolerance: f32,
-    /// Histogram matching strength (0 = off).
+    /// Histogram matching strength, 0 (off) to 10.
     #[arg(long, default_value_t = 1.0)]
     pub histogram: f32,
-    /// k-coherence candidates per neighbour (more: better matches, slower).
+    /// k-coherence candidates per neighbour, 1 to 32 (more: better matches, slower).
     #[arg(long, default_value_t = 6)]
     pub coherence: usize,
-    /// Most PCA dimensions of the neighbourhood search (fewer: faster, coarser matches).
+    /// Most PCA dimensions of the neighbourhood search, 1 to 64 (fewer: faster, coarser matches).
     #[arg(long, default_value_t = 16)]
     pub pca_dims: usize,
-    /// Share of the neighbourhood variance the PCA keeps, up to --pca-dims dimensions.
+    /// Share of the neighbourhood variance the PCA keeps, 0.01 to 1, up to --pca-dims dimensions.
     #[arg(long, default_value_t = 0.95)]
     pub pca_variance: f32,
     /// Print every stage with the time it was reached.
@@ -120,13 +129,36 @@ impl Progress for Bar {
     }
 }
 
+/// Check every number of `solidtex synth` against its range (usage errors).
+fn check_values(args: &SynthArgs) -> Result<[usize; 3]> {
+    use io::values::within;
+    let size = super::commands::parse_size(&args.size)?;
+    args.others.check()?;
+    let checks = || -> Result<()> {
+        within("--levels", args.levels, SynthParams::LEVELS.0, SynthParams::LEVELS.1)?;
+        within("--iterations", args.iterations, SynthParams::ITERATIONS.0, SynthParams::ITERATIONS.1)?;
+        within("--finest-iterations", args.finest_iterations, SynthParams::ITERATIONS.0, SynthParams::ITERATIONS.1)?;
+        within("--tolerance", args.tolerance, SynthParams::TOLERANCE.0, SynthParams::TOLERANCE.1)?;
+        within("--histogram", args.histogram, SynthParams::HISTOGRAM.0, SynthParams::HISTOGRAM.1)?;
+        within("--coherence", args.coherence, SynthParams::COHERENCE.0, SynthParams::COHERENCE.1)?;
+        within("--pca-dims", args.pca_dims, SynthParams::PCA_DIMS.0, SynthParams::PCA_DIMS.1)?;
+        within("--pca-variance", args.pca_variance, SynthParams::PCA_VARIANCE.0, SynthParams::PCA_VARIANCE.1)?;
+        within("--depth-weight", args.depth_weight, LayeredParams::DEPTH_WEIGHT.0, LayeredParams::DEPTH_WEIGHT.1)?;
+        Ok(())
+    };
+    checks().map_err(usage)?;
+    Ok(size)
+}
+
 /// Run `solidtex synth`.
 pub fn run(args: &SynthArgs) -> Result<()> {
-    io::Format::of(&args.output)?;
-    io::check_folder(&args.output)?;
+    let size = check_values(args)?;
+    let inputs = [Some(&args.exemplar), args.others.ey.as_ref(), args.others.ez.as_ref(), args.depth.as_ref()];
+    let inputs: Vec<&Path> = inputs.into_iter().chain([args.start.as_ref()]).flatten().map(PathBuf::as_path).collect();
+    io::check_output(&args.output, &inputs)?;
     let budget = io::budget_from_env()?;
     let params = SynthParams {
-        size: super::commands::parse_size(&args.size)?,
+        size,
         levels: args.levels,
         max_iterations: args.iterations,
         finest_iterations: args.finest_iterations,

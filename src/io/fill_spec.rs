@@ -2,7 +2,7 @@
 //! the file, the field, the value and what is allowed. Paths in the spec are relative to
 //! its folder. The format, with examples: `docs/fill.md`.
 
-use super::values;
+use super::{manifest, values};
 use crate::error::{Error, Result};
 use crate::fill::spec::{DepthSpec, FaceGroup, FillSpec, PasteSpec};
 use crate::texture_type::TextureType;
@@ -12,7 +12,7 @@ use serde::Deserialize;
 use std::path::Path;
 
 /// Allowed target tet counts.
-pub const TETS: std::ops::RangeInclusive<usize> = 100..=2_000_000;
+pub const TETS: std::ops::RangeInclusive<usize> = 100..=200_000;
 
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -80,34 +80,41 @@ struct RawPaste {
     scale: f32,
 }
 
-/// Reads and validates a fill spec.
+/// Reads and validates a fill spec. A file that is not TOML is named as such, and its
+/// content is not quoted.
 pub fn read_fill_spec(path: &Path) -> Result<FillSpec> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let text = super::read_text(path, "fill spec")?;
     let folder = path.parent().unwrap_or(Path::new("."));
-    parse_fill_spec(&text, folder).map_err(|e| e.in_file(path))
+    spec_of(&text, folder, manifest::has_toml_name(path)).map_err(|e| e.in_file(path))
 }
 
 /// Validates fill spec text; `folder` resolves relative paths.
 pub fn parse_fill_spec(text: &str, folder: &Path) -> Result<FillSpec> {
-    let raw: RawSpec = toml::from_str(text).map_err(|e| Error::invalid(format!("invalid fill spec: {e}")))?;
+    spec_of(text, folder, true)
+}
+
+/// [`parse_fill_spec`]; `quote` allows a syntax error to show the line it is on. Errors
+/// of a field start with the line it is on.
+fn spec_of(text: &str, folder: &Path, quote: bool) -> Result<FillSpec> {
+    let raw: RawSpec = toml::from_str(text).map_err(|e| manifest::syntax_error(text, &e, "fill spec", quote))?;
+    validate(raw, folder).map_err(|e| {
+        let message = e.to_string();
+        match manifest::line_of(text, manifest::leading_path(&message)) {
+            Some(line) => Error::invalid(format!("line {line}: {message}")),
+            None => e,
+        }
+    })
+}
+
+fn validate(raw: RawSpec, folder: &Path) -> Result<FillSpec> {
     let texture_type = raw
         .texture_type
         .as_deref()
         .map(|t| t.parse::<TextureType>().map_err(|e| Error::invalid(format!("type = {t:?}: {e}"))))
         .transpose()?;
-    let tets = raw.tets.unwrap_or(5000);
-    if !TETS.contains(&tets) {
-        return Err(Error::invalid(format!(
-            "tets = {tets} is out of range; allowed {} to {}",
-            TETS.start(),
-            TETS.end()
-        )));
-    }
+    let tets = values::within("tets =", raw.tets.unwrap_or(5000), *TETS.start(), *TETS.end())?;
     positive("scale", raw.scale)?;
-    let falloff = raw.mask_falloff.unwrap_or(crate::mask::DEFAULT_FALLOFF);
-    if falloff.is_nan() || falloff <= 0.0 || falloff >= 0.5 {
-        return Err(Error::invalid(format!("mask_falloff = {falloff} is outside (0, 0.5)")));
-    }
+    let falloff = values::falloff("mask_falloff =", raw.mask_falloff.unwrap_or(crate::mask::DEFAULT_FALLOFF))?;
     let here = |p: Option<&String>, default: &str| p.map_or_else(|| default.into(), |p| folder.join(p));
     Ok(FillSpec {
         exemplar: raw.exemplar,

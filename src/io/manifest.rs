@@ -6,7 +6,7 @@
 use super::values;
 use crate::error::{Error, Result};
 use crate::procedural::Recipe;
-use crate::stamp::{Placement, Region};
+use crate::stamp::{Placement, RADIUS, Region, SCALE};
 use crate::sweep::Noise;
 use crate::texture_type::TextureType;
 use crate::volume::Axis;
@@ -219,22 +219,34 @@ pub struct Plan {
 /// Largest side accepted in a manifest.
 pub const MAX_SIDE: usize = 512;
 
+/// Most scattered seeds per step (see [`crate::stamp::MAX_COUNT`]).
+pub const MAX_COUNT: usize = crate::stamp::MAX_COUNT;
+
 /// Read and validate a manifest file; relative paths in it are resolved from its folder.
+/// A file that is not TOML is named as such, and its content is not quoted.
 pub fn read_plan(path: &Path) -> Result<Plan> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let text = super::read_text(path, "manifest")?;
     let folder = path.parent().unwrap_or(Path::new("."));
-    parse_plan(&text, folder).map_err(|e| e.in_file(path))
+    plan_of(&text, folder, has_toml_name(path)).map_err(|e| e.in_file(path))
 }
 
 /// Validate manifest text; `folder` resolves relative paths.
 pub fn parse_plan(text: &str, folder: &Path) -> Result<Plan> {
-    let raw: RawManifest = toml::from_str(text).map_err(|e| Error::invalid(format!("invalid manifest: {e}")))?;
+    plan_of(text, folder, true)
+}
+
+/// Whether a path ends in `.toml`: only then may a TOML error quote a line of it.
+pub(crate) fn has_toml_name(path: &Path) -> bool {
+    path.extension().is_some_and(|e| e.eq_ignore_ascii_case("toml"))
+}
+
+/// [`parse_plan`]; `quote` allows a syntax error to show the line it is on.
+fn plan_of(text: &str, folder: &Path, quote: bool) -> Result<Plan> {
+    let raw: RawManifest = toml::from_str(text).map_err(|e| syntax_error(text, &e, "manifest", quote))?;
     let mut entries: Vec<Entry> = Vec::new();
     for (i, e) in raw.exemplar.into_iter().enumerate() {
         let name = e.name.clone();
-        let line = entry_line(text, i);
-        let entry =
-            validate(e, folder).map_err(|err| Error::invalid(format!("line {line}: exemplar[{i}] ({name}): {err}")))?;
+        let entry = validate(e, folder).map_err(|err| Error::invalid(entry_error(text, i, &name, &err)))?;
         if entries.iter().any(|x| x.name == entry.name) {
             let line = entry_line(text, i);
             return Err(Error::invalid(format!(
@@ -254,7 +266,7 @@ pub fn parse_plan(text: &str, folder: &Path) -> Result<Plan> {
 pub fn parse_plan_lenient(text: &str, folder: &Path) -> (Vec<Entry>, Vec<String>) {
     let raw: RawManifest = match toml::from_str(text) {
         Ok(raw) => raw,
-        Err(e) => return (Vec::new(), vec![format!("invalid manifest: {e}")]),
+        Err(e) => return (Vec::new(), vec![syntax_error(text, &e, "manifest", true).to_string()]),
     };
     let (mut entries, mut errors): (Vec<Entry>, Vec<String>) = (Vec::new(), Vec::new());
     for (i, e) in raw.exemplar.into_iter().enumerate() {
@@ -265,7 +277,7 @@ pub fn parse_plan_lenient(text: &str, folder: &Path) -> (Vec<Entry>, Vec<String>
                 errors.push(format!("line {line}: exemplar[{i}].name = {name:?} is used twice; names must be unique"))
             }
             Ok(entry) => entries.push(entry),
-            Err(err) => errors.push(format!("line {line}: exemplar[{i}] ({name}): {err}")),
+            Err(err) => errors.push(entry_error(text, i, &name, &err)),
         }
     }
     (entries, errors)
@@ -274,6 +286,90 @@ pub fn parse_plan_lenient(text: &str, folder: &Path) -> (Vec<Entry>, Vec<String>
 /// The line (from 1) of the `i`-th `[[exemplar]]` header.
 fn entry_line(text: &str, i: usize) -> usize {
     text.lines().enumerate().filter(|(_, l)| l.trim() == "[[exemplar]]").nth(i).map_or(0, |(n, _)| n + 1)
+}
+
+/// The message of an error in entry `i`: the entry's line and name, and the line of the
+/// field the error is about when that is another line.
+fn entry_error(text: &str, i: usize, name: &str, error: &Error) -> String {
+    let line = entry_line(text, i);
+    let message = error.to_string();
+    let (step, rest) = match message.strip_prefix("steps[").and_then(|r| r.split_once("]: ")) {
+        Some((k, rest)) => (Some(k), rest),
+        None => (None, message.as_str()),
+    };
+    let mut path = format!("exemplar[{i}]");
+    if let Some(k) = step {
+        path += &format!(".steps[{k}]");
+    }
+    let field = leading_path(rest);
+    let field_line = line_of(text, &format!("{path}.{field}")).or_else(|| line_of(text, &path));
+    match field_line {
+        Some(at) if at != line => format!("line {line}: exemplar[{i}] ({name}), line {at}: {message}"),
+        _ => format!("line {line}: exemplar[{i}] ({name}): {message}"),
+    }
+}
+
+/// The field path a validation message starts with, e.g. `depth.points[0]` or `count`.
+pub(crate) fn leading_path(message: &str) -> &str {
+    let end = message
+        .find(|c: char| !(c.is_ascii_alphanumeric() || matches!(c, '_' | '.' | '[' | ']')))
+        .unwrap_or(message.len());
+    message[..end].trim_end_matches('.')
+}
+
+/// The line (from 1) where the value at `path` (keys and `[index]`es joined by dots, e.g.
+/// `exemplar[0].steps[1].count`) is written in TOML `text`, if it is there.
+pub(crate) fn line_of(text: &str, path: &str) -> Option<usize> {
+    let document = toml_edit::Document::parse(text).ok()?;
+    let mut item = document.as_item();
+    let mut span = None;
+    for part in path.split('.').filter(|p| !p.is_empty()) {
+        let (key, index) = match part.split_once('[') {
+            Some((key, rest)) => (key, Some(rest.trim_end_matches(']').parse::<usize>().ok()?)),
+            None => (part, None),
+        };
+        item = item.get(key)?;
+        span = item.span().or(span);
+        if let Some(index) = index {
+            item = item.get(index)?;
+            span = item.span().or(span);
+        }
+    }
+    span.map(|s| line_at(text, s.start))
+}
+
+/// The line (from 1) of byte `offset` of `text`.
+fn line_at(text: &str, offset: usize) -> usize {
+    text.as_bytes()[..offset.min(text.len())].iter().filter(|b| **b == b'\n').count() + 1
+}
+
+/// A TOML error of a `what` (manifest, fill spec) as a message with its line. With `quote`
+/// (a `.toml` file, or text from the editor) and a line of printable text, the line is
+/// shown, cut to 80 characters; otherwise the file is said not to be TOML and nothing of
+/// it is echoed.
+pub(crate) fn syntax_error(text: &str, error: &toml::de::Error, what: &str, quote: bool) -> Error {
+    let message = error.message().trim_end();
+    let Some(start) = error.span().map(|s| s.start.min(text.len())) else {
+        return Error::invalid(format!("invalid {what}: {message}"));
+    };
+    let line = line_at(text, start);
+    let shown = text.lines().nth(line - 1).unwrap_or_default();
+    let printable = !shown.chars().any(|c| c.is_control() && c != '\t');
+    if !(quote && printable) {
+        return Error::invalid(format!(
+            "is not a TOML {what} (TOML error at line {line}: {}); name the {what}'s .toml file",
+            clip(message, 80)
+        ));
+    }
+    Error::invalid(format!("invalid {what} at line {line}: {message}: {:?}", clip(shown.trim(), 80)))
+}
+
+/// `text` cut to `most` characters, with `...` where it was cut.
+fn clip(text: &str, most: usize) -> String {
+    match text.char_indices().nth(most) {
+        Some((at, _)) => format!("{}...", &text[..at]),
+        None => text.to_string(),
+    }
 }
 
 fn validate(raw: RawExemplar, folder: &Path) -> Result<Entry> {
@@ -316,12 +412,12 @@ fn validate(raw: RawExemplar, folder: &Path) -> Result<Entry> {
             other => Err(Error::invalid(format!("masks: {other:?} is unknown; allowed: splotch, layered"))),
         })
         .collect::<Result<Vec<_>>>()?;
-    let mask_falloff = raw.mask_falloff.unwrap_or(crate::mask::DEFAULT_FALLOFF);
-    if mask_falloff.is_nan() || mask_falloff <= 0.0 || mask_falloff >= 0.5 {
-        return Err(Error::invalid(format!("mask_falloff = {mask_falloff} is outside (0, 0.5)")));
-    }
+    let mask_falloff = values::falloff("mask_falloff =", raw.mask_falloff.unwrap_or(crate::mask::DEFAULT_FALLOFF))?;
     if let Some(bad) = raw.exports.iter().find(|e| !EXPORTS.contains(&e.as_str())) {
         return Err(Error::invalid(format!("exports: {bad:?} is unknown; allowed: {}", EXPORTS.join(", "))));
+    }
+    if let Some(dims) = dims {
+        check_exports(&raw.exports, dims)?;
     }
     let texture_type = raw
         .texture_type
@@ -346,6 +442,19 @@ fn validate(raw: RawExemplar, folder: &Path) -> Result<Entry> {
         mask_falloff,
         exports: raw.exports,
     })
+}
+
+/// An error when `exports` asks for a format that cannot hold a volume of `dims`: a `.vol`
+/// file holds cubes only.
+pub fn check_exports(exports: &[String], dims: [usize; 3]) -> Result<()> {
+    if exports.iter().any(|e| e == "vol") && !(dims[0] == dims[1] && dims[1] == dims[2]) {
+        return Err(Error::invalid(format!(
+            "exports: \"vol\" needs a cube, but the volume is {}x{}x{}; a .vol file holds cubes only \
+             (export \"nrrd\" instead, or make the size a cube)",
+            dims[0], dims[1], dims[2]
+        )));
+    }
+    Ok(())
 }
 
 fn dims_of(size: &RawSize) -> Result<[usize; 3]> {
@@ -379,8 +488,8 @@ fn sweep_spec(raw: &RawExemplar, folder: &Path) -> Result<SweepSpec> {
         .map_err(|e| Error::invalid(format!("depth_axis: {e}")))?;
     let noise = match raw.noise.as_deref() {
         None => None,
-        Some([a, f]) => Some(Noise { amplitude: *a, frequency: *f, jitter: 0.0 }),
-        Some([a, f, j]) => Some(Noise { amplitude: *a, frequency: *f, jitter: *j }),
+        Some([a, f]) => Some(noise("noise", *a, *f, 0.0)?),
+        Some([a, f, j]) => Some(noise("noise", *a, *f, *j)?),
         Some(v) => {
             return Err(Error::invalid(format!(
                 "noise = {v:?} must be [amplitude, frequency] or [amplitude, frequency, jitter]"
@@ -396,19 +505,32 @@ fn sweep_spec(raw: &RawExemplar, folder: &Path) -> Result<SweepSpec> {
                 Err(_) if s.contains('.') => SkinSource::Image(folder.join(s)),
                 Err(e) => return Err(e),
             };
-            Ok((look, raw.skin_width.unwrap_or(2.0), raw.skin_noise.unwrap_or(0.0)))
+            let (lo, hi) = crate::sweep::SKIN_WIDTH;
+            let width = values::within("skin_width =", raw.skin_width.unwrap_or(2.0), lo, hi)?;
+            let width_noise = values::within("skin_noise =", raw.skin_noise.unwrap_or(0.0), lo, hi)?;
+            Ok((look, width, width_noise))
         })
         .transpose()?;
     Ok(SweepSpec { image, length, axis, depth_axis, noise, skin })
 }
 
+/// Sweep noise with each part in its range; `label` names the option or field.
+pub fn noise(label: &str, amplitude: f32, frequency: f32, jitter: f32) -> Result<Noise> {
+    use crate::sweep::{AMPLITUDE, FREQUENCY, JITTER};
+    Ok(Noise {
+        amplitude: values::within(&format!("{label} amplitude"), amplitude, AMPLITUDE.0, AMPLITUDE.1)?,
+        frequency: values::within(&format!("{label} frequency"), frequency, FREQUENCY.0, FREQUENCY.1)?,
+        jitter: values::within(&format!("{label} jitter"), jitter, JITTER.0, JITTER.1)?,
+    })
+}
+
 fn synth_spec(raw: &RawExemplar, folder: &Path) -> Result<SynthSpec> {
     let image = folder
         .join(raw.image.as_deref().ok_or_else(|| Error::invalid("image is missing; synth needs an exemplar image"))?);
-    let levels = raw.levels.unwrap_or(3);
-    if !(1..=8).contains(&levels) {
-        return Err(Error::invalid(format!("levels = {levels} is out of range; allowed 1 to 8")));
-    }
+    let (lo, hi) = crate::synth::SynthParams::LEVELS;
+    let levels = values::within("levels =", raw.levels.unwrap_or(3), lo, hi)?;
+    let (lo, hi) = crate::synth::SynthParams::EXEMPLAR_SIDE;
+    let max_exemplar = raw.max_exemplar.map(|m| values::within("max_exemplar =", m, lo, hi)).transpose()?;
     let layered = raw.recipe == "synth-layered";
     if !layered && raw.depth_image.is_some() {
         return Err(Error::invalid("depth_image needs recipe = \"synth-layered\""));
@@ -421,7 +543,7 @@ fn synth_spec(raw: &RawExemplar, folder: &Path) -> Result<SynthSpec> {
         layered,
         depth: join(&raw.depth_image),
         levels,
-        max_exemplar: raw.max_exemplar,
+        max_exemplar,
     })
 }
 
@@ -436,7 +558,7 @@ fn step(raw: &RawStep, folder: &Path) -> Result<Step> {
     if let Some(mesh) = &raw.stamp {
         let at = values::point("at", raw.at.as_deref().ok_or_else(|| Error::invalid("at is missing"))?)?;
         let rotation = raw.rotate.as_deref().map(|r| values::rotation("rotate", r)).transpose()?.unwrap_or_default();
-        let scale = values::scale("scale", raw.scale.as_deref().unwrap_or("1"))?;
+        let scale = values::scale("scale =", raw.scale.as_deref().unwrap_or("1"), SCALE.0, SCALE.1)?;
         return Ok(Step::Stamp {
             mesh: folder.join(mesh),
             placement: Placement { at, rotation, scale },
@@ -445,8 +567,9 @@ fn step(raw: &RawStep, folder: &Path) -> Result<Step> {
     }
     if let Some(mesh) = &raw.scatter {
         let count = raw.count.ok_or_else(|| Error::invalid("count is missing"))?;
+        let count = values::within("count =", count, 1, MAX_COUNT)?;
         let region = raw.region.as_deref().map(region).transpose()?;
-        let scale = values::range("scale", raw.scale.as_deref().unwrap_or("1"))?;
+        let scale = values::range("scale =", raw.scale.as_deref().unwrap_or("1"), SCALE.0, SCALE.1)?;
         return Ok(Step::Scatter {
             mesh: folder.join(mesh),
             count,
@@ -458,13 +581,16 @@ fn step(raw: &RawStep, folder: &Path) -> Result<Step> {
     }
     let at = values::point("blur", raw.blur.as_deref().unwrap_or_default())?;
     let radius = raw.radius.ok_or_else(|| Error::invalid("radius is missing"))?;
-    Ok(Step::Blur { at, radius, strength: raw.strength.unwrap_or(1.0) })
+    let radius = values::within("radius =", radius, RADIUS.0, RADIUS.1)?;
+    let strength = values::within("strength =", raw.strength.unwrap_or(1.0), 0.0, 1.0)?;
+    Ok(Step::Blur { at, radius, strength })
 }
 
 /// `box:X0,Y0,Z0,X1,Y1,Z1` or `depth:FROM,TO`.
 pub fn region(text: &str) -> Result<Region> {
     if let Some(rest) = text.strip_prefix("box:") {
         let v = values::numbers("region box", rest, &[6])?;
+        values::positions("region box", rest, &v)?;
         return Ok(Region::Box(Vec3::new(v[0], v[1], v[2]), Vec3::new(v[3], v[4], v[5])));
     }
     if let Some(rest) = text.strip_prefix("depth:") {
@@ -483,10 +609,72 @@ mod tests {
         let (entries, errors) = parse_plan_lenient(text, Path::new("."));
         assert_eq!(entries.iter().map(|e| e.name.as_str()).collect::<Vec<_>>(), ["a"]);
         assert_eq!(errors.len(), 2, "{errors:?}");
-        assert!(errors[0].starts_with("line 6: exemplar[1] (b): recipe"), "{errors:?}");
+        assert!(errors[0].starts_with("line 6: exemplar[1] (b), line 8: recipe"), "{errors:?}");
         assert!(errors[1].contains("line 11") && errors[1].contains("used twice"), "{errors:?}");
         let (none, broken) = parse_plan_lenient("[[exemplar]\n", Path::new("."));
         assert!(none.is_empty() && broken[0].contains("invalid manifest"));
+    }
+
+    #[test]
+    fn values_out_of_range_name_their_line_field_value_and_range() {
+        let head = "[[exemplar]]\nname = \"k\"\nrecipe = \"sweep\"\nimage = \"i.png\"\nlength = 8\naxis = \"x\"\n";
+        let cases = [
+            ("noise = [1.0, 2000000.0]", "line 7: noise frequency 2000000 is out of range; allowed: 0 to 64"),
+            ("noise = [1.0, nan]", "line 7: noise frequency NaN is out of range"),
+            ("depth_axis = \"z\"\nskin = \"#000000\"\nskin_width = 1e9", "line 9: skin_width = 1000000000"),
+            (
+                "[[exemplar.steps]]\nscatter = \"s.obj\"\ncolor = \"#000000\"\ncount = 10000000",
+                "line 10: steps[0]: count = 10000000 is out of range; allowed: 1 to 2000",
+            ),
+            (
+                "[[exemplar.steps]]\nblur = \"1,1,1\"\nradius = 1e9",
+                "line 9: steps[0]: radius = 1000000000 is out of range; allowed: 0.1 to 64",
+            ),
+            ("[[exemplar.steps]]\nblur = \"1,1,1\"\nradius = 2\nstrength = 3", "line 10: steps[0]: strength = 3"),
+            (
+                "[[exemplar.steps]]\nstamp = \"s.obj\"\nat = \"1,1,1\"\nscale = \"0\"\ncolor = \"#000000\"",
+                "line 10: steps[0]: scale = \"0\" is out of range",
+            ),
+            (
+                "[[exemplar.steps]]\nscatter = \"s.obj\"\ncolor = \"#000000\"\ncount = 1\nregion = \"box:0,0,0,1e30,1,1\"",
+                "line 11: steps[0]: region box",
+            ),
+        ];
+        for (body, expected) in cases {
+            let err = plan(&format!("{head}{body}\n")).unwrap_err().to_string();
+            assert!(err.starts_with("line 1: exemplar[0] (k), "), "{err}");
+            assert!(err.contains(expected), "{body}: {err}");
+        }
+        let synth = "[[exemplar]]\nname = \"s\"\nrecipe = \"synth\"\nimage = \"i.png\"\nsize = 8\nmax_exemplar = 0\n";
+        assert!(
+            plan(synth)
+                .unwrap_err()
+                .to_string()
+                .contains("line 6: max_exemplar = 0 is out of range; allowed: 8 to 4096")
+        );
+    }
+
+    #[test]
+    fn a_vol_export_of_a_volume_that_is_not_a_cube_is_refused() {
+        let text =
+            "[[exemplar]]\nname = \"m\"\nrecipe = \"procedural:marble\"\nsize = [8, 8, 4]\nexports = [\"vol\"]\n";
+        let err = plan(text).unwrap_err().to_string();
+        assert!(err.contains("line 5: exports: \"vol\" needs a cube, but the volume is 8x8x4"), "{err}");
+        assert!(plan(&text.replace("[8, 8, 4]", "8")).is_ok());
+        assert!(check_exports(&["nrrd".to_string()], [8, 8, 4]).is_ok());
+    }
+
+    #[test]
+    fn syntax_errors_quote_a_toml_line_but_nothing_of_other_files() {
+        let bad = "[[exemplar]]\nname = \"a\"\nrecipe = = 2\n";
+        let quoted = plan_of(bad, Path::new("."), true).unwrap_err().to_string();
+        assert!(quoted.contains("invalid manifest at line 3") && quoted.contains("recipe = = 2"), "{quoted}");
+        let text = "v 0 0 0\nv 1 0 0 secret\n";
+        let plain = plan_of(text, Path::new("."), false).unwrap_err().to_string();
+        assert!(plain.contains("is not a TOML manifest") && plain.contains("line 1"), "{plain}");
+        assert!(!plain.contains("v 0 0") && !plain.contains("secret"), "{plain}");
+        let control = plan_of("\u{1}\u{2}PNG\n", Path::new("."), true).unwrap_err().to_string();
+        assert!(control.contains("is not a TOML manifest") && !control.contains("PNG"), "{control}");
     }
     use super::*;
 

@@ -68,6 +68,11 @@ pub struct LayeredParams {
     pub depth_weight: f32,
 }
 
+impl LayeredParams {
+    /// Allowed depth channel weights (layered synthesis).
+    pub const DEPTH_WEIGHT: (f32, f32) = (0.0, 100.0);
+}
+
 impl Default for LayeredParams {
     fn default() -> Self {
         LayeredParams { anti_sweeping: true, depth_weight: 1.0 }
@@ -75,40 +80,35 @@ impl Default for LayeredParams {
 }
 
 impl SynthParams {
+    /// Allowed pyramid levels.
+    pub const LEVELS: (usize, usize) = (1, 8);
+    /// Allowed iterations per level (below the finest, and at the finest).
+    pub const ITERATIONS: (usize, usize) = (1, 16);
+    /// Allowed k-coherence set sizes.
+    pub const COHERENCE: (usize, usize) = (1, 32);
+    /// Allowed most PCA dimensions.
+    pub const PCA_DIMS: (usize, usize) = (1, 64);
+    /// Allowed shares of neighbourhood variance PCA keeps.
+    pub const PCA_VARIANCE: (f32, f32) = (0.01, 1.0);
+    /// Allowed early-stop tolerances.
+    pub const TOLERANCE: (f32, f32) = (0.0, 1.0);
+    /// Allowed histogram matching strengths.
+    pub const HISTOGRAM: (f32, f32) = (0.0, 10.0);
+    /// Allowed longest exemplar sides when exemplars are shrunk first, in pixels.
+    pub const EXEMPLAR_SIDE: (usize, usize) = (8, 4096);
+
     /// Check ranges; errors name the parameter and what is allowed.
     pub fn check(&self, channels: usize) -> Result<()> {
-        let bad = |name: &str, value: String, allowed: &str| {
-            Err(Error::invalid(format!("synthesis parameter {name} = {value} is out of range; allowed: {allowed}")))
-        };
-        if !(1..=8).contains(&self.levels) {
-            return bad("levels", self.levels.to_string(), "1 to 8");
-        }
-        if !(2..=16).contains(&self.neighbourhood) {
-            return bad("neighbourhood", self.neighbourhood.to_string(), "2 to 16");
-        }
-        if !(1..=64).contains(&self.max_iterations) || !(1..=64).contains(&self.finest_iterations) {
-            return bad(
-                "iterations",
-                format!("{} / {} (finest)", self.max_iterations, self.finest_iterations),
-                "1 to 64",
-            );
-        }
-        if self.pca_variance.is_nan() || self.pca_variance <= 0.0 || self.pca_variance > 1.0 {
-            return bad("pca_variance", self.pca_variance.to_string(), "over 0 and at most 1");
-        }
-        if !(1..=64).contains(&self.max_pca_dims) || !(1..=64).contains(&self.coherence) {
-            return bad("max_pca_dims / coherence", format!("{} / {}", self.max_pca_dims, self.coherence), "1 to 64");
-        }
-        if !(2..=256).contains(&self.histogram_bins)
-            || self.histogram_strength.is_nan()
-            || self.histogram_strength < 0.0
-        {
-            return bad(
-                "histogram",
-                format!("{} bins, strength {}", self.histogram_bins, self.histogram_strength),
-                "2 to 256 bins, strength >= 0",
-            );
-        }
+        within("levels", self.levels, Self::LEVELS)?;
+        within("neighbourhood", self.neighbourhood, (2, 16))?;
+        within("iterations", self.max_iterations, Self::ITERATIONS)?;
+        within("finest iterations", self.finest_iterations, Self::ITERATIONS)?;
+        within("pca_variance", self.pca_variance, Self::PCA_VARIANCE)?;
+        within("max_pca_dims", self.max_pca_dims, Self::PCA_DIMS)?;
+        within("coherence", self.coherence, Self::COHERENCE)?;
+        within("histogram bins", self.histogram_bins, (2, 256))?;
+        within("histogram strength", self.histogram_strength, Self::HISTOGRAM)?;
+        within("tolerance", self.tolerance, Self::TOLERANCE)?;
         crate::volume::check_size(self.size, channels, self.budget_bytes).map(|_| ())
     }
 
@@ -126,5 +126,14 @@ impl SynthParams {
         }
         dims.reverse();
         dims
+    }
+}
+
+/// An error unless `value` lies in `min..=max` (NaN never does).
+fn within<T: PartialOrd + std::fmt::Display>(name: &str, value: T, (min, max): (T, T)) -> Result<()> {
+    if value >= min && value <= max {
+        Ok(())
+    } else {
+        Err(Error::invalid(format!("synthesis parameter {name} = {value} is out of range; allowed: {min} to {max}")))
     }
 }
