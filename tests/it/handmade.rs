@@ -1,7 +1,7 @@
 //! Hand-made exemplars: stamping, scattering, blurring, sweeping from the command line,
 //! and the default library's kiwi, carrot and trunk.
 
-use crate::support::{assert_fails, at, listing, solidtex, stderr};
+use crate::support::{assert_fails, assert_usage, at, listing, solidtex, stderr};
 use glam::{Quat, Vec3};
 use solidtex::io::read_volume;
 use solidtex::sections::seed_mesh;
@@ -153,16 +153,16 @@ fn hand_made_bad_input_is_refused() {
     assert!(solidtex(&["draw", "kiwi", "--size", "16x16", "-o", &section]).status.success());
     assert!(solidtex(&["draw", "seed", "-o", &seed]).status.success());
     let out = at(dir.path(), "out.exr");
-    assert_fails(&solidtex(&["sweep", &section, "--length", "0", "-o", &out]), &["length 0"]);
+    assert_usage(&solidtex(&["sweep", &section, "--length", "0", "-o", &out]), &["length 0"]);
     assert_fails(&solidtex(&["sweep", &section, "--length", "8", "--depth-axis", "x", "-o", &out]), &["sweep axis"]);
-    assert_fails(&solidtex(&["sweep", &section, "--length", "8", "--noise", "1", "-o", &out]), &["--noise \"1\""]);
+    assert_usage(&solidtex(&["sweep", &section, "--length", "8", "--noise", "1", "-o", &out]), &["--noise \"1\""]);
     let vol = at(dir.path(), "v.exr");
     assert!(solidtex(&["sweep", &section, "--length", "8", "-o", &vol]).status.success());
     assert_fails(
         &solidtex(&["stamp", &vol, &seed, "--at", "900,0,0", "--color", "0,0,0", "-o", &out]),
         &["wholly outside"],
     );
-    assert_fails(&solidtex(&["stamp", &vol, &seed, "--at", "1,2", "--color", "0,0,0", "-o", &out]), &["--at \"1,2\""]);
+    assert_usage(&solidtex(&["stamp", &vol, &seed, "--at", "1,2", "--color", "0,0,0", "-o", &out]), &["--at \"1,2\""]);
     assert_fails(
         &solidtex(&[
             "scatter",
@@ -179,7 +179,7 @@ fn hand_made_bad_input_is_refused() {
         ]),
         &["Depth channel"],
     );
-    assert_fails(&solidtex(&["draw", "lemon", "-o", &out]), &["lemon", "kiwi"]);
+    assert_usage(&solidtex(&["draw", "lemon", "-o", &out]), &["lemon", "kiwi"]);
     assert_eq!(listing(dir.path()), ["kiwi.png", "seed.obj", "v.exr"]);
 }
 

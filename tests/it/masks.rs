@@ -1,6 +1,6 @@
 //! Classification and masks from the command line, with their bad input.
 
-use crate::support::{assert_fails, at, listing, solidtex, stderr};
+use crate::support::{assert_fails, assert_usage, at, listing, solidtex, stderr};
 use solidtex::io::{read_volume, write_volume};
 use solidtex::volume::{Channel, Volume};
 use std::path::Path;
@@ -48,7 +48,8 @@ fn masks_are_built_measured_and_reproducible() {
     assert_eq!(std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap());
     let layers = at(dir.path(), "layers");
     assert!(solidtex(&["mask", "layered", "--size", "24", "-o", &layers]).status.success());
-    assert_eq!(listing(&dir.path().join("layers")), ["inner.exr", "middle.exr", "outer.exr"]);
+    let names = ["inner.exr", "middle.exr", "outer.exr", "solidtex-folder.txt"];
+    assert_eq!(listing(&dir.path().join("layers")), names);
     let outer = read_volume(&dir.path().join("layers/outer.exr"), 1 << 30).unwrap();
     assert!((0..24 * 24).all(|i| outer.get(i % 24, i / 24, 0, 0) == 1.0), "the outer mask covers the depth-0 face");
 }
@@ -81,9 +82,9 @@ fn mask_bad_input_is_refused() {
     let out = at(dir.path(), "m.exr");
     for f in ["0", "0.5", "0.7", "-0.1"] {
         let arg = format!("--falloff={f}");
-        assert_fails(&solidtex(&["mask", "splotch", &arg, "-o", &out]), &["outside (0, 0.5)"]);
+        assert_usage(&solidtex(&["mask", "splotch", &arg, "-o", &out]), &["over 0 and under 0.5"]);
     }
-    assert_fails(&solidtex(&["mask", "splotch", "--size", "2", "-o", &out]), &["size 2", "4 to 512"]);
+    assert_usage(&solidtex(&["mask", "splotch", "--size", "2", "-o", &out]), &["size 2", "4 to 512"]);
     let preset = dir.path().join("p.toml");
     std::fs::write(&preset, "kind = \"cloud\"\n").unwrap();
     assert_fails(

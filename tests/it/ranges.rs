@@ -2,21 +2,11 @@
 //! the value and the allowed range, before any work and with nothing written; a manifest
 //! or fill-spec value names the file, the line, the field, the value and the range.
 
-use crate::support::{at, listing, random_volume, solidtex, stderr};
+use crate::support::{assert_usage, at, listing, random_volume, solidtex, stderr};
 use solidtex::Channel;
 use std::path::Path;
 use std::process::Output;
 use std::time::{Duration, Instant};
-
-/// Assert a run failed with exit code 2 and an error line containing every `needle`.
-fn assert_usage(out: &Output, needles: &[&str]) {
-    let err = stderr(out);
-    assert_eq!(out.status.code(), Some(2), "expected exit 2, stderr: {err}");
-    let line = err.lines().find(|l| l.starts_with("error:")).unwrap_or_else(|| panic!("no error line in {err:?}"));
-    for n in needles {
-        assert!(line.contains(n), "{line:?} does not mention {n:?}");
-    }
-}
 
 /// A folder with `base.exr` (an 8-voxel RGB cube), `seed.obj` and `kiwi.png` (16x16).
 fn inputs() -> tempfile::TempDir {

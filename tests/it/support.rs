@@ -39,8 +39,18 @@ pub fn stderr(out: &Output) -> String {
 
 /// Assert a run failed with exit code 1 and an error line containing every `needle`.
 pub fn assert_fails(out: &Output, needles: &[&str]) {
+    assert_exit(out, 1, needles);
+}
+
+/// Assert a run was refused as a usage error (exit code 2) with an error line containing
+/// every `needle`.
+pub fn assert_usage(out: &Output, needles: &[&str]) {
+    assert_exit(out, 2, needles);
+}
+
+fn assert_exit(out: &Output, code: i32, needles: &[&str]) {
     let err = stderr(out);
-    assert_eq!(out.status.code(), Some(1), "expected exit 1, stderr: {err}");
+    assert_eq!(out.status.code(), Some(code), "expected exit {code}, stderr: {err}");
     let line = err.lines().find(|l| l.starts_with("error:")).unwrap_or_else(|| panic!("no error line in {err:?}"));
     for n in needles {
         assert!(line.contains(n), "{line:?} does not mention {n:?}");
