@@ -66,6 +66,7 @@ pub fn run(job: &Job, params: &SynthParams, seed: u64, progress: &dyn Progress) 
             Some((coarse, _)) => upsample_level(job, &coarse, &ex, *dims, level_seed(seed, level)),
         };
         let mut previous = f64::INFINITY;
+        let pooled = pooled_colours(&ex);
         let iterations = params.iterations_at(level);
         for iteration in 0..iterations {
             if progress.cancelled() {
@@ -87,7 +88,7 @@ pub fn run(job: &Job, params: &SynthParams, seed: u64, progress: &dyn Progress) 
                 if job.init == Init::ByDepth {
                     transfer_histograms_by_depth(&mut grid.data, grid.dims, grid.channels, &first.colours);
                 } else {
-                    transfer_histograms(&mut grid.data, grid.channels, &first.colours);
+                    transfer_histograms(&mut grid.data, grid.channels, &pooled);
                 }
             }
             done += work[level];
@@ -168,6 +169,35 @@ fn histograms(ex: &[Option<&Prepared>; 3], params: &SynthParams) -> Histograms {
         })
         .collect();
     Histograms { bins: params.histogram_bins, strength: params.histogram_strength, target }
+}
+
+/// The colour distribution the volume should have: every distinct exemplar of the level
+/// counts equally (each contributes the same number of quantiles per channel), so Ey and Ez
+/// weigh as much as Ex whatever their sizes. One exemplar gives its own pixels.
+fn pooled_colours(ex: &[Option<&Prepared>; 3]) -> Vec<f32> {
+    let mut distinct: Vec<&Prepared> = Vec::new();
+    for e in ex.iter().flatten() {
+        if !distinct.iter().any(|d| std::ptr::eq(*d, *e)) {
+            distinct.push(e);
+        }
+    }
+    if distinct.len() == 1 {
+        return distinct[0].colours.clone();
+    }
+    let channels = distinct[0].channels;
+    let per = distinct.iter().map(|e| e.colours.len() / channels).max().unwrap_or(1);
+    let mut pooled = vec![0.0; distinct.len() * per * channels];
+    for c in 0..channels {
+        for (k, e) in distinct.iter().enumerate() {
+            let mut sorted: Vec<f32> = e.colours.iter().skip(c).step_by(channels).copied().collect();
+            sorted.sort_by(f32::total_cmp);
+            for q in 0..per {
+                let at = ((q as f64 + 0.5) / per as f64 * sorted.len() as f64) as usize;
+                pooled[((k * per) + q) * channels + c] = sorted[at.min(sorted.len() - 1)];
+            }
+        }
+    }
+    pooled
 }
 
 fn wraps(job: &Job, params: &SynthParams) -> [bool; 3] {
