@@ -150,6 +150,22 @@ fn check_values(args: &SynthArgs) -> Result<[usize; 3]> {
     Ok(size)
 }
 
+/// Warn when one directional image is asked to make a homogeneous solid: the same grain
+/// in all three cut directions leaves one cut a smear.
+fn warn_if_directional(image: &crate::volume::Image2d, path: &Path) {
+    let d = synth::direction(image);
+    if d.coherence > synth::DIRECTIONAL {
+        eprintln!(
+            "warning: {}: the features run one way (structure-tensor coherence {:.2}, along {:.0} degrees); \
+             one image for all three axes will smear one cut. Give the other cross-sections with --ey/--ez, \
+             or use --layered if the image is layers along its rows",
+            path.display(),
+            d.coherence,
+            d.angle_degrees
+        );
+    }
+}
+
 /// Run `solidtex synth`.
 pub fn run(args: &SynthArgs) -> Result<()> {
     let size = check_values(args)?;
@@ -187,6 +203,9 @@ pub fn run(args: &SynthArgs) -> Result<()> {
             .map_err(|e| e.in_file(&args.exemplar))?
     } else {
         let (ey, ez) = args.others.load_yz()?;
+        if ey.is_none() && ez.is_none() {
+            warn_if_directional(&ex, &args.exemplar);
+        }
         let exemplars = Exemplars { x: &ex, y: ey.as_ref(), z: ez.as_ref() };
         synth::synthesize(exemplars, &params, args.seed, &bar).map_err(|e| e.in_file(&args.exemplar))?
     };

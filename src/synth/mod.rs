@@ -17,6 +17,7 @@
 //! the output is bit-identical on any number of threads.
 
 mod depth;
+mod direction;
 mod driver;
 pub(crate) mod exemplar;
 mod grid;
@@ -26,6 +27,7 @@ mod params;
 mod pca;
 mod search;
 
+pub use direction::{DIRECTIONAL, Direction, direction};
 pub use params::{LayeredParams, SynthParams};
 
 use crate::error::{Error, Result};

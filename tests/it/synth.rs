@@ -297,3 +297,27 @@ fn every_exemplar_counts_for_the_colour_distribution() {
     let share = share_above_half(v.data());
     assert!((share - expected).abs() <= 0.02, "volume share {share:.3}, mean of the exemplars' {expected:.3}");
 }
+
+#[test]
+fn a_directional_image_alone_gets_a_warning_naming_ey_ez_and_layered() {
+    let dir = tempfile::tempdir().unwrap();
+    let grain = dir.path().join("grain.png");
+    image::GrayImage::from_fn(32, 32, |_, y| image::Luma([if (y / 3) % 2 == 0 { 40 } else { 200 }]))
+        .save(&grain)
+        .unwrap();
+    let speckle = dir.path().join("speckle.png");
+    image::GrayImage::from_fn(32, 32, |x, y| image::Luma([(noise::hash3(2, x as i64, y as i64, 0) % 256) as u8]))
+        .save(&speckle)
+        .unwrap();
+    let out = dir.path().join("v.exr").to_string_lossy().into_owned();
+    let run = |image: &std::path::Path| {
+        let args = ["synth", &image.to_string_lossy(), "--size", "8", "--levels", "1", "-o", &out];
+        let output = std::process::Command::new(env!("CARGO_BIN_EXE_solidtex")).args(args).output().unwrap();
+        assert!(output.status.success());
+        String::from_utf8_lossy(&output.stderr).into_owned()
+    };
+    let warned = run(&grain);
+    assert!(warned.contains("warning: ") && warned.contains("grain.png"), "{warned}");
+    assert!(warned.contains("--ey/--ez") && warned.contains("--layered"), "{warned}");
+    assert!(!run(&speckle).contains("warning"), "an isotropic image is not directional");
+}
