@@ -146,7 +146,8 @@ pub fn writable_folder(path: &Path) -> Result<Option<Vec<String>>> {
             format!(
                 "holds {} file(s) solidtex did not write there (e.g. {first:?}); solidtex writes a folder output \
                  only where the folder is new, empty, or holds what it wrote before (listed in {FOLDER_LIST}); \
-                 choose a new folder",
+                 choose a new folder (a folder written by a solidtex older than that list must be removed by hand \
+                 once)",
                 foreign.len()
             ),
         ));
