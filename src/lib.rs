@@ -48,6 +48,7 @@ pub mod progress;
 pub mod quality;
 pub mod render;
 pub mod sections;
+pub mod ground_truth;
 pub mod sharpness;
 pub mod snapshot;
 pub mod stamp;
