@@ -7,14 +7,15 @@
 //!  2D photos / cross-sections --> sweep (+noise, +skin) --+
 //!  seed meshes (OBJ/STL/PLY) ---> stamp ------------------+--> Volume --> classify
 //!  2D exemplars (Ex, Ey, Ez) ---> synthesize (Kopf 2007) -+      |
-//!  procedural recipes ----------> rings, strata, marble --+      +--> masks
+//!  procedural recipes ----------> marble, strata, wood ---+      +--> masks
 //!                                                                v
 //!              exemplar library (manifest + built files) --> fill backend --> cuts
 //! ```
 //!
-//! The core ([`volume`], [`texture_type`], [`procedural`], [`render`]) is pure: plain
-//! data in, plain data out, an explicit seed for anything random. Only [`io`] touches
-//! files and only [`cli`] talks to a terminal.
+//! The core ([`volume`], [`synth`], [`fill`], [`render`] and the other algorithm modules
+//! that `.ci/run` lists) is pure: plain data in, plain data out, an explicit seed for
+//! anything random. [`io`] reads and writes files; the front ends [`cli`] and [`tui`] also
+//! touch files (the library build, its cache and reports) and talk to the terminal.
 //!
 //! A 16³ volume, a slice and its statistics:
 //!

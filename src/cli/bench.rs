@@ -73,7 +73,7 @@ type Work = Box<dyn Fn() -> Result<()>>;
 /// The names of the hand-made workloads, in the order [`hand_made`] returns them.
 const HAND_MADE: [&str; 3] = ["stamp/2k-tri/128cube (+clone)", "scatter/100-seeds/128cube", "sweep+noise+skin/128cube"];
 
-/// The hand-made workloads of issue 4: stamp, scatter, sweep + noise + skin at 128³.
+/// The hand-made workloads: stamp, scatter, sweep + noise + skin at 128³.
 fn hand_made() -> Result<Vec<(&'static str, Work)>> {
     let seed = std::rc::Rc::new(crate::sections::seed_mesh(32, 32)?);
     let section = std::rc::Rc::new(crate::sections::draw("kiwi", 128, 128, 1)?);
@@ -112,7 +112,7 @@ fn hand_made() -> Result<Vec<(&'static str, Work)>> {
     Ok(HAND_MADE.into_iter().zip([stamp_one, scatter, sweep]).collect())
 }
 
-/// The synthesis workloads of issue 3.
+/// The synthesis workloads: homogeneous 64³ and 128³, layered 64x64x128.
 fn synthesis(args: &BenchArgs) -> Result<()> {
     let works: Vec<&Workload> =
         WORKLOADS.iter().filter(|w| args.only.as_ref().is_none_or(|o| w.name.contains(o.as_str()))).collect();

@@ -55,10 +55,9 @@ pub fn sweep_params(args: &SweepArgs) -> Result<Sweep> {
         .skin
         .as_deref()
         .map(|t| {
-            let look = match parse::colour("--skin", t) {
-                Ok(c) => SkinLook::Colour(c),
-                Err(_) if Path::new(t).exists() => SkinLook::Image(io::read_image(Path::new(t))?),
-                Err(e) => return Err(Error::usage(format!("{e}; or name an image file that exists"))),
+            let look = match io::manifest::skin_source("--skin", t, Path::new("")).map_err(usage)? {
+                io::manifest::SkinSource::Colour(c) => SkinLook::Colour(c),
+                io::manifest::SkinSource::Image(path) => SkinLook::Image(io::read_image(&path)?),
             };
             Ok(Skin { look, width: args.skin_width, width_noise: args.skin_noise })
         })
@@ -87,7 +86,7 @@ fn sweep_values(args: &SweepArgs) -> Result<(Axis, Option<Axis>, Option<sweep::N
 /// Run `solidtex sweep`.
 pub fn run_sweep(args: &SweepArgs) -> Result<()> {
     sweep_values(args).map_err(usage)?;
-    let skin_file = args.skin.as_deref().map(Path::new).filter(|p| p.exists());
+    let skin_file = args.skin.as_deref().map(Path::new).filter(|p| p.is_file());
     let inputs: Vec<&Path> = [Some(args.image.as_path()), skin_file].into_iter().flatten().collect();
     io::check_output(&args.output, &inputs)?;
     let params = sweep_params(args)?;

@@ -87,6 +87,16 @@ pub enum SkinSource {
     Image(PathBuf),
 }
 
+/// The one rule for a skin, on the command line and in a manifest: a colour when the text
+/// reads as one, otherwise an image file that must exist (relative to `folder`).
+pub fn skin_source(field: &str, text: &str, folder: &Path) -> Result<SkinSource> {
+    match values::colour(field, text) {
+        Ok(c) => Ok(SkinSource::Colour(c)),
+        Err(_) if folder.join(text).is_file() => Ok(SkinSource::Image(folder.join(text))),
+        Err(e) => Err(Error::invalid(format!("{e}; or name an image file that exists (none at {text:?})"))),
+    }
+}
+
 /// A sweep recipe (see [`crate::sweep`]), with file paths resolved.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SweepSpec {
@@ -500,11 +510,7 @@ fn sweep_spec(raw: &RawExemplar, folder: &Path) -> Result<SweepSpec> {
         .skin
         .as_deref()
         .map(|s| {
-            let look = match values::colour("skin", s) {
-                Ok(c) => SkinSource::Colour(c),
-                Err(_) if s.contains('.') => SkinSource::Image(folder.join(s)),
-                Err(e) => return Err(e),
-            };
+            let look = skin_source("skin", s, folder)?;
             let (lo, hi) = crate::sweep::SKIN_WIDTH;
             let width = values::within("skin_width =", raw.skin_width.unwrap_or(2.0), lo, hi)?;
             let width_noise = values::within("skin_noise =", raw.skin_noise.unwrap_or(0.0), lo, hi)?;
@@ -677,6 +683,16 @@ mod tests {
         assert!(control.contains("is not a TOML manifest") && !control.contains("PNG"), "{control}");
     }
     use super::*;
+
+    #[test]
+    fn a_skin_is_a_colour_or_an_existing_image_by_one_rule() {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join("bark"), b"an image without an extension").unwrap();
+        assert_eq!(skin_source("skin", "#336699", dir.path()).unwrap(), SkinSource::Colour([0.2, 0.4, 0.6]));
+        assert_eq!(skin_source("skin", "bark", dir.path()).unwrap(), SkinSource::Image(dir.path().join("bark")));
+        let err = skin_source("skin", "bark.png", dir.path()).unwrap_err().to_string();
+        assert!(err.contains("bark.png") && err.contains("image file that exists"), "{err}");
+    }
 
     fn plan(text: &str) -> Result<Plan> {
         parse_plan(text, Path::new("lib"))

@@ -46,7 +46,7 @@ struct Best {
 
 /// The in-plane neighbours whose matches propose candidates: the voxel and its four
 /// edge neighbours. The four diagonal ones cost 45 % more distances and gave the same
-/// slice energy on the photos (within 0.01; docs/PERFORMANCE.md, session 5).
+/// slice energy on the photos (within 0.01; docs/PERFORMANCE.md).
 const SOURCES: [(i64, i64); 5] = [(0, -1), (-1, 0), (0, 0), (1, 0), (0, 1)];
 
 /// How many of the closest candidates are kept to find a second best elsewhere.
