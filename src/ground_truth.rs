@@ -13,6 +13,7 @@
 //!   difference of a bin's share from the truth's, in points (1 point = 1 % of the voxels).
 
 use crate::error::{Error, Result};
+use crate::sharpness::Standard;
 use crate::volume::{Axis, Volume};
 use serde::Serialize;
 
@@ -58,8 +59,10 @@ pub fn compare(volume: &Volume, truth: &Volume) -> Result<TruthComparison> {
             2 * LAGS
         )));
     }
-    let scale = Scale::of(truth);
-    let (g_volume, g_truth) = (scale.grey(volume), scale.grey(truth));
+    let n = truth.channel_count();
+    let scale = Standard::of_samples(truth.data(), n);
+    let all: Vec<usize> = (0..n).collect();
+    let (g_volume, g_truth) = (scale.grey_samples(volume.data(), n, &all), scale.grey_samples(truth.data(), n, &all));
     let axes = Axis::ALL
         .iter()
         .map(|&axis| {
@@ -86,44 +89,6 @@ pub fn compare(volume: &Volume, truth: &Volume) -> Result<TruthComparison> {
         share_error: largest_gap(&shares(g_volume.iter().copied(), lo, hi), &truth_shares),
         slices_share_error: largest_gap(&shares(slice_values, lo, hi), &truth_shares),
     })
-}
-
-/// The truth's per-channel mean and deviation.
-struct Scale {
-    mean: Vec<f64>,
-    deviation: Vec<f64>,
-}
-
-impl Scale {
-    fn of(v: &Volume) -> Scale {
-        let n = v.channel_count();
-        let count = v.voxel_count() as f64;
-        let mut sum = vec![0.0; n];
-        let mut squares = vec![0.0; n];
-        for voxel in v.data().chunks_exact(n) {
-            for (c, s) in voxel.iter().enumerate() {
-                sum[c] += *s as f64;
-                squares[c] += (*s as f64) * (*s as f64);
-            }
-        }
-        let mean: Vec<f64> = sum.iter().map(|s| s / count).collect();
-        let deviation = squares.iter().zip(&mean).map(|(q, m)| (q / count - m * m).max(0.0).sqrt()).collect();
-        Scale { mean, deviation }
-    }
-
-    fn grey(&self, v: &Volume) -> Vec<f64> {
-        let n = v.channel_count();
-        v.data()
-            .chunks_exact(n)
-            .map(|voxel| {
-                let sum: f64 = (0..n)
-                    .filter(|c| self.deviation[*c] > 1e-9)
-                    .map(|c| (voxel[c] as f64 - self.mean[c]) / self.deviation[c])
-                    .sum();
-                sum / n as f64
-            })
-            .collect()
-    }
 }
 
 /// Normalized autocorrelation along `axis` at lags 1..=LAGS, over the whole volume or, with

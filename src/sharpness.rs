@@ -105,19 +105,23 @@ fn mean(values: &[f64]) -> f64 {
     if values.is_empty() { 0.0 } else { values.iter().sum::<f64>() / values.len() as f64 }
 }
 
-/// The exemplar's per-channel mean and deviation.
-struct Standard {
+/// Per-channel mean and deviation of interleaved samples, for standardizing.
+pub(crate) struct Standard {
     mean: Vec<f64>,
     deviation: Vec<f64>,
 }
 
 impl Standard {
     fn of(image: &Image2d) -> Standard {
-        let n = image.channel_count();
-        let count = (image.width() * image.height()) as f64;
-        let mut sum = vec![0.0; n];
-        let mut squares = vec![0.0; n];
-        for pixel in image.data().chunks_exact(n) {
+        Standard::of_samples(image.data(), image.channel_count())
+    }
+
+    /// The statistics of `samples` (`channels` per pixel or voxel).
+    pub(crate) fn of_samples(samples: &[f32], channels: usize) -> Standard {
+        let count = (samples.len() / channels).max(1) as f64;
+        let mut sum = vec![0.0; channels];
+        let mut squares = vec![0.0; channels];
+        for pixel in samples.chunks_exact(channels) {
             for (c, v) in pixel.iter().enumerate() {
                 sum[c] += *v as f64;
                 squares[c] += (*v as f64) * (*v as f64);
@@ -128,13 +132,17 @@ impl Standard {
         Standard { mean, deviation }
     }
 
-    /// The grey image of `image`: channel `picks[c]` standardized as exemplar channel `c`,
-    /// averaged over the channels (a channel with no deviation contributes nothing).
+    /// The grey image of `image` (see [`Standard::grey_samples`]).
     fn grey(&self, image: &Image2d, picks: &[usize]) -> Grey {
-        let n = image.channel_count();
-        let values = image
-            .data()
-            .chunks_exact(n)
+        let values = self.grey_samples(image.data(), image.channel_count(), picks);
+        Grey { width: image.width(), height: image.height(), values }
+    }
+
+    /// One grey value per pixel: sample channel `picks[c]` standardized as channel `c` of
+    /// these statistics, averaged over the channels (a channel with no deviation adds 0).
+    pub(crate) fn grey_samples(&self, samples: &[f32], channels: usize, picks: &[usize]) -> Vec<f64> {
+        samples
+            .chunks_exact(channels)
             .map(|pixel| {
                 let sum: f64 = picks
                     .iter()
@@ -144,8 +152,7 @@ impl Standard {
                     .sum();
                 sum / picks.len() as f64
             })
-            .collect();
-        Grey { width: image.width(), height: image.height(), values }
+            .collect()
     }
 }
 

@@ -188,7 +188,8 @@ fn lock_output(output: &Path) -> Result<std::fs::File> {
 }
 
 /// Remove the temporaries an interrupted build left (names solidtex gives them:
-/// `.NAME.solidtex-XXXXXX.tmp`, files or folders). Only called under the build lock.
+/// `.NAME.solidtex-` + random letters + `.tmp`, files or folders). Only called under the
+/// build lock.
 fn remove_stale_temporaries(output: &Path) {
     for folder in [output.to_path_buf(), output.join(".cache")] {
         let Ok(entries) = std::fs::read_dir(&folder) else { continue };

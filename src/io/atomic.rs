@@ -37,7 +37,7 @@ fn name_of(path: &Path) -> String {
     path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_else(|| "output".to_string())
 }
 
-/// A temporary file for `path`, named `.NAME.solidtex-XXXXXX.tmp` (random letters), created
+/// A temporary file for `path`, named `.NAME.solidtex-` + six random letters + `.tmp`, created
 /// exclusively in the folder of `path`.
 fn temporary_file(path: &Path) -> Result<tempfile::NamedTempFile> {
     let prefix = format!(".{}.solidtex-", name_of(path));
@@ -228,16 +228,28 @@ fn remove_listed(old: &Path, names: &[String], path: &Path) -> Result<()> {
             let _ = fs::remove_file(file);
         }
     }
-    fs::remove_dir(old).map_err(|_| {
-        Error::file(
-            path,
-            format!(
-                "written; the previous folder was moved to {} and kept, because files appeared in it while \
-                 solidtex wrote (look there)",
-                old.display()
-            ),
-        )
-    })
+    if fs::remove_dir(old).is_ok() {
+        return Ok(());
+    }
+    // Files appeared in the old folder while solidtex wrote: keep it under a visible name
+    // that no clean-up of temporaries matches.
+    let kept = keep_aside(old, path).unwrap_or_else(|| old.to_path_buf());
+    Err(Error::file(
+        path,
+        format!(
+            "written; the previous folder was kept as {}, because files appeared in it while solidtex wrote \
+             (look there)",
+            kept.display()
+        ),
+    ))
+}
+
+/// Move `old` to a new sibling `NAME.kept-<random letters>` of `path`.
+fn keep_aside(old: &Path, path: &Path) -> Option<PathBuf> {
+    let prefix = format!("{}.kept-", name_of(path));
+    let target = tempfile::Builder::new().prefix(&prefix).tempdir_in(folder_of(path)).ok()?.keep();
+    fs::rename(old, &target).ok()?;
+    Some(target)
 }
 
 /// The size cap for a volume file read within `budget` bytes of samples: the samples,
