@@ -88,9 +88,8 @@ pub fn read_volume(path: &Path, budget: u64) -> Result<Volume> {
     if !path.exists() {
         return Err(Error::file(path, "no such file or folder"));
     }
-    if Format::of(path)? != Format::PngStack {
-        atomic::open_regular(path, atomic::file_cap(budget))?;
-    } else if !path.is_dir() {
+    // Each reader opens its file through `atomic`, which takes regular files only.
+    if Format::of(path)? == Format::PngStack && !path.is_dir() {
         return Err(Error::file(
             path,
             "has no volume extension and is not a folder; allowed: .exr, .nrrd, .vol, .png, or a folder of PNG slices",
