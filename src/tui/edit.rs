@@ -104,10 +104,30 @@ pub fn append_steps(text: &str, name: &str, steps: &[super::model::StampStep], f
     let table = entry_mut(&mut doc, name)?;
     let existing = table.entry("steps").or_insert(Item::ArrayOfTables(toml_edit::ArrayOfTables::new()));
     let array = existing.as_array_of_tables_mut().ok_or("steps is not a list of [[exemplar.steps]] tables")?;
+    let indent = array.iter().last().map_or_else(|| "  ".to_string(), step_indent);
     for step in steps {
-        array.push(step_table(step, file));
+        let mut table = step_table(step, file);
+        table.decor_mut().set_prefix(indent.clone());
+        let keys: Vec<String> = table.iter().map(|(k, _)| k.to_string()).collect();
+        for key in keys {
+            if let Some(mut k) = table.key_mut(&key) {
+                k.leaf_decor_mut().set_prefix(indent.clone());
+            }
+        }
+        array.push(table);
     }
     Ok(doc.to_string())
+}
+
+/// The indentation of an existing step's first key (the library indents its steps by two
+/// spaces), so appended steps line up with it.
+fn step_indent(table: &toml_edit::Table) -> String {
+    let prefix = table.iter().next().and_then(|(k, _)| {
+        let key = table.key(k)?;
+        key.leaf_decor().prefix().and_then(|p| p.as_str()).map(str::to_string)
+    });
+    let prefix = prefix.unwrap_or_default();
+    prefix.rsplit('\n').next().unwrap_or("").chars().filter(|c| *c == ' ' || *c == '\t').collect()
 }
 
 fn step_table(step: &super::model::StampStep, file: &str) -> toml_edit::Table {
@@ -177,6 +197,11 @@ mod tests {
         let steps = [StampStep::Stamp(placement), StampStep::Scatter { count: 10, scale: (2.0, 3.0), seed: 4 }];
         let out = append_steps(TEXT, "b", &steps, "seed.obj").unwrap();
         assert!(out.starts_with("# the library") && out.contains("  blur = \"1,1,1\""), "{out}");
+        assert!(
+            out.contains("\n  [[exemplar.steps]]\n  stamp = \"seed.obj\"\n  at = "),
+            "indented like b's step: {out}"
+        );
+        assert!(out.contains("\n  scatter = \"seed.obj\"\n  count = 10\n"), "{out}");
         let plan = crate::io::manifest::parse_plan(&out, std::path::Path::new("lib")).unwrap();
         let b = &plan.entries[1];
         assert_eq!(b.steps.len(), 3);

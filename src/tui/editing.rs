@@ -138,13 +138,18 @@ pub fn saved(model: &mut Model, result: Result<String, String>) {
     match (result, &mut model.screen) {
         (Ok(text), Screen::Editor(editor)) => {
             editor.saved = text;
-            model.status = format!("saved {}", model.manifest.display());
+            let name = editor.name.clone();
+            super::update::mark_changed(model, &name);
+            model.status =
+                format!("saved {}; {name} changed since its last build (b rebuilds it)", model.manifest.display());
         }
         (Ok(_), Screen::Exemplar(view)) => {
             if let Some(stamp) = &mut view.stamp {
                 stamp.steps.clear();
                 stamp.undo.clear();
             }
+            let name = view.name.clone();
+            super::update::mark_changed(model, &name);
             model.status = format!("saved the steps into {}", model.manifest.display());
         }
         (Ok(_), _) => model.status = format!("saved {}", model.manifest.display()),

@@ -88,8 +88,8 @@ fn fill(code: KeyCode) -> Option<Message> {
         KeyCode::Char('x') => Some(Message::SelectAxis(Axis::X)),
         KeyCode::Char('y') => Some(Message::SelectAxis(Axis::Y)),
         KeyCode::Char('z') => Some(Message::SelectAxis(Axis::Z)),
-        KeyCode::Right | KeyCode::Up | KeyCode::Char('l') => Some(Message::MovePlane(0.05)),
-        KeyCode::Left | KeyCode::Down | KeyCode::Char('h') => Some(Message::MovePlane(-0.05)),
+        KeyCode::Right | KeyCode::Up | KeyCode::Char('l') | KeyCode::Char('k') => Some(Message::MovePlane(0.05)),
+        KeyCode::Left | KeyCode::Down | KeyCode::Char('h') | KeyCode::Char('j') => Some(Message::MovePlane(-0.05)),
         KeyCode::PageUp => Some(Message::MovePlane(0.25)),
         KeyCode::PageDown => Some(Message::MovePlane(-0.25)),
         KeyCode::Backspace => Some(Message::Back),
@@ -102,8 +102,8 @@ fn exemplar(code: KeyCode) -> Option<Message> {
         KeyCode::Char('x') => Some(Message::SelectAxis(Axis::X)),
         KeyCode::Char('y') => Some(Message::SelectAxis(Axis::Y)),
         KeyCode::Char('z') => Some(Message::SelectAxis(Axis::Z)),
-        KeyCode::Right | KeyCode::Up | KeyCode::Char('l') => Some(Message::MoveSlice(1)),
-        KeyCode::Left | KeyCode::Down | KeyCode::Char('h') => Some(Message::MoveSlice(-1)),
+        KeyCode::Right | KeyCode::Up | KeyCode::Char('l') | KeyCode::Char('k') => Some(Message::MoveSlice(1)),
+        KeyCode::Left | KeyCode::Down | KeyCode::Char('h') | KeyCode::Char('j') => Some(Message::MoveSlice(-1)),
         KeyCode::PageUp => Some(Message::MoveSlice(8)),
         KeyCode::PageDown => Some(Message::MoveSlice(-8)),
         KeyCode::Char('c') => Some(Message::NextChannel),
@@ -125,16 +125,16 @@ pub const HELP: [&str; 19] = [
     "e              edit its recipe (enter edits a",
     "               value, s saves, u undo, r redo)",
     "x, y, z        choose the slice axis",
-    "left/right     move the slice (page up/down: 8)",
+    "arrows, hjkl   move the slice (page up/down: 8)",
     "c              cycle colour and single channels",
     "+/-, a         zoom; show the masks in turn",
     "f              fill a shape with it, then",
     "               x/y/z + arrows move the cut",
     "m              stamp mode: arrows move the seed,",
     "               r turn, +/- scale, enter, n, u, s",
-    "esc            back",
+    "esc            back (asks if work is unsaved)",
     "?              this help",
-    "q, ctrl-c      quit",
+    "q, ctrl-c      quit (asks if work is unsaved)",
     "",
     "builds run in the background: the list shows",
     "their state and the type the build measured",
@@ -162,6 +162,8 @@ mod tests {
         let view = Screen::Exemplar(super::super::model::ExemplarView::new("a"));
         assert!(matches!(key(&view, press(KeyCode::Char('x'))), Some(Message::SelectAxis(Axis::X))));
         assert!(matches!(key(&view, press(KeyCode::PageUp)), Some(Message::MoveSlice(8))));
+        assert!(matches!(key(&view, press(KeyCode::Char('k'))), Some(Message::MoveSlice(1))));
+        assert!(matches!(key(&view, press(KeyCode::Char('j'))), Some(Message::MoveSlice(-1))));
         assert!(matches!(key(&view, press(KeyCode::Char('?'))), Some(Message::Help)));
         let ctrl_c = KeyEvent { modifiers: KeyModifiers::CONTROL, ..press(KeyCode::Char('c')) };
         assert!(matches!(key(&view, ctrl_c), Some(Message::Quit)));

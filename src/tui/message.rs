@@ -32,6 +32,9 @@ pub enum Message {
     Loaded(String, Result<Arc<Volume>, String>),
     /// A build finished: name, and the rebuilt list row or the error.
     Built(String, Result<super::model::Item, String>),
+    /// A build was cancelled before this exemplar finished: the row as its previous output
+    /// (kept) leaves it.
+    BuildCancelled(String, super::model::Item),
     /// Open the recipe editor of the selected exemplar.
     Edit,
     /// The manifest text for the editor arrived.

@@ -172,15 +172,27 @@ fn build(manifest: &Path, output: &Path, names: Vec<String>, send: &Sender<Messa
     let (items, _) = load_items(manifest, output);
     for name in names {
         let row = items.iter().find(|i| i.name == name);
-        let result = match row {
+        let message = match row {
+            Some(row) if cancelled && !finished(&log, &name) => Message::BuildCancelled(name, row.clone()),
             Some(row) if matches!(row.state, BuildState::Built(_)) && !log.contains(&format!("FAILED {name}:")) => {
-                Ok(row.clone())
+                Message::Built(name, Ok(row.clone()))
             }
-            _ if cancelled => Err("cancelled".to_string()),
-            _ => Err(failure(&log, &name)),
+            _ => {
+                let error = if cancelled { "cancelled".to_string() } else { failure(&log, &name) };
+                Message::Built(name, Err(error))
+            }
         };
-        let _ = send.send(Message::Built(name, result));
+        let _ = send.send(message);
     }
+}
+
+/// Whether the build's log says entry `name` was built or found cached (the lines
+/// `solidtex build` prints per finished entry).
+fn finished(log: &str, name: &str) -> bool {
+    log.lines().any(|l| {
+        let rest = l.strip_prefix("built ").or_else(|| l.strip_prefix("cached ")).map(str::trim_start);
+        rest.is_some_and(|r| r.split_whitespace().next() == Some(name))
+    })
 }
 
 /// Reads a build's stderr to the end, forwarding progress lines; returns the other lines
@@ -281,4 +293,19 @@ fn cancel_builds() {
 fn failure(log: &str, name: &str) -> String {
     let prefix = format!("FAILED {name}: ");
     log.lines().find_map(|l| l.strip_prefix(&prefix)).unwrap_or("the build did not finish").to_string()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::finished;
+
+    /// A cancelled build's log tells which entries finished before it stopped: by whole
+    /// names, so `marble` is not taken for `marble-synth`.
+    #[test]
+    fn the_build_log_names_the_entries_that_finished() {
+        let log = "built  marble 64x64x64 in 1.20 s\ncached kiwi (recipe and inputs unchanged)\nwarning: x\n";
+        assert!(finished(log, "marble") && finished(log, "kiwi"));
+        assert!(!finished(log, "marble-synth") && !finished(log, "warning:"));
+        assert!(!finished("built  marble-synth 8x8x8 in 0.1 s\n", "marble"));
+    }
 }

@@ -13,6 +13,8 @@ pub enum BuildState {
     Building,
     /// Built; the classified type from the build record.
     Built(String),
+    /// Built (the classified type), but its recipe was saved since: the output is stale.
+    Changed(String),
     /// The last build failed with this message.
     Failed(String),
 }
@@ -161,6 +163,17 @@ pub struct FillView {
     pub offset: f32,
 }
 
+/// An action that loses unsaved work, asked for once and done on the second press.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Confirm {
+    /// Quit the program.
+    Quit,
+    /// Go back to the library.
+    Leave,
+    /// Leave stamp mode.
+    StampOff,
+}
+
 /// The screen on top.
 #[derive(Debug, Clone)]
 pub enum Screen {
@@ -195,6 +208,8 @@ pub struct Model {
     pub status: String,
     /// Leave the program.
     pub quit: bool,
+    /// The action a second press of the same key confirms (unsaved work would be lost).
+    pub confirm: Option<Confirm>,
     /// Progress of running builds: exemplar -> (stage, fraction).
     pub progress: std::collections::BTreeMap<String, (String, f32)>,
     /// The latest pyramid level a synthesis build finished: exemplar -> (`2/3`, volume).
@@ -215,6 +230,7 @@ impl Model {
             help: false,
             status,
             quit: false,
+            confirm: None,
             progress: Default::default(),
             previews: Default::default(),
         }

@@ -92,13 +92,26 @@ pub fn turn(model: &mut Model, degrees: f32) {
     }
 }
 
-/// Scale the seed.
+/// Scale the seed, from a voxel across up to as wide as the volume's longest side.
 pub fn scale(model: &mut Model, factor: f32) {
     let Some(v) = view(model) else { return };
-    if let Some(s) = &mut v.stamp {
-        s.placement.scale = (s.placement.scale * factor).clamp(Vec3::splat(0.05), Vec3::splat(1000.0));
-        follow(v);
-    }
+    let longest = v.volume.as_ref().map_or(1, |vol| vol.dims().into_iter().max().unwrap_or(1)) as f32;
+    let Some(s) = &mut v.stamp else { return };
+    let (_, radius) = stamp::bounding_sphere(&s.mesh);
+    let radius = radius.max(1e-6);
+    let (smallest, largest) = (0.5 / radius, longest / (2.0 * radius));
+    let wanted = s.placement.scale.x * factor;
+    let scale = wanted.clamp(smallest, largest);
+    s.placement.scale = Vec3::splat(scale);
+    follow(v);
+    let across = 2.0 * radius * scale;
+    model.status = if wanted > largest {
+        format!("the seed is {across:.0} voxels across, as wide as the volume: it grows no further")
+    } else if wanted < smallest {
+        "the seed is one voxel across: it shrinks no further".to_string()
+    } else {
+        format!("the seed is {across:.1} voxels across")
+    };
 }
 
 /// Enter: stamp the seed into the volume.
@@ -220,6 +233,38 @@ mod tests {
         let s = view_of(&m).stamp.as_ref().unwrap();
         assert!(matches!(s.steps[..], [StampStep::Scatter { count: 10, seed: 1, .. }]), "{:?}", s.steps);
         update(&mut m, Message::StampMode);
-        assert!(view_of(&m).stamp.is_none());
+        assert!(view_of(&m).stamp.is_some() && m.status.contains("unsaved stamps"), "{}", m.status);
+        update(&mut m, Message::StampMode);
+        assert!(view_of(&m).stamp.is_none(), "m again leaves stamp mode");
+    }
+
+    #[test]
+    fn stamps_are_not_dropped_without_asking() {
+        let mut m = stamping();
+        update(&mut m, Message::Stamp);
+        update(&mut m, Message::Back);
+        assert!(matches!(m.screen, Screen::Exemplar(_)) && m.status.contains("unsaved stamps"), "{}", m.status);
+        update(&mut m, Message::Quit);
+        assert!(!m.quit, "q asks too");
+        update(&mut m, Message::Saved(Ok(String::new())));
+        assert_eq!(m.items[0].state, BuildState::Changed("0".into()));
+        update(&mut m, Message::Back);
+        assert!(matches!(m.screen, Screen::Library), "saved stamps leave without a question");
+    }
+
+    #[test]
+    fn the_seed_grows_no_wider_than_the_volume() {
+        let mut m = stamping();
+        for _ in 0..40 {
+            update(&mut m, Message::ScaleSeed(1.15));
+        }
+        let s = view_of(&m).stamp.as_ref().unwrap();
+        let (_, radius) = stamp::bounding_sphere(&s.mesh);
+        assert!(2.0 * radius * s.placement.scale.x <= 32.0 + 1e-3, "{}", s.placement.scale.x);
+        assert!(m.status.contains("grows no further"), "{}", m.status);
+        update(&mut m, Message::Stamp);
+        let v = view_of(&m).volume.as_ref().unwrap();
+        let dark = v.data().chunks_exact(3).filter(|p| p[0] < 0.2).count();
+        assert!(dark < 32 * 32 * 32 * 6 / 10, "a ball as wide as the volume covers about half of it: {dark}");
     }
 }

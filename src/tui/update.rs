@@ -1,15 +1,17 @@
 //! `update`: the only place the model changes. Pure: returns the work to start.
 
 use super::message::{Effect, Message};
-use super::model::{BuildState, ExemplarView, Model, Screen};
+use super::model::{BuildState, Confirm, ExemplarView, Model, Screen};
 use super::{editing, stamping};
 
 /// Apply `message` to `model`; returns the effects to run.
 pub fn update(model: &mut Model, message: Message) -> Vec<Effect> {
+    // A confirmation holds for the very next key only; results from workers leave it.
+    let asked = if from_key(&message) { model.confirm.take() } else { model.confirm };
     match message {
-        Message::Quit => model.quit = true,
+        Message::Quit => quit(model, asked),
         Message::Help => model.help = !model.help,
-        Message::Back => return back(model),
+        Message::Back => return back(model, asked),
         Message::Up => select(model, -1),
         Message::Down => select(model, 1),
         Message::Open => return open(model),
@@ -26,6 +28,7 @@ pub fn update(model: &mut Model, message: Message) -> Vec<Effect> {
         }),
         Message::Loaded(name, result) => loaded(model, &name, result),
         Message::Built(name, result) => built(model, &name, result),
+        Message::BuildCancelled(name, row) => cancelled(model, &name, row),
         Message::Edit => return editing::open_editor(model),
         Message::EditorReady(result) => return editing::editor_ready(model, result),
         Message::Commit => return editing::commit(model),
@@ -33,7 +36,7 @@ pub fn update(model: &mut Model, message: Message) -> Vec<Effect> {
         Message::InputBack => editing::input(model, None),
         Message::Cancel => {
             if !editing::cancel(model) {
-                return back(model);
+                return back(model, asked);
             }
         }
         Message::Undo if matches!(model.screen, Screen::Exemplar(_)) => stamping::undo(model),
@@ -52,6 +55,10 @@ pub fn update(model: &mut Model, message: Message) -> Vec<Effect> {
         Message::MasksLoaded(name, result) => masks_loaded(model, &name, result),
         Message::StampMode if showing_mask(model) => {
             model.status = "stamping works on the exemplar, not on a mask: press a".into()
+        }
+        Message::StampMode if stamps_unsaved(model) && asked != Some(Confirm::StampOff) => {
+            model.confirm = Some(Confirm::StampOff);
+            model.status = "unsaved stamps: s saves them as steps, m again leaves stamp mode without saving".into();
         }
         Message::StampMode => return stamping::toggle(model),
         Message::SeedLoaded(result) => stamping::seed_loaded(model, result),
@@ -73,16 +80,49 @@ pub fn update(model: &mut Model, message: Message) -> Vec<Effect> {
     Vec::new()
 }
 
-fn back(model: &mut Model) -> Vec<Effect> {
+/// Whether `message` comes from a key (not from a worker's result).
+fn from_key(message: &Message) -> bool {
+    !matches!(
+        message,
+        Message::Loaded(..)
+            | Message::Built(..)
+            | Message::BuildCancelled(..)
+            | Message::EditorReady(_)
+            | Message::Saved(_)
+            | Message::Previewed(..)
+            | Message::Filled(..)
+            | Message::MasksLoaded(..)
+            | Message::SeedLoaded(_)
+            | Message::BuildPreview(..)
+            | Message::BuildProgress(..)
+    )
+}
+
+/// `q` or Ctrl-C: quit, asking first when recipe edits or stamps are unsaved.
+fn quit(model: &mut Model, asked: Option<Confirm>) {
+    match unsaved(model) {
+        Some(what) if asked != Some(Confirm::Quit) => {
+            model.confirm = Some(Confirm::Quit);
+            model.status = format!("unsaved {what}: s saves them, q again quits without saving");
+        }
+        _ => model.quit = true,
+    }
+}
+
+/// Esc: close the help, cancel running builds, or go back to the library (asking first
+/// when work is unsaved). The library is the first screen: Esc there never quits.
+fn back(model: &mut Model, asked: Option<Confirm>) -> Vec<Effect> {
+    let on_library = matches!(model.screen, Screen::Library);
     if model.help {
         model.help = false;
-    } else if matches!(model.screen, Screen::Library) && model.items.iter().any(|i| i.state == BuildState::Building) {
-        model.status = "cancelling the running builds (esc again when they stop quits)".into();
+    } else if on_library && model.items.iter().any(|i| i.state == BuildState::Building) {
+        model.status = "cancelling the running builds; their previous outputs are kept".into();
         return vec![Effect::CancelBuilds];
-    } else if matches!(model.screen, Screen::Library) {
-        model.quit = true;
-    } else if unsaved(model) && !model.status.starts_with("unsaved") {
-        model.status = "unsaved changes: s saves them, esc again leaves without saving".into();
+    } else if on_library {
+        model.status = "this is the library, the first screen: q quits".into();
+    } else if let Some(what) = unsaved(model).filter(|_| asked != Some(Confirm::Leave)) {
+        model.confirm = Some(Confirm::Leave);
+        model.status = format!("unsaved {what}: s saves them, esc again leaves without saving");
     } else {
         model.screen = Screen::Library;
     }
@@ -146,8 +186,17 @@ fn masks_loaded(
     }
 }
 
-fn unsaved(model: &Model) -> bool {
-    matches!(&model.screen, Screen::Editor(e) if e.text.as_ref().is_some_and(|t| *t != e.saved))
+/// What would be lost by leaving the screen: recipe edits or stamps not yet saved.
+fn unsaved(model: &Model) -> Option<&'static str> {
+    match &model.screen {
+        Screen::Editor(e) if e.text.as_ref().is_some_and(|t| *t != e.saved) => Some("recipe edits"),
+        Screen::Exemplar(_) if stamps_unsaved(model) => Some("stamps"),
+        _ => None,
+    }
+}
+
+fn stamps_unsaved(model: &Model) -> bool {
+    matches!(&model.screen, Screen::Exemplar(v) if v.stamp.as_ref().is_some_and(|s| !s.steps.is_empty()))
 }
 
 fn with_view(model: &mut Model, f: impl FnOnce(&mut ExemplarView)) {
@@ -165,7 +214,7 @@ fn move_slice(view: &mut ExemplarView, step: i64) {
 
 fn open(model: &mut Model) -> Vec<Effect> {
     let Some(item) = model.items.get(model.selected) else { return Vec::new() };
-    if !matches!(item.state, BuildState::Built(_)) {
+    if !matches!(item.state, BuildState::Built(_) | BuildState::Changed(_)) {
         model.status = format!("{} is not built yet: press b to build it", item.name);
         return Vec::new();
     }
@@ -230,6 +279,31 @@ fn built(model: &mut Model, name: &str, result: Result<crate::tui::model::Item, 
     }
 }
 
+/// A build was cancelled before it finished: `row` is the entry as its previous output
+/// left it (that output is kept).
+fn cancelled(model: &mut Model, name: &str, row: crate::tui::model::Item) {
+    model.progress.remove(name);
+    model.previews.remove(name);
+    let kept = matches!(row.state, BuildState::Built(_));
+    if let Some(item) = model.items.iter_mut().find(|i| i.name == name) {
+        *item = row;
+    }
+    model.status = if kept {
+        format!("cancelled {name}: its previous output is kept")
+    } else {
+        format!("cancelled {name}: it has no output yet")
+    };
+}
+
+/// Mark exemplar `name` as changed since its last build (its recipe was saved).
+pub fn mark_changed(model: &mut Model, name: &str) {
+    for item in model.items.iter_mut().filter(|i| i.name == name) {
+        if let BuildState::Built(kind) = &item.state {
+            item.state = BuildState::Changed(kind.clone());
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -281,6 +355,8 @@ mod tests {
         update(&mut m, Message::Back);
         assert!(matches!(m.screen, Screen::Library));
         update(&mut m, Message::Back);
+        assert!(!m.quit && m.status.contains("q quits"), "esc on the library goes nowhere: {}", m.status);
+        update(&mut m, Message::Quit);
         assert!(m.quit);
     }
 
@@ -294,11 +370,59 @@ mod tests {
         assert_eq!(m.progress.len(), 1, "only running builds report");
         assert_eq!(update(&mut m, Message::Back), vec![Effect::CancelBuilds]);
         assert!(!m.quit && m.status.contains("cancelling"));
-        update(&mut m, Message::Built("b".into(), Err("cancelled".into())));
+        // b had been built before: the cancelled build keeps that output and says so.
+        let before =
+            Item { name: "b".into(), declared: None, size: Some([8; 3]), state: BuildState::Built("0".into()) };
+        update(&mut m, Message::BuildCancelled("b".into(), before));
         assert!(m.progress.is_empty());
-        assert_eq!(m.items[1].state, BuildState::Failed("cancelled".into()));
-        update(&mut m, Message::Back);
-        assert!(m.quit);
+        assert_eq!(m.items[1].state, BuildState::Built("0".into()));
+        assert!(m.status.contains("cancelled b") && m.status.contains("previous output is kept"), "{}", m.status);
+        assert!(!m.status.contains("built b"));
+    }
+
+    /// The editor with one unsaved edit of exemplar a.
+    fn edited() -> Model {
+        let mut m = model();
+        update(&mut m, Message::Edit);
+        update(
+            &mut m,
+            Message::EditorReady(Ok("[[exemplar]]\nname = \"a\"\nrecipe = \"procedural:marble\"\nsize = 8\n".into())),
+        );
+        let Screen::Editor(e) = &mut m.screen else { panic!("the editor") };
+        e.text = Some(e.saved.replace("size = 8", "size = 16"));
+        m
+    }
+
+    #[test]
+    fn quitting_or_leaving_with_unsaved_edits_asks_first() {
+        let mut m = edited();
+        update(&mut m, Message::Quit);
+        assert!(!m.quit && m.status.contains("unsaved recipe edits"), "{}", m.status);
+        update(&mut m, Message::Down);
+        update(&mut m, Message::Quit);
+        assert!(!m.quit, "another key in between asks again");
+        update(&mut m, Message::Previewed(99, Err("late".into())));
+        update(&mut m, Message::Quit);
+        assert!(m.quit, "the second q quits; a worker's result in between does not reset the question");
+        let mut m = edited();
+        update(&mut m, Message::Cancel);
+        assert!(matches!(m.screen, Screen::Editor(_)) && m.status.contains("esc again"), "{}", m.status);
+        update(&mut m, Message::Cancel);
+        assert!(matches!(m.screen, Screen::Library));
+    }
+
+    #[test]
+    fn a_saved_edit_marks_the_entry_changed_since_its_build() {
+        let mut m = edited();
+        let Screen::Editor(e) = &m.screen else { panic!("the editor") };
+        let text = e.text.clone().unwrap();
+        update(&mut m, Message::Saved(Ok(text)));
+        assert_eq!(m.items[0].state, BuildState::Changed("0".into()));
+        update(&mut m, Message::Quit);
+        assert!(m.quit, "nothing unsaved after saving");
+        let mut m = model();
+        m.items[0].state = BuildState::Changed("0".into());
+        assert_eq!(update(&mut m, Message::Open), vec![Effect::Load("a".into())], "its previous output opens");
     }
 
     #[test]

@@ -68,6 +68,7 @@ fn library(frame: &mut Frame, model: &Model, area: Rect) {
             BuildState::NotBuilt => ("not built".to_string(), "-".to_string()),
             BuildState::Building => (gauge(model.progress.get(&item.name)), "-".to_string()),
             BuildState::Built(t) => ("built".to_string(), t.clone()),
+            BuildState::Changed(t) => ("changed since built".to_string(), t.clone()),
             BuildState::Failed(e) => (format!("failed: {e}"), "-".to_string()),
         };
         let badge = if measured != "-" && measured != declared { format!("{measured} (differs)") } else { measured };
