@@ -94,6 +94,10 @@ pub struct SynthArgs {
     /// Histogram matching strength, 0 (off) to 10.
     #[arg(long, default_value_t = 1.0)]
     pub histogram: f32,
+    /// How much the best-matching neighbourhoods dominate the blend, 0 to 16: a prediction
+    /// weighs distance^-power; lower blends more, softer (default: 6; 1.2 with --layered).
+    #[arg(long)]
+    pub blend_power: Option<f32>,
     /// k-coherence candidates per neighbour, 1 to 32 (more: better matches, slower).
     #[arg(long, default_value_t = 6)]
     pub coherence: usize,
@@ -141,6 +145,9 @@ fn check_values(args: &SynthArgs) -> Result<[usize; 3]> {
         within("--tolerance", args.tolerance, SynthParams::TOLERANCE.0, SynthParams::TOLERANCE.1)?;
         within("--histogram", args.histogram, SynthParams::HISTOGRAM.0, SynthParams::HISTOGRAM.1)?;
         within("--coherence", args.coherence, SynthParams::COHERENCE.0, SynthParams::COHERENCE.1)?;
+        if let Some(power) = args.blend_power {
+            within("--blend-power", power, SynthParams::BLEND_POWER.0, SynthParams::BLEND_POWER.1)?;
+        }
         within("--pca-dims", args.pca_dims, SynthParams::PCA_DIMS.0, SynthParams::PCA_DIMS.1)?;
         within("--pca-variance", args.pca_variance, SynthParams::PCA_VARIANCE.0, SynthParams::PCA_VARIANCE.1)?;
         within("--depth-weight", args.depth_weight, LayeredParams::DEPTH_WEIGHT.0, LayeredParams::DEPTH_WEIGHT.1)?;
@@ -179,6 +186,7 @@ pub fn run(args: &SynthArgs) -> Result<()> {
         max_iterations: args.iterations,
         finest_iterations: args.finest_iterations,
         histogram_strength: args.histogram,
+        blend_power: args.blend_power,
         tolerance: args.tolerance,
         coherence: args.coherence,
         max_pca_dims: args.pca_dims,

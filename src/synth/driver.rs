@@ -1,6 +1,14 @@
 //! The multi-resolution loop: prepare exemplar pyramids, initialize the coarsest
 //! volume, then per level {search, optimize} until converged, and upsample.
 //!
+//! Contrast per band: after each blend of a homogeneous finer level, only the detail the
+//! level adds (the volume minus its own coarser version grown back) takes the histogram
+//! of the exemplars' detail band; the layout the coarser levels made stays. An exact
+//! transfer of the whole volume would stretch that layout, the only variation a soft
+//! blend leaves, to the exemplar's full contrast: large blobs where the photo has none
+//! (docs/synthesis.md, "The blur, measured"). The finest level ends with one exact
+//! transfer of the whole volume, so its colour distribution is the exemplars'.
+//!
 //! A finer level takes the coarser volume's colours (interpolated on the sample grid the
 //! exemplar pyramid uses: coarse voxel i at fine voxel 2i) but not its matches. Doubled
 //! matches (each coarse match predicting a 2x2 block of fine ones) lock the finer level
@@ -67,6 +75,12 @@ pub fn run(job: &Job, params: &SynthParams, seed: u64, progress: &dyn Progress) 
         };
         let mut previous = f64::INFINITY;
         let pooled = pooled_colours(&ex);
+        let by_band = level > 0 && job.init == Init::Random;
+        let detail = by_band.then(|| detail_band(&ex, &level_exemplars(&pyramids, level - 1), grid.channels));
+        let power = params.blend_power.unwrap_or(match job.init {
+            Init::Random => SynthParams::HOMOGENEOUS_BLEND_POWER,
+            Init::ByDepth => SynthParams::LAYERED_BLEND_POWER,
+        });
         let iterations = params.iterations_at(level);
         for iteration in 0..iterations {
             if progress.cancelled() {
@@ -82,13 +96,15 @@ pub fn run(job: &Job, params: &SynthParams, seed: u64, progress: &dyn Progress) 
             matches = found;
             let stage = format!("level {}/{}, iteration {}", level + 1, levels.len(), iteration + 1);
             progress.update(&format!("{stage}: searched"), (done / total_work) as f32);
-            grid.data = optimize(&grid, &matches, ex, &histograms(&ex, params));
+            grid.data = optimize(&grid, &matches, ex, &histograms(&ex, params), power);
             if params.histogram_strength > 0.0 {
                 let first = ex.iter().flatten().next().expect("at least one axis is searched");
-                if job.init == Init::ByDepth {
-                    transfer_histograms_by_depth(&mut grid.data, grid.dims, grid.channels, &first.colours);
-                } else {
-                    transfer_histograms(&mut grid.data, grid.channels, &pooled);
+                match (&detail, job.init) {
+                    (Some(detail), _) => transfer_detail(&mut grid, detail),
+                    (None, Init::ByDepth) => {
+                        transfer_histograms_by_depth(&mut grid.data, grid.dims, grid.channels, &first.colours)
+                    }
+                    (None, Init::Random) => transfer_histograms(&mut grid.data, grid.channels, &pooled),
                 }
             }
             done += work[level];
@@ -99,6 +115,9 @@ pub fn run(job: &Job, params: &SynthParams, seed: u64, progress: &dyn Progress) 
                 break;
             }
             previous = mean;
+        }
+        if by_band && level + 1 == levels.len() && params.histogram_strength > 0.0 {
+            transfer_histograms(&mut grid.data, grid.channels, &pooled);
         }
         progress.level_done(level + 1, levels.len(), grid.dims, grid.channels, &grid.data);
         state = Some((grid, matches));
@@ -171,25 +190,71 @@ fn histograms(ex: &[Option<&Prepared>; 3], params: &SynthParams) -> Histograms {
     Histograms { bins: params.histogram_bins, strength: params.histogram_strength, target }
 }
 
+/// The distinct exemplars of a level (axes sharing an image share it).
+fn distinct<'a>(ex: &[Option<&'a Prepared>; 3]) -> Vec<&'a Prepared> {
+    let mut out: Vec<&Prepared> = Vec::new();
+    for e in ex.iter().flatten() {
+        if !out.iter().any(|d| std::ptr::eq(*d, *e)) {
+            out.push(e);
+        }
+    }
+    out
+}
+
 /// The colour distribution the volume should have: every distinct exemplar of the level
 /// counts equally (each contributes the same number of quantiles per channel), so Ey and Ez
 /// weigh as much as Ex whatever their sizes. One exemplar gives its own pixels.
 fn pooled_colours(ex: &[Option<&Prepared>; 3]) -> Vec<f32> {
-    let mut distinct: Vec<&Prepared> = Vec::new();
-    for e in ex.iter().flatten() {
-        if !distinct.iter().any(|d| std::ptr::eq(*d, *e)) {
-            distinct.push(e);
-        }
+    let samples: Vec<Vec<f32>> = distinct(ex).iter().map(|e| e.colours.clone()).collect();
+    pooled(samples, ex.iter().flatten().next().map_or(1, |e| e.channels))
+}
+
+/// The distribution of the detail band a finer level adds: per distinct exemplar, its
+/// pixels minus its coarser level grown back on the pyramid's sample grid, pooled as
+/// [`pooled_colours`] pools colours.
+fn detail_band(ex: &[Option<&Prepared>; 3], coarser: &[Option<&Prepared>; 3], channels: usize) -> Vec<f32> {
+    let fine = distinct(ex);
+    let coarse = distinct(coarser);
+    let samples = fine
+        .iter()
+        .zip(&coarse)
+        .map(|(f, k)| {
+            let small = as_volume([k.width, k.height, 1], channels, k.colours.clone());
+            let grown = upsample_on_samples(&small, [f.width, f.height, 1], Edge::Clamp)
+                .expect("an exemplar level fits the budget")
+                .into_data();
+            f.colours.iter().zip(&grown).map(|(a, b)| a - b).collect()
+        })
+        .collect();
+    pooled(samples, channels)
+}
+
+/// Transfer the histogram of the volume's detail band (the volume minus itself shrunk and
+/// grown back) to `detail`, keeping the layout underneath.
+fn transfer_detail(grid: &mut Grid, detail: &[f32]) {
+    let volume = as_volume(grid.dims, grid.channels, grid.data.clone());
+    let layout = downsample(&volume, edge(grid.wrap))
+        .and_then(|small| upsample_on_samples(&small, grid.dims, edge(grid.wrap)))
+        .expect("a smaller volume fits the budget")
+        .into_data();
+    let mut band: Vec<f32> = grid.data.iter().zip(&layout).map(|(v, l)| v - l).collect();
+    transfer_histograms(&mut band, grid.channels, detail);
+    for ((out, l), b) in grid.data.iter_mut().zip(&layout).zip(&band) {
+        *out = l + b;
     }
-    if distinct.len() == 1 {
-        return distinct[0].colours.clone();
+}
+
+/// Samples of several sources pooled so that each counts equally: as many quantiles per
+/// channel from each (the largest source's count). One source is returned as it is.
+fn pooled(mut samples: Vec<Vec<f32>>, channels: usize) -> Vec<f32> {
+    if samples.len() == 1 {
+        return samples.remove(0);
     }
-    let channels = distinct[0].channels;
-    let per = distinct.iter().map(|e| e.colours.len() / channels).max().unwrap_or(1);
-    let mut pooled = vec![0.0; distinct.len() * per * channels];
+    let per = samples.iter().map(|s| s.len() / channels).max().unwrap_or(1);
+    let mut pooled = vec![0.0; samples.len() * per * channels];
     for c in 0..channels {
-        for (k, e) in distinct.iter().enumerate() {
-            let mut sorted: Vec<f32> = e.colours.iter().skip(c).step_by(channels).copied().collect();
+        for (k, e) in samples.iter().enumerate() {
+            let mut sorted: Vec<f32> = e.iter().skip(c).step_by(channels).copied().collect();
             sorted.sort_by(f32::total_cmp);
             for q in 0..per {
                 let at = ((q as f64 + 0.5) / per as f64 * sorted.len() as f64) as usize;

@@ -1,6 +1,7 @@
 //! The optimization phase (thesis Fig. 4.5): every voxel becomes the weighted blend of
 //! what the exemplar neighbourhoods matched around it predict for it. The weight is
-//! `d^-1.2` (one IRLS step for the robust exponent r = 0.8), divided by
+//! `d^-power` (power 1.2: one IRLS step for Kopf's robust exponent r = 0.8; homogeneous
+//! synthesis uses 6, so the best-matching neighbourhoods decide), divided by
 //! `1 + strength * excess`, where `excess` sums, over channels, how much the colour's
 //! histogram bin is over-represented in the volume compared with the exemplars
 //! (histogram matching, Fig. 4.6). Each voxel is computed from the previous state
@@ -41,14 +42,20 @@ pub fn bin(v: f32, bins: usize) -> usize {
 }
 
 /// One optimization pass; returns the new samples.
-pub fn optimize(grid: &Grid, matches: &[Matches; 3], exemplars: [Option<&Prepared>; 3], hist: &Histograms) -> Vec<f32> {
+pub fn optimize(
+    grid: &Grid,
+    matches: &[Matches; 3],
+    exemplars: [Option<&Prepared>; 3],
+    hist: &Histograms,
+    power: f32,
+) -> Vec<f32> {
     let current = densities(&grid.data, grid.channels, hist.bins);
     let weighted: Vec<Vec<f32>> =
         exemplars.iter().map(|ex| ex.map(|ex| weighted_pixels(ex, &current, hist)).unwrap_or_default()).collect();
     // Match pixel and blending weight side by side: one memory access per prediction.
     let packed: Vec<Vec<(u32, f32)>> = matches
         .iter()
-        .map(|m| m.pixel.iter().zip(&m.dist).map(|(p, d)| (*p, (d + 1e-3).powf(-1.2))).collect())
+        .map(|m| m.pixel.iter().zip(&m.dist).map(|(p, d)| (*p, (d + 1e-3).powf(-power))).collect())
         .collect();
     let planes: Vec<Option<PlaneView>> = (0..3)
         .map(|axis| exemplars[axis].map(|ex| PlaneView::new(grid, ex, &packed[axis], &weighted[axis], axis)))
@@ -315,7 +322,7 @@ mod tests {
         let m = Matches { pixel, dist: vec![0.1; gw * gh] };
         let matches = [Matches::default(), Matches::default(), m];
         let hist = Histograms { bins: 8, strength: 0.0, target: vec![vec![1.0; 8]] };
-        let out = optimize(&grid, &matches, [None, None, Some(&ex)], &hist);
+        let out = optimize(&grid, &matches, [None, None, Some(&ex)], &hist, 1.2);
         for y in 0..gh {
             for x in 0..gw {
                 assert!((out[y * gw + x] - data[(y + oy) * w + x + ox]).abs() < 1e-6, "voxel ({x}, {y})");

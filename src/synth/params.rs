@@ -28,6 +28,11 @@ pub struct SynthParams {
     pub histogram_bins: usize,
     /// Histogram matching strength; 0 switches it off (1).
     pub histogram_strength: f32,
+    /// How much the best-matching neighbourhoods dominate the blend: a prediction weighs
+    /// `distance^-power`. `None`: 6 for homogeneous synthesis, whose finer levels otherwise
+    /// average disagreeing predictions into soft blobs (docs/synthesis.md), and 1.2 for
+    /// layered synthesis (Kopf's robust exponent r = 0.8, which keeps its layers smooth).
+    pub blend_power: Option<f32>,
     /// Wrap around so the output tiles (true). Layered volumes never wrap along depth.
     pub tileable: bool,
     /// Voxel budget in bytes for the output.
@@ -52,6 +57,7 @@ impl Default for SynthParams {
             coherence: 6,
             histogram_bins: 32,
             histogram_strength: 1.0,
+            blend_power: None,
             tileable: true,
             budget_bytes: crate::volume::DEFAULT_BUDGET_BYTES,
             start: None,
@@ -94,6 +100,12 @@ impl SynthParams {
     pub const TOLERANCE: (f32, f32) = (0.0, 1.0);
     /// Allowed histogram matching strengths.
     pub const HISTOGRAM: (f32, f32) = (0.0, 10.0);
+    /// Allowed blend powers.
+    pub const BLEND_POWER: (f32, f32) = (0.0, 16.0);
+    /// The blend power of homogeneous synthesis unless one is given.
+    pub const HOMOGENEOUS_BLEND_POWER: f32 = 6.0;
+    /// The blend power of layered synthesis unless one is given (Kopf's r = 0.8).
+    pub const LAYERED_BLEND_POWER: f32 = 1.2;
     /// Allowed longest exemplar sides when exemplars are shrunk first, in pixels.
     pub const EXEMPLAR_SIDE: (usize, usize) = (8, 4096);
 
@@ -109,6 +121,9 @@ impl SynthParams {
         within("histogram bins", self.histogram_bins, (2, 256))?;
         within("histogram strength", self.histogram_strength, Self::HISTOGRAM)?;
         within("tolerance", self.tolerance, Self::TOLERANCE)?;
+        if let Some(power) = self.blend_power {
+            within("blend power", power, Self::BLEND_POWER)?;
+        }
         crate::volume::check_size(self.size, channels, self.budget_bytes).map(|_| ())
     }
 
