@@ -93,9 +93,9 @@ fn build_makes_the_default_library() {
     let run = solidtex(&["build", manifest, "-o", &out]);
     assert!(run.status.success(), "{}", stderr(&run));
     assert!(stderr(&run).contains("built  wood 64x64x64"), "{}", stderr(&run));
-    assert!(stderr(&run).contains("7 built, 0 cached, 0 failed"), "{}", stderr(&run));
+    assert!(stderr(&run).contains("10 built, 0 cached, 0 failed"), "{}", stderr(&run));
     let names = listing(&dir.path().join("lib"));
-    for name in ["marble", "strata", "wood", "kiwi", "carrot", "trunk"] {
+    for name in ["marble", "strata", "wood", "kiwi", "carrot", "trunk", "gravel", "grass", "brick"] {
         assert!(names.contains(&format!("{name}.exr")) && names.contains(&format!("{name}.sheet.png")), "{names:?}");
     }
     for extra in ["marble-synth.mask.exr", "marble-synth.nrrd", "kiwi.masks", "report.md", "report.html"] {
@@ -104,6 +104,16 @@ fn build_makes_the_default_library() {
     let strata = read_volume(&dir.path().join("lib/strata.exr"), 1 << 30).unwrap();
     assert_eq!(strata.meta.texture_type, Some(solidtex::TextureType::T1b));
     assert_eq!(strata.meta.get("name"), Some("strata"));
+    // The gravel solid is as sharp as its photo and its stones about their size.
+    let photo = concat!(env!("CARGO_MANIFEST_DIR"), "/exemplars/gravel_photo.png");
+    let gravel = at(dir.path(), "lib/gravel.exr");
+    let run = solidtex(&["quality", &gravel, "--exemplar", photo, "--max-exemplar", "128", "--json"]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let report: serde_json::Value = serde_json::from_slice(&run.stdout).unwrap();
+    for axis in report["sharpness"].as_array().unwrap() {
+        let (gradient, length) = (axis["gradient_ratio"].as_f64().unwrap(), axis["length_ratio"].as_f64().unwrap());
+        assert!((0.8..=1.2).contains(&gradient) && length <= 1.5, "{axis}");
+    }
 }
 
 #[test]
