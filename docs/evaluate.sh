@@ -28,13 +28,19 @@ import json,sys
 r=json.loads(sys.argv[1])
 ratios=' '.join('%s %.2f' % (a['axis'], a['ratio']) for a in r['axes'])
 hist=max(h['distance'] for h in r['histograms'])
-print('%-12s %6.2fs  ratio %s  hist %.3f  %s' % (sys.argv[2], float(sys.argv[3]), ratios, hist, sys.argv[4]))
+grad=[a['gradient_ratio'] for a in r['sharpness']]
+length=[a['length_ratio'] for a in r['sharpness']]
+sharp='gradient %.2f-%.2f  length %.2f-%.2f' % (min(grad), max(grad), min(length), max(length))
+print('%-12s %6.2fs  ratio %s  hist %.3f  %s  %s' % (sys.argv[2], float(sys.argv[3]), ratios, hist, sharp, sys.argv[4]))
 " "$q" "$name" "$took" "$extra"
 }
 row gravel skimage_gravel.png homogeneous
+row grass skimage_grass.png homogeneous
+row brick skimage_brick.png homogeneous
 row marble gimp_marble1.png homogeneous
 row granite gimp_granite1.png homogeneous
 row pebbles sh3d_pebbles.png homogeneous
+row coffee gimp_java_coffee_beans.png homogeneous
 row wood gimp_wood1.png homogeneous
 row strata stk_rockStrata_a_512.png layered
 row cliff stk_cliff_layered_512.png layered
