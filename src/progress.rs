@@ -10,6 +10,10 @@ pub trait Progress: Sync {
         false
     }
 
+    /// Something the user should know that does not stop the work (e.g. fewer seeds placed
+    /// than asked). Front ends show it where they show messages. Default: ignore.
+    fn warn(&self, _message: &str) {}
+
     /// A level of multi-resolution work finished: `level` of `levels` (from 1), its samples
     /// (`dims`, `channels` per voxel, x fastest), e.g. to show a preview. Default: ignore.
     fn level_done(&self, _level: usize, _levels: usize, _dims: [usize; 3], _channels: usize, _data: &[f32]) {}

@@ -276,6 +276,10 @@ impl crate::progress::Progress for LineProgress<'_> {
         }
     }
 
+    fn warn(&self, message: &str) {
+        eprintln!("warning: {}: {message}", self.name);
+    }
+
     fn level_done(&self, level: usize, levels: usize, dims: [usize; 3], channels: usize, data: &[f32]) {
         if !self.enabled {
             return;

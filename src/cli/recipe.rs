@@ -30,7 +30,7 @@ pub fn make_with(entry: &Entry, progress: &dyn crate::progress::Progress) -> Res
         Source::Load(path) => io::read_volume(path, io::budget_from_env()?)?,
     };
     for step in &entry.steps {
-        apply(step, &mut volume)?;
+        apply(step, &mut volume, progress)?;
     }
     if entry.texture_type.is_some() {
         volume.meta.texture_type = entry.texture_type;
@@ -44,7 +44,8 @@ pub fn make_with(entry: &Entry, progress: &dyn crate::progress::Progress) -> Res
 /// A quick, low-resolution build of exemplar `name` from manifest `text` (for the editor's
 /// live preview): procedural and synthesized sizes are capped at 32 and 24 voxels, sweeps at
 /// 32 voxels along their axis; steps and masks apply as in the real build, exports do not.
-pub fn preview(manifest: &Path, name: &str, text: &str) -> Result<Volume> {
+/// Returns the volume and the warnings the build gave (for a status line, not stderr).
+pub fn preview(manifest: &Path, name: &str, text: &str) -> Result<(Volume, Vec<String>)> {
     let folder = manifest.parent().unwrap_or(Path::new("."));
     let plan = crate::io::manifest::parse_plan(text, folder)?;
     let mut entry = plan
@@ -64,7 +65,21 @@ pub fn preview(manifest: &Path, name: &str, text: &str) -> Result<Volume> {
     if cap > 0 {
         entry.dims = entry.dims.map(|d| d.map(|x| x.min(cap)));
     }
-    make(&entry)
+    let warnings = Warnings::default();
+    let volume = make_with(&entry, &warnings)?;
+    Ok((volume, warnings.0.into_inner().unwrap_or_else(|e| e.into_inner())))
+}
+
+/// Progress that keeps the warnings and ignores the rest.
+#[derive(Default)]
+struct Warnings(std::sync::Mutex<Vec<String>>);
+
+impl crate::progress::Progress for Warnings {
+    fn update(&self, _stage: &str, _fraction: f32) {}
+
+    fn warn(&self, message: &str) {
+        self.0.lock().unwrap_or_else(|e| e.into_inner()).push(message.to_string());
+    }
 }
 
 fn synthesized(spec: &SynthSpec, size: [usize; 3], seed: u64, none: &dyn crate::progress::Progress) -> Result<Volume> {
@@ -167,7 +182,7 @@ fn planned(w: usize, h: usize, spec: &SweepSpec) -> [usize; 3] {
     d
 }
 
-fn apply(step: &Step, volume: &mut Volume) -> Result<()> {
+fn apply(step: &Step, volume: &mut Volume, progress: &dyn crate::progress::Progress) -> Result<()> {
     match step {
         Step::Stamp { mesh, placement, colour } => {
             let seed = super::handmade::read_seed(mesh)?;
@@ -181,11 +196,11 @@ fn apply(step: &Step, volume: &mut Volume) -> Result<()> {
             let params = Scatter { count: *count, region, scale: *scale, colour: *colour, attempts: 200 };
             let done = stamp::scatter(volume, &shape, &params, *seed).map_err(|e| e.in_file(mesh))?;
             if done.placed.len() < *count {
-                eprintln!(
-                    "warning: placed {} of {count} seeds from {}: no room for the rest",
+                progress.warn(&format!(
+                    "placed {} of {count} seeds from {}: no room for the rest",
                     done.placed.len(),
                     mesh.display()
-                );
+                ));
             }
         }
         Step::Blur { at, radius, strength } => {

@@ -23,7 +23,7 @@ use super::depth;
 use super::exemplar::{PrepareOptions, Prepared};
 use super::grid::Grid;
 use super::knn::KdTree;
-use super::optimize::{Histograms, densities, optimize, transfer_histograms, transfer_histograms_by_depth};
+use super::optimize::{Histograms, densities, optimize, transfer_histograms_by_depth, transfer_joint};
 use super::params::SynthParams;
 use super::search::{Matches, SearchSetup, pass_seed, search};
 use crate::error::{Error, Result};
@@ -31,6 +31,10 @@ use crate::noise::hash3;
 use crate::progress::Progress;
 use crate::volume::{Edge, Image2d, Volume, downsample, upsample_on_samples};
 use rayon::prelude::*;
+
+/// Rounds of the joint colour transfer (each along the axes of one rotation of colour
+/// space; the last along the channels' own axes).
+const JOINT_ROUNDS: usize = 8;
 
 /// How the coarsest volume starts.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -104,7 +108,7 @@ pub fn run(job: &Job, params: &SynthParams, seed: u64, progress: &dyn Progress) 
                     (None, Init::ByDepth) => {
                         transfer_histograms_by_depth(&mut grid.data, grid.dims, grid.channels, &first.colours)
                     }
-                    (None, Init::Random) => transfer_histograms(&mut grid.data, grid.channels, &pooled),
+                    (None, Init::Random) => transfer_joint(&mut grid.data, grid.channels, &pooled, JOINT_ROUNDS),
                 }
             }
             done += work[level];
@@ -117,7 +121,7 @@ pub fn run(job: &Job, params: &SynthParams, seed: u64, progress: &dyn Progress) 
             previous = mean;
         }
         if by_band && level + 1 == levels.len() && params.histogram_strength > 0.0 {
-            transfer_histograms(&mut grid.data, grid.channels, &pooled);
+            transfer_joint(&mut grid.data, grid.channels, &pooled, JOINT_ROUNDS);
         }
         progress.level_done(level + 1, levels.len(), grid.dims, grid.channels, &grid.data);
         state = Some((grid, matches));
@@ -238,7 +242,7 @@ fn transfer_detail(grid: &mut Grid, detail: &[f32]) {
         .expect("a smaller volume fits the budget")
         .into_data();
     let mut band: Vec<f32> = grid.data.iter().zip(&layout).map(|(v, l)| v - l).collect();
-    transfer_histograms(&mut band, grid.channels, detail);
+    transfer_joint(&mut band, grid.channels, detail, JOINT_ROUNDS);
     for ((out, l), b) in grid.data.iter_mut().zip(&layout).zip(&band) {
         *out = l + b;
     }

@@ -88,14 +88,10 @@ pub fn optimize(
     out
 }
 
-/// Exact per-channel histogram transfer: the k-th smallest volume sample takes the value
-/// of the same quantile of the exemplar samples (ties broken by position, so the result
-/// is deterministic). Keeps the order of values, restores the exemplar's contrast.
-pub fn transfer_histograms(data: &mut [f32], channels: usize, exemplar: &[f32]) {
-    transfer_channels(data, channels, exemplar, 0..channels);
-}
-
-/// The exact transfer of [`transfer_histograms`] for the channels in `which`.
+/// Exact per-channel histogram transfer of the channels in `which`: the k-th smallest
+/// volume sample takes the value of the same quantile of the exemplar samples (ties broken
+/// by position, so the result is deterministic). Keeps the order of values, restores the
+/// exemplar's contrast.
 fn transfer_channels(data: &mut [f32], channels: usize, exemplar: &[f32], which: std::ops::Range<usize>) {
     let count = data.len() / channels;
     let targets = exemplar.len() / channels;
@@ -112,6 +108,67 @@ fn transfer_channels(data: &mut [f32], channels: usize, exemplar: &[f32], which:
             data[(key as u32) as usize * channels + c] = target[q.min(targets - 1)];
         }
     }
+}
+
+/// Joint colour transfer (Pitié's iterative distribution transfer, a sliced optimal
+/// transport): `rounds` times, along every axis of a pseudo-random rotation of colour
+/// space, the volume's projections take the same quantiles of the exemplar's projections
+/// (an exact 1D transfer) and each sample moves along that axis by the difference. A
+/// per-channel transfer maps every channel alone, so a voxel blended from red and green
+/// can come out yellow or black, colours the exemplar never shows; moving along rotating
+/// axes matches the distribution of whole colours. One channel: the exact transfer.
+pub fn transfer_joint(data: &mut [f32], channels: usize, exemplar: &[f32], rounds: usize) {
+    if channels == 1 {
+        transfer_channels(data, 1, exemplar, 0..1);
+        return;
+    }
+    let count = data.len() / channels;
+    let mut target = vec![0.0f32; exemplar.len() / channels];
+    let mut along = vec![0.0f32; count];
+    // Rounds count down so that the last one is along the channels' own axes: the
+    // per-channel histograms end up exact, after the joint rounds brought whole colours close.
+    for round in (0..rounds.max(1)).rev() {
+        for axis in rotation(channels, round as u64) {
+            let project = |px: &[f32]| px.iter().zip(&axis).map(|(v, a)| v * a).sum::<f32>();
+            for (t, px) in target.iter_mut().zip(exemplar.chunks_exact(channels)) {
+                *t = project(px);
+            }
+            for (p, px) in along.iter_mut().zip(data.chunks_exact(channels)) {
+                *p = project(px);
+            }
+            let mut moved = along.clone();
+            transfer_channels(&mut moved, 1, &target, 0..1);
+            for ((px, before), after) in data.chunks_exact_mut(channels).zip(&along).zip(&moved) {
+                for (v, a) in px.iter_mut().zip(&axis) {
+                    *v += (after - before) * a;
+                }
+            }
+        }
+    }
+}
+
+/// An orthonormal basis of `n` dimensions, pseudo-random but fixed for `round` (Gram-Schmidt
+/// on hashed directions); round 0 is the channels' own axes.
+fn rotation(n: usize, round: u64) -> Vec<Vec<f32>> {
+    let unit = |i: usize| -> Vec<f32> { (0..n).map(|j| f32::from(u8::from(i == j))).collect() };
+    let hashed = |i: usize| -> Vec<f32> {
+        (0..n).map(|j| (crate::noise::hash3(round, i as i64, j as i64, 11) % 20_001) as f32 / 10_000.0 - 1.0).collect()
+    };
+    let mut basis: Vec<Vec<f32>> = Vec::with_capacity(n);
+    for i in 0..n {
+        let first = if round == 0 { unit(i) } else { hashed(i) };
+        // A draw (nearly) inside the span so far is replaced by the first channel axis that is not.
+        let next = std::iter::once(first).chain((0..n).map(unit)).find_map(|mut v| {
+            for b in &basis {
+                let dot: f32 = v.iter().zip(b).map(|(x, y)| x * y).sum();
+                v.iter_mut().zip(b).for_each(|(x, y)| *x -= dot * y);
+            }
+            let norm = v.iter().map(|x| x * x).sum::<f32>().sqrt();
+            (norm > 1e-3).then(|| v.into_iter().map(|x| x / norm).collect::<Vec<f32>>())
+        });
+        basis.push(next.expect("n unit axes span n dimensions"));
+    }
+    basis
 }
 
 /// The bits of `v` as an integer that sorts like `f32::total_cmp`.
@@ -327,6 +384,41 @@ mod tests {
             for x in 0..gw {
                 assert!((out[y * gw + x] - data[(y + oy) * w + x + ox]).abs() < 1e-6, "voxel ({x}, {y})");
             }
+        }
+    }
+
+    /// Blends of red, green and blue voxels come back as colours the exemplar has: the
+    /// joint transfer leaves no voxel far from all three (a per-channel transfer made some
+    /// yellow or black), and every channel's histogram ends exact.
+    #[test]
+    fn the_joint_transfer_invents_no_colours() {
+        let palette = [[1.0f32, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+        let exemplar: Vec<f32> = (0..300).flat_map(|i| palette[i % 3]).collect();
+        // Voxels: pure colours and half-half blends of two of them, as a soft blend leaves.
+        let mut data: Vec<f32> = (0..600)
+            .flat_map(|i| {
+                let (a, b) = (palette[i % 3], palette[(i / 3) % 3]);
+                let t = if i % 2 == 0 { 0.5 } else { 0.9 };
+                [0, 1, 2].map(|c| t * a[c] + (1.0 - t) * b[c])
+            })
+            .collect();
+        let mut per_channel = data.clone();
+        transfer_channels(&mut per_channel, 3, &exemplar, 0..3);
+        transfer_joint(&mut data, 3, &exemplar, 8);
+        let off = |d: &[f32]| {
+            d.chunks_exact(3)
+                .filter(|px| {
+                    palette.iter().all(|p| p.iter().zip(*px).map(|(a, b)| (a - b) * (a - b)).sum::<f32>() > 0.25)
+                })
+                .count()
+        };
+        assert!(off(&per_channel) > 30, "the per-channel transfer invents colours here: {}", off(&per_channel));
+        assert_eq!(off(&data), 0, "the joint transfer invents none");
+        for c in 0..3 {
+            let mut got: Vec<f32> = data.iter().skip(c).step_by(3).copied().collect();
+            got.sort_by(f32::total_cmp);
+            let ones = got.iter().filter(|v| **v > 0.5).count();
+            assert_eq!(ones, 200, "channel {c}: a third of the voxels take its colour");
         }
     }
 

@@ -157,15 +157,26 @@ pub fn saved(model: &mut Model, result: Result<String, String>) {
     }
 }
 
-/// A preview arrived; older generations are dropped.
-pub fn previewed(model: &mut Model, generation: u64, result: Result<std::sync::Arc<crate::Volume>, String>) {
+/// A preview arrived; older generations are dropped. Its build's warnings go to the status
+/// line (never to the terminal under the screen).
+pub fn previewed(
+    model: &mut Model,
+    generation: u64,
+    result: Result<std::sync::Arc<crate::Volume>, String>,
+    warnings: Vec<String>,
+) {
     let Screen::Editor(editor) = &mut model.screen else { return };
     if generation != editor.generation {
         return;
     }
     editor.previewing = false;
     match result {
-        Ok(volume) => editor.preview = Some(volume),
+        Ok(volume) => {
+            editor.preview = Some(volume);
+            if !warnings.is_empty() {
+                model.status = format!("preview: {}", warnings.join("; "));
+            }
+        }
         Err(e) => model.status = format!("preview failed: {e}"),
     }
 }
@@ -277,8 +288,11 @@ mod tests {
         update(&mut m, Message::Saved(Ok(edited)));
         assert!(m.status.starts_with("saved"));
         let stale = std::sync::Arc::new(crate::Volume::new([2; 3], crate::Channel::rgb()).unwrap());
-        update(&mut m, Message::Previewed(1, Ok(stale)));
+        update(&mut m, Message::Previewed(1, Ok(stale.clone()), Vec::new()));
         assert!(editor(&m).preview.is_none(), "an old generation is dropped");
+        let current = editor(&m).generation;
+        update(&mut m, Message::Previewed(current, Ok(stale), vec!["placed 59 of 60 seeds".into()]));
+        assert!(editor(&m).preview.is_some() && m.status.contains("placed 59 of 60 seeds"), "{}", m.status);
         // the name is not edited here
         update(&mut m, Message::Up);
         update(&mut m, Message::Up);

@@ -55,8 +55,9 @@ pub enum Message {
     Save,
     /// The manifest was saved (or not).
     Saved(Result<String, String>),
-    /// A preview finished: the edit generation it belongs to, and the volume.
-    Previewed(u64, Result<Arc<Volume>, String>),
+    /// A preview finished: the edit generation it belongs to, the volume, and the
+    /// warnings its build gave.
+    Previewed(u64, Result<Arc<Volume>, String>, Vec<String>),
     /// Open the fill preview of the exemplar on screen.
     FillPreview,
     /// A fill preview finished.

@@ -129,9 +129,11 @@ fn start(effects: Vec<Effect>, model: &Model, send: &Sender<Message>) {
                 let _ = send.send(Message::Saved(result));
             }
             Effect::Preview { name, text, generation } => {
-                let result =
-                    crate::cli::preview_recipe(&manifest, &name, &text).map(Arc::new).map_err(|e| e.to_string());
-                let _ = send.send(Message::Previewed(generation, result));
+                let (result, warnings) = match crate::cli::preview_recipe(&manifest, &name, &text) {
+                    Ok((volume, warnings)) => (Ok(Arc::new(volume)), warnings),
+                    Err(e) => (Err(e.to_string()), Vec::new()),
+                };
+                let _ = send.send(Message::Previewed(generation, result, warnings));
             }
             Effect::CancelBuilds => cancel_builds(),
             Effect::LoadMasks(name) => {

@@ -44,7 +44,7 @@ pub fn update(model: &mut Model, message: Message) -> Vec<Effect> {
         Message::Redo => return editing::undo(model, true),
         Message::Save => return editing::save(model),
         Message::Saved(result) => editing::saved(model, result),
-        Message::Previewed(generation, result) => editing::previewed(model, generation, result),
+        Message::Previewed(generation, result, warnings) => editing::previewed(model, generation, result, warnings),
         Message::FillPreview => return editing::open_fill(model),
         Message::Filled(name, result) => editing::filled(model, &name, result),
         Message::MovePlane(step) => editing::plane(model, None, step),
@@ -401,7 +401,7 @@ mod tests {
         update(&mut m, Message::Down);
         update(&mut m, Message::Quit);
         assert!(!m.quit, "another key in between asks again");
-        update(&mut m, Message::Previewed(99, Err("late".into())));
+        update(&mut m, Message::Previewed(99, Err("late".into()), Vec::new()));
         update(&mut m, Message::Quit);
         assert!(m.quit, "the second q quits; a worker's result in between does not reset the question");
         let mut m = edited();

@@ -230,3 +230,14 @@ fn progress_lines_report_each_synthesis_level_with_a_preview() {
     let quiet = solidtex(&["build", &manifest.to_string_lossy(), "-o", &out, "--force"]);
     assert!(!stderr(&quiet).contains("progress\t"), "no progress lines unless asked");
 }
+
+/// The editor's preview hands its build's warnings back instead of printing them (printed,
+/// they land over the terminal UI): the kiwi's 60 seeds do not all fit its 32-voxel preview.
+#[test]
+fn a_preview_returns_its_warnings() {
+    let manifest = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/exemplars/library.toml"));
+    let text = std::fs::read_to_string(manifest).unwrap();
+    let (volume, warnings) = solidtex::cli::preview_recipe(manifest, "kiwi", &text).unwrap();
+    assert!(volume.dims().iter().any(|d| *d <= 32), "a preview is small: {:?}", volume.dims());
+    assert!(warnings.iter().any(|w| w.contains("seeds") && w.contains("no room")), "{warnings:?}");
+}
