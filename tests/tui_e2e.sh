@@ -38,8 +38,12 @@ sleep 0.5
 tmux send-keys -t "$session" f
 wait_for "fill preview: marble" 5
 wait_for "patches" 60
-tmux send-keys -t "$session" z Right
-wait_for "cut across z" 5
+tmux send-keys -t "$session" PageUp z
+wait_for "cut across z at +0.00" 5
+tmux send-keys -t "$session" Right
+wait_for "cut across z at +0.05" 5
+tmux send-keys -t "$session" Escape
+wait_for "back to marble" 5
 tmux send-keys -t "$session" Escape
 wait_for "solidtex library" 5
 # recipe editor: size 64 -> 32 (validated, previewed), saved with the comments kept

@@ -185,7 +185,8 @@ pub fn previewed(
 pub fn open_fill(model: &mut Model) -> Vec<Effect> {
     let Screen::Exemplar(view) = &model.screen else { return Vec::new() };
     let name = view.name.clone();
-    model.screen = Screen::Fill(FillView { name: name.clone(), filled: None, axis: Axis::X, offset: 0.0 });
+    let from = Some(Box::new(view.clone()));
+    model.screen = Screen::Fill(FillView { name: name.clone(), filled: None, axis: Axis::X, offset: 0.0, from });
     model.status = format!("filling a shape with {name}...");
     vec![Effect::Fill(name)]
 }
@@ -211,8 +212,10 @@ pub fn filled(model: &mut Model, name: &str, result: Result<std::sync::Arc<super
 /// Move or turn the cut plane.
 pub fn plane(model: &mut Model, axis: Option<Axis>, step: f32) {
     if let Screen::Fill(view) = &mut model.screen {
-        if let Some(axis) = axis {
+        if let Some(axis) = axis.filter(|a| *a != view.axis) {
+            // A new axis starts with the plane through the model's centre.
             view.axis = axis;
+            view.offset = 0.0;
         }
         view.offset = (view.offset + step).clamp(-0.98, 0.98);
     }

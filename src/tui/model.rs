@@ -161,6 +161,8 @@ pub struct FillView {
     pub axis: Axis,
     /// Where the plane sits between the model's bounds, -1 to 1.
     pub offset: f32,
+    /// The exemplar view the preview was opened from, where Esc goes back to.
+    pub from: Option<Box<ExemplarView>>,
 }
 
 /// An action that loses unsaved work, asked for once and done on the second press.

@@ -123,6 +123,10 @@ fn back(model: &mut Model, asked: Option<Confirm>) -> Vec<Effect> {
     } else if let Some(what) = unsaved(model).filter(|_| asked != Some(Confirm::Leave)) {
         model.confirm = Some(Confirm::Leave);
         model.status = format!("unsaved {what}: s saves them, esc again leaves without saving");
+    } else if let Screen::Fill(super::model::FillView { from: Some(view), .. }) = &mut model.screen {
+        let view = std::mem::replace(view, Box::new(ExemplarView::new("")));
+        model.status = format!("back to {}", view.name);
+        model.screen = Screen::Exemplar(*view);
     } else {
         model.screen = Screen::Library;
     }
@@ -409,6 +413,28 @@ mod tests {
         assert!(matches!(m.screen, Screen::Editor(_)) && m.status.contains("esc again"), "{}", m.status);
         update(&mut m, Message::Cancel);
         assert!(matches!(m.screen, Screen::Library));
+    }
+
+    #[test]
+    fn the_fill_preview_centres_each_new_axis_and_esc_goes_back_to_the_exemplar() {
+        let mut m = model();
+        update(&mut m, Message::Open);
+        let v = Arc::new(Volume::new([8, 8, 8], Channel::rgb()).unwrap());
+        update(&mut m, Message::Loaded("a".into(), Ok(v)));
+        update(&mut m, Message::SelectAxis(Axis::Y));
+        assert_eq!(update(&mut m, Message::FillPreview), vec![Effect::Fill("a".into())]);
+        update(&mut m, Message::MovePlane(0.25));
+        update(&mut m, Message::SelectAxis(Axis::Z));
+        let Screen::Fill(f) = &m.screen else { panic!("the fill preview") };
+        assert_eq!((f.axis, f.offset), (Axis::Z, 0.0), "a new axis cuts through the centre");
+        update(&mut m, Message::MovePlane(0.05));
+        update(&mut m, Message::SelectAxis(Axis::Z));
+        let Screen::Fill(f) = &m.screen else { panic!("the fill preview") };
+        assert_eq!(f.offset, 0.05, "the same axis keeps its cut");
+        update(&mut m, Message::Back);
+        let Screen::Exemplar(view) = &m.screen else { panic!("back to the exemplar view, not the library") };
+        assert_eq!((view.name.as_str(), view.axis), ("a", Axis::Y));
+        assert!(view.volume.is_some(), "its volume is still loaded");
     }
 
     #[test]

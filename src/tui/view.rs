@@ -388,13 +388,15 @@ mod tests {
             filled: Some(Arc::new(filled)),
             axis: Axis::Z,
             offset: 0.0,
+            from: None,
         });
         let (text, buffer) = screen(&m, 80, 24);
-        assert!(text.contains("fill preview: marble  cut across z"), "{text}");
-        let painted = (0..80u16)
-            .flat_map(|x| (0..24u16).map(move |y| (x, y)))
-            .filter(|p| matches!(buffer[*p].fg, Color::Rgb(..)))
-            .count();
+        assert!(text.contains("fill preview: marble  cut across z at +0.00"), "{text}");
+        let cells: Vec<(u16, u16)> = (0..80u16).flat_map(|x| (0..24u16).map(move |y| (x, y))).collect();
+        let painted = cells.iter().filter(|p| matches!(buffer[**p].fg, Color::Rgb(..))).count();
         assert!(painted > 300, "{painted} cells of the cut");
+        // Half-blocks at the rim draw their inside half; the default colour never fills a half.
+        let rim = cells.iter().filter(|p| matches!(buffer[**p].symbol(), "▀" | "▄") && buffer[**p].fg == Color::Reset);
+        assert_eq!(rim.count(), 0, "a half-block whose coloured half is the terminal's default");
     }
 }

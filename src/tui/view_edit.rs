@@ -83,7 +83,10 @@ fn preview(frame: &mut Frame, editor: &Editor, area: Rect) {
 
 /// The fill preview: a cut through the filled shape.
 pub fn fill(frame: &mut Frame, view: &FillView, area: Rect) {
-    let title = format!(" fill preview: {}  cut across {} ", view.name, view.axis);
+    let title = format!(
+        " fill preview: {}  cut across {} at {:+.2} (-1 to 1 across the model) ",
+        view.name, view.axis, view.offset
+    );
     let block =
         Block::default().borders(Borders::ALL).title(title).title_bottom(" x/y/z cut axis  arrows move  esc back ");
     let inner = block.inner(area);
@@ -116,13 +119,15 @@ impl Widget for CutWidget<'_> {
         let x0 = area.x + (area.width.saturating_sub(cut.width as u16)) / 2;
         for cy in 0..(cut.height / 2).min(area.height as usize) {
             for cx in 0..cut.width.min(area.width as usize) {
-                let (top, bottom) = (px(cx, 2 * cy), px(cx, 2 * cy + 1));
-                if top.is_none() && bottom.is_none() {
-                    continue;
-                }
-                if let Some(cell) = buf.cell_mut((x0 + cx as u16, area.y + cy as u16)) {
-                    cell.set_symbol("▀").set_fg(top.unwrap_or(Color::Reset)).set_bg(bottom.unwrap_or(Color::Reset));
-                }
+                let Some(cell) = buf.cell_mut((x0 + cx as u16, area.y + cy as u16)) else { continue };
+                // A half outside the shape is the background: drawn with the other half's
+                // block, so the terminal's default foreground never shows at the rim.
+                match (px(cx, 2 * cy), px(cx, 2 * cy + 1)) {
+                    (Some(top), Some(bottom)) => cell.set_symbol("▀").set_fg(top).set_bg(bottom),
+                    (Some(top), None) => cell.set_symbol("▀").set_fg(top).set_bg(Color::Reset),
+                    (None, Some(bottom)) => cell.set_symbol("▄").set_fg(bottom).set_bg(Color::Reset),
+                    (None, None) => continue,
+                };
             }
         }
     }
