@@ -149,6 +149,10 @@ fn exemplar(frame: &mut Frame, view: &ExemplarView, area: Rect, mut graphics: Op
         let slice_area = block.inner(*panel);
         frame.render_widget(block, *panel);
         let Ok(full) = volume.slice(axis, view.index[k]) else { continue };
+        // Slices containing z are drawn with +z up, as on the contact sheet.
+        let up = axis != Axis::Z;
+        let full = if up { flipped(&full) } else { full };
+        let rows = full.height();
         let (image, ox, oy) = crop(&full, view.zoom);
         if let (Some(g), None) = (graphics.as_deref_mut(), &view.stamp) {
             let key = format!(
@@ -167,7 +171,8 @@ fn exemplar(frame: &mut Frame, view: &ExemplarView, area: Rect, mut graphics: Op
             let index = view.index[k];
             let seed = move |px: usize, py: usize| {
                 let mut v = [0usize; 3];
-                (v[k], v[a], v[b]) = (index, px + ox, py + oy);
+                let row = if up { rows - 1 - (py + oy) } else { py + oy };
+                (v[k], v[a], v[b]) = (index, px + ox, row);
                 outline.as_ref().is_some_and(|o| o.at(v[0], v[1], v[2]) > 0.5)
             };
             let overlay: Option<&dyn Fn(usize, usize) -> bool> =
@@ -175,6 +180,13 @@ fn exemplar(frame: &mut Frame, view: &ExemplarView, area: Rect, mut graphics: Op
             frame.render_widget(HalfBlocks { image: &image, channel: view.channel, overlay }, slice_area);
         }
     }
+}
+
+/// `image` upside down (row 0 last).
+fn flipped(image: &Image2d) -> Image2d {
+    let data = (0..image.height()).rev().flat_map(|y| (0..image.width()).flat_map(move |x| image.pixel(x, y).to_vec()));
+    Image2d::from_data(image.width(), image.height(), image.channels().to_vec(), data.collect())
+        .unwrap_or_else(|_| image.clone())
 }
 
 /// The middle `1/zoom` of `image` in each direction, and where it starts.
@@ -187,7 +199,9 @@ fn crop(image: &Image2d, zoom: usize) -> (Image2d, usize, usize) {
     (cropped, ox, oy)
 }
 
-/// A 2D image drawn with half-block characters, scaled to fit (nearest voxel).
+/// A 2D image drawn with half-block characters, scaled to fit: grown by repeating pixels,
+/// shrunk by averaging the pixels each half cell covers (point samples of a fine pattern
+/// such as marble veins alias into noise).
 pub struct HalfBlocks<'a> {
     /// The image.
     pub image: &'a Image2d,
@@ -208,16 +222,28 @@ impl Widget for HalfBlocks<'_> {
             0 => ColourMap::for_channels(self.image.channels()),
             k => ColourMap::Grey(k - 1),
         };
+        let (iw, ih) = (self.image.width(), self.image.height());
         let colour = |x: f32, y: f32| -> Option<Color> {
             let (px, py) = ((x / scale) as usize, (y / scale) as usize);
-            (px < self.image.width() && py < self.image.height()).then(|| {
-                let [r, g, b] = map.colour(self.image.pixel(px, py));
-                if self.overlay.is_some_and(|seed| seed(px, py)) {
-                    let tint = |c: u8, t: u8| ((c as u16 * 2 + t as u16 * 3) / 5) as u8;
-                    return Color::Rgb(tint(r, 255), tint(g, 220), tint(b, 0));
-                }
-                Color::Rgb(r, g, b)
-            })
+            if px >= iw || py >= ih {
+                return None;
+            }
+            // The pixels under this half cell: one when growing, a block when shrinking.
+            let (x1, y1) =
+                ((((x + 1.0) / scale) as usize).clamp(px + 1, iw), (((y + 1.0) / scale) as usize).clamp(py + 1, ih));
+            let (mut sum, mut seeded) = ([0u32; 3], false);
+            for (qx, qy) in (py..y1).flat_map(|qy| (px..x1).map(move |qx| (qx, qy))) {
+                let c = map.colour(self.image.pixel(qx, qy));
+                sum.iter_mut().zip(c).for_each(|(s, v)| *s += u32::from(v));
+                seeded |= self.overlay.is_some_and(|seed| seed(qx, qy));
+            }
+            let n = ((x1 - px) * (y1 - py)) as u32;
+            let [r, g, b] = sum.map(|s| (s / n) as u8);
+            if seeded {
+                let tint = |c: u8, t: u8| ((c as u16 * 2 + t as u16 * 3) / 5) as u8;
+                return Some(Color::Rgb(tint(r, 255), tint(g, 220), tint(b, 0)));
+            }
+            Some(Color::Rgb(r, g, b))
         };
         for cy in 0..area.height {
             for cx in 0..area.width {
@@ -338,6 +364,43 @@ mod tests {
         let (text, _) = screen(&m2, 80, 24);
         assert!(text.contains("size is missing") && text.contains("the manifest has 1 error(s)"), "{text}");
         assert!(text.contains("kiwi") && text.contains("marble"), "the valid exemplars stay listed: {text}");
+    }
+
+    /// Slices containing z have +z up, as on the contact sheet; a slice wider than its
+    /// panel is shrunk by averaging, so a fine checkerboard reads as grey, not as noise.
+    #[test]
+    fn slices_have_z_up_and_shrink_by_averaging() {
+        let volume = Volume::from_fn([64, 64, 64], Channel::rgb(), |x, y, z, o| {
+            let check = ((x + y) % 2) as f32;
+            o.copy_from_slice(&[z as f32 / 63.0, check, 1.0 - z as f32 / 63.0]);
+        })
+        .unwrap();
+        let mut m = model();
+        m.screen = Screen::Exemplar(ExemplarView {
+            volume: Some(Arc::new(volume)),
+            index: [32; 3],
+            ..ExemplarView::new("kiwi")
+        });
+        let (_, buffer) = screen(&m, 80, 24);
+        let rgb = |c: Color| match c {
+            Color::Rgb(r, g, b) => Some((r, g, b)),
+            _ => None,
+        };
+        // The XY panel (left third): green is the checkerboard, averaged to about half.
+        let greens: Vec<u8> = (1..26u16)
+            .flat_map(|x| (0..24u16).map(move |y| (x, y)))
+            .filter_map(|p| rgb(buffer[p].fg))
+            .map(|c| c.1)
+            .collect();
+        assert!(greens.len() > 100, "{} cells", greens.len());
+        let grey = greens.iter().filter(|g| (60..=195).contains(*g)).count();
+        assert!(grey * 10 >= greens.len() * 9, "{grey} of {} cells averaged", greens.len());
+        // The XZ and YZ panels (right two thirds): red (high z) on top, blue (low z) below.
+        let rows: Vec<u16> = (0..24u16).filter(|&y| (30..80u16).any(|x| rgb(buffer[(x, y)].fg).is_some())).collect();
+        let (top, bottom) = (rows[0], rows[rows.len() - 1]);
+        let (tr, _, tb) = rgb(buffer[(40, top)].fg).unwrap();
+        let (br, _, bb) = rgb(buffer[(40, bottom)].fg).unwrap();
+        assert!(tr > tb && bb > br, "top ({tr}, {tb}) is high z, bottom ({br}, {bb}) low z");
     }
 
     #[test]
