@@ -23,7 +23,7 @@ use super::depth;
 use super::exemplar::{PrepareOptions, Prepared};
 use super::grid::Grid;
 use super::knn::KdTree;
-use super::optimize::{Histograms, densities, optimize, transfer_histograms_by_depth, transfer_joint};
+use super::optimize::{Histograms, JOINT_ROUNDS, densities, optimize, transfer_histograms_by_depth, transfer_joint};
 use super::params::SynthParams;
 use super::search::{Matches, SearchSetup, pass_seed, search};
 use crate::error::{Error, Result};
@@ -31,10 +31,6 @@ use crate::noise::hash3;
 use crate::progress::Progress;
 use crate::volume::{Edge, Image2d, Volume, downsample, upsample_on_samples};
 use rayon::prelude::*;
-
-/// Rounds of the joint colour transfer (each along the axes of one rotation of colour
-/// space; the last along the channels' own axes).
-const JOINT_ROUNDS: usize = 8;
 
 /// How the coarsest volume starts.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
