@@ -43,8 +43,10 @@ pub fn make_with(entry: &Entry, progress: &dyn crate::progress::Progress) -> Res
 }
 /// A quick, low-resolution build of exemplar `name` from manifest `text` (for the editor's
 /// live preview): procedural and synthesized sizes are capped at 32 and 24 voxels, sweeps at
-/// 32 voxels along their axis; steps and masks apply as in the real build, exports do not.
-/// Returns the volume and the warnings the build gave (for a status line, not stderr).
+/// 32 voxels along their axis; an entry with steps is built at its full size, since its
+/// stamps, scatters and blurs are placed in the full volume's voxels. Masks and exports
+/// are not made. Returns the volume and the warnings the build gave (for a status line,
+/// not stderr).
 pub fn preview(manifest: &Path, name: &str, text: &str) -> Result<(Volume, Vec<String>)> {
     let folder = manifest.parent().unwrap_or(Path::new("."));
     let plan = crate::io::manifest::parse_plan(text, folder)?;
@@ -54,6 +56,7 @@ pub fn preview(manifest: &Path, name: &str, text: &str) -> Result<(Volume, Vec<S
         .find(|e| e.name == name)
         .ok_or_else(|| Error::invalid(format!("no exemplar named {name:?}")))?;
     let cap = match &mut entry.source {
+        _ if !entry.steps.is_empty() => 0,
         Source::Sweep(spec) => {
             spec.length = spec.length.min(32);
             entry.dims = None;

@@ -170,6 +170,7 @@ pub fn previewed(
         return;
     }
     editor.previewing = false;
+    editor.preview_error = result.as_ref().err().cloned();
     match result {
         Ok(volume) => {
             editor.preview = Some(volume);

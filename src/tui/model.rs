@@ -132,6 +132,8 @@ pub struct Editor {
     pub generation: u64,
     /// A preview is being made.
     pub previewing: bool,
+    /// Why the newest preview failed (the panel then shows the last good one, marked stale).
+    pub preview_error: Option<String>,
 }
 
 /// A filled preview model with the textures to cut it.

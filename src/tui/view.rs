@@ -416,10 +416,17 @@ mod tests {
             error: Some("size 0 is not allowed".into()),
             ..Default::default()
         });
-        let (screen, _) = screen(&m, 80, 24);
-        assert!(screen.contains("recipe: m [modified]"), "{screen}");
-        assert!(screen.contains("recipe = \"procedural:marble\"") && screen.contains("size = 0_"), "{screen}");
-        assert!(screen.contains("size 0 is not allowed") && screen.contains("s save"), "{screen}");
+        let (text, _) = screen(&m, 80, 24);
+        assert!(text.contains("recipe: m [modified]"), "{text}");
+        assert!(text.contains("recipe = \"procedural:marble\"") && text.contains("size = 0_"), "{text}");
+        assert!(text.contains("size 0 is not allowed") && text.contains("s save"), "{text}");
+        // A failed preview says so beside the last good picture.
+        let Screen::Editor(e) = &mut m.screen else { panic!("the editor") };
+        e.preview = Some(Arc::new(Volume::new([8; 3], Channel::rgb()).unwrap()));
+        e.preview_error = Some("stamp: outside the volume".into());
+        let (text, _) = screen(&m, 100, 30);
+        assert!(text.contains("preview FAILED") && text.contains("stale"), "{text}");
+        assert!(text.contains("stamp: outside the volume"), "{text}");
     }
 
     #[test]

@@ -66,10 +66,21 @@ fn field_lines(editor: &Editor, text: &str) -> Vec<Line<'static>> {
 }
 
 fn preview(frame: &mut Frame, editor: &Editor, area: Rect) {
-    let label = if editor.previewing { " preview (updating...) " } else { " preview (low resolution) " };
+    let label = match (&editor.preview_error, editor.previewing) {
+        (_, true) => " preview (updating...) ",
+        (Some(_), false) => " preview FAILED: the last good one, stale ",
+        (None, false) => " preview (low resolution) ",
+    };
     let block = Block::default().borders(Borders::LEFT).title(label);
-    let inner = block.inner(area);
+    let mut inner = block.inner(area);
     frame.render_widget(block, area);
+    if let Some(error) = &editor.preview_error {
+        let lines = 3.min(inner.height);
+        let [pictures, reason] = Layout::vertical([Constraint::Min(0), Constraint::Length(lines)]).areas(inner);
+        let text = Paragraph::new(error.as_str()).style(Style::new().fg(Color::Red)).wrap(Wrap { trim: true });
+        frame.render_widget(text, reason);
+        inner = pictures;
+    }
     let Some(volume) = &editor.preview else { return };
     let panels = Layout::vertical([Constraint::Ratio(1, 2); 2]).split(inner);
     let top = Layout::horizontal([Constraint::Ratio(1, 2); 2]).split(panels[0]);

@@ -232,12 +232,32 @@ fn progress_lines_report_each_synthesis_level_with_a_preview() {
 }
 
 /// The editor's preview hands its build's warnings back instead of printing them (printed,
-/// they land over the terminal UI): the kiwi's 60 seeds do not all fit its 32-voxel preview.
+/// they land over the terminal UI): 2000 kiwi seeds do not all find room.
 #[test]
 fn a_preview_returns_its_warnings() {
     let manifest = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/exemplars/library.toml"));
-    let text = std::fs::read_to_string(manifest).unwrap();
-    let (volume, warnings) = solidtex::cli::preview_recipe(manifest, "kiwi", &text).unwrap();
-    assert!(volume.dims().iter().any(|d| *d <= 32), "a preview is small: {:?}", volume.dims());
+    let text = std::fs::read_to_string(manifest).unwrap().replace("count = 60", "count = 2000");
+    let (_, warnings) = solidtex::cli::preview_recipe(manifest, "kiwi", &text).unwrap();
     assert!(warnings.iter().any(|w| w.contains("seeds") && w.contains("no room")), "{warnings:?}");
+}
+
+/// An entry with steps previews at its full size: a stamp at x = 40 lands inside the volume
+/// (a preview capped at 32 voxels refused it as outside).
+#[test]
+fn a_preview_keeps_stamps_beyond_its_cap() {
+    let manifest = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/exemplars/library.toml"));
+    let original = std::fs::read_to_string(manifest).unwrap();
+    let step =
+        "\n[[exemplar.steps]]\nstamp = \"kiwi_seed.obj\"\nat = \"40,32,32\"\nscale = \"8\"\ncolor = \"#000000\"\n";
+    let at = original.find("\n[[exemplar]]\nname = \"carrot\"").expect("the carrot follows the kiwi");
+    let text = format!("{}{step}{}", &original[..at], &original[at..]);
+    let (before, _) = solidtex::cli::preview_recipe(manifest, "kiwi", &original).unwrap();
+    let (after, _) = solidtex::cli::preview_recipe(manifest, "kiwi", &text).unwrap();
+    assert_eq!(after.dims(), before.dims());
+    let black = |v: &[f32]| v[..3].iter().all(|c| *c < 0.01);
+    let stamped = (30..50)
+        .flat_map(|x| (22..42).flat_map(move |y| (22..42).map(move |z| (x, y, z))))
+        .filter(|&(x, y, z)| black(after.voxel(x, y, z)) && !black(before.voxel(x, y, z)))
+        .count();
+    assert!(stamped > 10, "{stamped} voxels near (40, 32, 32) turned black");
 }
