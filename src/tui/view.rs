@@ -10,7 +10,7 @@ use ratatui::buffer::Buffer;
 use ratatui::layout::{Constraint, Layout, Rect};
 use ratatui::style::{Color, Modifier, Style};
 use ratatui::text::Line;
-use ratatui::widgets::{Block, Borders, Clear, Paragraph, Row, Table, Widget};
+use ratatui::widgets::{Block, Borders, Clear, Paragraph, Row, Table, Widget, Wrap};
 
 /// Smallest usable terminal.
 pub const MIN_SIZE: (u16, u16) = (60, 16);
@@ -31,7 +31,10 @@ pub fn draw_with(frame: &mut Frame, model: &Model, graphics: Option<&mut super::
         frame.render_widget(Paragraph::new(text), area);
         return;
     }
-    let [main, status] = Layout::vertical([Constraint::Min(3), Constraint::Length(1)]).areas(area);
+    // A long status (an error with its reason) gets as many lines as it needs, up to four,
+    // beside the key hints rather than under them.
+    let status_lines = wrapped_lines(&model.status, area.width.saturating_sub(16)).clamp(1, 4);
+    let [main, status] = Layout::vertical([Constraint::Min(3), Constraint::Length(status_lines)]).areas(area);
     match &model.screen {
         Screen::Library => library(frame, model, main),
         Screen::Exemplar(view) => exemplar(frame, view, main, graphics),
@@ -39,7 +42,8 @@ pub fn draw_with(frame: &mut Frame, model: &Model, graphics: Option<&mut super::
         Screen::Fill(view) => super::view_edit::fill(frame, view, main),
     }
     let [left, right] = Layout::horizontal([Constraint::Min(10), Constraint::Length(16)]).areas(status);
-    frame.render_widget(Paragraph::new(model.status.as_str()).style(Style::new().fg(Color::Gray)), left);
+    let text = Paragraph::new(model.status.as_str()).style(Style::new().fg(Color::Gray)).wrap(Wrap { trim: false });
+    frame.render_widget(text, left);
     frame.render_widget(Paragraph::new(" ? help  q quit").style(Style::new().fg(Color::DarkGray)), right);
     if model.help {
         help(frame, area);
@@ -257,6 +261,13 @@ impl Widget for HalfBlocks<'_> {
     }
 }
 
+/// How many lines `text` takes wrapped at `width` columns (counting characters; a close
+/// enough estimate of the word wrap for choosing a height).
+pub fn wrapped_lines(text: &str, width: u16) -> u16 {
+    let width = usize::from(width.max(1));
+    text.lines().map(|l| l.chars().count().div_ceil(width).max(1)).sum::<usize>().min(u16::MAX as usize) as u16
+}
+
 fn help(frame: &mut Frame, area: Rect) {
     let (w, h) = (52u16.min(area.width), (HELP.len() as u16 + 2).min(area.height));
     let rect = Rect::new(area.x + (area.width - w) / 2, area.y + (area.height - h) / 2, w, h);
@@ -401,6 +412,19 @@ mod tests {
         let (tr, _, tb) = rgb(buffer[(40, top)].fg).unwrap();
         let (br, _, bb) = rgb(buffer[(40, bottom)].fg).unwrap();
         assert!(tr > tb && bb > br, "top ({tr}, {tb}) is high z, bottom ({br}, {bb}) low z");
+    }
+
+    /// A long status is shown whole, over several lines, and the key hints stay readable.
+    #[test]
+    fn a_long_status_wraps_instead_of_running_into_the_hints() {
+        let mut m = model();
+        let reason =
+            "line 43: steps[0]: count = 4000 is out of range; allowed: 1 to 2000 (the most seeds one scatter places)";
+        m.status = format!("not saved: {reason}");
+        let (text, _) = screen(&m, 80, 24);
+        let flat: String = text.lines().map(str::trim_end).collect::<Vec<_>>().join(" ");
+        assert!(flat.contains("the most seeds one") && flat.contains("scatter places)"), "{text}");
+        assert!(text.contains("? help  q quit"), "{text}");
     }
 
     #[test]

@@ -29,7 +29,10 @@ pub fn editor(frame: &mut Frame, editor: &Editor, area: Rect) {
     let [left, right] = Layout::horizontal([Constraint::Percentage(45), Constraint::Percentage(55)]).areas(inner);
     let (fields, error) = match &editor.error {
         Some(e) => {
-            let [f, e_area] = Layout::vertical([Constraint::Min(3), Constraint::Length(6)]).areas(left);
+            // The whole reason, up to half the column (word wrap needs a little more room).
+            let needed = super::view::wrapped_lines(e, left.width.saturating_sub(4)) + 2;
+            let lines = needed.clamp(3, (left.height / 2).max(3));
+            let [f, e_area] = Layout::vertical([Constraint::Min(3), Constraint::Length(lines)]).areas(left);
             let message = Paragraph::new(e.as_str()).style(Style::new().fg(Color::Red)).wrap(Wrap { trim: true });
             (f, Some((e_area, message)))
         }
