@@ -113,7 +113,7 @@ enum Outcome {
 
 /// Run `solidtex build`.
 pub fn run(args: &BuildArgs) -> Result<()> {
-    let plan = manifest::read_plan(&args.manifest)?;
+    let plan = plan_for(args)?;
     if !args.merge.is_empty() {
         return merge(&plan.entries, &args.merge, &args.output);
     }
@@ -212,6 +212,28 @@ fn copy(from: &Path, to: &Path) -> Result<()> {
         });
     }
     io::write_bytes(to, &io::atomic::read_bytes(from)?)
+}
+
+/// The manifest's plan. A whole build needs every entry valid; with `--only`, only the named
+/// entries must be (a mistake in another entry does not stop them: the terminal UI builds
+/// the valid entries of a manifest that still has broken ones). A named entry that is broken
+/// fails with its own error.
+fn plan_for(args: &BuildArgs) -> Result<manifest::Plan> {
+    if args.only.is_empty() || !args.merge.is_empty() {
+        return manifest::read_plan(&args.manifest);
+    }
+    let text = io::read_text(&args.manifest, "manifest")?;
+    let folder = args.manifest.parent().unwrap_or(Path::new("."));
+    let (entries, _) = manifest::parse_plan_lenient(&text, folder);
+    for name in args.only.iter().filter(|n| !entries.iter().any(|e| &e.name == *n)) {
+        // Named but not valid: its own error (or, for a name no entry has, the list below).
+        if let Err(e) = manifest::parse_entry(&text, folder, name)
+            && !e.to_string().starts_with("no exemplar named")
+        {
+            return Err(e.in_file(&args.manifest));
+        }
+    }
+    Ok(manifest::Plan { entries })
 }
 
 fn select<'a>(entries: &'a [Entry], only: &[String], manifest: &Path) -> Result<Vec<&'a Entry>> {

@@ -49,12 +49,8 @@ pub fn make_with(entry: &Entry, progress: &dyn crate::progress::Progress) -> Res
 /// not stderr).
 pub fn preview(manifest: &Path, name: &str, text: &str) -> Result<(Volume, Vec<String>)> {
     let folder = manifest.parent().unwrap_or(Path::new("."));
-    let plan = crate::io::manifest::parse_plan(text, folder)?;
-    let mut entry = plan
-        .entries
-        .into_iter()
-        .find(|e| e.name == name)
-        .ok_or_else(|| Error::invalid(format!("no exemplar named {name:?}")))?;
+    // Mistakes in other entries do not stop this one's preview.
+    let mut entry = crate::io::manifest::parse_entry(text, folder, name)?;
     let cap = match &mut entry.source {
         _ if !entry.steps.is_empty() => 0,
         Source::Sweep(spec) => {

@@ -245,6 +245,21 @@ pub fn parse_plan(text: &str, folder: &Path) -> Result<Plan> {
     plan_of(text, folder, true)
 }
 
+/// Entry `name` of manifest `text`, valid, whatever mistakes other entries have; the error
+/// is this entry's own (or the file's syntax error, or that no entry has the name).
+pub fn parse_entry(text: &str, folder: &Path, name: &str) -> Result<Entry> {
+    let (entries, errors) = parse_plan_lenient(text, folder);
+    if let Some(entry) = entries.into_iter().find(|e| e.name == name) {
+        return Ok(entry);
+    }
+    let own = errors.iter().find(|e| e.contains(&format!("({name})")) || e.contains(&format!("{name:?}")));
+    let whole = errors.iter().find(|e| !e.contains("exemplar["));
+    match own.or(whole) {
+        Some(error) => Err(Error::invalid(error.clone())),
+        None => Err(Error::invalid(format!("no exemplar named {name:?}"))),
+    }
+}
+
 /// Whether a path ends in `.toml`: only then may a TOML error quote a line of it.
 pub(crate) fn has_toml_name(path: &Path) -> bool {
     path.extension().is_some_and(|e| e.eq_ignore_ascii_case("toml"))

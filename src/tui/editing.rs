@@ -57,16 +57,27 @@ pub fn commit(model: &mut Model) -> Vec<Effect> {
         editor.error = Some("the name is the exemplar's identity: rename it in the file".into());
         return Vec::new();
     }
-    match edit::set(&text, &editor.name, &field.key, &input).and_then(|t| check(&t, &folder).map(|_| t)) {
-        Ok(new_text) => {
+    let name = editor.name.clone();
+    // A valid entry keeps only edits that leave it valid. An entry that already has a
+    // mistake keeps every well-formed edit, so its mistakes can be fixed one at a time.
+    let verdict = edit::set(&text, &name, &field.key, &input).map(|t| {
+        let still = check(&t, &folder, &name).err();
+        (t, still)
+    });
+    match verdict {
+        Ok((new_text, still)) if still.is_none() || check(&text, &folder, &name).is_err() => {
             editor.undo.push(text);
             editor.redo.clear();
             editor.text = Some(new_text);
             editor.input = None;
-            editor.error = None;
+            editor.error = still.map(|e| format!("kept; the entry still has a mistake: {e}"));
             model.status = format!("{} = {input}; previewing", field.key);
             let Screen::Editor(editor) = &mut model.screen else { return Vec::new() };
             preview(editor)
+        }
+        Ok((_, still)) => {
+            editor.error = still;
+            Vec::new()
         }
         Err(e) => {
             editor.error = Some(e);
@@ -75,9 +86,10 @@ pub fn commit(model: &mut Model) -> Vec<Effect> {
     }
 }
 
-/// The manifest parser's verdict on `text`.
-fn check(text: &str, folder: &Path) -> Result<(), String> {
-    manifest::parse_plan(text, folder).map(|_| ()).map_err(|e| e.to_string())
+/// The manifest parser's verdict on entry `name` of `text` (other entries' mistakes are
+/// theirs: they do not block editing this one).
+fn check(text: &str, folder: &Path, name: &str) -> Result<(), String> {
+    manifest::parse_entry(text, folder, name).map(|_| ()).map_err(|e| e.to_string())
 }
 
 /// Typing into the value.
@@ -138,8 +150,8 @@ pub fn saved(model: &mut Model, result: Result<String, String>) {
     match (result, &mut model.screen) {
         (Ok(text), Screen::Editor(editor)) => {
             editor.saved = text;
-            let name = editor.name.clone();
-            super::update::mark_changed(model, &name);
+            let (name, valid) = (editor.name.clone(), editor.error.is_none());
+            super::update::mark_changed(model, &name, valid);
             model.status =
                 format!("saved {}; {name} changed since its last build (b rebuilds it)", model.manifest.display());
         }
@@ -149,7 +161,7 @@ pub fn saved(model: &mut Model, result: Result<String, String>) {
                 stamp.undo.clear();
             }
             let name = view.name.clone();
-            super::update::mark_changed(model, &name);
+            super::update::mark_changed(model, &name, true);
             model.status = format!("saved the steps into {}", model.manifest.display());
         }
         (Ok(_), _) => model.status = format!("saved {}", model.manifest.display()),
@@ -256,6 +268,39 @@ mod tests {
             update(m, Message::Input(c));
         });
         update(m, Message::Commit)
+    }
+
+    /// A manifest whose entry "bad" has two mistakes (size 0, an unknown recipe).
+    const TWO: &str = "[[exemplar]]\nname = \"m\"\nrecipe = \"procedural:marble\"\nsize = 16\n\n[[exemplar]]\nname = \"bad\"\nrecipe = \"weave\"\nsize = 0\n";
+
+    fn editing_in(text: &str, name: &str) -> Model {
+        let item = Item { name: name.into(), declared: None, size: None, state: crate::tui::BuildState::NotBuilt };
+        let mut m = Model::new(PathBuf::from("lib/library.toml"), PathBuf::from("out"), vec![item], Vec::new());
+        update(&mut m, Message::Edit);
+        update(&mut m, Message::EditorReady(Ok(text.into())));
+        m
+    }
+
+    /// Another entry's mistakes do not block editing a valid one; a broken entry keeps each
+    /// well-formed edit, so its mistakes are fixed one at a time.
+    #[test]
+    fn mistakes_elsewhere_do_not_block_edits_and_a_broken_entry_is_fixed_step_by_step() {
+        let mut m = editing_in(TWO, "m");
+        update(&mut m, Message::Down);
+        update(&mut m, Message::Down);
+        type_value(&mut m, "24");
+        assert!(editor(&m).error.is_none(), "{:?}", editor(&m).error);
+        assert!(editor(&m).text.as_deref().unwrap().contains("size = 24"));
+        let mut m = editing_in(TWO, "bad");
+        update(&mut m, Message::Down);
+        update(&mut m, Message::Down);
+        type_value(&mut m, "16");
+        let e = editor(&m);
+        assert!(e.text.as_deref().unwrap().contains("size = 16"), "the fix is kept");
+        assert!(e.error.as_deref().unwrap_or("").contains("still has a mistake"), "{:?}", e.error);
+        update(&mut m, Message::Up);
+        type_value(&mut m, "\"procedural:marble\"");
+        assert!(editor(&m).error.is_none(), "both fixed: {:?}", editor(&m).error);
     }
 
     #[test]

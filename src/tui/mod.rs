@@ -42,7 +42,33 @@ pub fn load_items(manifest: &Path, output: &Path) -> (Vec<Item>, Vec<String>) {
     let folder = manifest.parent().unwrap_or(Path::new("."));
     let (entries, errors) = io::manifest::parse_plan_lenient(&text, folder);
     let shown = manifest.display();
-    (entries.iter().map(|e| item(e, output)).collect(), errors.into_iter().map(|e| format!("{shown}: {e}")).collect())
+    // Every entry in manifest order; a broken one is listed too, so it can be opened and fixed.
+    let items = entry_names(&text)
+        .into_iter()
+        .map(|name| match entries.iter().find(|e| e.name == name) {
+            Some(entry) => item(entry, output),
+            None => {
+                let own = errors.iter().find(|e| e.contains(&format!("({name})")));
+                let reason = own.cloned().unwrap_or_else(|| "a mistake in this entry (see below)".to_string());
+                Item { name, declared: None, size: None, state: BuildState::Broken(reason) }
+            }
+        })
+        .collect();
+    (items, errors.into_iter().map(|e| format!("{shown}: {e}")).collect())
+}
+
+/// The names of a manifest's entries in order, valid or not (entries without a name, or
+/// with a repeated one, are left out: the editor finds entries by name).
+fn entry_names(text: &str) -> Vec<String> {
+    let Ok(doc) = text.parse::<toml::Table>() else { return Vec::new() };
+    let mut names: Vec<String> = Vec::new();
+    let list = doc.get("exemplar").and_then(|v| v.as_array()).map(Vec::as_slice).unwrap_or_default();
+    for name in list.iter().filter_map(|e| e.get("name").and_then(|n| n.as_str())) {
+        if !names.iter().any(|n| n == name) {
+            names.push(name.to_string());
+        }
+    }
+    names
 }
 
 fn item(entry: &io::manifest::Entry, output: &Path) -> Item {
@@ -265,7 +291,7 @@ fn save_steps(
     let text = io::read_text(manifest, "manifest").map_err(|e| e.to_string())?;
     let text = edit::append_steps(&text, name, steps, file)?;
     let folder = manifest.parent().unwrap_or(Path::new("."));
-    io::manifest::parse_plan(&text, folder).map_err(|e| e.to_string())?;
+    io::manifest::parse_entry(&text, folder, name).map_err(|e| e.to_string())?;
     io::write_bytes(manifest, text.as_bytes()).map_err(|e| e.to_string())?;
     Ok(text)
 }
@@ -299,7 +325,33 @@ fn failure(log: &str, name: &str) -> String {
 
 #[cfg(test)]
 mod tests {
-    use super::finished;
+    use super::{BuildState, Effect, Message, finished, load_items, update};
+
+    /// Broken entries are listed in manifest order (so they can be opened and fixed) with
+    /// every error below; `B` builds the valid ones, `b` on a broken one says why not.
+    #[test]
+    fn broken_entries_are_listed_and_only_valid_ones_build() {
+        let dir = tempfile::tempdir().unwrap();
+        let manifest = dir.path().join("lib.toml");
+        let text = "[[exemplar]]\nname = \"a\"\nrecipe = \"procedural:marble\"\nsize = 8\n\n\
+                    [[exemplar]]\nname = \"broken1\"\nrecipe = \"procedural:marble\"\nsize = 0\n\n\
+                    [[exemplar]]\nname = \"b\"\nrecipe = \"procedural:strata\"\nsize = 8\n\n\
+                    [[exemplar]]\nname = \"broken2\"\nrecipe = \"weave\"\nsize = 8\n";
+        std::fs::write(&manifest, text).unwrap();
+        let (items, errors) = load_items(&manifest, &dir.path().join("out"));
+        let names: Vec<&str> = items.iter().map(|i| i.name.as_str()).collect();
+        assert_eq!(names, ["a", "broken1", "b", "broken2"]);
+        assert!(matches!(&items[1].state, BuildState::Broken(e) if e.contains("size")), "{:?}", items[1].state);
+        assert!(matches!(&items[3].state, BuildState::Broken(e) if e.contains("weave")), "{:?}", items[3].state);
+        assert_eq!(errors.len(), 2, "{errors:?}");
+        let mut m = super::Model::new(manifest, dir.path().join("out"), items, errors);
+        assert_eq!(update(&mut m, Message::BuildAll), vec![Effect::Build(vec!["a".into(), "b".into()])]);
+        let mut m = super::Model { selected: 3, ..m };
+        m.items[3].state = BuildState::Broken("weave".into());
+        assert!(update(&mut m, Message::Build).is_empty());
+        assert!(m.status.contains("mistake") && m.status.contains("e opens it"), "{}", m.status);
+        assert_eq!(update(&mut m, Message::Edit), vec![Effect::ReadManifest], "a broken entry opens in the editor");
+    }
 
     /// A cancelled build's log tells which entries finished before it stopped: by whole
     /// names, so `marble` is not taken for `marble-synth`.

@@ -17,6 +17,8 @@ pub enum BuildState {
     Changed(String),
     /// The last build failed with this message.
     Failed(String),
+    /// The manifest entry has a mistake (this message): `e` opens it to fix.
+    Broken(String),
 }
 
 /// One exemplar of the library list.

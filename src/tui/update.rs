@@ -218,6 +218,10 @@ fn move_slice(view: &mut ExemplarView, step: i64) {
 
 fn open(model: &mut Model) -> Vec<Effect> {
     let Some(item) = model.items.get(model.selected) else { return Vec::new() };
+    if let BuildState::Broken(reason) = &item.state {
+        model.status = format!("{} has a mistake (e opens it to fix): {reason}", item.name);
+        return Vec::new();
+    }
     if !matches!(item.state, BuildState::Built(_) | BuildState::Changed(_)) {
         model.status = format!("{} is not built yet: press b to build it", item.name);
         return Vec::new();
@@ -234,9 +238,15 @@ fn build(model: &mut Model, all: bool) -> Vec<Effect> {
         .iter()
         .enumerate()
         .filter(|(i, item)| (all || *i == model.selected) && item.state != BuildState::Building)
+        .filter(|(_, item)| !matches!(item.state, BuildState::Broken(_)))
         .map(|(_, item)| item.name.clone())
         .collect();
     if names.is_empty() {
+        if let Some(BuildState::Broken(reason)) = model.items.get(model.selected).map(|i| &i.state)
+            && !all
+        {
+            model.status = format!("this entry has a mistake (e opens it to fix): {reason}");
+        }
         return Vec::new();
     }
     for item in model.items.iter_mut().filter(|i| names.contains(&i.name)) {
@@ -299,11 +309,14 @@ fn cancelled(model: &mut Model, name: &str, row: crate::tui::model::Item) {
     };
 }
 
-/// Mark exemplar `name` as changed since its last build (its recipe was saved).
-pub fn mark_changed(model: &mut Model, name: &str) {
+/// Mark exemplar `name` as changed since its last build (its recipe was saved; `valid`:
+/// the saved entry passed the manifest rules, so a broken one is now buildable).
+pub fn mark_changed(model: &mut Model, name: &str, valid: bool) {
     for item in model.items.iter_mut().filter(|i| i.name == name) {
-        if let BuildState::Built(kind) = &item.state {
-            item.state = BuildState::Changed(kind.clone());
+        match &item.state {
+            BuildState::Built(kind) => item.state = BuildState::Changed(kind.clone()),
+            BuildState::Broken(_) if valid => item.state = BuildState::NotBuilt,
+            _ => {}
         }
     }
 }

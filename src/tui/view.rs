@@ -56,7 +56,9 @@ fn library(frame: &mut Frame, model: &Model, area: Rect) {
     let area = if model.errors.is_empty() {
         area
     } else {
-        let lines = (model.errors.len() as u16 + 2).min(area.height / 2).max(3);
+        // Every error, wrapped, up to half the screen.
+        let wrapped: u16 = model.errors.iter().map(|e| wrapped_lines(e, area.width.saturating_sub(2))).sum();
+        let lines = (wrapped + 2).min(area.height / 2).max(3);
         let [list, errors] = Layout::vertical([Constraint::Min(3), Constraint::Length(lines)]).areas(area);
         let text: Vec<Line> =
             model.errors.iter().map(|e| Line::styled(e.as_str(), Style::new().fg(Color::Red))).collect();
@@ -74,6 +76,7 @@ fn library(frame: &mut Frame, model: &Model, area: Rect) {
             BuildState::Built(t) => ("built".to_string(), t.clone()),
             BuildState::Changed(t) => ("changed since built".to_string(), t.clone()),
             BuildState::Failed(e) => (format!("failed: {e}"), "-".to_string()),
+            BuildState::Broken(_) => ("mistake: e fixes it".to_string(), "-".to_string()),
         };
         let badge = if measured != "-" && measured != declared { format!("{measured} (differs)") } else { measured };
         let style = if i == model.selected { Style::new().add_modifier(Modifier::REVERSED) } else { Style::new() };

@@ -261,3 +261,25 @@ fn a_preview_keeps_stamps_beyond_its_cap() {
         .count();
     assert!(stamped > 10, "{stamped} voxels near (40, 32, 32) turned black");
 }
+
+/// With `--only`, only the named entries must be valid: the valid entries of a manifest with
+/// two broken ones build, and naming a broken one fails with that entry's own mistake.
+#[test]
+fn only_the_named_entries_must_be_valid() {
+    let dir = tempfile::tempdir().unwrap();
+    let manifest = dir.path().join("lib.toml");
+    let text = "[[exemplar]]\nname = \"a\"\nrecipe = \"procedural:marble\"\nsize = 8\n\n\
+                [[exemplar]]\nname = \"broken1\"\nrecipe = \"procedural:marble\"\nsize = 0\n\n\
+                [[exemplar]]\nname = \"b\"\nrecipe = \"procedural:strata\"\nsize = 8\n\n\
+                [[exemplar]]\nname = \"broken2\"\nrecipe = \"weave\"\nsize = 8\n";
+    std::fs::write(&manifest, text).unwrap();
+    let (m, out) = (manifest.to_string_lossy().into_owned(), at(dir.path(), "out"));
+    let run = solidtex(&["build", &m, "-o", &out, "--only", "a", "--only", "b"]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    assert!(stderr(&run).contains("2 built, 0 cached, 0 failed"), "{}", stderr(&run));
+    let run = solidtex(&["build", &m, "-o", &out, "--only", "broken2"]);
+    assert_eq!(run.status.code(), Some(1));
+    assert!(stderr(&run).contains("(broken2)") && stderr(&run).contains("weave"), "{}", stderr(&run));
+    let run = solidtex(&["build", &m, "-o", &out]);
+    assert_eq!(run.status.code(), Some(1), "a whole build still needs every entry valid");
+}
