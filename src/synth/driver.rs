@@ -244,22 +244,21 @@ fn transfer_detail(grid: &mut Grid, detail: &[f32]) {
     }
 }
 
-/// Samples of several sources pooled so that each counts equally: as many quantiles per
-/// channel from each (the largest source's count). One source is returned as it is.
+/// Samples of several sources pooled so that each counts equally: as many whole samples
+/// from each as the largest has (every sample of the largest once, the others' spread
+/// evenly over it), so the joint transfer aims at colours the sources really hold. One
+/// source is returned as it is.
 fn pooled(mut samples: Vec<Vec<f32>>, channels: usize) -> Vec<f32> {
     if samples.len() == 1 {
         return samples.remove(0);
     }
     let per = samples.iter().map(|s| s.len() / channels).max().unwrap_or(1);
-    let mut pooled = vec![0.0; samples.len() * per * channels];
-    for c in 0..channels {
-        for (k, e) in samples.iter().enumerate() {
-            let mut sorted: Vec<f32> = e.iter().skip(c).step_by(channels).copied().collect();
-            sorted.sort_by(f32::total_cmp);
-            for q in 0..per {
-                let at = ((q as f64 + 0.5) / per as f64 * sorted.len() as f64) as usize;
-                pooled[((k * per) + q) * channels + c] = sorted[at.min(sorted.len() - 1)];
-            }
+    let mut pooled = Vec::with_capacity(samples.len() * per * channels);
+    for source in &samples {
+        let count = source.len() / channels;
+        for q in 0..per {
+            let at = (q * count / per).min(count.saturating_sub(1));
+            pooled.extend_from_slice(&source[at * channels..(at + 1) * channels]);
         }
     }
     pooled
@@ -416,4 +415,23 @@ fn as_volume(dims: [usize; 3], channels: usize, data: Vec<f32>) -> Volume {
 /// The resamplers' edge rule: that of the first axis (x and y always agree).
 fn edge(wrap: [bool; 3]) -> Edge {
     if wrap[0] { Edge::Wrap } else { Edge::Clamp }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::pooled;
+
+    /// Pooling keeps whole colours (a red-and-blue exemplar never pools into black or
+    /// magenta, as per-channel quantiles did) and gives each source the same weight
+    /// whatever its size.
+    #[test]
+    fn pooling_keeps_whole_colours_and_weighs_sources_alike() {
+        let red_blue = [1.0f32, 0.0, 0.0, 0.0, 0.0, 1.0].repeat(2);
+        let green = [0.0f32, 1.0, 0.0].repeat(2);
+        let out = pooled(vec![red_blue, green], 3);
+        assert_eq!(out.len(), 8 * 3, "four samples from each");
+        let colours: Vec<&[f32]> = out.chunks_exact(3).collect();
+        let count = |c: [f32; 3]| colours.iter().filter(|x| **x == c).count();
+        assert_eq!((count([1.0, 0.0, 0.0]), count([0.0, 0.0, 1.0]), count([0.0, 1.0, 0.0])), (2, 2, 4));
+    }
 }
