@@ -48,8 +48,8 @@ pub fn commit(model: &mut Model) -> Vec<Effect> {
     let Some(text) = editor.text.clone() else { return Vec::new() };
     let fields = edit::fields(&text, &editor.name).unwrap_or_default();
     let Some(field) = fields.get(editor.selected) else { return Vec::new() };
-    let Some(input) = editor.input.clone() else {
-        editor.input = Some(field.value.clone());
+    let Some(input) = editor.input.as_ref().map(|i| i.value().to_string()) else {
+        editor.input = Some(field.value.as_str().into());
         editor.error = None;
         return Vec::new();
     };
@@ -92,15 +92,10 @@ fn check(text: &str, folder: &Path, name: &str) -> Result<(), String> {
     manifest::parse_entry(text, folder, name).map(|_| ()).map_err(|e| e.to_string())
 }
 
-/// Typing into the value.
-pub fn input(model: &mut Model, c: Option<char>) {
+/// Editing the value being typed.
+pub fn input(model: &mut Model, request: tui_input::InputRequest) {
     if let Screen::Editor(Editor { input: Some(value), .. }) = &mut model.screen {
-        match c {
-            Some(c) => value.push(c),
-            None => {
-                value.pop();
-            }
-        }
+        value.handle(request);
     }
 }
 
@@ -262,12 +257,36 @@ mod tests {
     fn type_value(m: &mut Model, value: &str) -> Vec<Effect> {
         update(m, Message::Commit);
         for _ in 0..10 {
-            update(m, Message::InputBack);
+            update(m, Message::Input(tui_input::InputRequest::DeletePrevChar));
         }
         value.chars().for_each(|c| {
-            update(m, Message::Input(c));
+            update(m, Message::Input(tui_input::InputRequest::InsertChar(c)));
         });
         update(m, Message::Commit)
+    }
+
+    /// The value is a text field: the cursor moves, deletes and inserts anywhere, and Ctrl-U
+    /// clears it (it only appended and removed at the end).
+    #[test]
+    fn a_value_is_edited_anywhere_in_it() {
+        use tui_input::InputRequest::{DeleteLine, DeleteNextChar, GoToEnd, GoToStart, InsertChar};
+        let mut m = editing();
+        update(&mut m, Message::Down);
+        update(&mut m, Message::Down);
+        update(&mut m, Message::Commit);
+        let value = |m: &Model| editor(m).input.as_ref().map(|i| i.value().to_string());
+        assert_eq!(value(&m).as_deref(), Some("16"));
+        for request in [GoToStart, DeleteNextChar, InsertChar('2'), GoToEnd, InsertChar('0')] {
+            update(&mut m, Message::Input(request));
+        }
+        assert_eq!(value(&m).as_deref(), Some("260"));
+        update(&mut m, Message::Input(DeleteLine));
+        assert_eq!(value(&m).as_deref(), Some(""));
+        for c in "24".chars() {
+            update(&mut m, Message::Input(InsertChar(c)));
+        }
+        update(&mut m, Message::Commit);
+        assert!(editor(&m).text.as_deref().unwrap().contains("size = 24"), "{:?}", editor(&m).text);
     }
 
     /// A manifest whose entry "bad" has two mistakes (size 0, an unknown recipe).

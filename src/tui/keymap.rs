@@ -11,7 +11,7 @@ pub fn key(screen: &Screen, event: KeyEvent) -> Option<Message> {
         return Some(Message::Quit);
     }
     if let Screen::Editor(Editor { input: Some(_), .. }) = screen {
-        return typing(event.code);
+        return typing(event);
     }
     let common = match event.code {
         KeyCode::Char('?') => Some(Message::Help),
@@ -61,13 +61,13 @@ fn stamping(code: KeyCode) -> Option<Message> {
     }
 }
 
-fn typing(code: KeyCode) -> Option<Message> {
-    match code {
+/// Keys while a value is typed: Enter commits, Esc drops it, the rest edit it as a text
+/// field (tui-input: arrows, Home, End, Backspace, Delete, Ctrl-U, Ctrl-W, Ctrl-A, Ctrl-E).
+fn typing(event: KeyEvent) -> Option<Message> {
+    match event.code {
         KeyCode::Enter => Some(Message::Commit),
         KeyCode::Esc => Some(Message::Cancel),
-        KeyCode::Backspace => Some(Message::InputBack),
-        KeyCode::Char(c) => Some(Message::Input(c)),
-        _ => None,
+        _ => tui_input::backend::crossterm::to_input_request(&crossterm::event::Event::Key(event)).map(Message::Input),
     }
 }
 
@@ -169,12 +169,19 @@ mod tests {
         assert!(matches!(key(&view, ctrl_c), Some(Message::Quit)));
         assert!(matches!(key(&view, press(KeyCode::Char('f'))), Some(Message::FillPreview)));
         let editing =
-            |input: Option<&str>| Screen::Editor(Editor { input: input.map(String::from), ..Editor::default() });
+            |input: Option<&str>| Screen::Editor(Editor { input: input.map(Into::into), ..Editor::default() });
         assert!(matches!(key(&editing(None), press(KeyCode::Char('u'))), Some(Message::Undo)));
         assert!(matches!(key(&editing(None), press(KeyCode::Esc)), Some(Message::Cancel)));
         // while a value is typed, every letter is text, even q and ?
-        assert!(matches!(key(&editing(Some("")), press(KeyCode::Char('q'))), Some(Message::Input('q'))));
-        assert!(matches!(key(&editing(Some("")), press(KeyCode::Char('?'))), Some(Message::Input('?'))));
+        use tui_input::InputRequest::{DeleteLine, DeletePrevWord, GoToEnd, GoToPrevChar, GoToStart, InsertChar};
+        let typed = |code, modifiers| key(&editing(Some("")), KeyEvent { modifiers, ..press(code) });
+        assert!(matches!(typed(KeyCode::Char('q'), KeyModifiers::NONE), Some(Message::Input(InsertChar('q')))));
+        assert!(matches!(typed(KeyCode::Char('?'), KeyModifiers::NONE), Some(Message::Input(InsertChar('?')))));
+        assert!(matches!(typed(KeyCode::Left, KeyModifiers::NONE), Some(Message::Input(GoToPrevChar))));
+        assert!(matches!(typed(KeyCode::Home, KeyModifiers::NONE), Some(Message::Input(GoToStart))));
+        assert!(matches!(typed(KeyCode::End, KeyModifiers::NONE), Some(Message::Input(GoToEnd))));
+        assert!(matches!(typed(KeyCode::Char('u'), KeyModifiers::CONTROL), Some(Message::Input(DeleteLine))));
+        assert!(matches!(typed(KeyCode::Char('w'), KeyModifiers::CONTROL), Some(Message::Input(DeletePrevWord))));
         assert!(matches!(key(&editing(Some("")), press(KeyCode::Enter)), Some(Message::Commit)));
     }
 }

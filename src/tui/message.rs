@@ -41,10 +41,9 @@ pub enum Message {
     EditorReady(Result<String, String>),
     /// Start editing the selected field, or commit the value being typed.
     Commit,
-    /// Type a character into the value.
-    Input(char),
-    /// Delete the last character of the value.
-    InputBack,
+    /// Edit the value being typed: a character, a cursor move, a deletion (tui-input's
+    /// requests: Left, Right, Home, End, Backspace, Delete, Ctrl-U, Ctrl-W, ...).
+    Input(tui_input::InputRequest),
     /// Stop editing the value without changing it.
     Cancel,
     /// Undo the last edit.

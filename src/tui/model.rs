@@ -121,7 +121,7 @@ pub struct Editor {
     /// Selected field row.
     pub selected: usize,
     /// The value being typed, when editing.
-    pub input: Option<String>,
+    pub input: Option<tui_input::Input>,
     /// Why the last edit was refused.
     pub error: Option<String>,
     /// Earlier texts, newest last.

@@ -32,8 +32,7 @@ pub fn update(model: &mut Model, message: Message) -> Vec<Effect> {
         Message::Edit => return editing::open_editor(model),
         Message::EditorReady(result) => return editing::editor_ready(model, result),
         Message::Commit => return editing::commit(model),
-        Message::Input(c) => editing::input(model, Some(c)),
-        Message::InputBack => editing::input(model, None),
+        Message::Input(request) => editing::input(model, request),
         Message::Cancel => {
             if !editing::cancel(model) {
                 return back(model, asked);

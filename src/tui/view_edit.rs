@@ -11,7 +11,7 @@ use ratatui::Frame;
 use ratatui::buffer::Buffer;
 use ratatui::layout::{Constraint, Layout, Rect};
 use ratatui::style::{Color, Modifier, Style};
-use ratatui::text::Line;
+use ratatui::text::{Line, Span};
 use ratatui::widgets::{Block, Borders, Paragraph, Widget, Wrap};
 
 /// The editor: the entry's fields on the left, the live preview on the right.
@@ -55,10 +55,20 @@ fn field_lines(editor: &Editor, text: &str) -> Vec<Line<'static>> {
         .map(|(i, f)| {
             let selected = i == editor.selected;
             match (&editor.input, selected) {
-                (Some(input), true) => Line::styled(
-                    format!("{} = {input}_", f.key),
-                    Style::new().fg(Color::Yellow).add_modifier(Modifier::BOLD),
-                ),
+                (Some(input), true) => {
+                    // The cursor: the character under it reversed, or `_` past the end.
+                    let style = Style::new().fg(Color::Yellow).add_modifier(Modifier::BOLD);
+                    let chars: Vec<char> = input.value().chars().collect();
+                    let at = input.cursor().min(chars.len());
+                    let before: String = chars[..at].iter().collect();
+                    let under = chars.get(at).map_or("_".to_string(), char::to_string);
+                    let after: String = chars.get(at + 1..).unwrap_or_default().iter().collect();
+                    Line::from(vec![
+                        Span::styled(format!("{} = {before}", f.key), style),
+                        Span::styled(under, style.add_modifier(Modifier::REVERSED)),
+                        Span::styled(after, style),
+                    ])
+                }
                 (_, true) => {
                     Line::styled(format!("{} = {}", f.key, f.value), Style::new().add_modifier(Modifier::REVERSED))
                 }
