@@ -4,8 +4,16 @@ use clap::Parser;
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
+    use solidtex::cli::Command;
+    use std::path::Path;
     let cli = solidtex::cli::Cli::parse();
-    match solidtex::cli::run(cli) {
+    // Two front ends: the terminal UI (no command, or `tui`) and every other command.
+    let result = match cli.command {
+        None => solidtex::tui::run(Path::new("exemplars/library.toml"), Path::new("out")),
+        Some(Command::Tui { manifest, output }) => solidtex::tui::run(&manifest, &output),
+        Some(command) => solidtex::cli::run(command),
+    };
+    match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(error) => {
             eprintln!("error: {}", solidtex::cli::clip(&error.to_string()));

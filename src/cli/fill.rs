@@ -371,7 +371,7 @@ pub fn run_view(args: &ViewArgs) -> Result<()> {
 /// (built into `output` first if needed) — a fruit with its axis as the innermost part for
 /// the depth-varying types and strokes along it, a block with strokes along x for 1-a, a
 /// fruit for type 0 — at 2,500 tets, with the textures to cut it.
-pub fn preview_fill(manifest: &Path, output: &Path, name: &str) -> Result<crate::tui::FillPreview> {
+pub fn preview_fill(manifest: &Path, output: &Path, name: &str) -> Result<crate::fill::FillPreview> {
     let started = Instant::now();
     let mut spec = FillSpec::new(name);
     spec.library = manifest.to_path_buf();
@@ -406,5 +406,5 @@ pub fn preview_fill(manifest: &Path, output: &Path, name: &str) -> Result<crate:
         report.paste.patches,
         started.elapsed().as_secs_f64()
     );
-    Ok(crate::tui::FillPreview { model, textures, summary })
+    Ok(crate::fill::FillPreview { model, textures, summary })
 }

@@ -156,11 +156,9 @@ pub enum Command {
     View(fill::ViewArgs),
 }
 
-/// Run a parsed command line.
-pub fn run(cli: Cli) -> crate::Result<()> {
-    let Some(command) = cli.command else {
-        return crate::tui::run(std::path::Path::new("exemplars/library.toml"), std::path::Path::new("out"));
-    };
+/// Run one command of the command line. The terminal UI (`tui`, or no command) is the
+/// other front end: `main` dispatches it, so this module never calls into it.
+pub fn run(command: Command) -> crate::Result<()> {
     match command {
         Command::Info { file, json } => info::run(&file, json),
         Command::Convert { input, output } => commands::convert(&input, &output),
@@ -171,7 +169,7 @@ pub fn run(cli: Cli) -> crate::Result<()> {
         Command::Quality(args) => quality::run(&args),
         Command::Bench(args) => bench::run(&args),
         Command::Build(args) => build::run(&args),
-        Command::Tui { manifest, output } => crate::tui::run(&manifest, &output),
+        Command::Tui { .. } => Err(crate::Error::usage("the terminal UI is started by the solidtex binary itself")),
         Command::Sweep(args) => handmade::run_sweep(&args),
         Command::Stamp(args) => handmade::run_stamp(&args),
         Command::Scatter(args) => handmade::run_scatter(&args),

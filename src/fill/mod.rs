@@ -29,6 +29,22 @@ use crate::progress::Progress;
 use crate::volume::Volume;
 use glam::Vec3;
 pub use model::{FillReport, LstModel, MaskRef, Source};
+
+/// A filled model with the textures to cut it: what a front end shows as a quick preview.
+pub struct FillPreview {
+    /// The model.
+    pub model: LstModel,
+    /// Its textures.
+    pub textures: render::Textures,
+    /// One line about the fill (shape, tets, patches, time).
+    pub summary: String,
+}
+
+impl std::fmt::Debug for FillPreview {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.summary)
+    }
+}
 use spec::FillSpec;
 use tets::TetMesh;
 use warp::Frame;

@@ -138,21 +138,7 @@ pub struct Editor {
     pub preview_error: Option<String>,
 }
 
-/// A filled preview model with the textures to cut it.
-pub struct FillPreview {
-    /// The model.
-    pub model: crate::fill::LstModel,
-    /// Its textures.
-    pub textures: crate::fill::render::Textures,
-    /// One line about the fill (shape, tets, patches, time).
-    pub summary: String,
-}
-
-impl std::fmt::Debug for FillPreview {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(&self.summary)
-    }
-}
+pub use crate::fill::FillPreview;
 
 /// The fill preview: a drawn shape filled with the exemplar, and a cut plane.
 #[derive(Debug, Clone)]
