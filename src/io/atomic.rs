@@ -248,7 +248,11 @@ fn remove_listed(old: &Path, names: &[String], path: &Path) -> Result<()> {
 fn keep_aside(old: &Path, path: &Path) -> Option<PathBuf> {
     let prefix = format!("{}.kept-", name_of(path));
     let target = tempfile::Builder::new().prefix(&prefix).tempdir_in(folder_of(path)).ok()?.keep();
-    fs::rename(old, &target).ok()?;
+    if fs::rename(old, &target).is_err() {
+        // The empty folder made for it here, and nothing else.
+        let _ = fs::remove_dir(&target);
+        return None;
+    }
     Some(target)
 }
 

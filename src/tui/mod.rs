@@ -333,11 +333,8 @@ mod tests {
     fn broken_entries_are_listed_and_only_valid_ones_build() {
         let dir = tempfile::tempdir().unwrap();
         let manifest = dir.path().join("lib.toml");
-        let text = "[[exemplar]]\nname = \"a\"\nrecipe = \"procedural:marble\"\nsize = 8\n\n\
-                    [[exemplar]]\nname = \"broken1\"\nrecipe = \"procedural:marble\"\nsize = 0\n\n\
-                    [[exemplar]]\nname = \"b\"\nrecipe = \"procedural:strata\"\nsize = 8\n\n\
-                    [[exemplar]]\nname = \"broken2\"\nrecipe = \"weave\"\nsize = 8\n";
-        std::fs::write(&manifest, text).unwrap();
+        let fixture = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/manifests/two-broken.toml");
+        std::fs::copy(fixture, &manifest).unwrap();
         let (items, errors) = load_items(&manifest, &dir.path().join("out"));
         let names: Vec<&str> = items.iter().map(|i| i.name.as_str()).collect();
         assert_eq!(names, ["a", "broken1", "b", "broken2"]);

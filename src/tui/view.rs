@@ -353,17 +353,24 @@ mod tests {
         assert!(text.contains("keys") && text.contains("cycle colour"), "{text}");
     }
 
+    /// The exemplar view of `volume`, its central slices shown.
+    fn viewing(volume: Volume) -> Model {
+        let index = volume.dims().map(|d| d / 2);
+        Model {
+            screen: Screen::Exemplar(ExemplarView {
+                volume: Some(Arc::new(volume)),
+                index,
+                ..ExemplarView::new("kiwi")
+            }),
+            ..model()
+        }
+    }
+
     #[test]
     fn the_exemplar_view_draws_slices_in_colour() {
         let volume =
             Volume::from_fn([8, 8, 8], Channel::rgb(), |_, _, _, o| o.copy_from_slice(&[1.0, 0.0, 0.0])).unwrap();
-        let mut m = model();
-        m.screen = Screen::Exemplar(ExemplarView {
-            volume: Some(Arc::new(volume)),
-            index: [4; 3],
-            ..ExemplarView::new("kiwi")
-        });
-        let (text, buffer) = screen(&m, 80, 24);
+        let (text, buffer) = screen(&viewing(volume), 80, 24);
         assert!(text.contains("XY z=4/7") && text.contains("XZ y=4/7") && text.contains("YZ x=4/7"), "{text}");
         let ramp =
             Image2d::from_data(8, 1, crate::volume::Channel::grey(), (0..8).map(|x| x as f32).collect()).unwrap();
@@ -389,13 +396,7 @@ mod tests {
             o.copy_from_slice(&[z as f32 / 63.0, check, 1.0 - z as f32 / 63.0]);
         })
         .unwrap();
-        let mut m = model();
-        m.screen = Screen::Exemplar(ExemplarView {
-            volume: Some(Arc::new(volume)),
-            index: [32; 3],
-            ..ExemplarView::new("kiwi")
-        });
-        let (_, buffer) = screen(&m, 80, 24);
+        let (_, buffer) = screen(&viewing(volume), 80, 24);
         let rgb = |c: Color| match c {
             Color::Rgb(r, g, b) => Some((r, g, b)),
             _ => None,

@@ -268,11 +268,8 @@ fn a_preview_keeps_stamps_beyond_its_cap() {
 fn only_the_named_entries_must_be_valid() {
     let dir = tempfile::tempdir().unwrap();
     let manifest = dir.path().join("lib.toml");
-    let text = "[[exemplar]]\nname = \"a\"\nrecipe = \"procedural:marble\"\nsize = 8\n\n\
-                [[exemplar]]\nname = \"broken1\"\nrecipe = \"procedural:marble\"\nsize = 0\n\n\
-                [[exemplar]]\nname = \"b\"\nrecipe = \"procedural:strata\"\nsize = 8\n\n\
-                [[exemplar]]\nname = \"broken2\"\nrecipe = \"weave\"\nsize = 8\n";
-    std::fs::write(&manifest, text).unwrap();
+    let fixture = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/manifests/two-broken.toml");
+    std::fs::copy(fixture, &manifest).unwrap();
     let (m, out) = (manifest.to_string_lossy().into_owned(), at(dir.path(), "out"));
     let run = solidtex(&["build", &m, "-o", &out, "--only", "a", "--only", "b"]);
     assert!(run.status.success(), "{}", stderr(&run));
