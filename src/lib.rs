@@ -14,8 +14,9 @@
 //!
 //! The core ([`volume`], [`synth`], [`fill`], [`render`] and the other algorithm modules
 //! that `.ci/run` lists) is pure: plain data in, plain data out, an explicit seed for
-//! anything random. [`io`] reads and writes files; the front ends [`cli`] and [`tui`] also
-//! touch files (the library build, its cache and reports) and talk to the terminal.
+//! anything random. [`io`] reads and writes files; [`library`] builds a manifest's
+//! exemplars into an output folder (recipes, cache, reports) for both front ends, [`cli`]
+//! and [`tui`], which also talk to the terminal.
 //!
 //! A 16³ volume, a slice and its statistics:
 //!
@@ -42,6 +43,7 @@ pub mod error;
 pub mod fill;
 pub mod ground_truth;
 pub mod io;
+pub mod library;
 pub mod mask;
 pub mod mesh;
 pub mod noise;

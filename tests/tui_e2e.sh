@@ -79,6 +79,73 @@ wait_for "saved the steps" 5
 grep -q '^  stamp = "kiwi_seed.obj"' "$out/lib/library.toml" || { echo "tui e2e: the stamp step was not saved"; exit 1; }
 tmux send-keys -t "$session" Escape
 wait_for "solidtex library" 5
+# b. a build cancelled mid-synthesis says so and keeps the previous output byte for byte
+tmux send-keys -t "$session" Up Up Up Down Down Down Down Down Down b
+wait_for "built marble-synth" 120
+before=$(md5sum < "$out/built/marble-synth.exr")
+sed -i '/^name = "marble-synth"/,/^seed/{s/^size = 32/size = 64/;s/^levels = 2/levels = 3/;s/^seed = 1/seed = 2/}' "$out/lib/library.toml"
+tmux send-keys -t "$session" b
+wait_for "level 3/3" 60
+tmux send-keys -t "$session" Escape
+wait_for "cancelled marble-synth: its previous output is kept" 10
+[ "$(md5sum < "$out/built/marble-synth.exr")" = "$before" ] || { echo "tui e2e: the cancelled build replaced the output"; exit 1; }
+screen | grep -q "marble-synth.*changed since built" || { echo "tui e2e: the cancelled entry is not marked changed"; screen; exit 1; }
+# c. Esc on the idle library does not quit; q with unsaved edits asks first
+tmux send-keys -t "$session" Escape
+sleep 0.5
+tmux has-session -t "$session" 2>/dev/null || { echo "tui e2e: Esc on the library quit"; exit 1; }
+tmux send-keys -t "$session" Up Up Up Up Up Up e
+wait_for "recipe: marble" 10
+wait_for "seed = 3" 10
+tmux send-keys -t "$session" Down Down Down Enter BSpace 2 Enter
+wait_for "recipe: marble \[modified\]" 5
+tmux send-keys -t "$session" q
+wait_for "q again quits without saving" 5
+tmux send-keys -t "$session" q
+sleep 0.5
+if tmux has-session -t "$session" 2>/dev/null; then echo "tui e2e: q did not quit"; exit 1; fi
+
+# a, e. At 80x24: a stamp at x > 31 saved into the kiwi, then the editor's preview of the
+# kiwi is not stale, and its build warning stays in the status line, not over the screen.
+tmux new-session -d -s "$session" -x 80 -y 24 "$bin tui $out/lib/library.toml -o $out/built"
+wait_for "solidtex library" 10
+tmux send-keys -t "$session" Down Down Down b
+wait_for "built kiwi" 60
+tmux send-keys -t "$session" Enter
+wait_for "XY z=32/63" 10
+tmux send-keys -t "$session" m
+wait_for "stamp mode" 10
+tmux send-keys -t "$session" Right Right Right Enter
+wait_for "stamped" 5
+tmux send-keys -t "$session" Escape
+wait_for "unsaved stamps" 5
+tmux send-keys -t "$session" s
+wait_for "saved the steps" 5
+tmux send-keys -t "$session" Escape
+wait_for "solidtex library" 5
+sed -i 's/^  count = 60$/  count = 400/' "$out/lib/library.toml"
+tmux send-keys -t "$session" e
+wait_for "recipe: kiwi" 10
+wait_for "no room for the rest" 60
+if screen | grep -q "stale"; then echo "tui e2e: the preview after a stamp at x > 31 is stale"; screen; exit 1; fi
+if screen | head -n 18 | grep -q "no room"; then echo "tui e2e: a warning was printed over the screen"; screen; exit 1; fi
+screen | head -n 1 | grep -q "recipe: kiwi" || { echo "tui e2e: the top border was overwritten"; screen; exit 1; }
+tmux kill-session -t "$session"
+
+# d. A manifest with two broken entries: both errors listed, B builds the valid ones, a
+# broken entry opens in the editor.
+cp tests/manifests/two-broken.toml "$out/lib/broken.toml"
+tmux new-session -d -s "$session" -x 80 -y 24 "$bin tui $out/lib/broken.toml -o $out/broken"
+wait_for "the manifest has 2 error" 10
+wait_for "broken1" 5
+screen | grep -q "size" && screen | grep -q "weave" || { echo "tui e2e: not every error is shown"; screen; exit 1; }
+tmux send-keys -t "$session" B
+wait_for "built b" 60
+[ -f "$out/broken/a.exr" ] && [ -f "$out/broken/b.exr" ] || { echo "tui e2e: B did not build the valid entries"; exit 1; }
+tmux send-keys -t "$session" Up Up Up Down Down Down e
+wait_for "recipe: broken2" 10
+tmux send-keys -t "$session" Escape
+wait_for "solidtex library" 5
 tmux send-keys -t "$session" q
 sleep 0.5
 if tmux has-session -t "$session" 2>/dev/null; then echo "tui e2e: q did not quit"; exit 1; fi

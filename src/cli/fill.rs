@@ -4,13 +4,11 @@
 use super::commands::usage;
 use crate::error::{Error, Result};
 use crate::fill::render::{self, Textures, View};
-use crate::fill::spec::{self, FillSpec};
-use crate::fill::{self, Job, LstModel, MaskRef, Source, mesher};
-use crate::io::{self, fill_spec, lst_file, manifest};
-use crate::mask::Layer;
+use crate::fill::{self, Job, LstModel, mesher};
+use crate::io::{self, fill_spec, lst_file};
+use crate::library;
+use crate::library::fill::load_mask;
 use crate::progress::Progress;
-use crate::volume::{Axis, Volume};
-use crate::{TextureType, cli::build};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -102,7 +100,12 @@ pub fn run_fill(args: &FillArgs) -> Result<()> {
     let started = Instant::now();
     let tets = mesher::tetrahedralize(&surface, spec.tets).map_err(|e| e.in_file(&args.mesh))?;
     let meshed = started.elapsed().as_secs_f64();
-    let resolved = resolve(&spec, &args.output)?;
+    let missing = library::fill::missing(&spec)?;
+    if !missing.is_empty() {
+        eprintln!("building {} into {} first", missing.join(", "), spec.built.display());
+        library::fill::build_first(&spec, missing, &super::build::Lines::new(0))?;
+    }
+    let resolved = library::fill::resolve(&spec, &args.output)?;
     let job = Job {
         surface: &surface,
         spec: &spec,
@@ -163,116 +166,6 @@ impl Progress for Bar {
         self.0.set_position((fraction.clamp(0.0, 1.0) * 1000.0) as u64);
         self.0.set_message(stage.to_string());
     }
-}
-
-/// The spec's exemplars turned into a type, texture axes, sources and masks.
-struct Resolved {
-    kind: TextureType,
-    axes: [usize; 3],
-    sources: Vec<Source>,
-    masks: Vec<Volume>,
-}
-
-fn resolve(spec: &FillSpec, model_path: &Path) -> Result<Resolved> {
-    let plan = manifest::read_plan(&spec.library)?;
-    let mut names = vec![spec.exemplar.clone()];
-    names.extend(spec.pastes.iter().map(|p| p.exemplar.clone()));
-    for name in &names {
-        if !plan.entries.iter().any(|e| &e.name == name) {
-            let known: Vec<&str> = plan.entries.iter().map(|e| e.name.as_str()).collect();
-            return Err(Error::invalid(format!(
-                "exemplar '{name}' is not in the library {}; it has: {}",
-                spec.library.display(),
-                known.join(", ")
-            )));
-        }
-    }
-    ensure_built(spec, &names)?;
-    let entry = plan.entries.iter().find(|e| e.name == spec.exemplar).expect("checked above");
-    let volume = load_built(spec, &spec.exemplar)?;
-    let declared = entry.texture_type.or(volume.meta.texture_type);
-    let kind = match (spec.texture_type, declared) {
-        (Some(t), _) | (None, Some(t)) => t,
-        (None, None) => crate::classify::classify(&volume)?.texture_type,
-    };
-    let axes = spec::texture_axes(&volume, kind, spec.axes)?;
-    let size = *volume.dims().iter().max().expect("three dims");
-    let base = model_path.parent().unwrap_or(Path::new("."));
-    let mut sources = Vec::new();
-    let layered = matches!(kind, TextureType::T1b | TextureType::T2b);
-    let layers: &[Option<Layer>] =
-        if layered { &[Some(Layer::Outer), Some(Layer::Middle), Some(Layer::Inner)] } else { &[None] };
-    for layer in layers {
-        sources.push(source(spec, &spec.exemplar, *layer, Axis::ALL[axes[0]], size, base));
-    }
-    for p in &spec.pastes {
-        let v = load_built(spec, &p.exemplar)?;
-        sources.push(source(spec, &p.exemplar, None, Axis::Z, *v.dims().iter().max().expect("dims"), base));
-    }
-    let masks = sources.iter().map(|s| load_mask(&s.mask, base)).collect::<Result<Vec<_>>>()?;
-    Ok(Resolved { kind, axes, sources, masks })
-}
-
-/// Builds (cached) the exemplars the fill needs when their volumes are missing.
-fn ensure_built(spec: &FillSpec, names: &[String]) -> Result<()> {
-    let missing: Vec<String> = names.iter().filter(|n| !built_path(spec, n).exists()).cloned().collect();
-    if missing.is_empty() {
-        return Ok(());
-    }
-    eprintln!("building {} into {} first", missing.join(", "), spec.built.display());
-    build::run(&build::BuildArgs {
-        manifest: spec.library.clone(),
-        output: spec.built.clone(),
-        force: false,
-        only: missing,
-        shard: None,
-        merge: Vec::new(),
-        progress_lines: false,
-    })
-}
-
-fn built_path(spec: &FillSpec, name: &str) -> PathBuf {
-    spec.built.join(format!("{name}.exr"))
-}
-
-fn load_built(spec: &FillSpec, name: &str) -> Result<Volume> {
-    io::read_volume(&built_path(spec, name), io::budget_from_env()?)
-}
-
-fn source(spec: &FillSpec, name: &str, layer: Option<Layer>, depth: Axis, size: usize, base: &Path) -> Source {
-    let file = match layer {
-        Some(l) => spec.built.join(format!("{name}.masks")).join(format!("{}.exr", l.name())),
-        None => spec.built.join(format!("{name}.mask.exr")),
-    };
-    let (falloff, seed) = (spec.mask_falloff, spec.seed);
-    let mask = match layer {
-        _ if file.exists() => MaskRef::File(relative(&file, base)),
-        Some(layer) => MaskRef::Layered { layer, depth, size, falloff, seed },
-        None => MaskRef::Splotch { size, falloff, seed },
-    };
-    Source { exemplar: name.to_string(), volume: relative(&built_path(spec, name), base), mask }
-}
-
-fn load_mask(mask: &MaskRef, base: &Path) -> Result<Volume> {
-    match (mask.generate(), mask) {
-        (Some(generated), _) => generated,
-        (None, MaskRef::File(path)) => io::read_volume(&base.join(path), io::budget_from_env()?),
-        (None, _) => unreachable!("only files are not generated"),
-    }
-}
-
-/// `target` relative to the folder `base` (both resolved), or absolute if that fails.
-fn relative(target: &Path, base: &Path) -> String {
-    let absolute = |p: &Path| std::path::absolute(p).ok();
-    let (Some(t), Some(b)) = (absolute(target), absolute(base)) else {
-        return target.to_string_lossy().into_owned();
-    };
-    let (t, b): (Vec<_>, Vec<_>) = (t.components().collect(), b.components().collect());
-    let common = t.iter().zip(&b).take_while(|(x, y)| x == y).count();
-    let mut out = PathBuf::new();
-    (common..b.len()).for_each(|_| out.push(".."));
-    t[common..].iter().for_each(|c| out.push(c));
-    out.to_string_lossy().into_owned()
 }
 
 /// A model with the textures of its sources.
@@ -365,46 +258,4 @@ pub fn run_view(args: &ViewArgs) -> Result<()> {
     io::write_rgb8(&args.output, &picture)?;
     eprintln!("wrote {} in {ms:.0} ms", args.output.display());
     Ok(())
-}
-
-/// The fill preview of the terminal UI: a drawn shape filled with library exemplar `name`
-/// (built into `output` first if needed) — a fruit with its axis as the innermost part for
-/// the depth-varying types and strokes along it, a block with strokes along x for 1-a, a
-/// fruit for type 0 — at 2,500 tets, with the textures to cut it.
-pub fn preview_fill(manifest: &Path, output: &Path, name: &str) -> Result<crate::fill::FillPreview> {
-    let started = Instant::now();
-    let mut spec = FillSpec::new(name);
-    spec.library = manifest.to_path_buf();
-    spec.built = output.to_path_buf();
-    spec.tets = 2500;
-    let probe = resolve(&spec, &output.join("preview.lst"))?;
-    let (shape, axis) = match probe.kind {
-        TextureType::T1a => ("block", vec![glam::Vec3::new(-0.9, 0.0, 0.0), glam::Vec3::new(0.9, 0.0, 0.0)]),
-        _ => ("fruit", vec![glam::Vec3::new(-0.75, 0.0, 0.0), glam::Vec3::new(0.75, 0.0, 0.0)]),
-    };
-    if matches!(probe.kind, TextureType::T1b | TextureType::T2a | TextureType::T2b) {
-        spec.depth.axes = vec![axis.clone()];
-    }
-    spec.directions = vec![axis];
-    let surface = crate::mesh::shapes::named(shape).expect("a drawn shape").canonical();
-    let tets = mesher::tetrahedralize(&surface, spec.tets)?;
-    let job = Job {
-        surface: &surface,
-        spec: &spec,
-        kind: probe.kind,
-        axes: probe.axes,
-        sources: probe.sources.clone(),
-        masks: probe.masks.clone(),
-    };
-    let (model, report) = fill::fill(&job, tets, &crate::progress::NoProgress)?;
-    let colour = probe.sources.iter().map(|s| load_built(&spec, &s.exemplar)).collect::<Result<Vec<_>>>()?;
-    let textures = Textures::new(&colour, &probe.masks);
-    let summary = format!(
-        "{name} (type {}) in a {shape}: {} tets, {} patches, {:.2} s",
-        probe.kind,
-        report.tets,
-        report.paste.patches,
-        started.elapsed().as_secs_f64()
-    );
-    Ok(crate::fill::FillPreview { model, textures, summary })
 }

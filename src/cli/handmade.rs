@@ -159,24 +159,9 @@ fn about(error: Error, mesh: &Path, volume: &Path) -> Error {
     }
 }
 
-/// A seed mesh, oriented, with a warning when it is not closed.
-pub fn read_seed(path: &Path) -> Result<crate::mesh::Mesh> {
-    let mesh = io::mesh_file::read_mesh(path)?;
-    let dropped = mesh.dropped_degenerate();
-    if dropped > 0 {
-        eprintln!(
-            "warning: {}: dropped {dropped} degenerate triangle(s) (zero area or a repeated corner)",
-            path.display()
-        );
-    }
-    let open = mesh.boundary_edges();
-    if open > 0 {
-        eprintln!(
-            "warning: {}: the mesh has {open} boundary edge(s) (open or non-manifold); inside is decided by winding number",
-            path.display()
-        );
-    }
-    Ok(mesh.oriented())
+/// A seed mesh, oriented; its warnings go to stderr.
+fn read_seed(path: &Path) -> Result<crate::mesh::Mesh> {
+    crate::library::recipe::read_seed(path, &super::Stderr)
 }
 
 /// `solidtex scatter`.

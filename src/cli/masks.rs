@@ -1,4 +1,4 @@
-//! `solidtex classify` and `solidtex mask ...`.
+//! `solidtex mask ...`: splotch, layered and mesh masks, and mask presets.
 
 use super::commands::usage;
 use crate::error::{Error, Result};
@@ -7,43 +7,6 @@ use crate::mask::{self, Layer, MaskMeasures};
 use crate::volume::{Axis, Volume};
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
-
-/// Run `solidtex classify FILE [--json]`.
-pub fn classify(file: &Path, json: bool) -> Result<()> {
-    let volume = io::read_volume(file, io::budget_from_env()?)?;
-    let c = crate::classify::classify(&volume).map_err(|e| e.in_file(file))?;
-    if json {
-        say!("{}", serde_json::to_string_pretty(&c).expect("a classification always serializes"));
-        return Ok(());
-    }
-    let t = c.texture_type;
-    say!("{}\n  type        {t} (anisotropy {}, variation {})", file.display(), t.anisotropy(), t.variation());
-    say!("  primary     {}", c.primary_axis.as_deref().unwrap_or("none (isotropic)"));
-    say!("  depth axis  {}", c.depth_axis.as_deref().unwrap_or("none (homogeneous)"));
-    say!("  confidence  {:.2}", c.confidence);
-    let [gx, gy, gz] = c.gradient_energy;
-    let [lx, ly, lz] = c.layering;
-    say!("  gradient energy / variance   x {gx:.4}  y {gy:.4}  z {gz:.4}   (alike within a factor 1.8)");
-    say!("  within-slice variance share  x {lx:.3}  y {ly:.3}  z {lz:.3}   (layered below 0.45)");
-    if let Some(declared) = volume.meta.texture_type.filter(|d| *d != t) {
-        say!("  note        the file declares type {declared}");
-    }
-    for note in &c.notes {
-        say!("  note        {note}");
-    }
-    Ok(())
-}
-
-/// Print the table of the seven types.
-pub fn types() {
-    for t in crate::TextureType::ALL {
-        let tiles = ["in no direction", "along one axis", "in a plane", "in 3D"][t.tiling_dimensions() as usize];
-        say!("type {:<4} anisotropy {}  variation {}  tiles {tiles}", t.name(), t.anisotropy(), t.variation());
-        say!("          tensor field: {}", t.tensor_field());
-        say!("          filling:      {}", t.filling());
-        say!("          examples:     {}", t.examples());
-    }
-}
 
 /// The options every mask shares.
 #[derive(Debug, clap::Args)]
@@ -218,24 +181,5 @@ fn build_preset(path: &Path) -> Result<()> {
             write_one(&file, mask::from_mesh(&shape, p.size, p.falloff).map_err(fail)?)
         }
         other => Err(Error::file(path, format!("kind = {other:?} is unknown; allowed: splotch, layered, mesh"))),
-    }
-}
-
-/// Run `solidtex snapshot VOLUME (-o NAME.snap | --check NAME.snap [--tolerance T])`.
-pub fn snapshot(volume: &Path, output: Option<&Path>, check: Option<&Path>, tolerance: f64) -> Result<()> {
-    io::values::within("--tolerance", tolerance, 0.0, 1.0e6).map_err(usage)?;
-    let v = io::read_volume(volume, io::budget_from_env()?)?;
-    match (output, check) {
-        (Some(out), None) => {
-            io::snapshot_file::write(out, &v)?;
-            eprintln!("wrote {}", out.display());
-            Ok(())
-        }
-        (None, Some(snap)) => {
-            io::snapshot_file::check(snap, &v, tolerance)?;
-            eprintln!("{} matches {}", volume.display(), snap.display());
-            Ok(())
-        }
-        _ => Err(Error::invalid("give either -o NAME.snap (write) or --check NAME.snap (compare)")),
     }
 }

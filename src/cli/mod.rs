@@ -16,8 +16,9 @@ mod handmade;
 mod info;
 mod masks;
 mod quality;
-mod recipe;
+mod snapshot;
 mod synth;
+mod types;
 
 use clap::{Parser, Subcommand};
 use std::path::PathBuf;
@@ -175,12 +176,12 @@ pub fn run(command: Command) -> crate::Result<()> {
         Command::Scatter(args) => handmade::run_scatter(&args),
         Command::Blur(args) => handmade::run_blur(&args),
         Command::Draw(args) => handmade::run_draw(&args),
-        Command::Classify { file, json } => masks::classify(&file, json),
+        Command::Classify { file, json } => types::classify(&file, json),
         Command::Snapshot { volume, output, check, tolerance } => {
-            masks::snapshot(&volume, output.as_deref(), check.as_deref(), tolerance)
+            snapshot::run(&volume, output.as_deref(), check.as_deref(), tolerance)
         }
         Command::Types => {
-            masks::types();
+            types::types();
             Ok(())
         }
         Command::Mask { kind } => masks::run(&kind),
@@ -191,8 +192,16 @@ pub fn run(command: Command) -> crate::Result<()> {
     }
 }
 
-pub use fill::preview_fill;
-pub use recipe::preview as preview_recipe;
+/// Progress that only prints warnings, on stderr.
+pub(crate) struct Stderr;
+
+impl crate::progress::Progress for Stderr {
+    fn update(&self, _stage: &str, _fraction: f32) {}
+
+    fn warn(&self, message: &str) {
+        eprintln!("warning: {message}");
+    }
+}
 
 /// Write one line to stdout; exit quietly when the reader has gone away.
 pub fn write_out(text: &str) {

@@ -92,7 +92,7 @@ pub fn run(job: &Job, params: &SynthParams, seed: u64, progress: &dyn Progress) 
                 seed: pass_seed(seed, level, iteration),
                 fresh: level > 0 && iteration == 0 && job.init == Init::Random,
             };
-            let (found, energy) = search(&grid, &matches, &setup);
+            let (found, energy) = search(&grid, &matches, &setup, progress).ok_or(Error::Cancelled)?;
             matches = found;
             let stage = format!("level {}/{}, iteration {}", level + 1, levels.len(), iteration + 1);
             progress.update(&format!("{stage}: searched"), (done / total_work) as f32);
@@ -106,6 +106,9 @@ pub fn run(job: &Job, params: &SynthParams, seed: u64, progress: &dyn Progress) 
                     }
                     (None, Init::Random) => transfer_joint(&mut grid.data, grid.channels, &pooled, JOINT_ROUNDS),
                 }
+            }
+            if progress.cancelled() {
+                return Err(Error::Cancelled);
             }
             done += work[level];
             progress.update(&format!("{stage}: optimized"), (done / total_work) as f32);
@@ -433,5 +436,29 @@ mod tests {
         let colours: Vec<&[f32]> = out.chunks_exact(3).collect();
         let count = |c: [f32; 3]| colours.iter().filter(|x| **x == c).count();
         assert_eq!((count([1.0, 0.0, 0.0]), count([0.0, 0.0, 1.0]), count([0.0, 1.0, 0.0])), (2, 2, 4));
+    }
+
+    /// Counts how often the work asks whether to stop.
+    struct Polls(std::sync::atomic::AtomicUsize);
+
+    impl crate::progress::Progress for Polls {
+        fn update(&self, _stage: &str, _fraction: f32) {}
+        fn cancelled(&self) -> bool {
+            self.0.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            false
+        }
+    }
+
+    /// Cancellation is polled per z-slice of every search, not once per iteration, so a
+    /// cancel stops a large synthesis within a slice's work.
+    #[test]
+    fn cancellation_is_polled_per_slice() {
+        use crate::synth::{Exemplars, SynthParams, synthesize};
+        let pixels = (0..32 * 32).flat_map(|i| [((i % 32 / 4 + i / 128) % 2) as f32; 3]).collect();
+        let ex = crate::volume::Image2d::from_data(32, 32, crate::Channel::rgb(), pixels).unwrap();
+        let params = SynthParams { size: [16; 3], levels: 1, finest_iterations: 1, ..SynthParams::default() };
+        let polls = Polls(Default::default());
+        synthesize(Exemplars { x: &ex, y: None, z: None }, &params, 1, &polls).unwrap();
+        assert!(polls.0.into_inner() >= 16, "at least one poll per slice of the one search");
     }
 }

@@ -13,6 +13,7 @@
 use super::exemplar::Prepared;
 use super::grid::Grid;
 use crate::noise::{hash3, mix64};
+use crate::progress::Progress;
 use crate::volume::Axis;
 use rayon::prelude::*;
 
@@ -62,10 +63,20 @@ fn near(ex: &Prepared, a: u32, b: u32) -> bool {
 /// One z-slice's matches per axis as (distance, pixel), and its summed distance.
 type SliceMatches = ([Vec<(f32, u32)>; 3], f64);
 
-/// Search every voxel; returns new matches per axis and the summed distance.
-pub fn search(grid: &Grid, previous: &[Matches; 3], setup: &SearchSetup) -> ([Matches; 3], f64) {
+/// Search every voxel; returns new matches per axis and the summed distance, or `None`
+/// when `progress` asks to stop (polled before each z-slice).
+pub fn search(
+    grid: &Grid,
+    previous: &[Matches; 3],
+    setup: &SearchSetup,
+    progress: &dyn Progress,
+) -> Option<([Matches; 3], f64)> {
     let [dx, dy, dz] = grid.dims;
-    let slices: Vec<SliceMatches> = (0..dz).into_par_iter().map(|z| search_slice(grid, previous, setup, z)).collect();
+    let slices: Vec<Option<SliceMatches>> = (0..dz)
+        .into_par_iter()
+        .map(|z| (!progress.cancelled()).then(|| search_slice(grid, previous, setup, z)))
+        .collect();
+    let slices: Vec<SliceMatches> = slices.into_iter().collect::<Option<_>>()?;
     let mut out: [Matches; 3] = Default::default();
     let mut total = 0.0;
     for (axis, m) in out.iter_mut().enumerate() {
@@ -81,7 +92,7 @@ pub fn search(grid: &Grid, previous: &[Matches; 3], setup: &SearchSetup) -> ([Ma
             m.pixel.extend(part.iter().map(|p| p.1));
         }
     }
-    (out, total)
+    Some((out, total))
 }
 
 /// Search one z-slice: per axis a list of (distance, pixel), and the slice's summed distance.
@@ -266,7 +277,7 @@ mod tests {
         let mut previous =
             [Matches::default(), Matches::default(), Matches { pixel: damaged, dist: vec![1.0; gw * gh] }];
         let setup = SearchSetup { exemplars: [None, None, Some(&ex)], anti_sweeping: false, seed: 1, fresh: false };
-        let (found, _) = search(&grid, &previous, &setup);
+        let (found, _) = search(&grid, &previous, &setup, &crate::progress::NoProgress).unwrap();
         previous = found;
         let inner = |i: usize| (2..gw - 2).contains(&(i % gw)) && (2..gh - 2).contains(&(i / gw));
         for i in (0..gw * gh).filter(|i| inner(*i)) {

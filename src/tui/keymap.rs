@@ -37,6 +37,8 @@ fn library(code: KeyCode) -> Option<Message> {
         KeyCode::Char('b') => Some(Message::Build),
         KeyCode::Char('B') => Some(Message::BuildAll),
         KeyCode::Char('e') => Some(Message::Edit),
+        KeyCode::PageDown => Some(Message::ScrollErrors(3)),
+        KeyCode::PageUp => Some(Message::ScrollErrors(-3)),
         _ => None,
     }
 }

@@ -18,6 +18,8 @@ pub enum Message {
     Build,
     /// Build every exemplar.
     BuildAll,
+    /// Scroll the manifest's error list by this many lines.
+    ScrollErrors(i32),
     /// Toggle the help overlay.
     Help,
     /// Leave.
@@ -89,6 +91,8 @@ pub enum Message {
     BuildPreview(String, String, Arc<Volume>),
     /// A running build reported progress: exemplar, stage, fraction.
     BuildProgress(String, String, f32),
+    /// A running build warned about exemplar `.0`: the message.
+    BuildWarning(String, String),
 }
 
 /// Work `update` asks the runtime to start in a worker thread.

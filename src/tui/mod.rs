@@ -26,10 +26,13 @@ pub use view::draw;
 
 use crate::error::{Error, Result};
 use crate::io;
+use crate::library::{self, Freshness, Observer, Outcome};
 use crossterm::event::{self, Event, KeyEventKind};
+use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::Mutex;
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::mpsc::{Receiver, Sender, channel};
 use std::time::Duration;
 
@@ -46,7 +49,7 @@ pub fn load_items(manifest: &Path, output: &Path) -> (Vec<Item>, Vec<String>) {
     let items = entry_names(&text)
         .into_iter()
         .map(|name| match entries.iter().find(|e| e.name == name) {
-            Some(entry) => item(entry, output),
+            Some(entry) => item(entry, folder, output),
             None => {
                 let own = errors.iter().find(|e| e.contains(&format!("({name})")));
                 let reason = own.cloned().unwrap_or_else(|| "a mistake in this entry (see below)".to_string());
@@ -71,11 +74,14 @@ fn entry_names(text: &str) -> Vec<String> {
     names
 }
 
-fn item(entry: &io::manifest::Entry, output: &Path) -> Item {
-    let record = io::atomic::read_bytes(&output.join(".cache").join(format!("{}.json", entry.name)))
-        .ok()
-        .and_then(|b| serde_json::from_slice::<crate::cli::build::Record>(&b).ok())
-        .filter(|_| output.join(format!("{}.exr", entry.name)).exists());
+/// A valid entry's row: its build state from the cache's plan (not built, built, or
+/// changed since its last build).
+fn item(entry: &io::manifest::Entry, folder: &Path, output: &Path) -> Item {
+    let (record, state) = match library::cache::freshness(entry, folder, output) {
+        Freshness::NotBuilt => (None, BuildState::NotBuilt),
+        Freshness::UpToDate(r) => (Some(r.clone()), BuildState::Built(r.classified)),
+        Freshness::Stale(r, _) => (Some(r.clone()), BuildState::Changed(r.classified)),
+    };
     Item {
         name: entry.name.clone(),
         declared: entry
@@ -83,7 +89,7 @@ fn item(entry: &io::manifest::Entry, output: &Path) -> Item {
             .map(|t| t.to_string())
             .or_else(|| record.as_ref().and_then(|r| r.declared.clone())),
         size: record.as_ref().map(|r| r.dims).or(entry.dims),
-        state: record.map_or(BuildState::NotBuilt, |r| BuildState::Built(r.classified)),
+        state,
     }
 }
 
@@ -140,7 +146,7 @@ fn start(effects: Vec<Effect>, model: &Model, send: &Sender<Message>) {
         std::thread::spawn(move || match effect {
             Effect::Load(name) => {
                 let result =
-                    io::read_volume(&output.join(format!("{name}.exr")), io::budget_from_env().unwrap_or(u64::MAX))
+                    io::read_volume(&library::files::volume(&output, &name), io::budget_from_env().unwrap_or(u64::MAX))
                         .map(Arc::new)
                         .map_err(|e| e.to_string());
                 let _ = send.send(Message::Loaded(name, result));
@@ -155,13 +161,15 @@ fn start(effects: Vec<Effect>, model: &Model, send: &Sender<Message>) {
                 let _ = send.send(Message::Saved(result));
             }
             Effect::Preview { name, text, generation } => {
-                let (result, warnings) = match crate::cli::preview_recipe(&manifest, &name, &text) {
+                let (result, warnings) = match library::recipe::preview(&manifest, &name, &text) {
                     Ok((volume, warnings)) => (Ok(Arc::new(volume)), warnings),
                     Err(e) => (Err(e.to_string()), Vec::new()),
                 };
                 let _ = send.send(Message::Previewed(generation, result, warnings));
             }
-            Effect::CancelBuilds => cancel_builds(),
+            Effect::CancelBuilds => {
+                CANCELS.fetch_add(1, Ordering::SeqCst);
+            }
             Effect::LoadMasks(name) => {
                 let _ = send.send(Message::MasksLoaded(name.clone(), load_masks(&output, &name)));
             }
@@ -172,88 +180,92 @@ fn start(effects: Vec<Effect>, model: &Model, send: &Sender<Message>) {
                 let _ = send.send(Message::Saved(save_steps(&manifest, &name, &steps, &file)));
             }
             Effect::Fill(name) => {
-                let result =
-                    crate::cli::preview_fill(&manifest, &output, &name).map(Arc::new).map_err(|e| e.to_string());
+                let result = library::fill::preview(&manifest, &output, &name, &crate::progress::NoProgress)
+                    .map(Arc::new)
+                    .map_err(|e| e.to_string());
                 let _ = send.send(Message::Filled(name, result));
             }
         });
     }
 }
 
-/// The builds running now, so `CancelBuilds` can stop them.
-static RUNNING: Mutex<Vec<std::process::Child>> = Mutex::new(Vec::new());
+/// Counts cancellations: a build stops when the count moves past the one it started with,
+/// so a cancel stops the builds running then, not the ones started after it.
+static CANCELS: AtomicU64 = AtomicU64::new(0);
 
-/// Build by running this program's own `build` (its output stays out of the screen); its
-/// progress lines become `BuildProgress` messages.
+/// One build at a time writes into the output folder; later ones wait their turn.
+static BUILDING: Mutex<()> = Mutex::new(());
+
+/// Build in this process on a worker thread; progress, level previews and warnings
+/// become messages, and each entry's end becomes `Built` or `BuildCancelled`.
 fn build(manifest: &Path, output: &Path, names: Vec<String>, send: &Sender<Message>) {
-    let exe = std::env::current_exe().unwrap_or_else(|_| PathBuf::from("solidtex"));
-    let mut cmd = std::process::Command::new(exe);
-    cmd.arg("build").arg(manifest).arg("-o").arg(output).arg("--progress-lines");
-    for n in &names {
-        cmd.arg("--only").arg(n);
-    }
-    cmd.stderr(std::process::Stdio::piped()).stdout(std::process::Stdio::null());
-    let (log, cancelled) = match cmd.spawn() {
-        Ok(child) => follow(child, send),
-        Err(e) => (e.to_string(), false),
+    let cancels = CANCELS.load(Ordering::SeqCst);
+    let _turn = BUILDING.lock().unwrap_or_else(|e| e.into_inner());
+    let request = library::Request {
+        manifest: manifest.to_path_buf(),
+        output: output.to_path_buf(),
+        force: false,
+        only: names.clone(),
+        shard: None,
     };
+    let observer = Messages { send: send.clone(), cancels, percent: Mutex::new(HashMap::new()) };
+    let outcomes =
+        library::build::select(&request).and_then(|entries| library::build::build(&request, &entries, &observer));
     let (items, _) = load_items(manifest, output);
-    for name in names {
-        let row = items.iter().find(|i| i.name == name);
-        let message = match row {
-            Some(row) if cancelled && !finished(&log, &name) => Message::BuildCancelled(name, row.clone()),
-            Some(row) if matches!(row.state, BuildState::Built(_)) && !log.contains(&format!("FAILED {name}:")) => {
-                Message::Built(name, Ok(row.clone()))
-            }
-            _ => {
-                let error = if cancelled { "cancelled".to_string() } else { failure(&log, &name) };
-                Message::Built(name, Err(error))
-            }
-        };
+    let row = |name: &str| items.iter().find(|i| i.name == name).cloned();
+    let messages: Vec<Message> = match outcomes {
+        Ok(outcomes) => outcomes.iter().map(|o| finished(o, row(o.name()))).collect(),
+        Err(e) => names.into_iter().map(|n| Message::Built(n, Err(e.to_string()))).collect(),
+    };
+    for message in messages {
         let _ = send.send(message);
     }
 }
 
-/// Whether the build's log says entry `name` was built or found cached (the lines
-/// `solidtex build` prints per finished entry).
-fn finished(log: &str, name: &str) -> bool {
-    log.lines().any(|l| {
-        let rest = l.strip_prefix("built ").or_else(|| l.strip_prefix("cached ")).map(str::trim_start);
-        rest.is_some_and(|r| r.split_whitespace().next() == Some(name))
-    })
+/// The message for one finished entry, given its list row as the build left it.
+fn finished(outcome: &Outcome, row: Option<Item>) -> Message {
+    let name = outcome.name().to_string();
+    match (outcome, row) {
+        (Outcome::Cancelled(_), Some(row)) => Message::BuildCancelled(name, row),
+        (Outcome::Built(_) | Outcome::Cached(_), Some(row)) => Message::Built(name, Ok(row)),
+        (Outcome::Failed(_, why), _) => Message::Built(name, Err(why.clone())),
+        (_, None) => Message::Built(name, Err("the entry is no longer in the manifest".to_string())),
+    }
 }
 
-/// Reads a build's stderr to the end, forwarding progress lines; returns the other lines
-/// and whether the build was killed.
-fn follow(mut child: std::process::Child, send: &Sender<Message>) -> (String, bool) {
-    use std::io::BufRead;
-    let stderr = child.stderr.take();
-    let id = child.id();
-    RUNNING.lock().unwrap_or_else(|e| e.into_inner()).push(child);
-    let mut log = String::new();
-    for line in stderr.into_iter().flat_map(|s| std::io::BufReader::new(s).lines().map_while(|l| l.ok())) {
-        let parts: Vec<&str> = line.splitn(4, '\t').collect();
-        match parts[..] {
-            ["progress", name, fraction, stage] => {
-                let fraction = fraction.parse().unwrap_or(0.0);
-                let _ = send.send(Message::BuildProgress(name.to_string(), stage.to_string(), fraction));
-            }
-            ["preview", name, path, level] => {
-                if let Ok(volume) = io::read_volume(Path::new(path), u64::MAX) {
-                    let _ = send.send(Message::BuildPreview(name.to_string(), level.to_string(), Arc::new(volume)));
-                }
-            }
-            _ => {
-                log.push_str(&line);
-                log.push('\n');
-            }
+/// A build's observer that sends messages to the UI (progress at most once per percent).
+struct Messages {
+    send: Sender<Message>,
+    cancels: u64,
+    percent: Mutex<HashMap<String, i32>>,
+}
+
+impl Observer for Messages {
+    fn progress(&self, name: &str, stage: &str, fraction: f32) {
+        let percent = (fraction.clamp(0.0, 1.0) * 100.0) as i32;
+        let mut last = self.percent.lock().unwrap_or_else(|e| e.into_inner());
+        if last.insert(name.to_string(), percent) != Some(percent) {
+            let _ = self.send.send(Message::BuildProgress(name.to_string(), stage.to_string(), fraction));
         }
     }
-    let mut running = RUNNING.lock().unwrap_or_else(|e| e.into_inner());
-    let position = running.iter().position(|c| c.id() == id);
-    let status = position.map(|p| running.remove(p)).and_then(|mut c| c.wait().ok());
-    let killed = status.is_some_and(|s| s.code().is_none());
-    (log, killed)
+
+    fn warn(&self, name: &str, message: &str) {
+        let _ = self.send.send(Message::BuildWarning(name.to_string(), message.to_string()));
+    }
+
+    fn level_done(&self, name: &str, level: usize, levels: usize, dims: [usize; 3], channels: usize, data: &[f32]) {
+        let roles = if channels >= 3 { crate::Channel::rgb() } else { crate::Channel::grey() };
+        let keep = roles.len();
+        let samples: Vec<f32> = data.chunks_exact(channels).flat_map(|v| v[..keep].iter().copied()).collect();
+        if let Ok(volume) = crate::Volume::from_data(dims, roles, samples) {
+            let _ =
+                self.send.send(Message::BuildPreview(name.to_string(), format!("{level}/{levels}"), Arc::new(volume)));
+        }
+    }
+
+    fn cancelled(&self) -> bool {
+        CANCELS.load(Ordering::SeqCst) != self.cancels
+    }
 }
 
 /// The seed mesh for stamping into `name`: the mesh its steps already use, else the first
@@ -299,28 +311,15 @@ fn save_steps(
 /// The built masks of `name`: `NAME.mask.exr` and `NAME.masks/{outer,middle,inner}.exr`.
 fn load_masks(output: &Path, name: &str) -> std::result::Result<Vec<(String, Arc<crate::volume::Volume>)>, String> {
     let budget = io::budget_from_env().unwrap_or(u64::MAX);
-    let mut files = vec![("splotch mask".to_string(), output.join(format!("{name}.mask.exr")))];
+    let mut files = vec![("splotch mask".to_string(), library::files::splotch_mask(output, name))];
     for layer in crate::mask::Layer::ALL {
-        let file = output.join(format!("{name}.masks")).join(format!("{}.exr", layer.name()));
-        files.push((format!("{} mask", layer.name()), file));
+        files.push((format!("{} mask", layer.name()), library::files::layer_mask(output, name, layer)));
     }
     files
         .into_iter()
         .filter(|(_, f)| f.exists())
         .map(|(label, f)| io::read_volume(&f, budget).map(|v| (label, Arc::new(v))).map_err(|e| e.to_string()))
         .collect()
-}
-
-/// Stops every running build.
-fn cancel_builds() {
-    for child in RUNNING.lock().unwrap_or_else(|e| e.into_inner()).iter_mut() {
-        let _ = child.kill();
-    }
-}
-
-fn failure(log: &str, name: &str) -> String {
-    let prefix = format!("FAILED {name}: ");
-    log.lines().find_map(|l| l.strip_prefix(&prefix)).unwrap_or("the build did not finish").to_string()
 }
 
 #[cfg(test)]
@@ -350,13 +349,15 @@ mod tests {
         assert_eq!(update(&mut m, Message::Edit), vec![Effect::ReadManifest], "a broken entry opens in the editor");
     }
 
-    /// A cancelled build's log tells which entries finished before it stopped: by whole
-    /// names, so `marble` is not taken for `marble-synth`.
+    /// Each finished entry becomes one message: a cancelled one keeps its row as the
+    /// previous output left it, a failed one says why.
     #[test]
-    fn the_build_log_names_the_entries_that_finished() {
-        let log = "built  marble 64x64x64 in 1.20 s\ncached kiwi (recipe and inputs unchanged)\nwarning: x\n";
-        assert!(finished(log, "marble") && finished(log, "kiwi"));
-        assert!(!finished(log, "marble-synth") && !finished(log, "warning:"));
-        assert!(!finished("built  marble-synth 8x8x8 in 0.1 s\n", "marble"));
+    fn each_outcome_becomes_its_message() {
+        let row =
+            super::Item { name: "m".into(), declared: None, size: Some([8; 3]), state: BuildState::Built("0".into()) };
+        let cancelled = finished(&super::Outcome::Cancelled("m".into()), Some(row.clone()));
+        assert!(matches!(cancelled, Message::BuildCancelled(n, r) if n == "m" && r == row));
+        let failed = finished(&super::Outcome::Failed("m".into(), "no image".into()), Some(row));
+        assert!(matches!(failed, Message::Built(n, Err(e)) if n == "m" && e == "no image"));
     }
 }

@@ -190,6 +190,8 @@ pub struct Model {
     pub items: Vec<Item>,
     /// Manifest errors, listed under the exemplars that are valid.
     pub errors: Vec<String>,
+    /// First line of the error list shown (page up/down scroll it).
+    pub error_scroll: usize,
     /// Selected row of the library list.
     pub selected: usize,
     /// The screen on top.
@@ -217,6 +219,7 @@ impl Model {
             output,
             items,
             errors,
+            error_scroll: 0,
             selected: 0,
             screen: Screen::Library,
             help: false,

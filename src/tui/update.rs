@@ -17,6 +17,11 @@ pub fn update(model: &mut Model, message: Message) -> Vec<Effect> {
         Message::Open => return open(model),
         Message::Build => return build(model, false),
         Message::BuildAll => return build(model, true),
+        Message::ScrollErrors(lines) => {
+            // The view stops at the last line; here only a bound that never overflows.
+            let most = model.errors.iter().map(|e| e.len()).sum::<usize>();
+            model.error_scroll = model.error_scroll.saturating_add_signed(lines as isize).min(most);
+        }
         Message::SelectAxis(axis) => {
             with_view(model, |v| v.axis = axis);
             editing::plane(model, Some(axis), 0.0);
@@ -75,6 +80,7 @@ pub fn update(model: &mut Model, message: Message) -> Vec<Effect> {
                 model.progress.insert(name, (stage, fraction));
             }
         }
+        Message::BuildWarning(name, warning) => model.status = format!("warning: {name}: {warning}"),
     }
     Vec::new()
 }
@@ -94,6 +100,7 @@ fn from_key(message: &Message) -> bool {
             | Message::SeedLoaded(_)
             | Message::BuildPreview(..)
             | Message::BuildProgress(..)
+            | Message::BuildWarning(..)
     )
 }
 
@@ -297,7 +304,7 @@ fn built(model: &mut Model, name: &str, result: Result<crate::tui::model::Item, 
 fn cancelled(model: &mut Model, name: &str, row: crate::tui::model::Item) {
     model.progress.remove(name);
     model.previews.remove(name);
-    let kept = matches!(row.state, BuildState::Built(_));
+    let kept = matches!(row.state, BuildState::Built(_) | BuildState::Changed(_));
     if let Some(item) = model.items.iter_mut().find(|i| i.name == name) {
         *item = row;
     }

@@ -62,9 +62,17 @@ fn library(frame: &mut Frame, model: &Model, area: Rect) {
         let [list, errors] = Layout::vertical([Constraint::Min(3), Constraint::Length(lines)]).areas(area);
         let text: Vec<Line> =
             model.errors.iter().map(|e| Line::styled(e.as_str(), Style::new().fg(Color::Red))).collect();
-        let title = format!(" the manifest has {} error(s); the other exemplars work ", model.errors.len());
+        let hidden = wrapped.saturating_sub(lines - 2);
+        let scroll = (model.error_scroll as u16).min(hidden);
+        let more = if hidden > 0 {
+            format!("lines {}-{} of {wrapped}, PgUp/PgDn scroll; ", scroll + 1, scroll + lines - 2)
+        } else {
+            String::new()
+        };
+        let title = format!(" the manifest has {} error(s) ({more}the other exemplars work) ", model.errors.len());
         let box_ = Block::default().borders(Borders::ALL).title(title);
-        frame.render_widget(Paragraph::new(text).wrap(ratatui::widgets::Wrap { trim: false }).block(box_), errors);
+        let paragraph = Paragraph::new(text).wrap(ratatui::widgets::Wrap { trim: false }).scroll((scroll, 0));
+        frame.render_widget(paragraph.block(box_), errors);
         list
     };
     let rows = model.items.iter().enumerate().map(|(i, item)| {
@@ -385,6 +393,13 @@ mod tests {
         let (text, _) = screen(&m2, 80, 24);
         assert!(text.contains("size is missing") && text.contains("the manifest has 1 error(s)"), "{text}");
         assert!(text.contains("kiwi") && text.contains("marble"), "the valid exemplars stay listed: {text}");
+        let many = (1..=12).map(|i| format!("lib.toml: line {i}: exemplar[{i}] (e{i}): size is missing")).collect();
+        let mut m3 = Model { errors: many, ..model() };
+        let (text, _) = screen(&m3, 80, 24);
+        assert!(text.contains("PgUp/PgDn scroll") && text.contains("(e1)") && !text.contains("(e12)"), "{text}");
+        crate::tui::update(&mut m3, crate::tui::Message::ScrollErrors(30));
+        let (text, _) = screen(&m3, 80, 24);
+        assert!(text.contains("(e12)") && !text.contains("(e1)"), "scrolled to the last error: {text}");
     }
 
     /// Slices containing z have +z up, as on the contact sheet; a slice wider than its

@@ -201,8 +201,30 @@ fn an_interrupted_build_resumes_and_ends_identical() {
     assert!(!a.iter().any(|f| f.0.ends_with(".tmp")), "no temporaries are left");
 }
 
+/// What an in-process build tells its observer.
+#[derive(Default)]
+struct Heard {
+    stages: std::sync::Mutex<Vec<String>>,
+    levels: std::sync::Mutex<Vec<(usize, usize, [usize; 3])>>,
+    finished: std::sync::Mutex<Vec<String>>,
+}
+
+impl solidtex::library::Observer for Heard {
+    fn progress(&self, name: &str, stage: &str, _fraction: f32) {
+        self.stages.lock().unwrap().push(format!("{name}: {stage}"));
+    }
+    fn level_done(&self, _: &str, level: usize, levels: usize, dims: [usize; 3], _: usize, _: &[f32]) {
+        self.levels.lock().unwrap().push((level, levels, dims));
+    }
+    fn finished(&self, outcome: &solidtex::library::Outcome) {
+        self.finished.lock().unwrap().push(outcome.name().to_string());
+    }
+}
+
+/// Both front ends build in-process: the observer hears each synthesis level (with the
+/// level's volume, for a preview) and each finished entry.
 #[test]
-fn progress_lines_report_each_synthesis_level_with_a_preview() {
+fn an_in_process_build_reports_each_synthesis_level() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     let image =
@@ -214,21 +236,16 @@ fn progress_lines_report_each_synthesis_level_with_a_preview() {
         "[[exemplar]]\nname = \"s\"\nrecipe = \"synth\"\nimage = \"ex.png\"\nsize = 16\nlevels = 2\n",
     )
     .unwrap();
-    let out = at(d, "out");
-    let run = solidtex(&["build", &manifest.to_string_lossy(), "-o", &out, "--progress-lines"]);
-    assert!(run.status.success(), "{}", stderr(&run));
-    let err = stderr(&run);
-    assert!(err.lines().any(|l| l.starts_with("progress\ts\t") && l.contains("level 2/2")), "{err}");
-    for level in ["1/2", "2/2"] {
-        assert!(
-            err.lines().any(|l| l.starts_with("preview\ts\t") && l.ends_with(level)),
-            "no level {level} preview in {err}"
-        );
-    }
-    let preview = solidtex::io::read_volume(&d.join("out/.cache/s.preview.exr"), u64::MAX).unwrap();
-    assert_eq!(preview.dims(), [16; 3], "the last preview is the finest level");
-    let quiet = solidtex(&["build", &manifest.to_string_lossy(), "-o", &out, "--force"]);
-    assert!(!stderr(&quiet).contains("progress\t"), "no progress lines unless asked");
+    let request =
+        solidtex::library::Request { manifest, output: d.join("out"), force: false, only: Vec::new(), shard: None };
+    let entries = solidtex::library::build::select(&request).unwrap();
+    let heard = Heard::default();
+    let outcomes = solidtex::library::build::build(&request, &entries, &heard).unwrap();
+    assert!(matches!(outcomes[..], [solidtex::library::Outcome::Built(_)]), "{outcomes:?}");
+    let stages = heard.stages.lock().unwrap();
+    assert!(stages.iter().any(|s| s.starts_with("s: level 2/2")), "{stages:?}");
+    assert_eq!(*heard.levels.lock().unwrap(), [(1, 2, [8; 3]), (2, 2, [16; 3])]);
+    assert_eq!(*heard.finished.lock().unwrap(), ["s"]);
 }
 
 /// The editor's preview hands its build's warnings back instead of printing them (printed,
@@ -237,7 +254,7 @@ fn progress_lines_report_each_synthesis_level_with_a_preview() {
 fn a_preview_returns_its_warnings() {
     let manifest = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/exemplars/library.toml"));
     let text = std::fs::read_to_string(manifest).unwrap().replace("count = 60", "count = 2000");
-    let (_, warnings) = solidtex::cli::preview_recipe(manifest, "kiwi", &text).unwrap();
+    let (_, warnings) = solidtex::library::recipe::preview(manifest, "kiwi", &text).unwrap();
     assert!(warnings.iter().any(|w| w.contains("seeds") && w.contains("no room")), "{warnings:?}");
 }
 
@@ -251,8 +268,8 @@ fn a_preview_keeps_stamps_beyond_its_cap() {
         "\n[[exemplar.steps]]\nstamp = \"kiwi_seed.obj\"\nat = \"40,32,32\"\nscale = \"8\"\ncolor = \"#000000\"\n";
     let at = original.find("\n[[exemplar]]\nname = \"carrot\"").expect("the carrot follows the kiwi");
     let text = format!("{}{step}{}", &original[..at], &original[at..]);
-    let (before, _) = solidtex::cli::preview_recipe(manifest, "kiwi", &original).unwrap();
-    let (after, _) = solidtex::cli::preview_recipe(manifest, "kiwi", &text).unwrap();
+    let (before, _) = solidtex::library::recipe::preview(manifest, "kiwi", &original).unwrap();
+    let (after, _) = solidtex::library::recipe::preview(manifest, "kiwi", &text).unwrap();
     assert_eq!(after.dims(), before.dims());
     let black = |v: &[f32]| v[..3].iter().all(|c| *c < 0.01);
     let stamped = (30..50)

@@ -13,7 +13,7 @@ fn every_default_library_exemplar_matches_its_snapshot() {
         if matches!(entry.source, Source::Procedural(_)) {
             entry.dims = Some([16; 3]);
         }
-        let volume = solidtex::cli::build::make(&entry).unwrap();
+        let volume = solidtex::library::recipe::make(&entry).unwrap();
         assert_snapshot(&format!("library-{}", entry.name), &volume, 0.0);
     }
 }

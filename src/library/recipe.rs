@@ -1,9 +1,11 @@
 //! Making one library exemplar: its source (procedural, sweep, synthesis, a loaded file),
 //! its steps (stamp, scatter, blur), and the masks and exports written beside it.
 
+use super::files;
 use crate::error::{Error, Result};
 use crate::io;
 use crate::io::manifest::{Entry, MaskKind, SkinSource, Source, Step, SweepSpec, SynthSpec};
+use crate::progress::Progress;
 use crate::stamp::{self, Region, Scatter};
 use crate::sweep::{self, Skin, SkinLook, Sweep};
 use crate::volume::Volume;
@@ -17,7 +19,7 @@ pub fn make(entry: &Entry) -> Result<Volume> {
 
 /// [`make`], reporting a synthesis' progress (per pyramid level) to `progress`, which may
 /// also cancel it.
-pub fn make_with(entry: &Entry, progress: &dyn crate::progress::Progress) -> Result<Volume> {
+pub fn make_with(entry: &Entry, progress: &dyn Progress) -> Result<Volume> {
     let mut volume = match &entry.source {
         Source::Procedural(recipe) => {
             let dims = entry.dims.ok_or_else(|| Error::invalid("size is missing"))?;
@@ -73,7 +75,7 @@ pub fn preview(manifest: &Path, name: &str, text: &str) -> Result<(Volume, Vec<S
 #[derive(Default)]
 struct Warnings(std::sync::Mutex<Vec<String>>);
 
-impl crate::progress::Progress for Warnings {
+impl Progress for Warnings {
     fn update(&self, _stage: &str, _fraction: f32) {}
 
     fn warn(&self, message: &str) {
@@ -81,7 +83,7 @@ impl crate::progress::Progress for Warnings {
     }
 }
 
-fn synthesized(spec: &SynthSpec, size: [usize; 3], seed: u64, none: &dyn crate::progress::Progress) -> Result<Volume> {
+fn synthesized(spec: &SynthSpec, size: [usize; 3], seed: u64, none: &dyn Progress) -> Result<Volume> {
     let read = |p: &Path| io::read_image_fit(p, spec.max_exemplar);
     let ex = read(&spec.image)?;
     let params = synth::SynthParams { size, levels: spec.levels, ..synth::SynthParams::default() };
@@ -100,18 +102,14 @@ fn synthesized(spec: &SynthSpec, size: [usize; 3], seed: u64, none: &dyn crate::
 pub fn extras(entry: &Entry, volume: &Volume, output: &Path) -> Result<()> {
     let name = &entry.name;
     for export in &entry.exports {
-        let path = match export.as_str() {
-            "slices" => output.join(format!("{name}_slices")),
-            ext => output.join(format!("{name}.{ext}")),
-        };
-        io::write_volume(&path, volume)?;
+        io::write_volume(&files::export(output, name, export), volume)?;
     }
     let size = *volume.dims().iter().max().expect("three dims");
     for kind in &entry.masks {
         match kind {
             MaskKind::Splotch => {
                 let m = crate::mask::splotch(size, entry.mask_falloff, entry.seed)?;
-                io::write_volume(&output.join(format!("{name}.mask.exr")), &m)?;
+                io::write_volume(&files::splotch_mask(output, name), &m)?;
             }
             MaskKind::Layered => {
                 let depth = depth_axis(entry);
@@ -119,9 +117,9 @@ pub fn extras(entry: &Entry, volume: &Volume, output: &Path) -> Result<()> {
                     .iter()
                     .map(|l| Ok((*l, crate::mask::layered(size, entry.mask_falloff, entry.seed, *l, depth)?)))
                     .collect::<Result<_>>()?;
-                io::write_folder(&output.join(format!("{name}.masks")), |dir| {
+                io::write_folder(&files::layer_folder(output, name), |dir| {
                     for (l, m) in &layers {
-                        io::write_volume(&dir.join(format!("{}.exr", l.name())), m)?;
+                        io::write_volume(&dir.join(files::layer_file(*l)), m)?;
                     }
                     Ok(())
                 })?;
@@ -181,14 +179,35 @@ fn planned(w: usize, h: usize, spec: &SweepSpec) -> [usize; 3] {
     d
 }
 
-fn apply(step: &Step, volume: &mut Volume, progress: &dyn crate::progress::Progress) -> Result<()> {
+/// A seed mesh, oriented; degenerate triangles dropped and an open mesh are reported as
+/// warnings to `progress`.
+pub fn read_seed(path: &Path, progress: &dyn Progress) -> Result<crate::mesh::Mesh> {
+    let mesh = io::mesh_file::read_mesh(path)?;
+    let dropped = mesh.dropped_degenerate();
+    if dropped > 0 {
+        progress.warn(&format!(
+            "{}: dropped {dropped} degenerate triangle(s) (zero area or a repeated corner)",
+            path.display()
+        ));
+    }
+    let open = mesh.boundary_edges();
+    if open > 0 {
+        progress.warn(&format!(
+            "{}: the mesh has {open} boundary edge(s) (open or non-manifold); inside is decided by winding number",
+            path.display()
+        ));
+    }
+    Ok(mesh.oriented())
+}
+
+fn apply(step: &Step, volume: &mut Volume, progress: &dyn Progress) -> Result<()> {
     match step {
         Step::Stamp { mesh, placement, colour } => {
-            let seed = super::handmade::read_seed(mesh)?;
+            let seed = read_seed(mesh, progress)?;
             stamp::stamp(volume, &seed, placement, *colour).map_err(|e| e.in_file(mesh))?;
         }
         Step::Scatter { mesh, count, region, scale, colour, seed } => {
-            let shape = super::handmade::read_seed(mesh)?;
+            let shape = read_seed(mesh, progress)?;
             let d = volume.dims();
             let region =
                 region.unwrap_or(Region::Box(glam::Vec3::ZERO, glam::Vec3::new(d[0] as f32, d[1] as f32, d[2] as f32)));

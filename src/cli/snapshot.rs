@@ -1,0 +1,25 @@
+//! `solidtex snapshot`: write or check a text snapshot of a volume.
+
+use super::commands::usage;
+use crate::error::{Error, Result};
+use crate::io;
+use std::path::Path;
+
+/// Run `solidtex snapshot VOLUME (-o NAME.snap | --check NAME.snap [--tolerance T])`.
+pub fn run(volume: &Path, output: Option<&Path>, check: Option<&Path>, tolerance: f64) -> Result<()> {
+    io::values::within("--tolerance", tolerance, 0.0, 1.0e6).map_err(usage)?;
+    let v = io::read_volume(volume, io::budget_from_env()?)?;
+    match (output, check) {
+        (Some(out), None) => {
+            io::snapshot_file::write(out, &v)?;
+            eprintln!("wrote {}", out.display());
+            Ok(())
+        }
+        (None, Some(snap)) => {
+            io::snapshot_file::check(snap, &v, tolerance)?;
+            eprintln!("{} matches {}", volume.display(), snap.display());
+            Ok(())
+        }
+        _ => Err(Error::invalid("give either -o NAME.snap (write) or --check NAME.snap (compare)")),
+    }
+}

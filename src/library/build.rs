@@ -1,0 +1,465 @@
+//! Building a library: make the chosen entries in parallel within the memory budget, each
+//! into `DIR/NAME.exr`, a contact sheet and its masks and exports, skip the ones the cache
+//! says are up to date, and write a report. Both front ends call [`build`] in-process; what
+//! happens is told to an [`Observer`], which may also cancel.
+
+use super::cache::{self, Freshness, Record};
+use super::{files, recipe};
+use crate::error::{Error, Result};
+use crate::io;
+use crate::io::manifest::{self, Entry, Source};
+use crate::progress::Progress;
+use rayon::prelude::*;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// What to build, and where.
+#[derive(Debug, Clone)]
+pub struct Request {
+    /// The manifest.
+    pub manifest: PathBuf,
+    /// Output folder (created if missing).
+    pub output: PathBuf,
+    /// Rebuild even what the cache says is up to date.
+    pub force: bool,
+    /// Build only these entries (empty: all).
+    pub only: Vec<String>,
+    /// Build only shard K of N.
+    pub shard: Option<(u64, u64)>,
+}
+
+/// How one entry's build ended.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Outcome {
+    /// Made and written.
+    Built(Record),
+    /// Up to date: nothing was written.
+    Cached(Record),
+    /// Failed with this message; its previous output (if any) is kept.
+    Failed(String, String),
+    /// Stopped before it finished; its previous output (if any) is kept.
+    Cancelled(String),
+}
+
+impl Outcome {
+    /// The entry's name.
+    pub fn name(&self) -> &str {
+        match self {
+            Outcome::Built(r) | Outcome::Cached(r) => &r.name,
+            Outcome::Failed(n, _) | Outcome::Cancelled(n) => n,
+        }
+    }
+}
+
+/// Hears what a build does. Every method has a default that ignores it; called from the
+/// build's worker threads.
+pub trait Observer: Sync {
+    /// Progress of entry `name`: `stage` and a fraction in [0, 1].
+    fn progress(&self, _name: &str, _stage: &str, _fraction: f32) {}
+    /// A warning about entry `name` that does not stop it.
+    fn warn(&self, _name: &str, _message: &str) {}
+    /// A pyramid level of entry `name`'s synthesis finished (see [`Progress::level_done`]).
+    fn level_done(
+        &self,
+        _name: &str,
+        _level: usize,
+        _levels: usize,
+        _dims: [usize; 3],
+        _channels: usize,
+        _data: &[f32],
+    ) {
+    }
+    /// An entry finished (built, cached, failed or cancelled).
+    fn finished(&self, _outcome: &Outcome) {}
+    /// Return true to stop: running entries stop at their next check, the others do not start.
+    fn cancelled(&self) -> bool {
+        false
+    }
+}
+
+/// An observer that hears nothing.
+pub struct Quiet;
+
+impl Observer for Quiet {}
+
+/// The entries a request builds: all of the manifest's, or the named ones (then only they
+/// must be valid: a mistake in another entry does not stop them), or one shard's.
+pub fn select(request: &Request) -> Result<Vec<Entry>> {
+    let folder = manifest_folder(&request.manifest);
+    let entries = if request.only.is_empty() {
+        manifest::read_plan(&request.manifest)?.entries
+    } else {
+        let text = io::read_text(&request.manifest, "manifest")?;
+        let (valid, _) = manifest::parse_plan_lenient(&text, folder);
+        let mut chosen = Vec::new();
+        for name in &request.only {
+            match valid.iter().find(|e| &e.name == name) {
+                Some(entry) => chosen.push(entry.clone()),
+                None => return Err(unknown_or_broken(&text, folder, name, &valid, &request.manifest)),
+            }
+        }
+        chosen
+    };
+    Ok(match request.shard {
+        Some((k, n)) => entries.into_iter().filter(|e| shard_of(&e.name, n) == k).collect(),
+        None => entries,
+    })
+}
+
+/// The error for `--only NAME` when no valid entry has that name: the entry's own mistake,
+/// or the list of names there are.
+fn unknown_or_broken(text: &str, folder: &Path, name: &str, valid: &[Entry], file: &Path) -> Error {
+    if let Err(e) = manifest::parse_entry(text, folder, name)
+        && !e.to_string().starts_with("no exemplar named")
+    {
+        return e.in_file(file);
+    }
+    let names: Vec<&str> = valid.iter().map(|e| e.name.as_str()).collect();
+    Error::file(file, format!("--only {name:?} is not in the manifest; it has {}", names.join(", ")))
+}
+
+/// The folder a manifest's relative paths start from.
+pub fn manifest_folder(manifest: &Path) -> &Path {
+    manifest.parent().unwrap_or(Path::new("."))
+}
+
+/// Build `entries` of `request`'s manifest into its output folder, holding the folder's
+/// build lock; one entry's failure (or panic) never takes the others down. Writes the
+/// report and returns one outcome per entry, in order.
+pub fn build(request: &Request, entries: &[Entry], observer: &dyn Observer) -> Result<Vec<Outcome>> {
+    let output = request.output.as_path();
+    let _lock = lock_output(output)?;
+    remove_stale_temporaries(output);
+    let folder = manifest_folder(&request.manifest);
+    let budget = io::budget_from_env()?;
+    let refs: Vec<&Entry> = entries.iter().collect();
+    let mut outcomes: Vec<Outcome> = Vec::new();
+    for batch in batches(&refs, budget) {
+        let done: Vec<Outcome> = batch
+            .par_iter()
+            .map(|entry| {
+                let outcome = build_one(entry, folder, output, request.force, observer);
+                observer.finished(&outcome);
+                outcome
+            })
+            .collect();
+        outcomes.extend(done);
+    }
+    write_report(output, &outcomes)?;
+    Ok(outcomes)
+}
+
+/// Build one entry; an error or a panic fails this entry only.
+fn build_one(entry: &Entry, folder: &Path, output: &Path, force: bool, observer: &dyn Observer) -> Outcome {
+    if observer.cancelled() {
+        return Outcome::Cancelled(entry.name.clone());
+    }
+    match caught(|| build_entry(entry, folder, output, force, observer)) {
+        Ok(outcome) => outcome,
+        Err(Error::Cancelled) => Outcome::Cancelled(entry.name.clone()),
+        Err(e) => Outcome::Failed(entry.name.clone(), e.to_string()),
+    }
+}
+
+/// Run `work`, turning a panic into an error that says what it was.
+pub fn caught<T>(work: impl FnOnce() -> Result<T>) -> Result<T> {
+    std::panic::catch_unwind(std::panic::AssertUnwindSafe(work)).unwrap_or_else(|panic| {
+        let what = panic
+            .downcast_ref::<&str>()
+            .map(|s| s.to_string())
+            .or_else(|| panic.downcast_ref::<String>().cloned())
+            .unwrap_or_else(|| "no message".to_string());
+        Err(Error::invalid(format!("internal error (please report it): {what}")))
+    })
+}
+
+/// One entry's progress, passed to its recipe.
+struct EntryProgress<'a> {
+    name: &'a str,
+    observer: &'a dyn Observer,
+}
+
+impl Progress for EntryProgress<'_> {
+    fn update(&self, stage: &str, fraction: f32) {
+        self.observer.progress(self.name, stage, fraction);
+    }
+
+    fn cancelled(&self) -> bool {
+        self.observer.cancelled()
+    }
+
+    fn warn(&self, message: &str) {
+        self.observer.warn(self.name, message);
+    }
+
+    fn level_done(&self, level: usize, levels: usize, dims: [usize; 3], channels: usize, data: &[f32]) {
+        self.observer.level_done(self.name, level, levels, dims, channels, data);
+    }
+}
+
+/// Make and write one entry, unless it is up to date. Nothing is written until its volume
+/// is made, so a cancelled or failed entry keeps its previous output.
+fn build_entry(entry: &Entry, folder: &Path, output: &Path, force: bool, observer: &dyn Observer) -> Result<Outcome> {
+    let started = Instant::now();
+    if !force && let Freshness::UpToDate(record) = cache::freshness(entry, folder, output) {
+        return Ok(Outcome::Cached(record));
+    }
+    let key = cache::key(entry, folder)?;
+    let progress = EntryProgress { name: &entry.name, observer };
+    let volume = recipe::make_with(entry, &progress)?;
+    if progress.cancelled() {
+        return Err(Error::Cancelled);
+    }
+    io::write_volume(&files::volume(output, &entry.name), &volume)?;
+    io::write_rgb8(&output.join(files::sheet(&entry.name)), &crate::render::sheet(&volume, &entry.name))?;
+    recipe::extras(entry, &volume, output)?;
+    let classified =
+        crate::classify::classify(&volume).map(|c| c.texture_type.to_string()).unwrap_or_else(|_| "-".into());
+    let record = Record {
+        name: entry.name.clone(),
+        key: key.key,
+        recipe: key.recipe,
+        inputs: key.inputs,
+        dims: volume.dims(),
+        declared: volume.meta.texture_type.map(|t| t.to_string()),
+        classified,
+        seconds: started.elapsed().as_secs_f64(),
+        files: cache::written(output, entry)?,
+    };
+    cache::write_record(output, &record)?;
+    Ok(Outcome::Built(record))
+}
+
+/// Copy the outputs of shard builds (`folders`) into `request`'s output folder and write
+/// the combined report.
+pub fn merge(request: &Request, folders: &[PathBuf]) -> Result<Vec<Outcome>> {
+    let entries = manifest::read_plan(&request.manifest)?.entries;
+    let output = request.output.as_path();
+    let _lock = lock_output(output)?;
+    let mut outcomes = Vec::new();
+    for entry in &entries {
+        let name = &entry.name;
+        let Some(folder) = folders.iter().find(|f| f.join(files::record(name)).exists()) else {
+            outcomes.push(Outcome::Failed(name.clone(), "built by none of the merged folders".to_string()));
+            continue;
+        };
+        let mut names = files::outputs(entry);
+        names.push(files::record(name));
+        for file in names {
+            copy(&folder.join(&file), &output.join(&file))?;
+        }
+        let record = cache::read_record(output, name)
+            .ok_or_else(|| Error::file(output.join(files::record(name)), "unreadable cache record"))?;
+        outcomes.push(Outcome::Cached(record));
+    }
+    write_report(output, &outcomes)?;
+    Ok(outcomes)
+}
+
+/// The shard an exemplar belongs to among `n`: a stable hash of its name.
+pub fn shard_of(name: &str, n: u64) -> u64 {
+    let hash = blake3::hash(name.as_bytes());
+    u64::from_le_bytes(hash.as_bytes()[..8].try_into().expect("8 bytes")) % n
+}
+
+/// Create the output folder and its cache, and hold the build lock on it (released when
+/// the returned file closes): a second build on the same folder stops with a clear message
+/// instead of removing the first one's temporaries.
+fn lock_output(output: &Path) -> Result<std::fs::File> {
+    let cache = output.join(files::CACHE);
+    std::fs::create_dir_all(&cache).map_err(|e| Error::io(output, e))?;
+    let path = cache.join("build.lock");
+    let file = std::fs::OpenOptions::new()
+        .create(true)
+        .truncate(false)
+        .write(true)
+        .open(&path)
+        .map_err(|e| Error::io(&path, e))?;
+    match file.try_lock() {
+        Ok(()) => Ok(file),
+        Err(std::fs::TryLockError::WouldBlock) => Err(Error::file(
+            output,
+            "another solidtex build is writing into this folder (it holds .cache/build.lock); \
+             wait for it to finish or build into another folder with -o",
+        )),
+        Err(std::fs::TryLockError::Error(e)) => Err(Error::io(&path, e)),
+    }
+}
+
+/// Remove the temporaries an interrupted build left (names solidtex gives them:
+/// `.NAME.solidtex-` + random letters + `.tmp`, files or folders). Only called under the
+/// build lock.
+fn remove_stale_temporaries(output: &Path) {
+    for folder in [output.to_path_buf(), output.join(files::CACHE)] {
+        let Ok(entries) = std::fs::read_dir(&folder) else { continue };
+        for path in entries.filter_map(|e| e.ok().map(|e| e.path())) {
+            let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+            if io::atomic::is_temporary_name(&name) {
+                let _ = if path.is_dir() { std::fs::remove_dir_all(&path) } else { std::fs::remove_file(&path) };
+            }
+        }
+    }
+}
+
+/// Copy a file, or a folder of files, atomically.
+fn copy(from: &Path, to: &Path) -> Result<()> {
+    if from.is_dir() {
+        let entries: Vec<PathBuf> =
+            std::fs::read_dir(from).map_err(|e| Error::io(from, e))?.filter_map(|e| e.ok().map(|e| e.path())).collect();
+        return io::write_folder(to, |dir| {
+            entries.iter().try_for_each(|f| copy(f, &dir.join(f.file_name().unwrap_or_default())))
+        });
+    }
+    io::write_bytes(to, &io::atomic::read_bytes(from)?)
+}
+
+/// Bytes an exemplar's build may hold at once: its volume several times over (synthesis
+/// keeps matches and two grids per level).
+fn estimate(entry: &Entry) -> u64 {
+    let dims = entry.dims.unwrap_or([64; 3]);
+    let voxels = dims.iter().map(|d| *d as u64).product::<u64>();
+    let factor = if matches!(entry.source, Source::Synth(_)) { 48 } else { 16 };
+    voxels * 4 * factor
+}
+
+/// Consecutive groups of entries whose estimates together fit the budget (one entry alone
+/// always forms a group); groups run one after another, entries in a group in parallel.
+fn batches<'a>(entries: &[&'a Entry], budget: u64) -> Vec<Vec<&'a Entry>> {
+    let mut out: Vec<Vec<&Entry>> = Vec::new();
+    let mut used = 0;
+    for &e in entries {
+        let need = estimate(e);
+        match out.last_mut() {
+            Some(last) if used + need <= budget => {
+                last.push(e);
+                used += need;
+            }
+            _ => {
+                out.push(vec![e]);
+                used = need;
+            }
+        }
+    }
+    out
+}
+
+/// `report.md` and `report.html`: one row per exemplar with its sheet.
+fn write_report(output: &Path, outcomes: &[Outcome]) -> Result<()> {
+    let mut md = String::from(
+        "# Exemplar library\n\n| exemplar | size | declared | classified | build | sheet |\n|---|---|---|---|---|---|\n",
+    );
+    let mut html = String::from(
+        "<!doctype html><meta charset=utf-8><title>Exemplar library</title>\
+         <style>body{font-family:sans-serif;background:#222;color:#eee}td,th{padding:4px 10px}img{width:280px}</style>\
+         <h1>Exemplar library</h1><table><tr><th>exemplar<th>size<th>declared<th>classified<th>build<th>sheet\n",
+    );
+    for o in outcomes {
+        let (size, declared, classified, build) = match o {
+            Outcome::Built(r) | Outcome::Cached(r) => {
+                let when = if matches!(o, Outcome::Built(_)) { format!("{:.2} s", r.seconds) } else { "cached".into() };
+                let [x, y, z] = r.dims;
+                (format!("{x}x{y}x{z}"), r.declared.clone().unwrap_or("-".into()), r.classified.clone(), when)
+            }
+            Outcome::Failed(_, why) => ("-".into(), "-".into(), "-".into(), format!("failed: {why}")),
+            Outcome::Cancelled(_) => ("-".into(), "-".into(), "-".into(), "cancelled".into()),
+        };
+        let (name, sheet) = (o.name(), files::sheet(o.name()));
+        md += &format!("| {name} | {size} | {declared} | {classified} | {build} | ![{name}]({sheet}) |\n");
+        html += &format!(
+            "<tr><td>{name}<td>{size}<td>{declared}<td>{classified}<td>{}<td><img src=\"{sheet}\" alt=\"{name}\">\n",
+            build.replace('<', "&lt;")
+        );
+    }
+    html += "</table>\n";
+    io::write_bytes(&output.join("report.md"), md.as_bytes())?;
+    io::write_bytes(&output.join("report.html"), html.as_bytes())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::io::manifest::parse_plan;
+    use std::sync::atomic::{AtomicBool, Ordering};
+
+    #[test]
+    fn batches_keep_each_group_within_the_budget() {
+        let text = (0..5)
+            .map(|i| format!("[[exemplar]]\nname = \"e{i}\"\nrecipe = \"procedural:marble\"\nsize = 16\n"))
+            .collect::<String>();
+        let plan = parse_plan(&text, Path::new(".")).unwrap();
+        let entries: Vec<&Entry> = plan.entries.iter().collect();
+        let one = estimate(entries[0]);
+        let groups = batches(&entries, 2 * one);
+        assert_eq!(groups.iter().map(Vec::len).collect::<Vec<_>>(), [2, 2, 1]);
+        assert_eq!(batches(&entries, 1).len(), 5, "an entry over the budget still builds, alone");
+        assert_eq!(batches(&entries, u64::MAX).len(), 1);
+    }
+
+    #[test]
+    fn a_panic_in_one_entry_becomes_its_error() {
+        let err = caught(|| -> Result<()> { panic!("octaves out of hand") }).unwrap_err().to_string();
+        assert!(err.contains("internal error") && err.contains("octaves out of hand"), "{err}");
+        assert_eq!(caught(|| Ok(7)).unwrap(), 7);
+    }
+
+    #[test]
+    fn shards_split_names_stably() {
+        let names = ["kiwi", "carrot", "trunk", "marble", "wood", "strata"];
+        let first: Vec<u64> = names.iter().map(|n| shard_of(n, 3)).collect();
+        assert_eq!(first, names.iter().map(|n| shard_of(n, 3)).collect::<Vec<_>>());
+        assert!(first.iter().all(|k| *k < 3));
+    }
+
+    /// Cancels once the synthesis reports its first level.
+    struct CancelAtLevel(AtomicBool);
+
+    impl Observer for CancelAtLevel {
+        fn level_done(&self, _: &str, _: usize, _: usize, _: [usize; 3], _: usize, _: &[f32]) {
+            self.0.store(true, Ordering::Relaxed);
+        }
+        fn cancelled(&self) -> bool {
+            self.0.load(Ordering::Relaxed)
+        }
+    }
+
+    /// The plan: a new entry is not built; after a build it is up to date; an edited
+    /// recipe makes it stale with the reason; a cancelled rebuild keeps the previous
+    /// output byte for byte and is reported as cancelled, not built.
+    #[test]
+    fn the_plan_sees_changes_and_a_cancelled_build_keeps_the_old_output() {
+        let dir = tempfile::tempdir().unwrap();
+        let pixels = (0..1024).flat_map(|i| [((i % 32 / 4 + i / 128) % 2) as f32, 0.5, (i % 3) as f32 / 2.0]).collect();
+        let photo = crate::volume::Image2d::from_data(32, 32, crate::Channel::rgb(), pixels).unwrap();
+        io::write_image(&dir.path().join("p.png"), &photo).unwrap();
+        let manifest = dir.path().join("lib.toml");
+        let write = |seed: u64| {
+            let text = format!(
+                "[[exemplar]]\nname = \"s\"\nrecipe = \"synth\"\nimage = \"p.png\"\nsize = 16\nlevels = 2\nseed = {seed}\n"
+            );
+            std::fs::write(&manifest, text).unwrap();
+        };
+        write(1);
+        let request = Request {
+            manifest: manifest.clone(),
+            output: dir.path().join("out"),
+            force: false,
+            only: Vec::new(),
+            shard: None,
+        };
+        let entries = select(&request).unwrap();
+        let fresh = |entries: &[Entry]| cache::freshness(&entries[0], dir.path(), &request.output);
+        assert_eq!(fresh(&entries), Freshness::NotBuilt);
+        let outcomes = build(&request, &entries, &Quiet).unwrap();
+        assert!(matches!(&outcomes[0], Outcome::Built(_)), "{outcomes:?}");
+        assert!(matches!(fresh(&entries), Freshness::UpToDate(_)));
+        let before = std::fs::read(files::volume(&request.output, "s")).unwrap();
+
+        write(2);
+        let entries = select(&request).unwrap();
+        assert!(matches!(fresh(&entries), Freshness::Stale(_, why) if why == "the recipe changed"));
+        let outcomes = build(&request, &entries, &CancelAtLevel(AtomicBool::new(false))).unwrap();
+        assert_eq!(outcomes, [Outcome::Cancelled("s".into())]);
+        assert_eq!(std::fs::read(files::volume(&request.output, "s")).unwrap(), before);
+        assert!(matches!(fresh(&entries), Freshness::Stale(..)));
+    }
+}

@@ -1,0 +1,187 @@
+//! The exemplars a fill spec names, resolved from a built library: the texture type and
+//! axes, one source per layer or paste with its mask, and the fill preview both front ends
+//! show.
+
+use super::build::{self, Observer, Outcome, Request};
+use super::files;
+use crate::TextureType;
+use crate::error::{Error, Result};
+use crate::fill::render::Textures;
+use crate::fill::spec::{self, FillSpec};
+use crate::fill::{self, FillPreview, Job, MaskRef, Source, mesher};
+use crate::io::{self, manifest};
+use crate::mask::Layer;
+use crate::volume::{Axis, Volume};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// The spec's exemplars turned into a type, texture axes, sources and masks.
+pub struct Resolved {
+    /// The texture type of the main exemplar.
+    pub kind: TextureType,
+    /// Which volume axis each texture axis is.
+    pub axes: [usize; 3],
+    /// One source per layer of the main exemplar, then one per paste.
+    pub sources: Vec<Source>,
+    /// The mask of each source.
+    pub masks: Vec<Volume>,
+}
+
+/// The exemplars a fill spec uses (the main one, then its pastes).
+pub fn names(spec: &FillSpec) -> Vec<String> {
+    let mut names = vec![spec.exemplar.clone()];
+    names.extend(spec.pastes.iter().map(|p| p.exemplar.clone()));
+    names
+}
+
+/// The exemplars of `spec` whose volumes are not built yet; an error if the library has
+/// no entry of one of its names.
+pub fn missing(spec: &FillSpec) -> Result<Vec<String>> {
+    check_names(spec, &manifest::read_plan(&spec.library)?)?;
+    Ok(names(spec).into_iter().filter(|n| !files::volume(&spec.built, n).exists()).collect())
+}
+
+fn check_names(spec: &FillSpec, plan: &manifest::Plan) -> Result<()> {
+    for name in &names(spec) {
+        if !plan.entries.iter().any(|e| &e.name == name) {
+            let known: Vec<&str> = plan.entries.iter().map(|e| e.name.as_str()).collect();
+            return Err(Error::invalid(format!(
+                "exemplar '{name}' is not in the library {}; it has: {}",
+                spec.library.display(),
+                known.join(", ")
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// Build (cached) the exemplars `names` of the spec's library.
+pub fn build_first(spec: &FillSpec, names: Vec<String>, observer: &dyn Observer) -> Result<()> {
+    let request =
+        Request { manifest: spec.library.clone(), output: spec.built.clone(), force: false, only: names, shard: None };
+    let entries = build::select(&request)?;
+    let outcomes = build::build(&request, &entries, observer)?;
+    match outcomes.iter().find(|o| !matches!(o, Outcome::Built(_) | Outcome::Cached(_))) {
+        Some(Outcome::Failed(name, why)) => Err(Error::invalid(format!("building exemplar '{name}' failed: {why}"))),
+        Some(_) => Err(Error::Cancelled),
+        None => Ok(()),
+    }
+}
+
+/// Resolve a spec whose exemplars are built; `model_path` is where the model will be
+/// written (its sources name files relative to it).
+pub fn resolve(spec: &FillSpec, model_path: &Path) -> Result<Resolved> {
+    let plan = manifest::read_plan(&spec.library)?;
+    check_names(spec, &plan)?;
+    let entry = plan.entries.iter().find(|e| e.name == spec.exemplar).expect("checked above");
+    let volume = load_built(spec, &spec.exemplar)?;
+    let declared = entry.texture_type.or(volume.meta.texture_type);
+    let kind = match (spec.texture_type, declared) {
+        (Some(t), _) | (None, Some(t)) => t,
+        (None, None) => crate::classify::classify(&volume)?.texture_type,
+    };
+    let axes = spec::texture_axes(&volume, kind, spec.axes)?;
+    let size = *volume.dims().iter().max().expect("three dims");
+    let base = model_path.parent().unwrap_or(Path::new("."));
+    let mut sources = Vec::new();
+    let layered = matches!(kind, TextureType::T1b | TextureType::T2b);
+    let layers: &[Option<Layer>] =
+        if layered { &[Some(Layer::Outer), Some(Layer::Middle), Some(Layer::Inner)] } else { &[None] };
+    for layer in layers {
+        sources.push(source(spec, &spec.exemplar, *layer, Axis::ALL[axes[0]], size, base));
+    }
+    for p in &spec.pastes {
+        let v = load_built(spec, &p.exemplar)?;
+        sources.push(source(spec, &p.exemplar, None, Axis::Z, *v.dims().iter().max().expect("dims"), base));
+    }
+    let masks = sources.iter().map(|s| load_mask(&s.mask, base)).collect::<Result<Vec<_>>>()?;
+    Ok(Resolved { kind, axes, sources, masks })
+}
+
+/// The built volume of exemplar `name`.
+pub fn load_built(spec: &FillSpec, name: &str) -> Result<Volume> {
+    io::read_volume(&files::volume(&spec.built, name), io::budget_from_env()?)
+}
+
+fn source(spec: &FillSpec, name: &str, layer: Option<Layer>, depth: Axis, size: usize, base: &Path) -> Source {
+    let file = match layer {
+        Some(l) => files::layer_mask(&spec.built, name, l),
+        None => files::splotch_mask(&spec.built, name),
+    };
+    let (falloff, seed) = (spec.mask_falloff, spec.seed);
+    let mask = match layer {
+        _ if file.exists() => MaskRef::File(relative(&file, base)),
+        Some(layer) => MaskRef::Layered { layer, depth, size, falloff, seed },
+        None => MaskRef::Splotch { size, falloff, seed },
+    };
+    Source { exemplar: name.to_string(), volume: relative(&files::volume(&spec.built, name), base), mask }
+}
+
+/// A source's mask: generated from its parameters, or read from its file (relative to `base`).
+pub fn load_mask(mask: &MaskRef, base: &Path) -> Result<Volume> {
+    match (mask.generate(), mask) {
+        (Some(generated), _) => generated,
+        (None, MaskRef::File(path)) => io::read_volume(&base.join(path), io::budget_from_env()?),
+        (None, _) => unreachable!("only files are not generated"),
+    }
+}
+
+/// `target` relative to the folder `base` (both resolved), or absolute if that fails.
+fn relative(target: &Path, base: &Path) -> String {
+    let absolute = |p: &Path| std::path::absolute(p).ok();
+    let (Some(t), Some(b)) = (absolute(target), absolute(base)) else {
+        return target.to_string_lossy().into_owned();
+    };
+    let (t, b): (Vec<_>, Vec<_>) = (t.components().collect(), b.components().collect());
+    let common = t.iter().zip(&b).take_while(|(x, y)| x == y).count();
+    let mut out = PathBuf::new();
+    (common..b.len()).for_each(|_| out.push(".."));
+    t[common..].iter().for_each(|c| out.push(c));
+    out.to_string_lossy().into_owned()
+}
+
+/// A small fill of a drawn shape with built exemplar `name` of the library `manifest`
+/// (built into `output`): a block for type 1-a, a fruit otherwise, 2500 tets. Nothing is
+/// written; `progress` may cancel it.
+pub fn preview(
+    manifest: &Path,
+    output: &Path,
+    name: &str,
+    progress: &dyn crate::progress::Progress,
+) -> Result<FillPreview> {
+    let started = Instant::now();
+    let mut spec = FillSpec::new(name);
+    spec.library = manifest.to_path_buf();
+    spec.built = output.to_path_buf();
+    spec.tets = 2500;
+    let probe = resolve(&spec, &output.join("preview.lst"))?;
+    let (shape, axis) = match probe.kind {
+        TextureType::T1a => ("block", vec![glam::Vec3::new(-0.9, 0.0, 0.0), glam::Vec3::new(0.9, 0.0, 0.0)]),
+        _ => ("fruit", vec![glam::Vec3::new(-0.75, 0.0, 0.0), glam::Vec3::new(0.75, 0.0, 0.0)]),
+    };
+    if matches!(probe.kind, TextureType::T1b | TextureType::T2a | TextureType::T2b) {
+        spec.depth.axes = vec![axis.clone()];
+    }
+    spec.directions = vec![axis];
+    let surface = crate::mesh::shapes::named(shape).expect("a drawn shape").canonical();
+    let tets = mesher::tetrahedralize(&surface, spec.tets)?;
+    let job = Job {
+        surface: &surface,
+        spec: &spec,
+        kind: probe.kind,
+        axes: probe.axes,
+        sources: probe.sources.clone(),
+        masks: probe.masks.clone(),
+    };
+    let (model, report) = fill::fill(&job, tets, progress)?;
+    let colour = probe.sources.iter().map(|s| load_built(&spec, &s.exemplar)).collect::<Result<Vec<_>>>()?;
+    let textures = Textures::new(&colour, &probe.masks);
+    let summary = format!(
+        "{name} (type {}) in a {shape}: {} tets, {} patches, {:.2} s",
+        probe.kind,
+        report.tets,
+        report.paste.patches,
+        started.elapsed().as_secs_f64()
+    );
+    Ok(FillPreview { model, textures, summary })
+}
