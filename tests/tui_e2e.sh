@@ -109,6 +109,10 @@ if tmux has-session -t "$session" 2>/dev/null; then echo "tui e2e: q did not qui
 # kiwi is not stale, and its build warning stays in the status line, not over the screen.
 tmux new-session -d -s "$session" -x 80 -y 24 "$bin tui $out/lib/library.toml -o $out/built"
 wait_for "solidtex library" 10
+# i. entries edited since their build are found stale when the UI opens, with the reason
+wait_for "changed since their last build (select one to see why)" 5
+tmux send-keys -t "$session" Down Up
+wait_for "marble changed since its last build (the recipe changed)" 5
 tmux send-keys -t "$session" Down Down Down b
 wait_for "built kiwi" 60
 tmux send-keys -t "$session" Enter

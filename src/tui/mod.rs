@@ -80,7 +80,7 @@ fn item(entry: &io::manifest::Entry, folder: &Path, output: &Path) -> Item {
     let (record, state) = match library::cache::freshness(entry, folder, output) {
         Freshness::NotBuilt => (None, BuildState::NotBuilt),
         Freshness::UpToDate(r) => (Some(r.clone()), BuildState::Built(r.classified)),
-        Freshness::Stale(r, _) => (Some(r.clone()), BuildState::Changed(r.classified)),
+        Freshness::Stale(r, why) => (Some(r.clone()), BuildState::Changed(r.classified, why)),
     };
     Item {
         name: entry.name.clone(),

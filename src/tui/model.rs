@@ -13,8 +13,9 @@ pub enum BuildState {
     Building,
     /// Built; the classified type from the build record.
     Built(String),
-    /// Built (the classified type), but its recipe was saved since: the output is stale.
-    Changed(String),
+    /// Built (the classified type), but its recipe or inputs changed since (why): the
+    /// output is stale.
+    Changed(String, String),
     /// The last build failed with this message.
     Failed(String),
     /// The manifest entry has a mistake (this message): `e` opens it to fix.
@@ -213,7 +214,11 @@ pub struct Model {
 impl Model {
     /// A model over `items`.
     pub fn new(manifest: PathBuf, output: PathBuf, items: Vec<Item>, errors: Vec<String>) -> Model {
-        let status = format!("{} exemplar(s) in {}", items.len(), manifest.display());
+        let mut status = format!("{} exemplar(s) in {}", items.len(), manifest.display());
+        let changed = items.iter().filter(|i| matches!(i.state, BuildState::Changed(..))).count();
+        if changed > 0 {
+            status += &format!("; {changed} changed since their last build (select one to see why)");
+        }
         Model {
             manifest,
             output,

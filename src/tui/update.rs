@@ -134,7 +134,9 @@ fn back(model: &mut Model, asked: Option<Confirm>) -> Vec<Effect> {
         model.status = format!("back to {}", view.name);
         model.screen = Screen::Exemplar(*view);
     } else {
+        // The left screen's messages do not follow onto the library.
         model.screen = Screen::Library;
+        model.status = format!("{} exemplar(s): enter opens, b builds, e edits", model.items.len());
     }
     Vec::new()
 }
@@ -148,6 +150,11 @@ fn select(model: &mut Model, step: i64) {
         _ => (&mut model.selected, model.items.len()),
     };
     *row = (*row as i64 + step).clamp(0, count.saturating_sub(1) as i64) as usize;
+    if let (Screen::Library, Some(item)) = (&model.screen, model.items.get(model.selected))
+        && let BuildState::Changed(_, why) = &item.state
+    {
+        model.status = format!("{} changed since its last build ({why}): b rebuilds it", item.name);
+    }
 }
 
 fn showing_mask(model: &Model) -> bool {
@@ -228,7 +235,7 @@ fn open(model: &mut Model) -> Vec<Effect> {
         model.status = format!("{} has a mistake (e opens it to fix): {reason}", item.name);
         return Vec::new();
     }
-    if !matches!(item.state, BuildState::Built(_) | BuildState::Changed(_)) {
+    if !matches!(item.state, BuildState::Built(_) | BuildState::Changed(..)) {
         model.status = format!("{} is not built yet: press b to build it", item.name);
         return Vec::new();
     }
@@ -304,7 +311,7 @@ fn built(model: &mut Model, name: &str, result: Result<crate::tui::model::Item, 
 fn cancelled(model: &mut Model, name: &str, row: crate::tui::model::Item) {
     model.progress.remove(name);
     model.previews.remove(name);
-    let kept = matches!(row.state, BuildState::Built(_) | BuildState::Changed(_));
+    let kept = matches!(row.state, BuildState::Built(_) | BuildState::Changed(..));
     if let Some(item) = model.items.iter_mut().find(|i| i.name == name) {
         *item = row;
     }
@@ -320,7 +327,7 @@ fn cancelled(model: &mut Model, name: &str, row: crate::tui::model::Item) {
 pub fn mark_changed(model: &mut Model, name: &str, valid: bool) {
     for item in model.items.iter_mut().filter(|i| i.name == name) {
         match &item.state {
-            BuildState::Built(kind) => item.state = BuildState::Changed(kind.clone()),
+            BuildState::Built(kind) => item.state = BuildState::Changed(kind.clone(), "its recipe was saved".into()),
             BuildState::Broken(_) if valid => item.state = BuildState::NotBuilt,
             _ => {}
         }
@@ -375,8 +382,10 @@ mod tests {
         update(&mut m, Message::MoveSlice(-100));
         let Screen::Exemplar(view) = &m.screen else { panic!("the exemplar view is open") };
         assert_eq!(view.index, [0, 3, 3]);
+        m.status = "z = 3 of the exemplar view".into();
         update(&mut m, Message::Back);
         assert!(matches!(m.screen, Screen::Library));
+        assert!(m.status.contains("exemplar(s)"), "the exemplar view's message stays behind: {}", m.status);
         update(&mut m, Message::Back);
         assert!(!m.quit && m.status.contains("q quits"), "esc on the library goes nowhere: {}", m.status);
         update(&mut m, Message::Quit);
@@ -462,11 +471,14 @@ mod tests {
         let Screen::Editor(e) = &m.screen else { panic!("the editor") };
         let text = e.text.clone().unwrap();
         update(&mut m, Message::Saved(Ok(text)));
-        assert_eq!(m.items[0].state, BuildState::Changed("0".into()));
+        assert!(matches!(&m.items[0].state, BuildState::Changed(t, _) if t == "0"));
         update(&mut m, Message::Quit);
         assert!(m.quit, "nothing unsaved after saving");
         let mut m = model();
-        m.items[0].state = BuildState::Changed("0".into());
+        m.items[0].state = BuildState::Changed("0".into(), "the input p.png changed".into());
+        update(&mut m, Message::Down);
+        update(&mut m, Message::Up);
+        assert!(m.status.contains("a changed since its last build (the input p.png changed)"), "{}", m.status);
         assert_eq!(update(&mut m, Message::Open), vec![Effect::Load("a".into())], "its previous output opens");
     }
 

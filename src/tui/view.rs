@@ -82,7 +82,7 @@ fn library(frame: &mut Frame, model: &Model, area: Rect) {
             BuildState::NotBuilt => ("not built".to_string(), "-".to_string()),
             BuildState::Building => (gauge(model.progress.get(&item.name)), "-".to_string()),
             BuildState::Built(t) => ("built".to_string(), t.clone()),
-            BuildState::Changed(t) => ("changed since built".to_string(), t.clone()),
+            BuildState::Changed(t, _) => ("changed since built".to_string(), t.clone()),
             BuildState::Failed(e) => (format!("failed: {e}"), "-".to_string()),
             BuildState::Broken(_) => ("mistake: e fixes it".to_string(), "-".to_string()),
         };
