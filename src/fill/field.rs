@@ -14,11 +14,13 @@
 //! thin-plate RBF (kernel |r| in 3D, plus a linear term) through the depth constraints.
 //! A tet's tensor is the mean of its vertices'.
 
+use super::mesher::closest::Surface;
 use super::patch::orthogonal;
 use super::solve::{Sparse, dense_solve, least_squares};
 use super::tets::TetMesh;
 use crate::TextureType;
 use crate::error::{Error, Result};
+use crate::mesh::Mesh;
 use glam::{DVec3, Vec3};
 
 /// Weight of a constraint row against the smoothing rows.
@@ -33,6 +35,9 @@ pub struct Constraints {
     pub directions: Vec<(Vec3, Vec3)>,
     /// (point, depth) for the RBF: 0 on the outer surface, 1 on the innermost part.
     pub depth: Vec<(Vec3, f32)>,
+    /// Per triangle of the filled surface: the depth it holds (`None`: free). The tet
+    /// mesh's boundary vertices take the value of the triangle closest to them.
+    pub surface_values: Vec<Option<f32>>,
     /// (point, texture scale): the side of the texture cube in model units.
     pub scales: Vec<(Vec3, f32)>,
     /// The scale where no scale constraint says otherwise.
@@ -52,13 +57,17 @@ pub struct Field {
     pub scale: Vec<f32>,
 }
 
-/// Builds the field for `kind` over `mesh` from `constraints`.
-pub fn build(mesh: &TetMesh, kind: TextureType, constraints: &Constraints) -> Result<Field> {
+/// Builds the field for `kind` over `mesh` (a tetrahedralization of `surface`, whose
+/// triangles `constraints.surface_values` describe) from `constraints`.
+pub fn build(mesh: &TetMesh, kind: TextureType, constraints: &Constraints, surface: Option<&Mesh>) -> Result<Field> {
     check_required(kind, constraints)?;
     let tets = mesh.tets.len();
     let uses_depth = matches!(kind, TextureType::T1b | TextureType::T2a | TextureType::T2b);
     let rbf = if uses_depth { Some(Rbf::fit(&constraints.depth)?) } else { None };
-    let depth: Option<Vec<f32>> = rbf.as_ref().map(|f| mesh.vertices.iter().map(|v| f.value(*v)).collect());
+    let mut depth: Option<Vec<f32>> = rbf.as_ref().map(|f| mesh.vertices.iter().map(|v| f.value(*v)).collect());
+    if let (Some(d), Some(surface)) = (depth.as_mut(), surface) {
+        pin_surface(mesh, surface, &constraints.surface_values, d);
+    }
     let primary: Vec<Vec3> = match (kind, &rbf) {
         (TextureType::T1a, _) => per_tet(mesh, &smooth_vectors(mesh, &constraints.directions, None)?),
         (_, Some(f)) => (0..tets).map(|t| f.gradient(mesh.centroid(t)).normalize_or(Vec3::Y)).collect(),
@@ -98,6 +107,45 @@ fn check_required(kind: TextureType, c: &Constraints) -> Result<()> {
             Err(Error::invalid(format!("scale {} must be a positive number of model units", c.scale)))
         }
         _ => Ok(()),
+    }
+}
+
+/// Holds every boundary vertex of the tet mesh at the depth of the surface triangle closest
+/// to it (the RBF meets the surface only at its samples, so between them, on a coarse
+/// triangulation, the depth rose above 0 and the skin went missing), and carries the
+/// change smoothly inward: the correction is harmonic inside (Laplacian smoothing) and
+/// exact at the pinned vertices.
+fn pin_surface(mesh: &TetMesh, surface: &Mesh, values: &[Option<f32>], depth: &mut [f32]) {
+    if values.len() != surface.triangles.len() || values.iter().all(Option::is_none) {
+        return;
+    }
+    let grid = Surface::new(surface, super::mean_edge(mesh));
+    let mut boundary: Vec<u32> = mesh.boundary_faces(&mesh.neighbours()).into_iter().flatten().collect();
+    boundary.sort_unstable();
+    boundary.dedup();
+    let pins: Vec<(usize, f32)> = boundary
+        .iter()
+        .filter_map(|&v| {
+            let (t, _) = grid.closest_triangle(mesh.vertices[v as usize]);
+            values[t].map(|d| (v as usize, d))
+        })
+        .collect();
+    if pins.is_empty() {
+        return;
+    }
+    let mut a = Smoothing::new(mesh, None).rows;
+    let mut b = vec![0.0; mesh.vertices.len()];
+    for &(v, d) in &pins {
+        a.push_row(std::iter::once((v, CONSTRAINT_WEIGHT)));
+        b.push(CONSTRAINT_WEIGHT * (d - depth[v]) as f64);
+    }
+    let mut correction = vec![0.0; mesh.vertices.len()];
+    least_squares(&a, &b, &mut correction, 1e-7, 4000);
+    for (d, c) in depth.iter_mut().zip(&correction) {
+        *d = (*d as f64 + c).clamp(0.0, 1.0) as f32;
+    }
+    for (v, d) in pins {
+        depth[v] = d;
     }
 }
 
@@ -301,7 +349,7 @@ mod tests {
     fn strokes_spread_over_the_mesh() {
         let mesh = cube_lattice([4, 4, 4], 1.0);
         let c = Constraints { directions: vec![(Vec3::splat(0.5), Vec3::X)], scale: 0.5, ..Default::default() };
-        let f = build(&mesh, TextureType::T1a, &c).unwrap();
+        let f = build(&mesh, TextureType::T1a, &c, None).unwrap();
         assert!(f.primary.iter().all(|d| d.dot(Vec3::X) > 0.999));
         assert!(f.scale.iter().all(|s| (*s - 0.5).abs() < 1e-6) && f.depth.is_none());
     }
@@ -314,7 +362,7 @@ mod tests {
             scale: 1.0,
             ..Default::default()
         };
-        let f = build(&mesh, TextureType::T1a, &c).unwrap();
+        let f = build(&mesh, TextureType::T1a, &c, None).unwrap();
         let (near, _) = locate(&mesh, Vec3::new(0.3, 0.5, 0.5));
         let (mid, _) = locate(&mesh, Vec3::new(3.0, 1.0, 1.0));
         assert!(f.primary[near].dot(Vec3::X) > 0.9, "{}", f.primary[near]);
@@ -337,7 +385,7 @@ mod tests {
             scale: 1.0,
             ..Default::default()
         };
-        let f = build(&mesh, TextureType::T2b, &c).unwrap();
+        let f = build(&mesh, TextureType::T2b, &c, None).unwrap();
         assert!(f.primary.iter().all(|r| r.dot(-Vec3::Y) > 0.99));
         assert!(f.secondary.iter().zip(&f.primary).all(|(s, r)| s.dot(*r).abs() < 1e-4 && s.dot(Vec3::X) > 0.99));
         assert!(f.scale.iter().all(|s| (s - 4.0).abs() < 0.05), "{:?}", &f.scale[..4]);
@@ -349,15 +397,15 @@ mod tests {
     fn missing_constraints_are_named() {
         let mesh = cube_lattice([2, 2, 2], 1.0);
         let c = Constraints { scale: 1.0, ..Default::default() };
-        let e = build(&mesh, TextureType::T1a, &c).unwrap_err().to_string();
+        let e = build(&mesh, TextureType::T1a, &c, None).unwrap_err().to_string();
         assert!(e.contains("1-a") && e.contains("direction"), "{e}");
-        let e = build(&mesh, TextureType::T2b, &c).unwrap_err().to_string();
+        let e = build(&mesh, TextureType::T2b, &c, None).unwrap_err().to_string();
         assert!(e.contains("direction"), "{e}");
         let c = Constraints { directions: vec![(Vec3::ONE, Vec3::X)], scale: 1.0, ..Default::default() };
-        let e = build(&mesh, TextureType::T1b, &c).unwrap_err().to_string();
+        let e = build(&mesh, TextureType::T1b, &c, None).unwrap_err().to_string();
         assert!(e.contains("depth"), "{e}");
-        let e = build(&mesh, TextureType::T2c, &c).unwrap_err().to_string();
+        let e = build(&mesh, TextureType::T2c, &c, None).unwrap_err().to_string();
         assert!(e.contains("cannot be filled"), "{e}");
-        assert!(build(&mesh, TextureType::T0, &Constraints { scale: -1.0, ..c }).is_err());
+        assert!(build(&mesh, TextureType::T0, &Constraints { scale: -1.0, ..c }, None).is_err());
     }
 }

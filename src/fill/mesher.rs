@@ -44,7 +44,7 @@
 //! pieces, and the boundary faces are chords of the surface, so a convex shape loses a
 //! little volume (about 1.6 % at 5,000 tets for a sphere, 0.3 % at 50,000).
 
-mod closest;
+pub(crate) mod closest;
 mod conform;
 mod inside;
 mod lattice;

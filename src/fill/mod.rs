@@ -75,7 +75,7 @@ pub fn fill(job: &Job, mesh: TetMesh, progress: &dyn Progress) -> Result<(LstMod
     let default_scale = spec::size_of(job.surface) / 4.0;
     let constraints = spec::constraints(job.spec, job.surface, default_scale)?;
     progress.update("tensor field", 0.0);
-    let mut field = field::build(&mesh, job.kind, &constraints)?;
+    let mut field = field::build(&mesh, job.kind, &constraints, Some(job.surface))?;
     let raised = check_scale(&mesh, &mut field, job.kind)?;
     let params = paste::Params { kind: job.kind, axes: job.axes, seed: job.spec.seed };
     let auto = if field.depth.is_some() { 3 } else { 1 };

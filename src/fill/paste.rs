@@ -418,7 +418,7 @@ mod tests {
 
     fn fill(kind: TextureType, c: &Constraints, masks: &[Volume], seed: u64) -> (TetMesh, Pasted) {
         let mesh = cube_lattice([6, 6, 6], 1.0 / 6.0);
-        let field = field::build(&mesh, kind, c).unwrap();
+        let field = field::build(&mesh, kind, c, None).unwrap();
         let mut paster = Paster::new(&mesh, &field, masks, Params { kind, axes: [1, 0, 2], seed }).unwrap();
         paster.fill(&NoProgress).unwrap();
         let out = paster.finish();

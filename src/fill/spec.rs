@@ -113,7 +113,8 @@ pub fn constraints(spec: &FillSpec, surface: &Mesh, default_scale: f32) -> Resul
         check_inside(surface, stroke, &format!("direction[{i}]"))?;
     }
     let directions = spec.directions.iter().flat_map(|s| stroke_samples(s, size)).collect();
-    let mut depth = surface_depth(spec, surface)?;
+    let surface_values = surface_values(spec, surface)?;
+    let mut depth = surface_depth(spec, surface, &surface_values)?;
     for (i, axis) in spec.depth.axes.iter().enumerate() {
         check_inside(surface, axis, &format!("depth.axis[{i}]"))?;
         depth.extend(resample(axis, size).into_iter().map(|p| (p, 1.0)));
@@ -125,7 +126,13 @@ pub fn constraints(spec: &FillSpec, surface: &Mesh, default_scale: f32) -> Resul
     for (i, (p, _)) in spec.scales.iter().enumerate() {
         check_inside(surface, &[*p], &format!("scale_at[{i}]"))?;
     }
-    Ok(Constraints { directions, depth, scales: spec.scales.clone(), scale: spec.scale.unwrap_or(default_scale) })
+    Ok(Constraints {
+        directions,
+        depth,
+        surface_values,
+        scales: spec.scales.clone(),
+        scale: spec.scale.unwrap_or(default_scale),
+    })
 }
 
 /// The model's size: the diagonal of its bounding box.
@@ -168,23 +175,53 @@ fn resample(line: &[Vec3], size: f32) -> Vec<Vec3> {
     out
 }
 
-/// Depth constraints on the surface: 0 everywhere (if asked), face groups their value.
-fn surface_depth(spec: &FillSpec, surface: &Mesh) -> Result<Vec<(Vec3, f32)>> {
+/// The depth each surface triangle holds: 0 everywhere (if asked), face groups their value,
+/// `None` where the surface is free.
+pub fn surface_values(spec: &FillSpec, surface: &Mesh) -> Result<Vec<Option<f32>>> {
     let mut value: Vec<Option<f32>> = vec![if spec.depth.surface { Some(0.0) } else { None }; surface.triangles.len()];
     for group in &spec.depth.faces {
         for t in face_group(surface, group)? {
             value[t] = Some(group.value);
         }
     }
-    let step = surface.triangles.len().div_ceil(SURFACE_POINTS).max(1);
-    let centre = |t: usize| {
-        // corners summed in index order, so a flipped triangle gives the same bits
-        let mut corners = surface.triangles[t];
-        corners.sort_unstable();
-        corners.iter().map(|&i| surface.vertices[i as usize]).sum::<Vec3>() / 3.0
+    Ok(value)
+}
+
+/// Depth constraints on the surface for the RBF: about [`SURFACE_POINTS`] points spread by
+/// area (so a few long triangles are sampled along their length, not only at their
+/// centres), each with its triangle's value; free triangles give none.
+fn surface_depth(spec: &FillSpec, surface: &Mesh, value: &[Option<f32>]) -> Result<Vec<(Vec3, f32)>> {
+    let corners = |t: usize| {
+        // corners in index order, so a flipped triangle gives the same bits
+        let mut c = surface.triangles[t];
+        c.sort_unstable();
+        c.map(|i| surface.vertices[i as usize])
     };
-    let mut out: Vec<(Vec3, f32)> =
-        (0..surface.triangles.len()).step_by(step).filter_map(|t| value[t].map(|d| (centre(t), d))).collect();
+    let areas: Vec<f64> = (0..surface.triangles.len())
+        .map(|t| {
+            let [a, b, c] = corners(t);
+            f64::from((b - a).cross(c - a).length() / 2.0)
+        })
+        .collect();
+    let total: f64 = areas.iter().sum();
+    let mut out: Vec<(Vec3, f32)> = Vec::new();
+    let (mut t, mut before) = (0, 0.0);
+    for k in 0..SURFACE_POINTS {
+        // stratified by area: sample k sits at the middle of its share of the total area
+        let at = (k as f64 + 0.5) / SURFACE_POINTS as f64 * total;
+        while t + 1 < areas.len() && before + areas[t] < at {
+            before += areas[t];
+            t += 1;
+        }
+        if let Some(d) = value[t] {
+            let [a, b, c] = corners(t);
+            let (mut u, mut v) = (fract(0.5 + k as f32 * 0.754_877_7), fract(0.5 + k as f32 * 0.569_840_3));
+            if u + v > 1.0 {
+                (u, v) = (1.0 - u, 1.0 - v);
+            }
+            out.push((a + (b - a) * u + (c - a) * v, d));
+        }
+    }
     // small groups could fall between the thinned samples: keep some corners of each
     for group in &spec.depth.faces {
         let faces = face_group(surface, group)?;
@@ -193,6 +230,10 @@ fn surface_depth(spec: &FillSpec, surface: &Mesh) -> Result<Vec<(Vec3, f32)>> {
         out.extend(corners.map(|i| (surface.vertices[i as usize], group.value)));
     }
     Ok(out)
+}
+
+fn fract(x: f32) -> f32 {
+    x - x.floor()
 }
 
 /// The triangles of a face group, sorted.

@@ -12,7 +12,7 @@ use glam::Vec3;
 const ENTRY_BUDGET: usize = 1 << 23;
 
 /// The triangles of a mesh bucketed on a uniform grid.
-pub(super) struct Surface {
+pub(crate) struct Surface {
     tris: Vec<[Vec3; 3]>,
     lo: Vec3,
     cell: f32,
@@ -26,7 +26,7 @@ impl Surface {
     /// Buckets the triangles of `mesh` on cells of their mean edge length, or `max_cell` if
     /// that is smaller (a query near the surface then looks at a few cells of a few triangles
     /// each), made coarser while the grid would hold too many entries.
-    pub(super) fn new(mesh: &Mesh, max_cell: f32) -> Surface {
+    pub(crate) fn new(mesh: &Mesh, max_cell: f32) -> Surface {
         let tris: Vec<[Vec3; 3]> =
             mesh.triangles.iter().map(|t| sorted(*t).map(|i| mesh.vertices[i as usize])).collect();
         let edges: f64 = tris.iter().map(|[a, b, c]| f64::from(a.distance(*b) + b.distance(*c) + c.distance(*a))).sum();
@@ -77,8 +77,14 @@ impl Surface {
 
     /// The point of the mesh closest to `p`.
     pub(super) fn closest(&self, p: Vec3) -> Vec3 {
+        self.closest_triangle(p).1
+    }
+
+    /// The triangle of the mesh closest to `p` (its index in the mesh; the lowest index
+    /// among equally close ones) and the closest point on it.
+    pub(crate) fn closest_triangle(&self, p: Vec3) -> (usize, Vec3) {
         let home = self.cell_of(p);
-        let mut best = (f32::INFINITY, p);
+        let mut best = (f32::INFINITY, p, u32::MAX);
         for r in 0.. {
             let lo = home.map(|h| h.saturating_sub(r));
             let hi = [0, 1, 2].map(|a| (home[a] + r).min(self.dims[a] - 1));
@@ -88,7 +94,7 @@ impl Surface {
                 _ => break,
             }
         }
-        best.1
+        (best.2 as usize, best.1)
     }
 
     /// Tests the triangles of the cells in `lo..=hi` at Chebyshev distance `r` from `home`.
@@ -98,7 +104,7 @@ impl Surface {
         home: [usize; 3],
         r: usize,
         (lo, hi): ([usize; 3], [usize; 3]),
-        best: &mut (f32, Vec3),
+        best: &mut (f32, Vec3, u32),
     ) {
         for z in lo[2]..=hi[2] {
             for y in lo[1]..=hi[1] {
@@ -114,8 +120,8 @@ impl Surface {
                     for &id in &self.ids[self.offsets[c]..self.offsets[c + 1]] {
                         let q = closest_on_triangle(p, self.tris[id as usize]);
                         let d = q.distance_squared(p);
-                        if d < best.0 {
-                            *best = (d, q);
+                        if d < best.0 || (d == best.0 && id < best.2) {
+                            *best = (d, q, id);
                         }
                     }
                 }
