@@ -134,6 +134,17 @@ pub fn run_fill(args: &FillArgs) -> Result<()> {
         "  layers per tet {:.1}, tets per clump {:.0}, field angle mean {:.1}° p95 {:.1}°, uncovered {}",
         p.mean_layers, p.mean_clump, p.angle_mean, p.angle_p95, p.forced
     );
+    if report.raised_scale > 0 {
+        let share = report.raised_scale as f64 / report.tets.max(1) as f64 * 100.0;
+        eprintln!(
+            "  texture scale raised to {} tet edges in {} tets ({share:.1} %), where the field asked for less",
+            crate::fill::MIN_SCALE_EDGES,
+            report.raised_scale
+        );
+    }
+    for note in &report.ignored {
+        eprintln!("warning: {}: {note}", args.spec.display());
+    }
     eprintln!("wrote {} ({:.0} KB)", args.output.display(), bytes as f64 / 1024.0);
     if let Some(path) = &args.json {
         let json = serde_json::json!({ "fill": report, "seconds": total, "mesh_seconds": meshed, "bytes": bytes, "type": resolved.kind.name() });

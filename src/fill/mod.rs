@@ -91,6 +91,7 @@ pub fn fill(job: &Job, mesh: TetMesh, progress: &dyn Progress) -> Result<(LstMod
         vertices: mesh.vertices.len(),
         min_dihedral: mesh.min_dihedral_degrees(),
         raised_scale: raised,
+        ignored: spec::ignored(job.spec, job.kind, &job.sources),
         paste: pasted.stats.clone(),
     };
     let model =
@@ -105,8 +106,9 @@ fn unit(axis: usize) -> Vec3 {
 }
 
 /// Refuses a texture scale so small that patches could not cover the tets, and raises
-/// the scale of the few tets below [`MIN_SCALE_EDGES`] edges (where the depth field is
-/// steep, e.g. at the ends of a fruit's axis). Returns how many were raised.
+/// the scale of the tets below [`MIN_SCALE_EDGES`] edges (where the depth field is steep,
+/// e.g. near a fruit's axis: over a tenth of a kiwi's tets). Returns how many were raised;
+/// the command line reports the share.
 fn check_scale(mesh: &TetMesh, field: &mut field::Field, kind: TextureType) -> Result<usize> {
     let floor = MIN_SCALE_EDGES * mean_edge(mesh);
     let mut sorted = field.scale.clone();

@@ -152,6 +152,8 @@ pub struct FillReport {
     pub min_dihedral: f32,
     /// Tets whose texture scale was raised to the smallest allowed.
     pub raised_scale: usize,
+    /// Options of the spec this fill did not use, each with the reason.
+    pub ignored: Vec<String>,
     /// The paste loop's figures.
     pub paste: Stats,
 }

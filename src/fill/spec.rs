@@ -33,8 +33,8 @@ pub struct FillSpec {
     pub tets: usize,
     /// Texture axes of the primary and secondary directions (else from the exemplar).
     pub axes: Option<[Axis; 2]>,
-    /// Fall-off of generated masks.
-    pub mask_falloff: f32,
+    /// Fall-off of generated masks (`None`: the default).
+    pub mask_falloff: Option<f32>,
     /// Direction strokes (polylines).
     pub directions: Vec<Vec<Vec3>>,
     /// Depth constraints.
@@ -58,7 +58,7 @@ impl FillSpec {
             scale: None,
             tets: 5000,
             axes: None,
-            mask_falloff: crate::mask::DEFAULT_FALLOFF,
+            mask_falloff: None,
             directions: Vec::new(),
             depth: DepthSpec { surface: true, ..Default::default() },
             scales: Vec::new(),
@@ -133,6 +133,40 @@ pub fn constraints(spec: &FillSpec, surface: &Mesh, default_scale: f32) -> Resul
         scales: spec.scales.clone(),
         scale: spec.scale.unwrap_or(default_scale),
     })
+}
+
+/// The options of `spec` a fill of texture type `kind` with these `sources` does not use,
+/// each with the reason (so a spec that changes nothing says so instead of writing the
+/// same model silently).
+pub fn ignored(spec: &FillSpec, kind: TextureType, sources: &[super::Source]) -> Vec<String> {
+    let mut out = Vec::new();
+    let layered = matches!(kind, TextureType::T1b | TextureType::T2b);
+    if layered && spec.scale.is_some() {
+        out.push(format!(
+            "scale is not used by type {kind}: its texture scale follows the depth field (1 / |grad depth|)"
+        ));
+    }
+    if layered && !spec.scales.is_empty() {
+        out.push(format!("[[scale_at]] is not used by type {kind}: its texture scale follows the depth field"));
+    }
+    let generated = sources.iter().any(|s| !matches!(s.mask, super::MaskRef::File(_)));
+    if spec.mask_falloff.is_some() && !generated {
+        out.push(
+            "mask_falloff is not used: every mask comes from the built library (NAME.mask.exr or NAME.masks/), \
+             whose fall-off the manifest's mask_falloff sets"
+                .to_string(),
+        );
+    }
+    let depth_given = !(spec.depth.axes.is_empty() && spec.depth.points.is_empty() && spec.depth.faces.is_empty());
+    if depth_given && matches!(kind, TextureType::T0 | TextureType::T1a) {
+        out.push(format!("[depth] is not used by type {kind}: it has no depth-varying layers"));
+    }
+    if !spec.directions.is_empty() && matches!(kind, TextureType::T0 | TextureType::T1b) {
+        out.push(format!(
+            "[[direction]] is not used by type {kind}: its orientation is random about the depth gradient or everywhere"
+        ));
+    }
+    out
 }
 
 /// The model's size: the diagonal of its bounding box.

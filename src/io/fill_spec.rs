@@ -114,7 +114,7 @@ fn validate(raw: RawSpec, folder: &Path) -> Result<FillSpec> {
         .transpose()?;
     let tets = values::within("tets =", raw.tets.unwrap_or(5000), *TETS.start(), *TETS.end())?;
     positive("scale", raw.scale)?;
-    let falloff = values::falloff("mask_falloff =", raw.mask_falloff.unwrap_or(crate::mask::DEFAULT_FALLOFF))?;
+    let falloff = raw.mask_falloff.map(|f| values::falloff("mask_falloff =", f)).transpose()?;
     let here = |p: Option<&String>, default: &str| p.map_or_else(|| default.into(), |p| folder.join(p));
     Ok(FillSpec {
         exemplar: raw.exemplar,

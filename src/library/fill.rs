@@ -108,7 +108,7 @@ fn source(spec: &FillSpec, name: &str, layer: Option<Layer>, depth: Axis, size: 
         Some(l) => files::layer_mask(&spec.built, name, l),
         None => files::splotch_mask(&spec.built, name),
     };
-    let (falloff, seed) = (spec.mask_falloff, spec.seed);
+    let (falloff, seed) = (spec.mask_falloff.unwrap_or(crate::mask::DEFAULT_FALLOFF), spec.seed);
     let mask = match layer {
         _ if file.exists() => MaskRef::File(relative(&file, base)),
         Some(layer) => MaskRef::Layered { layer, depth, size, falloff, seed },

@@ -351,3 +351,29 @@ fn the_skin_covers_the_whole_surface_of_coarse_and_holed_meshes() {
     let share = skin_share(&d.join("torus.lst"), "kiwi", |_| true);
     assert!(share >= 0.99, "skin on {:.2} % of the torus' surface", share * 100.0);
 }
+
+/// Options a fill does not use are named with the reason, not dropped silently: a 2-b
+/// kiwi takes its scale from the depth field and its masks from the built library. The
+/// share of tets whose scale was raised is reported.
+#[test]
+fn unused_fill_options_are_named_and_raised_scales_counted() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let mesh = draw(d, "fruit");
+    let (top, table) = ("scale = 0.01\nmask_falloff = 0.3\n", "[[scale_at]]\npoint = [0.5, 0, 0]\nscale = 0.2\n");
+    let spec = spec(d, "kiwi.toml", &format!("{top}{KIWI}{table}"));
+    let run = solidtex(&["fill", &mesh, "--spec", &spec, "-o", &at(d, "kiwi.lst")]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let err = stderr(&run);
+    for needle in [
+        "warning: ",
+        "scale is not used by type 2-b",
+        "[[scale_at]] is not used by type 2-b",
+        "mask_falloff is not used",
+        "texture scale raised to 2.5 tet edges in",
+    ] {
+        assert!(err.contains(needle), "no {needle:?} in {err}");
+    }
+    let plain = solidtex(&["fill", &mesh, "--spec", &self::spec(d, "plain.toml", KIWI), "-o", &at(d, "plain.lst")]);
+    assert!(!stderr(&plain).contains("warning"), "{}", stderr(&plain));
+}
