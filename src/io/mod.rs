@@ -6,6 +6,7 @@
 //! | `.nrrd`          | NRRD, raw f32 (3D Slicer, ParaView, ITK)          |
 //! | `.vol`           | Kopf's solid texture format, f32, cubes only      |
 //! | `.png`           | 8-bit flipbook atlas with a description chunk     |
+//! | `.vdb`           | OpenVDB: `density`, `color` and named float grids (Blender, Houdini) |
 //! | a folder (no extension, or ending in `/`) | 8-bit PNG slice stack    |
 //!
 //! See `docs/formats.md` for the byte-level layouts. Reads take regular files within a
@@ -24,6 +25,7 @@ mod nrrd;
 mod png_file;
 pub mod snapshot_file;
 pub mod values;
+mod vdb;
 
 pub use atlas::layout as atlas_layout;
 pub use atomic::{check_folder, read_text, write_bytes, write_folder};
@@ -47,6 +49,8 @@ pub enum Format {
     PngAtlas,
     /// A folder of 8-bit PNG slices.
     PngStack,
+    /// OpenVDB.
+    Vdb,
 }
 
 impl Format {
@@ -61,11 +65,12 @@ impl Format {
             Some(e) if e == "nrrd" => Ok(Format::Nrrd),
             Some(e) if e == "vol" => Ok(Format::Vol),
             Some(e) if e == "png" => Ok(Format::PngAtlas),
+            Some(e) if e == "vdb" => Ok(Format::Vdb),
             None => Ok(Format::PngStack),
             Some(e) => Err(Error::file(
                 path,
                 format!(
-                    "unknown volume extension .{e}; allowed: .exr, .nrrd, .vol, .png, or a folder for a PNG slice stack"
+                    "unknown volume extension .{e}; allowed: .exr, .nrrd, .vol, .png, .vdb, or a folder for a PNG slice stack"
                 ),
             )),
         }
@@ -92,7 +97,7 @@ pub fn read_volume(path: &Path, budget: u64) -> Result<Volume> {
     if Format::of(path)? == Format::PngStack && !path.is_dir() {
         return Err(Error::file(
             path,
-            "has no volume extension and is not a folder; allowed: .exr, .nrrd, .vol, .png, or a folder of PNG slices",
+            "has no volume extension and is not a folder; allowed: .exr, .nrrd, .vol, .png, .vdb, or a folder of PNG slices",
         ));
     }
     match Format::of(path)? {
@@ -101,6 +106,7 @@ pub fn read_volume(path: &Path, budget: u64) -> Result<Volume> {
         Format::Vol => kopf_vol::read(path, budget),
         Format::PngAtlas => png_file::read_atlas(path, budget),
         Format::PngStack => png_file::read_stack(path, budget),
+        Format::Vdb => vdb::read(path, budget),
     }
 }
 
@@ -145,6 +151,7 @@ pub fn write_volume(path: &Path, volume: &Volume) -> Result<()> {
         }
         Format::PngAtlas => png_file::write_atlas(path, volume),
         Format::PngStack => png_file::write_stack(path, volume),
+        Format::Vdb => vdb::write(path, volume),
     }
 }
 

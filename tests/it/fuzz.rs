@@ -85,7 +85,7 @@ const fn file(name: &'static str, case: &'static str, seeds: fn(&Path) -> Vec<Fi
 
 type Reader = fn(&Path) -> solidtex::Result<()>;
 
-const TARGETS: [Target; 15] = [
+const TARGETS: [Target; 16] = [
     file("obj", "case.obj", obj_seeds, read_mesh),
     file("stl_binary", "case.stl", stl_binary_seeds, read_mesh),
     file("stl_ascii", "case.stl", stl_ascii_seeds, read_mesh),
@@ -94,6 +94,7 @@ const TARGETS: [Target; 15] = [
     file("nrrd", "case.nrrd", nrrd_seeds, read_volume),
     file("vol", "case.vol", vol_seeds, read_volume),
     file("exr", "case.exr", exr_seeds, read_volume),
+    file("vdb", "case.vdb", vdb_seeds, read_volume),
     Target { png: true, ..file("png_atlas", "case.png", png_atlas_seeds, read_volume) },
     Target { png: true, folder: true, ..file("png_stack", "case", png_stack_seeds, read_volume) },
     file("manifest", "case.toml", manifest_seeds, read_manifest),
@@ -167,6 +168,12 @@ fn nrrd_seeds(dir: &Path) -> Vec<Files> {
     let mut list = volumes();
     list.push(random_volume([2, 3, 2], vec![Channel::R, Channel::G, Channel::B, Channel::A, Channel::Depth], 4));
     volume_seeds(dir, ".nrrd", &list)
+}
+
+fn vdb_seeds(dir: &Path) -> Vec<Files> {
+    let mut list = volumes();
+    list.push(random_volume([9, 3, 2], vec![Channel::R, Channel::G, Channel::B, Channel::A, Channel::Depth], 5));
+    volume_seeds(dir, ".vdb", &list)
 }
 
 fn exr_seeds(dir: &Path) -> Vec<Files> {

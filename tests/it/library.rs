@@ -38,11 +38,15 @@ fn a_second_build_rebuilds_nothing_and_a_touched_input_rebuilds_only_its_exempla
     assert!(stderr(&third).contains("1 built, 2 cached") && stderr(&third).contains("built  c "), "{}", stderr(&third));
     assert_ne!(std::fs::read(dir.path().join("out/c.exr")).unwrap(), c_before);
     let mut text = std::fs::read_to_string(&manifest).unwrap();
-    text += "[[exemplar]]\nname = \"e\"\nrecipe = \"load\"\nvolume = \"out/a.exr\"\nexports = [\"nrrd\"]\n";
+    text += "[[exemplar]]\nname = \"e\"\nrecipe = \"load\"\nvolume = \"out/a.exr\"\nexports = [\"nrrd\", \"vdb\"]\n";
     std::fs::write(&manifest, text).unwrap();
     let loaded = solidtex(&["build", &manifest, "-o", &out]);
     assert!(stderr(&loaded).contains("1 built, 3 cached"), "{}", stderr(&loaded));
-    assert!(dir.path().join("out/e.nrrd").exists());
+    let a = solidtex::io::read_volume(&dir.path().join("out/a.exr"), u64::MAX).unwrap();
+    for export in ["e.nrrd", "e.vdb"] {
+        let copy = solidtex::io::read_volume(&dir.path().join("out").join(export), u64::MAX).unwrap();
+        assert_eq!(copy.data(), a.data(), "{export} holds the loaded volume");
+    }
     let forced = solidtex(&["build", &manifest, "-o", &out, "--force", "--only", "a"]);
     assert!(stderr(&forced).contains("1 built, 0 cached"), "{}", stderr(&forced));
     let report = std::fs::read_to_string(dir.path().join("out/report.md")).unwrap();
