@@ -23,11 +23,18 @@ pub fn usage(error: Error) -> Error {
     }
 }
 
-/// `solidtex convert IN OUT`.
-pub fn convert(input: &Path, output: &Path) -> Result<()> {
+/// `solidtex convert IN OUT [--dds-format F]`.
+pub fn convert(input: &Path, output: &Path, dds_format: Option<&str>) -> Result<()> {
+    let format = dds_format.map(io::dds::DdsFormat::parse).transpose().map_err(usage)?;
+    if format.is_some() && io::Format::of(output)? != io::Format::Dds {
+        return Err(Error::usage("--dds-format applies to a .dds output only"));
+    }
     io::check_output(output, &[input])?;
     let volume = load(input)?;
-    io::write_volume(output, &volume)?;
+    match format {
+        Some(format) => io::dds::write(output, &volume, format)?,
+        None => io::write_volume(output, &volume)?,
+    }
     eprintln!("wrote {}", output.display());
     Ok(())
 }

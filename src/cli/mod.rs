@@ -47,8 +47,12 @@ pub enum Command {
     Convert {
         /// The volume to read.
         input: PathBuf,
-        /// Where to write it: .exr, .nrrd, .vol, .png (atlas) or a folder (PNG slices).
+        /// Where to write it: .exr, .nrrd, .vol, .png (atlas), .vdb (OpenVDB), .dds (DDS volume
+        /// texture) or a folder (PNG slices).
         output: PathBuf,
+        /// Pixel format of a .dds output: rgba8, rgba16f (default) or rgba32f.
+        #[arg(long)]
+        dds_format: Option<String>,
     },
     /// Save one axis-aligned slice as a PNG.
     Slice {
@@ -162,7 +166,7 @@ pub enum Command {
 pub fn run(command: Command) -> crate::Result<()> {
     match command {
         Command::Info { file, json } => info::run(&file, json),
-        Command::Convert { input, output } => commands::convert(&input, &output),
+        Command::Convert { input, output, dds_format } => commands::convert(&input, &output, dds_format.as_deref()),
         Command::Slice { file, axis, index, output } => commands::slice(&file, &axis, index, &output),
         Command::Sheet { file, output, title } => commands::sheet(&file, &output, title),
         Command::Make { recipe, size, seed, output } => commands::make(&recipe, &size, seed, &output),

@@ -156,7 +156,7 @@ pub enum MaskKind {
 }
 
 /// Extra formats written beside the native EXR.
-pub const EXPORTS: [&str; 5] = ["nrrd", "vol", "png", "vdb", "slices"];
+pub const EXPORTS: [&str; 6] = ["nrrd", "vol", "png", "vdb", "dds", "slices"];
 
 /// A step applied after the source, in order.
 #[derive(Debug, Clone, PartialEq)]

@@ -6,6 +6,7 @@
 //! | `.nrrd`          | NRRD, raw f32 (3D Slicer, ParaView, ITK)          |
 //! | `.vol`           | Kopf's solid texture format, f32, cubes only      |
 //! | `.png`           | 8-bit flipbook atlas with a description chunk     |
+//! | `.dds`           | DDS volume texture, RGBA16F (DirectX engines)     |
 //! | `.vdb`           | OpenVDB: `density`, `color` and named float grids (Blender, Houdini) |
 //! | a folder (no extension, or ending in `/`) | 8-bit PNG slice stack    |
 //!
@@ -14,6 +15,7 @@
 
 mod atlas;
 pub mod atomic;
+pub mod dds;
 mod exr_file;
 mod fields;
 pub mod fill_spec;
@@ -51,6 +53,8 @@ pub enum Format {
     PngStack,
     /// OpenVDB.
     Vdb,
+    /// DDS volume texture.
+    Dds,
 }
 
 impl Format {
@@ -66,11 +70,12 @@ impl Format {
             Some(e) if e == "vol" => Ok(Format::Vol),
             Some(e) if e == "png" => Ok(Format::PngAtlas),
             Some(e) if e == "vdb" => Ok(Format::Vdb),
+            Some(e) if e == "dds" => Ok(Format::Dds),
             None => Ok(Format::PngStack),
             Some(e) => Err(Error::file(
                 path,
                 format!(
-                    "unknown volume extension .{e}; allowed: .exr, .nrrd, .vol, .png, .vdb, or a folder for a PNG slice stack"
+                    "unknown volume extension .{e}; allowed: .exr, .nrrd, .vol, .png, .vdb, .dds, or a folder for a PNG slice stack"
                 ),
             )),
         }
@@ -97,7 +102,7 @@ pub fn read_volume(path: &Path, budget: u64) -> Result<Volume> {
     if Format::of(path)? == Format::PngStack && !path.is_dir() {
         return Err(Error::file(
             path,
-            "has no volume extension and is not a folder; allowed: .exr, .nrrd, .vol, .png, .vdb, or a folder of PNG slices",
+            "has no volume extension and is not a folder; allowed: .exr, .nrrd, .vol, .png, .vdb, .dds, or a folder of PNG slices",
         ));
     }
     match Format::of(path)? {
@@ -107,6 +112,7 @@ pub fn read_volume(path: &Path, budget: u64) -> Result<Volume> {
         Format::PngAtlas => png_file::read_atlas(path, budget),
         Format::PngStack => png_file::read_stack(path, budget),
         Format::Vdb => vdb::read(path, budget),
+        Format::Dds => dds::read(path, budget),
     }
 }
 
@@ -152,6 +158,7 @@ pub fn write_volume(path: &Path, volume: &Volume) -> Result<()> {
         Format::PngAtlas => png_file::write_atlas(path, volume),
         Format::PngStack => png_file::write_stack(path, volume),
         Format::Vdb => vdb::write(path, volume),
+        Format::Dds => dds::write(path, volume, dds::DdsFormat::Rgba16F),
     }
 }
 

@@ -85,7 +85,7 @@ const fn file(name: &'static str, case: &'static str, seeds: fn(&Path) -> Vec<Fi
 
 type Reader = fn(&Path) -> solidtex::Result<()>;
 
-const TARGETS: [Target; 16] = [
+const TARGETS: [Target; 17] = [
     file("obj", "case.obj", obj_seeds, read_mesh),
     file("stl_binary", "case.stl", stl_binary_seeds, read_mesh),
     file("stl_ascii", "case.stl", stl_ascii_seeds, read_mesh),
@@ -95,6 +95,7 @@ const TARGETS: [Target; 16] = [
     file("vol", "case.vol", vol_seeds, read_volume),
     file("exr", "case.exr", exr_seeds, read_volume),
     file("vdb", "case.vdb", vdb_seeds, read_volume),
+    file("dds", "case.dds", dds_seeds, read_volume),
     Target { png: true, ..file("png_atlas", "case.png", png_atlas_seeds, read_volume) },
     Target { png: true, folder: true, ..file("png_stack", "case", png_stack_seeds, read_volume) },
     file("manifest", "case.toml", manifest_seeds, read_manifest),
@@ -174,6 +175,15 @@ fn vdb_seeds(dir: &Path) -> Vec<Files> {
     let mut list = volumes();
     list.push(random_volume([9, 3, 2], vec![Channel::R, Channel::G, Channel::B, Channel::A, Channel::Depth], 5));
     volume_seeds(dir, ".vdb", &list)
+}
+
+fn dds_seeds(dir: &Path) -> Vec<Files> {
+    let list = volumes();
+    let mut seeds = volume_seeds(dir, ".dds", &list);
+    for (i, format) in [io::dds::DdsFormat::Rgba8, io::dds::DdsFormat::Rgba32F].into_iter().enumerate() {
+        seeds.push(written(dir, &format!("f{i}.dds"), |p| io::dds::write(p, &list[2], format)));
+    }
+    seeds
 }
 
 fn exr_seeds(dir: &Path) -> Vec<Files> {
@@ -1193,6 +1203,16 @@ fn vol_reader_survives_mutated_files() {
 #[test]
 fn exr_reader_survives_mutated_files() {
     fuzz("exr");
+}
+
+#[test]
+fn vdb_reader_survives_mutated_files() {
+    fuzz("vdb");
+}
+
+#[test]
+fn dds_reader_survives_mutated_files() {
+    fuzz("dds");
 }
 
 #[test]
