@@ -39,6 +39,43 @@ pub fn convert(input: &Path, output: &Path, dds_format: Option<&str>) -> Result<
     Ok(())
 }
 
+/// `solidtex flipbook FILE -o OUT.png [--columns C] [--rows R] [--padding P] [--pow2]`.
+pub fn flipbook(
+    file: &Path,
+    output: &Path,
+    columns: Option<usize>,
+    rows: Option<usize>,
+    padding: usize,
+    pow2: bool,
+) -> Result<()> {
+    if output.extension().and_then(|e| e.to_str()) != Some("png") {
+        return Err(Error::usage(format!("{}: the flipbook is a PNG; name it NAME.png", output.display())));
+    }
+    let sidecar = output.with_extension("json");
+    io::check_output(output, &[file])?;
+    if sidecar.is_dir() {
+        return Err(Error::file(&sidecar, "is a folder; the flipbook's layout is written there"));
+    }
+    let volume = load(file)?;
+    let layout = io::flipbook::Layout::new(volume.dims(), columns, rows, padding, pow2).map_err(usage)?;
+    let samples = io::flipbook::flipbook(&volume, &layout);
+    let image =
+        crate::volume::Image2d::from_data(layout.width, layout.height, crate::volume::Channel::rgba(), samples)?;
+    io::write_image(output, &image)?;
+    let name = output.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    io::write_bytes(&sidecar, io::flipbook::sidecar(&layout, &name).as_bytes())?;
+    eprintln!(
+        "wrote {} ({}x{} pixels, {} columns x {} rows) and {}",
+        output.display(),
+        layout.width,
+        layout.height,
+        layout.columns,
+        layout.rows,
+        sidecar.display()
+    );
+    Ok(())
+}
+
 /// `solidtex slice FILE --axis A --index N -o out.png`.
 pub fn slice(file: &Path, axis: &str, index: Option<usize>, output: &Path) -> Result<()> {
     let axis: Axis = axis.parse().map_err(usage)?;

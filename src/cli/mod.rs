@@ -68,6 +68,27 @@ pub enum Command {
         #[arg(short, long)]
         output: PathBuf,
     },
+    /// Tile the z-slices into an RGBA flipbook PNG for game engines, with a JSON sidecar
+    /// (OUT.json) naming the layout (Unity Texture3D, Unreal volume texture).
+    Flipbook {
+        /// The volume to read.
+        file: PathBuf,
+        /// The PNG to write (the sidecar goes beside it, with the extension .json).
+        #[arg(short, long)]
+        output: PathBuf,
+        /// Tiles across (default: near square, or from --rows).
+        #[arg(long)]
+        columns: Option<usize>,
+        /// Tiles down (default: from --columns, or near square).
+        #[arg(long)]
+        rows: Option<usize>,
+        /// Pixels of repeated edge around each tile, 0 to 64 (against bilinear bleeding).
+        #[arg(long, default_value_t = 0)]
+        padding: usize,
+        /// Enlarge the image to powers of two.
+        #[arg(long)]
+        pow2: bool,
+    },
     /// Save a contact sheet: the three central slices and a cut-away corner view.
     Sheet {
         /// The volume to read.
@@ -169,6 +190,9 @@ pub fn run(command: Command) -> crate::Result<()> {
         Command::Convert { input, output, dds_format } => commands::convert(&input, &output, dds_format.as_deref()),
         Command::Slice { file, axis, index, output } => commands::slice(&file, &axis, index, &output),
         Command::Sheet { file, output, title } => commands::sheet(&file, &output, title),
+        Command::Flipbook { file, output, columns, rows, padding, pow2 } => {
+            commands::flipbook(&file, &output, columns, rows, padding, pow2)
+        }
         Command::Make { recipe, size, seed, output } => commands::make(&recipe, &size, seed, &output),
         Command::Synth(args) => synth::run(&args),
         Command::Quality(args) => quality::run(&args),

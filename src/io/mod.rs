@@ -19,6 +19,7 @@ pub mod dds;
 mod exr_file;
 mod fields;
 pub mod fill_spec;
+pub mod flipbook;
 mod kopf_vol;
 pub mod lst_file;
 pub mod manifest;

@@ -259,3 +259,31 @@ fn openvdb_itself_reads_our_grids() {
         }
     }
 }
+
+/// `flipbook` writes the RGBA tiles and a sidecar naming the layout; an engine-ready
+/// layout says so, a padded one says why not; too few tiles is a usage error.
+#[test]
+fn a_flipbook_and_its_sidecar_name_the_layout() {
+    use crate::support::{at, solidtex, stderr};
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let v = random_volume([6, 4, 8], Channel::rgba(), 3);
+    write_volume(&d.join("v.exr"), &v).unwrap();
+    let run = solidtex(&["flipbook", &at(d, "v.exr"), "-o", &at(d, "fb.png"), "--columns", "4"]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let image = image::open(d.join("fb.png")).unwrap().to_rgba8();
+    assert_eq!(image.dimensions(), (24, 8));
+    let [r, _, _, a] = image.get_pixel(6 + 2, 3).0; // slice 1 (second tile), voxel (2, 3)
+    assert_eq!((r, a), ([v.get(2, 3, 1, 0), v.get(2, 3, 1, 3)].map(|x| (x * 255.0).round() as u8)).into());
+    let json: serde_json::Value = serde_json::from_slice(&std::fs::read(d.join("fb.json")).unwrap()).unwrap();
+    assert_eq!((json["unity"]["columns"].as_u64(), json["unity"]["rows"].as_u64()), (Some(4), Some(2)));
+    assert_eq!(json["unity"]["usable"], true);
+    let padded = solidtex(&["flipbook", &at(d, "v.exr"), "-o", &at(d, "p.png"), "--padding", "2", "--pow2"]);
+    assert!(padded.status.success(), "{}", stderr(&padded));
+    let json: serde_json::Value = serde_json::from_slice(&std::fs::read(d.join("p.json")).unwrap()).unwrap();
+    assert_eq!(json["unity"]["usable"], false);
+    assert_eq!((json["layout"]["width"].as_u64(), json["layout"]["height"].as_u64()), (Some(32), Some(32)));
+    let few = solidtex(&["flipbook", &at(d, "v.exr"), "-o", &at(d, "f.png"), "--columns", "2", "--rows", "2"]);
+    assert_eq!(few.status.code(), Some(2), "{}", stderr(&few));
+    assert!(stderr(&few).contains("fewer than the 8 slices"));
+}
