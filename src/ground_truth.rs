@@ -92,33 +92,20 @@ pub fn compare(volume: &Volume, truth: &Volume) -> Result<TruthComparison> {
 }
 
 /// Normalized autocorrelation along `axis` at lags 1..=LAGS, over the whole volume or, with
-/// `Some((other, index))`, over the slice across `other` at `index`.
+/// `Some((other, index))`, over the slice across `other` at `index`: the sum of products of
+/// the centred values at each lag over their sum of squares.
 fn correlation(grey: &[f64], dims: [usize; 3], axis: Axis, within: Option<(Axis, usize)>) -> Vec<f64> {
-    let inside = |p: [usize; 3]| within.is_none_or(|(other, index)| p[other.index()] == index);
-    let points: Vec<[usize; 3]> = (0..dims[2])
-        .flat_map(|z| (0..dims[1]).flat_map(move |y| (0..dims[0]).map(move |x| [x, y, z])))
-        .filter(|p| inside(*p))
-        .collect();
-    let at = |p: [usize; 3]| grey[(p[2] * dims[1] + p[1]) * dims[0] + p[0]];
-    let mean = points.iter().map(|p| at(*p)).sum::<f64>() / points.len() as f64;
-    let energy: f64 = points.iter().map(|p| (at(*p) - mean).powi(2)).sum();
-    (1..=LAGS)
-        .map(|lag| {
-            if energy <= 1e-12 {
-                return 0.0;
-            }
-            let sum: f64 = points
-                .iter()
-                .filter(|p| p[axis.index()] + lag < dims[axis.index()])
-                .map(|p| {
-                    let mut q = *p;
-                    q[axis.index()] += lag;
-                    (at(*p) - mean) * (at(q) - mean)
-                })
-                .sum();
-            sum / energy
-        })
-        .collect()
+    let inside = |i: usize| {
+        let p = [i % dims[0], i / dims[0] % dims[1], i / (dims[0] * dims[1])];
+        within.is_none_or(|(other, index)| p[other.index()] == index)
+    };
+    let (sum, count) =
+        grey.iter().enumerate().filter(|(i, _)| inside(*i)).fold((0.0, 0), |(s, n), (_, v)| (s + v, n + 1));
+    let mean = sum / count.max(1) as f64;
+    let centred: Vec<f64> = grey.iter().map(|v| v - mean).collect();
+    let products = crate::correlation::lagged_products(&centred, dims, axis, within, LAGS);
+    let energy = products[0].0;
+    products[1..].iter().map(|(sum, _)| if energy <= 1e-12 { 0.0 } else { sum / energy }).collect()
 }
 
 fn distance(a: &[f64], b: &[f64]) -> f64 {

@@ -39,10 +39,12 @@
 
 pub mod classify;
 pub mod cli;
+pub mod correlation;
 pub mod error;
 pub mod fill;
 pub mod ground_truth;
 pub mod io;
+pub mod labels;
 pub mod library;
 pub mod mask;
 pub mod mesh;

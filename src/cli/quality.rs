@@ -11,8 +11,12 @@ pub struct QualityArgs {
     /// The volume to measure.
     pub volume: PathBuf,
     /// The exemplar it was made from (Ex, or the layered exemplar).
-    #[arg(long)]
-    pub exemplar: PathBuf,
+    #[arg(long, required_unless_present = "labels")]
+    pub exemplar: Option<PathBuf>,
+    /// Measure a label volume instead (a few phases in the first channel): per phase its
+    /// share, two-point probability S2 and lineal path per axis, and interface per voxel.
+    #[arg(long, conflicts_with = "exemplar")]
+    pub labels: bool,
     /// Ey, Ez and shrinking.
     #[command(flatten)]
     pub others: super::synth::OtherExemplars,
@@ -29,7 +33,8 @@ pub struct QualityArgs {
 pub fn run(args: &QualityArgs) -> Result<()> {
     args.others.check()?;
     let volume = io::read_volume(&args.volume, io::budget_from_env()?)?;
-    let ex = args.others.load(&args.exemplar, "exemplar")?;
+    let Some(exemplar) = &args.exemplar else { return labels(args, &volume) };
+    let ex = args.others.load(exemplar, "exemplar")?;
     let (ey, ez) = args.others.load_yz()?;
     let layered = args.layered || volume.meta.texture_type == Some(crate::TextureType::T1b);
     let ey_ref = ey.as_ref().unwrap_or(&ex);
@@ -99,4 +104,37 @@ fn table(r: &Report) -> String {
         );
     }
     out
+}
+
+/// `quality VOLUME --labels`: the materials statistics of a label volume.
+fn labels(args: &QualityArgs, volume: &crate::Volume) -> Result<()> {
+    let stats = crate::labels::measure(volume).map_err(|e| e.in_file(&args.volume))?;
+    if args.json {
+        say!("{}", serde_json::to_string_pretty(&stats).expect("statistics always serialize"));
+        return Ok(());
+    }
+    let [x, y, z] = stats.dims;
+    say!("label volume {x}x{y}x{z}: {} phase(s)", stats.phases.len());
+    for p in &stats.phases {
+        say!(
+            "phase {}: share {:.4}, interface {:.4} per voxel (x {:.4}, y {:.4}, z {:.4})",
+            p.label,
+            p.share,
+            p.interface_per_voxel,
+            p.interface_per_axis[0],
+            p.interface_per_axis[1],
+            p.interface_per_axis[2]
+        );
+        for (a, axis) in ["x", "y", "z"].iter().enumerate() {
+            let at = |v: &Vec<f64>| {
+                [1, 2, 4, 8, 16]
+                    .iter()
+                    .filter_map(|r| v.get(*r).map(|s| format!("{s:.3}")))
+                    .collect::<Vec<_>>()
+                    .join(" ")
+            };
+            say!("  {axis}: S2 at 1 2 4 8 16: {}   L: {}", at(&p.two_point[a]), at(&p.lineal_path[a]));
+        }
+    }
+    Ok(())
 }

@@ -126,3 +126,25 @@ fn build_rejects_a_bad_manifest_by_name() {
     crate::support::assert_fails(&run, &["lib.toml", "exemplar[0] (x)", "lava", "allowed"]);
     assert!(!dir.path().join("lib").exists());
 }
+
+/// `quality --labels` gives the materials statistics of a label volume as JSON: slabs two
+/// voxels thick along z have half of each phase, S2 along z of 0 at a lag of 2, and every
+/// pair along x in the phase.
+#[test]
+fn quality_of_a_label_volume_reports_phase_statistics() {
+    let dir = tempfile::tempdir().unwrap();
+    let slabs =
+        solidtex::Volume::from_fn([4, 4, 8], solidtex::Channel::grey(), |_, _, z, o| o[0] = ((z / 2) % 2) as f32)
+            .unwrap();
+    let path = dir.path().join("slabs.nrrd");
+    solidtex::io::write_volume(&path, &slabs).unwrap();
+    let run = solidtex(&["quality", &path.to_string_lossy(), "--labels", "--json"]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let json: serde_json::Value = serde_json::from_slice(&run.stdout).unwrap();
+    let phase = &json["phases"][0];
+    assert_eq!(phase["share"], 0.5);
+    assert_eq!(phase["two_point"][2][2], 0.0);
+    assert_eq!(phase["two_point"][0][3], 0.5);
+    let neither = solidtex(&["quality", &path.to_string_lossy()]);
+    assert_eq!(neither.status.code(), Some(2), "no exemplar and no --labels is a usage error");
+}
