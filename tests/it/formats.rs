@@ -252,11 +252,15 @@ fn openvdb_itself_reads_our_grids() {
         assert_eq!(colour[k], voxel[..3], "colour of voxel {k}");
         assert_eq!((density[k][0], depth[k][0]), (voxel[3], voxel[4]), "voxel {k}");
     }
-    if let Ok(listing) = std::process::Command::new("vdb_print").arg(&path).output() {
-        let text = String::from_utf8_lossy(&listing.stdout);
-        for needle in ["density", "color", "Depth", "11x9x20"] {
-            assert!(text.contains(needle), "vdb_print shows no {needle}: {text}");
+    // vdb_print exits 0 even when it cannot read a file: its listing is what counts.
+    match std::process::Command::new("vdb_print").arg(&path).output() {
+        Ok(listing) => {
+            let text = String::from_utf8_lossy(&listing.stdout);
+            for needle in ["density", "color", "Depth", "11x9x20"] {
+                assert!(text.contains(needle), "vdb_print shows no {needle}: {text}");
+            }
         }
+        Err(_) => assert!(std::env::var_os("CI").is_none(), "vdb_print is missing: .ci/run installs libopenvdb-tools"),
     }
 }
 
