@@ -52,7 +52,10 @@ fn temporary_folder(path: &Path) -> Result<tempfile::TempDir> {
 
 /// Whether a file name is one of solidtex's temporaries (left behind by a killed run).
 pub fn is_temporary_name(name: &str) -> bool {
-    name.starts_with('.') && name.ends_with(".tmp") && name.contains(".solidtex-")
+    // exactly the shape `temporary` and `temporary_folder` give: six random letters or digits
+    let Some(rest) = name.strip_prefix('.').and_then(|n| n.strip_suffix(".tmp")) else { return false };
+    let Some((stem, letters)) = rest.rsplit_once(".solidtex-") else { return false };
+    !stem.is_empty() && letters.len() == 6 && letters.bytes().all(|b| b.is_ascii_alphanumeric())
 }
 
 /// Fail with a clear message unless the folder of `path` exists.
@@ -324,4 +327,27 @@ fn too_large(path: &Path, cap: u64) -> Error {
 /// A path's canonical form when it exists.
 pub fn canonical(path: &Path) -> Option<PathBuf> {
     fs::canonicalize(path).ok()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The clean-up of an interrupted build matches the names solidtex gives its
+    /// temporaries and nothing a user could plausibly name alike.
+    #[test]
+    fn only_solidtex_temporaries_match() {
+        let dir = tempfile::tempdir().unwrap();
+        let file = temporary_file(&dir.path().join("kiwi.exr")).unwrap();
+        let folder = temporary_folder(&dir.path().join("kiwi_slices")).unwrap();
+        for made in [file.path(), folder.path()] {
+            let name = made.file_name().unwrap().to_string_lossy().into_owned();
+            assert!(is_temporary_name(&name), "{name}");
+        }
+        for user in
+            [".notes.solidtex-draft.tmp", ".solidtex-abc123.tmp", "kiwi.solidtex-abc123.tmp", ".a.solidtex-abc12!.tmp"]
+        {
+            assert!(!is_temporary_name(user), "{user}");
+        }
+    }
 }

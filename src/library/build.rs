@@ -201,10 +201,10 @@ impl Progress for EntryProgress<'_> {
 /// is made, so a cancelled or failed entry keeps its previous output.
 fn build_entry(entry: &Entry, folder: &Path, output: &Path, force: bool, observer: &dyn Observer) -> Result<Outcome> {
     let started = Instant::now();
-    if !force && let Freshness::UpToDate(record) = cache::freshness(entry, folder, output) {
+    let key = cache::key(entry, folder)?;
+    if !force && let Freshness::UpToDate(record) = cache::freshness_against(entry, &key, output) {
         return Ok(Outcome::Cached(record));
     }
-    let key = cache::key(entry, folder)?;
     let progress = EntryProgress { name: &entry.name, observer };
     let volume = recipe::make_with(entry, &progress)?;
     if progress.cancelled() {
@@ -294,9 +294,14 @@ fn remove_stale_temporaries(output: &Path) {
         let Ok(entries) = std::fs::read_dir(&folder) else { continue };
         for path in entries.filter_map(|e| e.ok().map(|e| e.path())) {
             let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-            if io::atomic::is_temporary_name(&name) {
-                let _ = if path.is_dir() { std::fs::remove_dir_all(&path) } else { std::fs::remove_file(&path) };
+            if !io::atomic::is_temporary_name(&name) {
+                continue;
             }
+            // A link is removed itself, never followed.
+            let _ = match std::fs::symlink_metadata(&path) {
+                Ok(m) if m.is_dir() => std::fs::remove_dir_all(&path),
+                _ => std::fs::remove_file(&path),
+            };
         }
     }
 }

@@ -96,24 +96,33 @@ pub fn key(entry: &Entry, folder: &Path) -> Result<Key> {
 
 /// Whether `entry`'s build in `output` is up to date, and if not, why.
 pub fn freshness(entry: &Entry, folder: &Path, output: &Path) -> Freshness {
-    let Some(record) = read_record(output, &entry.name) else { return Freshness::NotBuilt };
-    if !files::volume(output, &entry.name).is_file() {
-        return Freshness::NotBuilt;
+    match key(entry, folder) {
+        Ok(now) => freshness_against(entry, &now, output),
+        Err(e) => match recorded(entry, output) {
+            Some(record) => Freshness::Stale(record, format!("an input cannot be read: {e}")),
+            None => Freshness::NotBuilt,
+        },
     }
-    match stale_because(entry, folder, output, &record) {
+}
+
+/// [`freshness`] for the key `now` of `entry` (already computed: the inputs are read once).
+pub fn freshness_against(entry: &Entry, now: &Key, output: &Path) -> Freshness {
+    let Some(record) = recorded(entry, output) else { return Freshness::NotBuilt };
+    match stale_because(entry, now, output, &record) {
         Some(why) => Freshness::Stale(record, why),
         None => Freshness::UpToDate(record),
     }
 }
 
+/// The record of a build whose volume is still there.
+fn recorded(entry: &Entry, output: &Path) -> Option<Record> {
+    read_record(output, &entry.name).filter(|_| files::volume(output, &entry.name).is_file())
+}
+
 /// Why a build recorded as `record` is out of date (`None`: it is not).
-fn stale_because(entry: &Entry, folder: &Path, output: &Path, record: &Record) -> Option<String> {
-    let now = match key(entry, folder) {
-        Ok(now) => now,
-        Err(e) => return Some(format!("an input cannot be read: {e}")),
-    };
+fn stale_because(entry: &Entry, now: &Key, output: &Path, record: &Record) -> Option<String> {
     if now.key != record.key {
-        return Some(changed(&now, record));
+        return Some(changed(now, record));
     }
     match written(output, entry) {
         Ok(files) if files == record.files && !files.is_empty() => None,
