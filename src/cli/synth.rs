@@ -98,6 +98,10 @@ pub struct SynthArgs {
     /// weighs distance^-power; lower blends more, softer (default: 6; 1.2 with --layered).
     #[arg(long)]
     pub blend_power: Option<f32>,
+    /// Leave the finest level's power spectrum as the blend made it (for comparison: the
+    /// features come out larger than the photo's).
+    #[arg(long)]
+    pub no_spectrum: bool,
     /// k-coherence candidates per neighbour, 1 to 32 (more: better matches, slower).
     #[arg(long, default_value_t = 6)]
     pub coherence: usize,
@@ -187,6 +191,7 @@ pub fn run(args: &SynthArgs) -> Result<()> {
         finest_iterations: args.finest_iterations,
         histogram_strength: args.histogram,
         blend_power: args.blend_power,
+        spectrum: !args.no_spectrum,
         tolerance: args.tolerance,
         coherence: args.coherence,
         max_pca_dims: args.pca_dims,

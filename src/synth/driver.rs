@@ -6,8 +6,10 @@
 //! of the exemplars' detail band; the layout the coarser levels made stays. An exact
 //! transfer of the whole volume would stretch that layout, the only variation a soft
 //! blend leaves, to the exemplar's full contrast: large blobs where the photo has none
-//! (docs/synthesis.md, "The blur, measured"). The finest level ends with one exact
-//! transfer of the whole volume, so its colour distribution is the exemplars'.
+//! (docs/synthesis.md, "The blur, measured"). The finest level ends by giving the cuts
+//! the exemplars' power spectra ([`super::spectrum`]: the blend leaves features larger
+//! than the photo's) and one exact transfer of the whole volume, so its colour
+//! distribution is the exemplars'.
 //!
 //! A finer level takes the coarser volume's colours (interpolated on the sample grid the
 //! exemplar pyramid uses: coarse voxel i at fine voxel 2i) but not its matches. Doubled
@@ -26,6 +28,7 @@ use super::knn::KdTree;
 use super::optimize::{Histograms, JOINT_ROUNDS, densities, optimize, transfer_histograms_by_depth, transfer_joint};
 use super::params::SynthParams;
 use super::search::{Matches, SearchSetup, pass_seed, search};
+use super::spectrum;
 use crate::error::{Error, Result};
 use crate::noise::hash3;
 use crate::progress::Progress;
@@ -119,14 +122,34 @@ pub fn run(job: &Job, params: &SynthParams, seed: u64, progress: &dyn Progress) 
             }
             previous = mean;
         }
-        if by_band && level + 1 == levels.len() && params.histogram_strength > 0.0 {
-            transfer_joint(&mut grid.data, grid.channels, &pooled, JOINT_ROUNDS);
+        if job.init == Init::Random && level + 1 == levels.len() && params.histogram_strength > 0.0 {
+            let reshape = params.spectrum && grid.wrap.iter().all(|w| *w);
+            if reshape {
+                match_spectrum(&mut grid, &ex, &pooled);
+            }
+            if reshape || by_band {
+                transfer_joint(&mut grid.data, grid.channels, &pooled, JOINT_ROUNDS);
+            }
         }
         progress.level_done(level + 1, levels.len(), grid.dims, grid.channels, &grid.data);
         state = Some((grid, matches));
     }
     progress.update("done", 1.0);
     Ok(state.map(|(g, _)| g.data).unwrap_or_default())
+}
+
+/// Give the volume's cuts the power spectra of the level's exemplars (the colour
+/// distribution is transferred again afterwards).
+fn match_spectrum(grid: &mut Grid, ex: &[Option<&Prepared>; 3], pooled: &[f32]) {
+    let standard = spectrum::Standard::of(pooled, grid.channels);
+    let targets = ex.map(|e| e.map(|e| spectrum::Target::of(&e.colours, e.width, e.height, e.channels, &standard)));
+    spectrum::match_spectrum(
+        &mut grid.data,
+        grid.dims,
+        grid.channels,
+        &standard,
+        &targets.each_ref().map(Option::as_ref),
+    );
 }
 
 /// Per axis, the prepared pyramid (coarsest first); axes sharing an image share it.

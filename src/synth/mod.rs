@@ -26,6 +26,7 @@ mod optimize;
 mod params;
 mod pca;
 mod search;
+mod spectrum;
 
 pub use direction::{DIRECTIONAL, Direction, direction};
 pub use params::{LayeredParams, SynthParams};

@@ -33,6 +33,11 @@ pub struct SynthParams {
     /// average disagreeing predictions into soft blobs (docs/synthesis.md), and 1.2 for
     /// layered synthesis (Kopf's robust exponent r = 0.8, which keeps its layers smooth).
     pub blend_power: Option<f32>,
+    /// Give the finest level's cuts the exemplars' power spectra (true; homogeneous
+    /// synthesis with histogram matching on, of a volume that wraps on every axis):
+    /// features at the photo's size
+    /// (docs/synthesis.md, "Features at the photo's size").
+    pub spectrum: bool,
     /// Wrap around so the output tiles (true). Layered volumes never wrap along depth.
     pub tileable: bool,
     /// Voxel budget in bytes for the output.
@@ -58,6 +63,7 @@ impl Default for SynthParams {
             histogram_bins: 32,
             histogram_strength: 1.0,
             blend_power: None,
+            spectrum: true,
             tileable: true,
             budget_bytes: crate::volume::DEFAULT_BUDGET_BYTES,
             start: None,
