@@ -34,7 +34,8 @@ pub struct SynthParams {
     /// layered synthesis (Kopf's robust exponent r = 0.8, which keeps its layers smooth).
     pub blend_power: Option<f32>,
     /// Give the finest level's cuts the exemplars' power spectra (true; homogeneous
-    /// synthesis with histogram matching on, of a volume that wraps on every axis):
+    /// synthesis with histogram matching on, without a start volume, of a volume that
+    /// wraps on every axis):
     /// features at the photo's size
     /// (docs/synthesis.md, "Features at the photo's size").
     pub spectrum: bool,

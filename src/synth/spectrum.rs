@@ -100,6 +100,12 @@ impl Target {
 
 /// Reshape the spectrum of a wrapping volume (`dims`, interleaved `channels`) so its cuts
 /// orthogonal to each axis with a target take that target's spectrum.
+///
+/// Real signals travel in pairs, one as the real and one as the imaginary part of a
+/// complex transform: a real gain that is the same at k and -k scales both parts' spectra
+/// alike, so one inverse transform gives both reshaped. The grey shares the first
+/// transform with channel 0 (its power is separated by the spectrum's symmetry), later
+/// channels go two by two.
 pub fn match_spectrum(
     data: &mut [f32],
     dims: [usize; 3],
@@ -111,23 +117,47 @@ pub fn match_spectrum(
         return;
     }
     let mut planner = FftPlannerScalar::new();
-    let mut grey: Vec<Complex<f32>> =
-        data.par_chunks_exact(channels).map(|px| Complex::new(standard.grey(px), 0.0)).collect();
-    transform(&mut grey, dims, &mut planner, false);
-    let power: Vec<f32> = grey.iter().map(|c| c.norm_sqr()).collect();
-    drop(grey);
-    let gain = fit_gain(&power, dims, targets);
-    let count = power.len() as f32;
-    for c in 0..channels {
-        let mut channel: Vec<Complex<f32>> =
-            data.iter().skip(c).step_by(channels).map(|v| Complex::new(*v, 0.0)).collect();
-        transform(&mut channel, dims, &mut planner, false);
-        channel.par_iter_mut().zip(&gain).skip(1).for_each(|(v, g)| *v *= g.sqrt());
-        transform(&mut channel, dims, &mut planner, true);
-        for (v, s) in data.iter_mut().skip(c).step_by(channels).zip(&channel) {
-            *v = s.re / count;
-        }
+    let mut packed: Vec<Complex<f32>> =
+        data.par_chunks_exact(channels).map(|px| Complex::new(standard.grey(px), px[0])).collect();
+    transform(&mut packed, dims, &mut planner, false);
+    let gain = fit_gain(&real_part_power(&packed, dims), dims, targets);
+    reshape(&mut packed, &gain, dims, &mut planner);
+    data.par_chunks_exact_mut(channels).zip(&packed).for_each(|(px, v)| px[0] = v.im);
+    for first in (1..channels).step_by(2) {
+        let second = (first + 1 < channels).then_some(first + 1);
+        let mut packed: Vec<Complex<f32>> =
+            data.par_chunks_exact(channels).map(|px| Complex::new(px[first], second.map_or(0.0, |c| px[c]))).collect();
+        transform(&mut packed, dims, &mut planner, false);
+        reshape(&mut packed, &gain, dims, &mut planner);
+        data.par_chunks_exact_mut(channels).zip(&packed).for_each(|(px, v)| {
+            px[first] = v.re;
+            if let Some(c) = second {
+                px[c] = v.im;
+            }
+        });
     }
+}
+
+/// Scale a transformed pair by the square root of the gain and transform it back
+/// (divided by the voxel count, so the values are the volume's).
+fn reshape(spectrum: &mut [Complex<f32>], gain: &[f32], dims: [usize; 3], planner: &mut FftPlannerScalar<f32>) {
+    spectrum.par_iter_mut().zip(gain).for_each(|(v, g)| *v *= g.sqrt());
+    transform(spectrum, dims, planner, true);
+    let count = spectrum.len() as f32;
+    spectrum.par_iter_mut().for_each(|v| *v /= count);
+}
+
+/// The power spectrum of the real part of the signal a packed transform holds:
+/// `(Z(k) + conj(Z(-k))) / 2` is the real part's transform.
+fn real_part_power(packed: &[Complex<f32>], dims: [usize; 3]) -> Vec<f32> {
+    (0..packed.len()).into_par_iter().map(|i| ((packed[i] + packed[mirror(i, dims)].conj()) * 0.5).norm_sqr()).collect()
+}
+
+/// The index of frequency -k for the index of k.
+fn mirror(i: usize, dims: [usize; 3]) -> usize {
+    let k = [i % dims[0], (i / dims[0]) % dims[1], i / (dims[0] * dims[1])];
+    let m = [0, 1, 2].map(|a| (dims[a] - k[a]) % dims[a]);
+    m[0] + dims[0] * (m[1] + dims[1] * m[2])
 }
 
 /// The gain per 3D frequency (the mean's is 1) that brings each axis' summed spectrum to
@@ -167,6 +197,14 @@ fn fit_gain(power: &[f32], dims: [usize; 3], targets: &[Option<&Target>; 3]) -> 
         gain[0] = 0.0;
     }
     gain[0] = 1.0;
+    for i in 0..gain.len() {
+        let j = mirror(i, dims);
+        if j > i {
+            let mean = 0.5 * (gain[i] + gain[j]);
+            gain[i] = mean;
+            gain[j] = mean;
+        }
+    }
     gain
 }
 

@@ -324,8 +324,8 @@ fn a_directional_image_alone_gets_a_warning_naming_ey_ez_and_layered() {
 
 /// The three central slices of a known solid (the procedural marble) as Ex, Ey, Ez: the
 /// synthesized volume's grey-level shares stay within 2 points of the truth's, and on every
-/// axis its two-point correlation is at most twice as far from the truth's as the slices'
-/// own (0.6-1.7 times with the power spectrum matched; 1.4-5.5 times without).
+/// axis its two-point correlation is at most 1.5 times as far from the truth's as the
+/// slices' own (0.73-1.43 times with the power spectrum matched; 1.4-5.5 times without).
 #[test]
 fn a_solid_from_the_slices_of_a_known_solid_keeps_its_shares() {
     let truth = solidtex::procedural::generate(solidtex::procedural::Recipe::Marble, [48, 48, 48], 3).unwrap();
@@ -335,7 +335,7 @@ fn a_solid_from_the_slices_of_a_known_solid_keeps_its_shares() {
     let v = synthesize(Exemplars { x: &ex[0], y: Some(&ex[1]), z: Some(&ex[2]) }, &params, 1, &NoProgress).unwrap();
     let comparison = solidtex::ground_truth::compare(&v, &truth).unwrap();
     assert!(comparison.share_error <= 2.0, "{comparison:?}");
-    assert!(comparison.axes.iter().all(|a| a.volume_error <= 2.0 * a.slices_error), "{comparison:?}");
+    assert!(comparison.axes.iter().all(|a| a.volume_error <= 1.5 * a.slices_error), "{comparison:?}");
 }
 
 /// A 64x64 grey "gravel": light stones of radius 2 to 3 pixels packed on a dark ground
