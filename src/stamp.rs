@@ -157,20 +157,20 @@ pub struct Scattered {
 /// (their bounding spheres stay apart) and wholly inside the volume. Reproducible from `seed`.
 pub fn scatter(volume: &mut Volume, mesh: &Mesh, params: &Scatter, seed: u64) -> Result<Scattered> {
     check_scatter(volume, params)?;
-    let (centre, radius) = bounding_sphere(mesh);
+    let capsule = bounding_capsule(mesh);
     let mut rng = Pcg64::seed_from_u64(seed);
     let mut out = Scattered { placed: Vec::new(), rejected: 0 };
-    let mut spheres: Vec<(Vec3, f32)> = Vec::new();
+    let mut taken: Vec<Capsule> = Vec::new();
     for _ in 0..params.count {
         for _ in 0..params.attempts.max(1) {
             let scale = rng.random_range(params.scale.0..=params.scale.1);
             let rotation = random_rotation(&mut rng);
             let at = random_point(volume, params.region, &mut rng);
-            let sphere = (at + rotation * (centre * scale), radius * scale);
-            if fits(volume, sphere) && spheres.iter().all(|s| s.0.distance(sphere.0) >= s.1 + sphere.1) {
-                let placement = Placement { at, rotation, scale: Vec3::splat(scale) };
+            let placement = Placement { at, rotation, scale: Vec3::splat(scale) };
+            let moved = capsule.placed(&placement);
+            if moved.inside(volume.dims()) && taken.iter().all(|c| !c.overlaps(&moved)) {
                 stamp_covered(volume, mesh, &placement, params.colour)?;
-                spheres.push(sphere);
+                taken.push(moved);
                 out.placed.push(placement);
                 break;
             }
@@ -178,6 +178,91 @@ pub fn scatter(volume: &mut Volume, mesh: &Mesh, params: &Scatter, seed: u64) ->
         }
     }
     Ok(out)
+}
+
+/// A segment with a radius: every point within `radius` of the segment `a`-`b`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Capsule {
+    /// One end of the segment.
+    pub a: Vec3,
+    /// The other end.
+    pub b: Vec3,
+    /// Distance from the segment that the shape stays within.
+    pub radius: f32,
+}
+
+impl Capsule {
+    /// The capsule moved, turned and scaled as a placement moves the mesh.
+    pub fn placed(&self, p: &Placement) -> Capsule {
+        let s = p.scale.x;
+        Capsule { a: p.at + p.rotation * (self.a * s), b: p.at + p.rotation * (self.b * s), radius: self.radius * s }
+    }
+
+    /// Whether the whole capsule lies inside a volume of these dims.
+    pub fn inside(&self, dims: [usize; 3]) -> bool {
+        (0..3).all(|k| {
+            let (lo, hi) = (self.a[k].min(self.b[k]), self.a[k].max(self.b[k]));
+            lo - self.radius >= 0.0 && hi + self.radius <= dims[k] as f32
+        })
+    }
+
+    /// Whether two capsules share a point.
+    pub fn overlaps(&self, other: &Capsule) -> bool {
+        segment_distance(self.a, self.b, other.a, other.b) < self.radius + other.radius
+    }
+}
+
+/// The capsule around a mesh: its segment runs along the bounding box's longest side
+/// through the box's centre, its radius is the farthest vertex's distance from that
+/// segment. Elongated seeds (a kiwi's) get a capsule far tighter than their bounding
+/// sphere, so scattered seeds can lie as close as their shapes allow.
+pub fn bounding_capsule(mesh: &Mesh) -> Capsule {
+    let (lo, hi) = mesh.bounds();
+    let centre = (lo + hi) / 2.0;
+    let size = hi - lo;
+    let long = if size.x >= size.y && size.x >= size.z {
+        Vec3::X
+    } else if size.y >= size.z {
+        Vec3::Y
+    } else {
+        Vec3::Z
+    };
+    let half = long * (size.dot(long) / 2.0);
+    let (a, b) = (centre - half, centre + half);
+    let radius = mesh.vertices.iter().map(|v| segment_distance(*v, *v, a, b)).fold(0.0, f32::max);
+    Capsule { a, b, radius }
+}
+
+/// The shortest distance between segments `p1`-`q1` and `p2`-`q2` (Ericson, Real-Time
+/// Collision Detection, 5.1.9); a segment may be a point.
+fn segment_distance(p1: Vec3, q1: Vec3, p2: Vec3, q2: Vec3) -> f32 {
+    let (d1, d2, r) = (q1 - p1, q2 - p2, p1 - p2);
+    let (a, e, f) = (d1.dot(d1), d2.dot(d2), d2.dot(r));
+    let tiny = 1e-12;
+    let (s, t) = if a <= tiny && e <= tiny {
+        (0.0, 0.0)
+    } else if a <= tiny {
+        (0.0, (f / e).clamp(0.0, 1.0))
+    } else {
+        let c = d1.dot(r);
+        if e <= tiny {
+            ((-c / a).clamp(0.0, 1.0), 0.0)
+        } else {
+            let b = d1.dot(d2);
+            let denom = a * e - b * b;
+            let mut s = if denom > tiny { ((b * f - c * e) / denom).clamp(0.0, 1.0) } else { 0.0 };
+            let mut t = (b * s + f) / e;
+            if t < 0.0 {
+                t = 0.0;
+                s = (-c / a).clamp(0.0, 1.0);
+            } else if t > 1.0 {
+                t = 1.0;
+                s = ((b - c) / a).clamp(0.0, 1.0);
+            }
+            (s, t)
+        }
+    };
+    (p1 + d1 * s).distance(p2 + d2 * t)
 }
 
 fn check_scatter(volume: &Volume, p: &Scatter) -> Result<()> {
@@ -244,12 +329,6 @@ fn random_point(volume: &Volume, region: Region, rng: &mut Pcg64) -> Vec3 {
             if inside { at } else { Vec3::splat(f32::NAN) }
         }
     }
-}
-
-/// The sphere lies wholly inside the volume (a NaN centre never fits).
-fn fits(volume: &Volume, (c, r): (Vec3, f32)) -> bool {
-    let d = volume.dims();
-    (0..3).all(|k| c[k] - r >= 0.0 && c[k] + r <= d[k] as f32)
 }
 
 /// A local blur: Gaussian-blurred values blended in inside a sphere, fully (times

@@ -68,6 +68,77 @@ fn a_kiwi_fill_covers_every_tet_and_puts_the_skin_on_the_surface() {
     assert!(flesh[1] > flesh[0] && flesh[1] > flesh[2], "green flesh between: {flesh:?}");
 }
 
+/// Connected groups (4-neighbour) of at least `least` pixels darker than `share` of the
+/// median brightness inside `radius` pixels of the picture's centre, with each group's
+/// mean distance from the centre.
+fn dark_spots(png: &str, radius: f32, share: f32, least: usize) -> Vec<f32> {
+    let img = image::open(png).unwrap().to_rgb8();
+    let (w, h) = img.dimensions();
+    let from_centre =
+        |x: u32, y: u32| ((x as f32 - w as f32 / 2.0).powi(2) + (y as f32 - h as f32 / 2.0).powi(2)).sqrt();
+    let light = |x: u32, y: u32| img.get_pixel(x, y).0.iter().map(|c| *c as f32).sum::<f32>() / 3.0;
+    let mut inside: Vec<f32> = (0..h)
+        .flat_map(|y| (0..w).map(move |x| (x, y)))
+        .filter(|&(x, y)| from_centre(x, y) < radius)
+        .map(|(x, y)| light(x, y))
+        .collect();
+    inside.sort_by(f32::total_cmp);
+    let limit = share * inside[inside.len() / 2];
+    let dark = |x: u32, y: u32| from_centre(x, y) < radius && light(x, y) < limit;
+    let mut seen = vec![false; (w * h) as usize];
+    let mut spots = Vec::new();
+    for start in 0..w * h {
+        let (x, y) = (start % w, start / w);
+        if seen[start as usize] || !dark(x, y) {
+            continue;
+        }
+        seen[start as usize] = true;
+        let (mut stack, mut distances) = (vec![(x, y)], Vec::new());
+        while let Some((x, y)) = stack.pop() {
+            distances.push(from_centre(x, y));
+            let next = [(x.wrapping_sub(1), y), (x + 1, y), (x, y.wrapping_sub(1)), (x, y + 1)];
+            for (nx, ny) in next {
+                if nx < w && ny < h && !seen[(ny * w + nx) as usize] && dark(nx, ny) {
+                    seen[(ny * w + nx) as usize] = true;
+                    stack.push((nx, ny));
+                }
+            }
+        }
+        if distances.len() >= least {
+            spots.push(distances.iter().sum::<f32>() / distances.len() as f32);
+        }
+    }
+    spots
+}
+
+/// The repository's kiwi fill (exemplars/kiwi_fill.toml on the drawn fruit): a cut across
+/// the axis shows at least 25 seeds (thesis Fig. 7.1), in a ring around the pale core. The
+/// seeds' bounding spheres let 60 fit in the exemplar, which left 4 to 8 in a cut.
+#[test]
+fn a_cut_across_the_kiwi_shows_a_ring_of_seeds() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let repo_spec =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("exemplars/kiwi_fill.toml")).unwrap();
+    let body: String = repo_spec
+        .lines()
+        .filter(|l| !l.starts_with("library") && !l.starts_with("built"))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    let (mesh, spec) = (draw(d, "fruit"), spec(d, "kiwi.toml", &body));
+    fill(d, &mesh, &spec, "kiwi.lst");
+    let png = at(d, "cut.png");
+    assert!(
+        solidtex(&["cut", &at(d, "kiwi.lst"), "--plane", "0,0,0,1,0,0", "--size", "512", "-o", &png]).status.success()
+    );
+    // the fruit's radius, 0.65, is 246 px; the seeds are searched inside 80 % of it
+    let fruit = 0.65 * 512.0 / (1.3 * 1.04);
+    let seeds = dark_spots(&png, 0.8 * fruit, 0.8, 4);
+    assert!(seeds.len() >= 25, "{} seeds", seeds.len());
+    let in_ring = seeds.iter().filter(|r| (0.3 * fruit..0.6 * fruit).contains(*r)).count();
+    assert!(in_ring as f32 >= 0.9 * seeds.len() as f32, "{in_ring} of {} seeds in the ring", seeds.len());
+}
+
 #[test]
 fn fills_replay_for_a_seed_and_ignore_the_mesh_orientation() {
     let dir = tempfile::tempdir().unwrap();

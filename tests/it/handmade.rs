@@ -5,7 +5,7 @@ use crate::support::{assert_fails, assert_usage, at, listing, solidtex, stderr};
 use glam::{Quat, Vec3};
 use solidtex::io::read_volume;
 use solidtex::sections::seed_mesh;
-use solidtex::stamp::{Placement, Region, Scatter, blur, bounding_sphere, scatter, stamp};
+use solidtex::stamp::{Placement, Region, Scatter, blur, bounding_capsule, scatter, stamp};
 use solidtex::volume::{Channel, Volume};
 
 fn grey_cube(side: usize) -> Volume {
@@ -44,17 +44,48 @@ fn scatter_never_overlaps_and_replays_from_its_seed() {
     assert_eq!(first, second);
     assert_eq!(a, b);
     assert_eq!(first.placed.len(), 25);
-    let (centre, radius) = bounding_sphere(&mesh);
-    let spheres: Vec<(Vec3, f32)> =
-        first.placed.iter().map(|p| (p.at + p.rotation * (centre * p.scale.x), radius * p.scale.x)).collect();
-    for (i, s) in spheres.iter().enumerate() {
-        assert!((0..3).all(|k| s.0[k] - s.1 >= 0.0 && s.0[k] + s.1 <= 48.0), "seed {i} pokes out");
-        for t in &spheres[i + 1..] {
-            assert!(s.0.distance(t.0) >= s.1 + t.1 - 1e-4, "seeds overlap");
+    let capsules: Vec<_> = first.placed.iter().map(|p| bounding_capsule(&mesh).placed(p)).collect();
+    for (i, c) in capsules.iter().enumerate() {
+        for end in [c.a, c.b] {
+            assert!((0..3).all(|k| end[k] - c.radius >= 0.0 && end[k] + c.radius <= 48.0), "seed {i} pokes out");
         }
+        for d in &capsules[i + 1..] {
+            assert!(sampled_distance(c.a, c.b, d.a, d.b) >= c.radius + d.radius - 1e-2, "seeds overlap");
+        }
+    }
+    for v in &mesh.vertices {
+        let capsule = bounding_capsule(&mesh);
+        assert!(sampled_distance(*v, *v, capsule.a, capsule.b) <= capsule.radius + 1e-4, "the capsule holds the mesh");
     }
     let mut c = grey_cube(48);
     assert_ne!(scatter(&mut c, &mesh, &params, 12).unwrap(), first);
+}
+
+/// The distance of two segments, from 200 points along each (a check independent of the
+/// closed form scatter uses).
+fn sampled_distance(p1: Vec3, q1: Vec3, p2: Vec3, q2: Vec3) -> f32 {
+    let along = |p: Vec3, q: Vec3| (0..=200).map(move |i| p + (q - p) * (i as f32 / 200.0));
+    along(p1, q1).flat_map(|a| along(p2, q2).map(move |b| a.distance(b))).fold(f32::INFINITY, f32::min)
+}
+
+/// Long thin seeds (a kiwi's: eight times longer than wide) are kept apart by their
+/// capsules, not their bounding spheres: many more fit in the same box, still apart.
+#[test]
+fn thin_seeds_pack_as_closely_as_their_shapes_allow() {
+    let corners =
+        vec![Vec3::new(-0.12, -0.12, -1.0), Vec3::new(0.12, -0.12, -1.0), Vec3::new(0.0, 0.12, -1.0), Vec3::Z];
+    let needle = solidtex::mesh::Mesh::new(corners, vec![[0, 2, 1], [0, 1, 3], [1, 2, 3], [2, 0, 3]]).unwrap();
+    let params = Scatter {
+        count: 400,
+        region: Region::Box(Vec3::ZERO, Vec3::splat(32.0)),
+        scale: (3.0, 3.0),
+        colour: [0.0; 3],
+        attempts: 200,
+    };
+    let placed = scatter(&mut grey_cube(32), &needle, &params, 5).unwrap().placed;
+    // Spheres of radius 3 in a 32-voxel cube, their centres at least 3 from every face:
+    // at most (26^3) / (4/3 pi 3^3) * 0.74 (the densest packing) = 115 of them.
+    assert!(placed.len() > 150, "{} placed", placed.len());
 }
 
 #[test]
