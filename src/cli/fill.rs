@@ -100,6 +100,7 @@ pub fn run_fill(args: &FillArgs) -> Result<()> {
     let started = Instant::now();
     let tets = mesher::tetrahedralize(&surface, spec.tets).map_err(|e| e.in_file(&args.mesh))?;
     let meshed = started.elapsed().as_secs_f64();
+    warn_if_far(&args.mesh, tets.tets.len(), spec.tets);
     let missing = library::fill::missing(&spec)?;
     if !missing.is_empty() {
         eprintln!("building {} into {} first", missing.join(", "), spec.built.display());
@@ -151,6 +152,17 @@ pub fn run_fill(args: &FillArgs) -> Result<()> {
         io::write_bytes(path, serde_json::to_string_pretty(&json).expect("serializable").as_bytes())?;
     }
     Ok(())
+}
+
+/// Warn when the tet mesh is more than 15 % off the count asked for.
+fn warn_if_far(mesh: &Path, got: usize, asked: usize) {
+    if (got as f64 / asked as f64 - 1.0).abs() > 0.15 {
+        eprintln!(
+            "warning: {}: {got} tets for the {asked} asked; no lattice spacing comes closer on this shape \
+             (a part about as thin as the spacing appears or vanishes as it changes)",
+            mesh.display()
+        );
+    }
 }
 
 fn lst_check(path: &Path) -> Result<()> {

@@ -448,3 +448,25 @@ fn unused_fill_options_are_named_and_raised_scales_counted() {
     let plain = solidtex(&["fill", &mesh, "--spec", &self::spec(d, "plain.toml", KIWI), "-o", &at(d, "plain.lst")]);
     assert!(!stderr(&plain).contains("warning"), "{}", stderr(&plain));
 }
+
+/// A plate a fiftieth as thick as wide: at 1,000 tets the lattice is coarser than the
+/// plate, and the first spacing with tets inside gives several times more. `fill` says so,
+/// naming the mesh and both counts; a fill whose count lands near the target does not.
+#[test]
+fn a_tet_count_far_from_the_target_is_warned_about() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let plate = solidtex::mesh::shapes::cuboid(glam::Vec3::ZERO, glam::Vec3::new(1.0, 1.0, 0.02));
+    let path = d.join("plate.obj");
+    solidtex::io::mesh_file::write_obj(&path, &plate).unwrap();
+    let spec = spec(d, "marble.toml", "exemplar = \"marble\"\n");
+    let fill_with = |tets: &str| {
+        let run = solidtex(&["fill", &at(d, "plate.obj"), "--spec", &spec, "--tets", tets, "-o", &at(d, "p.lst")]);
+        assert!(run.status.success(), "{}", stderr(&run));
+        stderr(&run)
+    };
+    let far = fill_with("1000");
+    assert!(far.contains("warning: ") && far.contains("plate.obj") && far.contains("for the 1000 asked"), "{far}");
+    let near = fill_with("10000");
+    assert!(!near.contains("warning"), "{near}");
+}

@@ -257,7 +257,7 @@ fn an_in_process_build_reports_each_synthesis_level() {
 #[test]
 fn a_preview_returns_its_warnings() {
     let manifest = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/exemplars/library.toml"));
-    let text = std::fs::read_to_string(manifest).unwrap().replace("count = 60", "count = 2000");
+    let text = std::fs::read_to_string(manifest).unwrap().replace("count = 180", "count = 2000");
     let (_, warnings) = solidtex::library::recipe::preview(manifest, "kiwi", &text).unwrap();
     assert!(warnings.iter().any(|w| w.contains("seeds") && w.contains("no room")), "{warnings:?}");
 }
