@@ -98,7 +98,7 @@ press "stamped" 5 Right Right Right Enter
 press "unsaved stamps" 5 Escape
 press "saved the steps" 5 s
 press "solidtex library" 5 Escape
-sed -i 's/^  count = 60$/  count = 400/' "$out/lib/library.toml"
+sed -i 's/^  count = 180$/  count = 600/' "$out/lib/library.toml"
 press "recipe: kiwi" 10 e
 wait_for "no room for the rest" 60
 if screen | grep -q "stale"; then echo "tui e2e: the preview after a stamp at x > 31 is stale"; screen; exit 1; fi

@@ -147,8 +147,12 @@ pub fn run_fill(args: &FillArgs) -> Result<()> {
         eprintln!("warning: {}: {note}", args.spec.display());
     }
     eprintln!("wrote {} ({:.0} KB)", args.output.display(), bytes as f64 / 1024.0);
+    let seams = seam_strength(&load_model(&args.output)?);
+    if let Some(seams) = seams {
+        eprintln!("  seam strength {seams:.2} (colour step across patch borders over within, central cuts)");
+    }
     if let Some(path) = &args.json {
-        let json = serde_json::json!({ "fill": report, "seconds": total, "mesh_seconds": meshed, "bytes": bytes, "type": resolved.kind.name() });
+        let json = serde_json::json!({ "fill": report, "seconds": total, "mesh_seconds": meshed, "bytes": bytes, "type": resolved.kind.name(), "seam_strength": seams });
         io::write_bytes(path, serde_json::to_string_pretty(&json).expect("serializable").as_bytes())?;
     }
     Ok(())
@@ -163,6 +167,20 @@ fn warn_if_far(mesh: &Path, got: usize, asked: usize) {
             mesh.display()
         );
     }
+}
+
+/// The mean seam strength of the model's three central axis cuts at 256² (see
+/// [`render::Cut::seam_strength`]).
+fn seam_strength(loaded: &Loaded) -> Option<f64> {
+    let models = [(&loaded.model, &loaded.textures)];
+    let bounds = render::bounds(&models);
+    let centre = (bounds.0 + bounds.1) / 2.0;
+    let figures: Vec<f64> = [glam::Vec3::X, glam::Vec3::Y, glam::Vec3::Z]
+        .iter()
+        .filter_map(|&normal| View::framing(bounds, centre, normal, 256).ok())
+        .filter_map(|view| render::cut_many(&models, &view).seam_strength())
+        .collect();
+    (!figures.is_empty()).then(|| figures.iter().sum::<f64>() / figures.len() as f64)
 }
 
 fn lst_check(path: &Path) -> Result<()> {
@@ -247,6 +265,9 @@ pub fn run_cut(args: &CutArgs) -> Result<()> {
     io::write_rgb8(&args.output, &cut.picture())?;
     let (shown, size) = (args.output.display(), args.size);
     eprintln!("wrote {shown} ({size}x{size}, {:.0} % inside) in {ms:.1} ms", cut.inside_share() * 100.0);
+    if let Some(seams) = cut.seam_strength() {
+        eprintln!("  seam strength {seams:.2} (colour step across patch borders over within)");
+    }
     Ok(())
 }
 

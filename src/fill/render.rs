@@ -111,7 +111,15 @@ pub struct Cut {
     pub height: usize,
     /// RGBA, row by row.
     pub pixels: Vec<[f32; 4]>,
+    /// The patch that shows most at each pixel ([`NO_PATCH`] outside; with several models,
+    /// model `m`'s patch `p` is `p + m * MODEL_STRIDE`).
+    pub patches: Vec<u32>,
 }
+
+/// The patch of a pixel outside the model.
+pub const NO_PATCH: u32 = u32::MAX;
+/// Patch numbers of one model in [`Cut::patches`] stay below this.
+const MODEL_STRIDE: u32 = 1 << 26;
 
 impl Cut {
     /// As an 8-bit picture over [`BACKGROUND`].
@@ -129,14 +137,44 @@ impl Cut {
     pub fn inside_share(&self) -> f64 {
         self.pixels.iter().filter(|p| p[3] > 0.0).count() as f64 / self.pixels.len().max(1) as f64
     }
+
+    /// Seam strength: the mean colour step (RGB distance) between neighbouring pixels
+    /// where the patch that shows most changes, over the mean step between neighbours of
+    /// the same patch. 1 means a patch border is as smooth as the texture inside a patch;
+    /// `None` when the cut has no border or no pair inside one patch.
+    pub fn seam_strength(&self) -> Option<f64> {
+        let (mut across, mut within) = ((0.0f64, 0usize), (0.0f64, 0usize));
+        let (w, h) = (self.width, self.height);
+        for y in 0..h {
+            for x in 0..w {
+                let i = y * w + x;
+                for j in [(x + 1 < w).then_some(i + 1), (y + 1 < h).then_some(i + w)].into_iter().flatten() {
+                    let (a, b) = (self.patches[i], self.patches[j]);
+                    if a == NO_PATCH || b == NO_PATCH {
+                        continue;
+                    }
+                    let (p, q) = (self.pixels[i], self.pixels[j]);
+                    let step = ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt() as f64;
+                    let sum = if a == b { &mut within } else { &mut across };
+                    sum.0 += step;
+                    sum.1 += 1;
+                }
+            }
+        }
+        if across.1 == 0 || within.1 == 0 || within.0 <= 0.0 {
+            return None;
+        }
+        Some((across.0 / across.1 as f64) / (within.0 / within.1 as f64))
+    }
 }
 
 /// Renders the cut of `model` seen through `view`.
 pub fn cut(model: &LstModel, textures: &Textures, view: &View) -> Cut {
     let bands = bin_tets(&model.mesh, view);
-    let rows: Vec<Vec<[f32; 4]>> =
+    let rows: Vec<Vec<([f32; 4], u32)>> =
         bands.par_iter().enumerate().map(|(b, tets)| render_band(model, textures, view, b, tets)).collect();
-    Cut { width: view.width, height: view.height, pixels: rows.concat() }
+    let (pixels, patches) = rows.into_iter().flatten().unzip();
+    Cut { width: view.width, height: view.height, pixels, patches }
 }
 
 /// For each band of rows, the tets that cross the plane there, in index order.
@@ -161,10 +199,11 @@ fn bin_tets(mesh: &TetMesh, view: &View) -> Vec<Vec<u32>> {
     bands
 }
 
-fn render_band(model: &LstModel, textures: &Textures, view: &View, band: usize, tets: &[u32]) -> Vec<[f32; 4]> {
+/// The pixels of one band of rows, each with the patch that shows most there.
+fn render_band(model: &LstModel, textures: &Textures, view: &View, band: usize, tets: &[u32]) -> Vec<([f32; 4], u32)> {
     let y0 = band * BAND;
     let y1 = (y0 + BAND).min(view.height);
-    let mut out = vec![[0.0f32; 4]; (y1 - y0) * view.width];
+    let mut out = vec![([0.0f32; 4], NO_PATCH); (y1 - y0) * view.width];
     let mut done = vec![false; out.len()];
     let (right, down) = (view.right / view.right.length_squared(), view.down / view.down.length_squared());
     let (normal, offset) = (view.normal(), view.normal().dot(view.origin));
@@ -219,12 +258,15 @@ fn pixel_span(coords: &[f32], limit: usize) -> (usize, usize) {
     (lo.min(limit), hi)
 }
 
-/// The patches of tet `t` as (source, corner texture coordinates), bottom first.
-fn layers_of(model: &LstModel, t: usize) -> Vec<(usize, [Vec3; 4])> {
+/// One patch of a tet: its source, its texture coordinates at the tet's corners, its number.
+type Layer = (usize, [Vec3; 4], u32);
+
+/// The patches of tet `t`, bottom first.
+fn layers_of(model: &LstModel, t: usize) -> Vec<Layer> {
     let tet = model.mesh.tets[t];
     model.tet_patches[t]
         .iter()
-        .map(|&p| (model.patches[p as usize].source as usize, model.patches[p as usize].corners(tet)))
+        .map(|&p| (model.patches[p as usize].source as usize, model.patches[p as usize].corners(tet), p))
         .collect()
 }
 
@@ -232,32 +274,39 @@ fn layers_of(model: &LstModel, t: usize) -> Vec<(usize, [Vec3; 4])> {
 pub fn shade_point(model: &LstModel, textures: &Textures, t: usize, point: Vec3) -> [f32; 4] {
     let b = model.mesh.barycentric(t, point).map(|x| x.max(0.0));
     let sum: f32 = b.iter().sum::<f32>().max(1e-12);
-    shade(textures, &layers_of(model, t), b.map(|x| x / sum))
+    shade(textures, &layers_of(model, t), b.map(|x| x / sum)).0
 }
 
-/// Composites the layers at barycentric point `b`, top first.
-fn shade(textures: &Textures, layers: &[(usize, [Vec3; 4])], b: [f32; 4]) -> [f32; 4] {
+/// Composites the layers at barycentric point `b`, top first; also the patch that
+/// contributes most.
+fn shade(textures: &Textures, layers: &[Layer], b: [f32; 4]) -> ([f32; 4], u32) {
     let at = |w: &[Vec3; 4]| w[0] * b[0] + w[1] * b[1] + w[2] * b[2] + w[3] * b[3];
     let mut colour = Vec3::ZERO;
     let mut cover = 0.0f32;
-    for (source, w) in layers.iter().rev() {
+    let (mut most, mut share) = (NO_PATCH, 0.0f32);
+    for (source, w, patch) in layers.iter().rev() {
         let p = at(w);
         let a = textures.masks[*source].alpha(p);
         if a <= 0.0 {
             continue;
         }
-        colour += textures.colour[*source].rgb(p) * (a * (1.0 - cover));
-        cover += a * (1.0 - cover);
+        let weight = a * (1.0 - cover);
+        colour += textures.colour[*source].rgb(p) * weight;
+        cover += weight;
+        if weight > share {
+            (most, share) = (*patch, weight);
+        }
         if cover > 0.996 {
             break;
         }
     }
     if cover > 0.0 {
         colour /= cover;
-    } else if let Some((source, w)) = layers.first() {
+    } else if let Some((source, w, patch)) = layers.first() {
         colour = textures.colour[*source].rgb(at(w));
+        most = *patch;
     }
-    [colour.x, colour.y, colour.z, 1.0]
+    ([colour.x, colour.y, colour.z, 1.0], most)
 }
 
 /// Cuts several models (a multi-material model): each pixel shows the first model that
@@ -268,11 +317,14 @@ pub fn cut_many(models: &[(&LstModel, &Textures)], view: &View) -> Cut {
         width: view.width,
         height: view.height,
         pixels: vec![[0.0; 4]; view.width * view.height],
+        patches: vec![NO_PATCH; view.width * view.height],
     });
-    for other in cuts {
-        for (p, q) in out.pixels.iter_mut().zip(other.pixels) {
+    for (m, other) in cuts.enumerate() {
+        let offset = (m as u32 + 1) * MODEL_STRIDE;
+        for ((p, q), (a, b)) in out.pixels.iter_mut().zip(other.pixels).zip(out.patches.iter_mut().zip(other.patches)) {
             if p[3] == 0.0 {
                 *p = q;
+                *a = if b == NO_PATCH { NO_PATCH } else { b + offset };
             }
         }
     }
@@ -296,4 +348,37 @@ pub fn bake(models: &[(&LstModel, &Textures)], res: usize, budget: u64) -> Resul
         data.extend(cut_many(models, &view).pixels.into_iter().flatten());
     }
     Volume::from_data(dims, Channel::rgba(), data)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A 32x32 cut of a gentle ramp (a step of 0.01 between neighbours), two patches split
+    /// at x = 16, with `jump` added to the right patch.
+    fn two_patches(jump: f32) -> Cut {
+        let (w, h) = (32, 32);
+        let pixels = (0..w * h)
+            .map(|i| {
+                let v = 0.2 + 0.01 * (i % w) as f32 + if i % w >= 16 { jump } else { 0.0 };
+                [v, v, v, 1.0]
+            })
+            .collect();
+        let patches = (0..w * h).map(|i| u32::from(i % w >= 16)).collect();
+        Cut { width: w, height: h, pixels, patches }
+    }
+
+    #[test]
+    fn a_seam_shows_as_a_step_larger_than_the_texture_inside() {
+        // Horizontal pairs step 0.01 * sqrt 3, vertical ones 0: within-patch mean about half of it.
+        let smooth = two_patches(0.0).seam_strength().unwrap();
+        assert!(
+            (smooth - 2.0).abs() < 0.1,
+            "the border steps like the ramp, against a mean halved by still rows: {smooth}"
+        );
+        let hard = two_patches(0.2).seam_strength().unwrap();
+        assert!(hard > 20.0 * smooth, "a jump of 0.2 at the border: {hard}");
+        let one = Cut { patches: vec![0; 32 * 32], ..two_patches(0.2) };
+        assert_eq!(one.seam_strength(), None, "no border, no figure");
+    }
 }

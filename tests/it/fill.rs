@@ -53,6 +53,8 @@ fn a_kiwi_fill_covers_every_tet_and_puts_the_skin_on_the_surface() {
     assert_eq!(stats["fill"]["paste"]["forced"], 0, "{stats}");
     assert!(stats["fill"]["tets"].as_u64().unwrap() > 2000);
     assert!(stats["fill"]["paste"]["angle_mean"].as_f64().unwrap() < 20.0, "{stats}");
+    let seams = stats["seam_strength"].as_f64().unwrap();
+    assert!((0.5..2.0).contains(&seams), "seam strength {seams}");
     // a cut across the fruit's axis: a 0.65-radius disc; 512 px span 1.3 x 1.04
     let png = at(d, "cut.png");
     assert!(
