@@ -147,7 +147,8 @@ pub fn run_fill(args: &FillArgs) -> Result<()> {
         eprintln!("warning: {}: {note}", args.spec.display());
     }
     eprintln!("wrote {} ({:.0} KB)", args.output.display(), bytes as f64 / 1024.0);
-    let seams = seam_strength(&load_model(&args.output)?);
+    // A figure, not a result: if the model cannot be read back it is left out.
+    let seams = load_model(&args.output).ok().and_then(|loaded| seam_strength(&loaded));
     if let Some(seams) = seams {
         eprintln!("  seam strength {seams:.2} (colour step across patch borders over within, central cuts)");
     }

@@ -142,8 +142,8 @@ pub fn run(job: &Job, params: &SynthParams, seed: u64, progress: &dyn Progress) 
     Ok(state.map(|(g, _)| g.data).unwrap_or_default())
 }
 
-/// Rounds of spectrum matching, each followed by the joint colour transfer (which moves
-/// the spectrum a little). Against the known solid of docs/synthesis.md, one round left
+/// Rounds of spectrum matching, each followed by a colour transfer (per channel after the
+/// first round, the joint one after the last), which moves the spectrum a little. Against the known solid of docs/synthesis.md, one round left
 /// the correlation error along x at 1.50-1.62 times the slices' own (seeds 1-3), two at
 /// 1.19-1.33, three no better (z up to 1.54).
 const SPECTRUM_ROUNDS: usize = 2;
