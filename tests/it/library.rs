@@ -301,3 +301,28 @@ fn only_the_named_entries_must_be_valid() {
     let run = solidtex(&["build", &m, "-o", &out]);
     assert_eq!(run.status.code(), Some(1), "a whole build still needs every entry valid");
 }
+
+/// The clean-up of an interrupted build removes only its own temporaries: a link shaped
+/// like one goes, the folder it points to and the user's files beside it stay.
+#[cfg(unix)]
+#[test]
+fn cleaning_up_never_touches_what_a_user_made() {
+    let dir = tempfile::tempdir().unwrap();
+    let manifest = library(dir.path());
+    let out = dir.path().join("out");
+    let keep = dir.path().join("keep");
+    std::fs::create_dir_all(&out).unwrap();
+    std::fs::create_dir_all(&keep).unwrap();
+    std::fs::write(keep.join("precious.txt"), "mine").unwrap();
+    std::os::unix::fs::symlink(&keep, out.join(".kiwi.solidtex-Ab12Cd.tmp")).unwrap();
+    for user in ["notes.solidtex-draft.tmp", ".notes.solidtex-draft.tmp", ".kiwi.solidtex-Ab12C.tmp"] {
+        std::fs::write(out.join(user), "mine").unwrap();
+    }
+    let run = solidtex(&["build", &manifest, "-o", &out.to_string_lossy()]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    assert!(std::fs::symlink_metadata(out.join(".kiwi.solidtex-Ab12Cd.tmp")).is_err(), "the stale temporary is gone");
+    assert_eq!(std::fs::read_to_string(keep.join("precious.txt")).unwrap(), "mine");
+    for user in ["notes.solidtex-draft.tmp", ".notes.solidtex-draft.tmp", ".kiwi.solidtex-Ab12C.tmp"] {
+        assert_eq!(std::fs::read_to_string(out.join(user)).unwrap(), "mine", "{user}");
+    }
+}
