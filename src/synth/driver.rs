@@ -151,7 +151,7 @@ const SPECTRUM_ROUNDS: usize = 2;
 /// Give the volume's cuts the power spectra of the level's exemplars (the colour
 /// distribution is transferred again afterwards).
 fn match_spectrum(grid: &mut Grid, ex: &[Option<&Prepared>; 3], pooled: &[f32]) {
-    let standard = spectrum::Standard::of(pooled, grid.channels);
+    let standard = crate::sharpness::Standard::of_samples(pooled, grid.channels);
     let targets = ex.map(|e| e.map(|e| spectrum::Target::of(&e.colours, e.width, e.height, e.channels, &standard)));
     spectrum::match_spectrum(
         &mut grid.data,

@@ -20,6 +20,7 @@
 //!
 //! The transform is periodic: only volumes that wrap on every axis are reshaped.
 
+use crate::sharpness::Standard;
 use crate::volume::Axis;
 use rayon::prelude::*;
 use rustfft::num_complex::Complex;
@@ -33,44 +34,6 @@ const FIT_ROUNDS: usize = 6;
 /// Largest factor the power of one frequency may be raised or lowered by.
 const MOST_GAIN: f64 = 16.0;
 
-/// Per-channel mean and deviation the grey is standardized with.
-#[derive(Debug, Clone)]
-pub struct Standard {
-    /// Mean per channel.
-    pub mean: Vec<f32>,
-    /// Deviation per channel (never 0).
-    pub deviation: Vec<f32>,
-}
-
-impl Standard {
-    /// The mean and deviation of interleaved samples.
-    pub fn of(samples: &[f32], channels: usize) -> Standard {
-        let count = (samples.len() / channels).max(1) as f64;
-        let mut mean = vec![0.0f64; channels];
-        for px in samples.chunks_exact(channels) {
-            for (m, v) in mean.iter_mut().zip(px) {
-                *m += *v as f64;
-            }
-        }
-        mean.iter_mut().for_each(|m| *m /= count);
-        let mut var = vec![0.0f64; channels];
-        for px in samples.chunks_exact(channels) {
-            for ((s, v), m) in var.iter_mut().zip(px).zip(&mean) {
-                *s += (*v as f64 - m).powi(2);
-            }
-        }
-        Standard {
-            mean: mean.iter().map(|m| *m as f32).collect(),
-            deviation: var.iter().map(|s| ((s / count).sqrt() as f32).max(1e-6)).collect(),
-        }
-    }
-
-    fn grey(&self, px: &[f32]) -> f32 {
-        let sum: f32 = px.iter().zip(&self.mean).zip(&self.deviation).map(|((v, m), d)| (v - m) / d).sum();
-        sum / px.len() as f32
-    }
-}
-
 /// An exemplar's power spectrum on the frequency cells, summing to 1 without the mean.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Target {
@@ -80,8 +43,8 @@ pub struct Target {
 impl Target {
     /// The spectrum of an exemplar's grey (`width` x `height`, interleaved samples).
     pub fn of(colours: &[f32], width: usize, height: usize, channels: usize, standard: &Standard) -> Target {
-        let mut data: Vec<Complex<f32>> =
-            colours.chunks_exact(channels).map(|px| Complex::new(standard.grey(px), 0.0)).collect();
+        let grey = standard.grey_samples(colours, channels, &all(channels));
+        let mut data: Vec<Complex<f32>> = grey.iter().map(|g| Complex::new(*g as f32, 0.0)).collect();
         let mut planner = FftPlannerScalar::new();
         transform(&mut data, [width, height, 1], &mut planner, false);
         let mut cells = vec![0.0f64; CELLS * CELLS];
@@ -117,8 +80,9 @@ pub fn match_spectrum(
         return;
     }
     let mut planner = FftPlannerScalar::new();
+    let grey = standard.grey_samples(data, channels, &all(channels));
     let mut packed: Vec<Complex<f32>> =
-        data.par_chunks_exact(channels).map(|px| Complex::new(standard.grey(px), px[0])).collect();
+        data.par_chunks_exact(channels).zip(grey).map(|(px, g)| Complex::new(g as f32, px[0])).collect();
     transform(&mut packed, dims, &mut planner, false);
     let gain = fit_gain(&real_part_power(&packed, dims), dims, targets);
     reshape(&mut packed, &gain, dims, &mut planner);
@@ -136,6 +100,11 @@ pub fn match_spectrum(
             }
         });
     }
+}
+
+/// Every channel, in order: the grey of [`Standard::grey_samples`] over all of them.
+fn all(channels: usize) -> Vec<usize> {
+    (0..channels).collect()
 }
 
 /// Scale a transformed pair by the square root of the gain and transform it back
@@ -375,7 +344,7 @@ mod tests {
         let mut volume = blobs(n, 1.8, 9);
         let before = lengths(&volume, n, &exemplar);
         assert!(before.iter().all(|l| *l > 1.4), "the blobs start too large: {before:?}");
-        let standard = Standard::of(exemplar.data(), 1);
+        let standard = Standard::of_samples(exemplar.data(), 1);
         let target = Target::of(exemplar.data(), n, n, 1, &standard);
         match_spectrum(&mut volume, [n; 3], 1, &standard, &[Some(&target); 3]);
         let after = lengths(&volume, n, &exemplar);
@@ -404,10 +373,12 @@ mod tests {
         let before = volume.clone();
         let exemplar =
             Image2d::from_data(2 * n, 2 * n, Channel::grey(), blobs(2 * n, 1.5, 4)[..4 * n * n].to_vec()).unwrap();
-        let standard = Standard::of(exemplar.data(), 1);
+        let standard = Standard::of_samples(exemplar.data(), 1);
         let target = Target::of(exemplar.data(), 2 * n, 2 * n, 1, &standard);
         match_spectrum(&mut volume, [n; 3], 1, &standard, &[Some(&target); 3]);
-        let (mean, spread) = (before.iter().sum::<f32>() / before.len() as f32, standard.deviation[0]);
+        let values = exemplar.data();
+        let mean = values.iter().sum::<f32>() / values.len() as f32;
+        let spread = (values.iter().map(|v| (v - mean).powi(2)).sum::<f32>() / values.len() as f32).sqrt();
         let moved = volume.iter().zip(&before).map(|(a, b)| (a - b).abs()).sum::<f32>() / before.len() as f32;
         assert!(moved < 0.35 * spread, "mean change {moved} against a deviation of {spread} (mean {mean})");
     }

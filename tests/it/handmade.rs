@@ -28,16 +28,15 @@ fn stamping_blends_the_colour_by_coverage() {
     assert!(err.contains("wholly outside") && err.contains("32x32x32"), "{err}");
 }
 
+/// Black seeds scattered anywhere in a cube of `side` voxels, 200 tries each.
+fn in_cube(count: usize, side: f32, scale: (f32, f32)) -> Scatter {
+    Scatter { count, region: Region::Box(Vec3::ZERO, Vec3::splat(side)), scale, colour: [0.0; 3], attempts: 200 }
+}
+
 #[test]
 fn scatter_never_overlaps_and_replays_from_its_seed() {
     let mesh = seed_mesh(12, 12).unwrap();
-    let params = Scatter {
-        count: 25,
-        region: Region::Box(Vec3::ZERO, Vec3::splat(48.0)),
-        scale: (2.0, 3.0),
-        colour: [0.0; 3],
-        attempts: 200,
-    };
+    let params = in_cube(25, 48.0, (2.0, 3.0));
     let (mut a, mut b) = (grey_cube(48), grey_cube(48));
     let first = scatter(&mut a, &mesh, &params, 11).unwrap();
     let second = scatter(&mut b, &mesh, &params, 11).unwrap();
@@ -75,13 +74,7 @@ fn thin_seeds_pack_as_closely_as_their_shapes_allow() {
     let corners =
         vec![Vec3::new(-0.12, -0.12, -1.0), Vec3::new(0.12, -0.12, -1.0), Vec3::new(0.0, 0.12, -1.0), Vec3::Z];
     let needle = solidtex::mesh::Mesh::new(corners, vec![[0, 2, 1], [0, 1, 3], [1, 2, 3], [2, 0, 3]]).unwrap();
-    let params = Scatter {
-        count: 400,
-        region: Region::Box(Vec3::ZERO, Vec3::splat(32.0)),
-        scale: (3.0, 3.0),
-        colour: [0.0; 3],
-        attempts: 200,
-    };
+    let params = in_cube(400, 32.0, (3.0, 3.0));
     let placed = scatter(&mut grey_cube(32), &needle, &params, 5).unwrap().placed;
     // Spheres of radius 3 in a 32-voxel cube, their centres at least 3 from every face:
     // at most (26^3) / (4/3 pi 3^3) * 0.74 (the densest packing) = 115 of them.
