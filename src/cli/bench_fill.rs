@@ -22,10 +22,14 @@ const OTHERS: [&str; 4] = ["libigl_bunny.obj", "cgal_sphere.obj", "cgal_dragknob
 /// The filling workloads of one mesh (`{}`: the mesh's name).
 const NAMES: [&str; 5] = ["tetmesh/{}/5k", "paste/{}/5k", "cut/{}/512", "view/{}/512", "bake/{}/64"];
 
+/// The one large fill: the drawn fruit at 50,000 tets, where the parallel parts show.
+const LARGE: &str = "fill/paste/fruit-2b/50k";
+
 /// The names of all filling workloads (those of the optional meshes too).
 pub fn names() -> Vec<String> {
     let cases = ["fruit-2b", "pipe-0"].into_iter().chain(OTHERS.map(|n| n.trim_end_matches(".obj")));
-    cases.flat_map(|case| NAMES.map(|n| format!("fill/{}", n.replace("{}", case)))).collect()
+    let each = cases.flat_map(|case| NAMES.map(|n| format!("fill/{}", n.replace("{}", case))));
+    each.chain(std::iter::once(LARGE.to_string())).collect()
 }
 
 /// Run the filling workloads.
@@ -49,7 +53,8 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         }
     }
     for (name, mesh, case) in &cases {
-        if !NAMES.iter().any(|n| wanted(args, &format!("fill/{}", n.replace("{}", name)))) {
+        let large = *name == "fruit-2b" && wanted(args, LARGE);
+        if !large && !NAMES.iter().any(|n| wanted(args, &format!("fill/{}", n.replace("{}", name)))) {
             continue;
         }
         timed(args, &format!("fill/tetmesh/{name}/5k"), || {
@@ -74,6 +79,12 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             model = Some(m);
             Ok(figures)
         })?;
+        if large {
+            timed(args, LARGE, || {
+                let (_, report) = case.fill_with(mesh, 50_000)?;
+                Ok(format!("{} tets, {} patches", report.tets, report.paste.patches))
+            })?;
+        }
         let model = match model {
             Some(m) => m,
             None => case.fill(mesh)?.0,
@@ -135,7 +146,12 @@ struct Case {
 impl Case {
     /// Meshes `mesh` (5,000 tets) and fills it.
     fn fill(&self, mesh: &Mesh) -> Result<(LstModel, fill::FillReport)> {
-        let tets = mesher::tetrahedralize(mesh, self.spec.tets)?;
+        self.fill_with(mesh, self.spec.tets)
+    }
+
+    /// Meshes `mesh` into about `tets` tets and fills it.
+    fn fill_with(&self, mesh: &Mesh, tets: usize) -> Result<(LstModel, fill::FillReport)> {
+        let tets = mesher::tetrahedralize(mesh, tets)?;
         let job = Job {
             surface: mesh,
             spec: &self.spec,

@@ -119,8 +119,9 @@ pub fn run_fill(args: &FillArgs) -> Result<()> {
     let (model, report) = fill::fill(&job, tets, &bar).map_err(|e| e.in_file(&args.spec))?;
     bar.0.finish_and_clear();
     let total = started.elapsed().as_secs_f64();
-    lst_file::write_lst(&args.output, &model)?;
-    let bytes = lst_file::to_bytes(&model).len();
+    let encoded = lst_file::to_bytes(&model);
+    io::write_bytes(&args.output, &encoded)?;
+    let bytes = encoded.len();
     let p = &report.paste;
     eprintln!(
         "filled {} ({} tets, min dihedral {:.1}°) with {} patches of '{}' (type {}) in {total:.2} s (mesh {meshed:.2} s)",

@@ -16,12 +16,13 @@
 
 use super::mesher::closest::Surface;
 use super::patch::orthogonal;
-use super::solve::{Sparse, dense_solve, least_squares};
+use super::solve::{Sparse, dense_solve, least_squares, least_squares_each};
 use super::tets::TetMesh;
 use crate::TextureType;
 use crate::error::{Error, Result};
 use crate::mesh::Mesh;
 use glam::{DVec3, Vec3};
+use rayon::prelude::*;
 
 /// Weight of a constraint row against the smoothing rows.
 const CONSTRAINT_WEIGHT: f64 = 10.0;
@@ -64,13 +65,15 @@ pub fn build(mesh: &TetMesh, kind: TextureType, constraints: &Constraints, surfa
     let tets = mesh.tets.len();
     let uses_depth = matches!(kind, TextureType::T1b | TextureType::T2a | TextureType::T2b);
     let rbf = if uses_depth { Some(Rbf::fit(&constraints.depth)?) } else { None };
-    let mut depth: Option<Vec<f32>> = rbf.as_ref().map(|f| mesh.vertices.iter().map(|v| f.value(*v)).collect());
+    let mut depth: Option<Vec<f32>> = rbf.as_ref().map(|f| mesh.vertices.par_iter().map(|v| f.value(*v)).collect());
     if let (Some(d), Some(surface)) = (depth.as_mut(), surface) {
         pin_surface(mesh, surface, &constraints.surface_values, d);
     }
-    let primary: Vec<Vec3> = match (kind, &rbf) {
+    let gradients: Option<Vec<Vec3>> =
+        rbf.as_ref().map(|f| (0..tets).into_par_iter().map(|t| f.gradient(mesh.centroid(t))).collect());
+    let primary: Vec<Vec3> = match (kind, &gradients) {
         (TextureType::T1a, _) => per_tet(mesh, &smooth_vectors(mesh, &constraints.directions, None)?),
-        (_, Some(f)) => (0..tets).map(|t| f.gradient(mesh.centroid(t)).normalize_or(Vec3::Y)).collect(),
+        (_, Some(g)) => g.iter().map(|g| g.normalize_or(Vec3::Y)).collect(),
         _ => vec![Vec3::ZERO; tets],
     };
     let secondary = match kind {
@@ -80,10 +83,8 @@ pub fn build(mesh: &TetMesh, kind: TextureType, constraints: &Constraints, surfa
         }
         _ => vec![Vec3::ZERO; tets],
     };
-    let scale = match (kind, &rbf) {
-        (TextureType::T1b | TextureType::T2b, Some(f)) => {
-            (0..tets).map(|t| 1.0 / f.gradient(mesh.centroid(t)).length().max(1e-6)).collect()
-        }
+    let scale = match (kind, &gradients) {
+        (TextureType::T1b | TextureType::T2b, Some(g)) => g.iter().map(|g| 1.0 / g.length().max(1e-6)).collect(),
         _ => smooth_scales(mesh, constraints)?,
     };
     let depth = if matches!(kind, TextureType::T1b | TextureType::T2b) { depth } else { None };
@@ -124,7 +125,7 @@ fn pin_surface(mesh: &TetMesh, surface: &Mesh, values: &[Option<f32>], depth: &m
     boundary.sort_unstable();
     boundary.dedup();
     let pins: Vec<(usize, f32)> = boundary
-        .iter()
+        .par_iter()
         .filter_map(|&v| {
             let (t, _) = grid.closest_triangle(mesh.vertices[v as usize]);
             values[t].map(|d| (v as usize, d))
@@ -216,11 +217,11 @@ impl Smoothing {
         }
         let mean: [f64; K] =
             std::array::from_fn(|k| points.iter().map(|p| p.1[k] as f64).sum::<f64>() / points.len() as f64);
+        let bs: Vec<Vec<f64>> = (0..K).map(|k| targets.iter().map(|t| t[k]).collect()).collect();
+        let mut xs: Vec<Vec<f64>> = mean.iter().map(|&m| vec![m; n]).collect();
+        least_squares_each(&a, &bs, &mut xs, 1e-7, 4000);
         let mut out = vec![0.0; n * K];
-        for k in 0..K {
-            let b: Vec<f64> = targets.iter().map(|t| t[k]).collect();
-            let mut x = vec![mean[k]; n];
-            least_squares(&a, &b, &mut x, 1e-7, 4000);
+        for (k, x) in xs.iter().enumerate() {
             for v in 0..n {
                 out[v * K + k] = x[v];
             }
@@ -310,12 +311,14 @@ impl Rbf {
     /// The gradient of the (unclamped) depth at `p`.
     pub fn gradient(&self, p: Vec3) -> Vec3 {
         let p = p.as_dvec3();
-        let radial: DVec3 = self
-            .centres
-            .iter()
-            .zip(&self.weights)
-            .map(|(c, w)| (p - *c).try_normalize().unwrap_or(DVec3::ZERO) * *w)
-            .sum();
+        let mut radial = DVec3::ZERO;
+        for (c, w) in self.centres.iter().zip(&self.weights) {
+            let d = p - *c;
+            let length = d.length();
+            if length > 0.0 {
+                radial += d * (w / length);
+            }
+        }
         (radial + DVec3::new(self.linear[0], self.linear[1], self.linear[2])).as_vec3()
     }
 }

@@ -17,7 +17,7 @@
 use super::field::Field;
 pub use super::patch::{Patch, SAMPLES};
 use super::patch::{orthogonal, prune, random_frame, sample_points, to_byte, touches, vertices_of};
-use super::sampler::Sampler;
+use super::sampler::{AlphaBounds, Sampler};
 use super::tets::{NONE, TetMesh};
 use super::warp::{Frame, Rigid, Warp, jacobian};
 use crate::TextureType;
@@ -83,6 +83,7 @@ pub struct Paster<'a> {
     neighbours: Vec<[u32; 4]>,
     field: &'a Field,
     masks: Vec<Sampler>,
+    bounds: Vec<AlphaBounds>,
     params: Params,
     samples: Vec<[f32; 4]>,
     coverage: Vec<u8>,
@@ -101,12 +102,14 @@ impl<'a> Paster<'a> {
         let tets = mesh.tets.len();
         let out = Pasted { patches: Vec::new(), tet_patches: vec![Vec::new(); tets], stats: Stats::default() };
         let (samples, coverage) = (sample_points(), vec![0; tets * SAMPLES]);
-        let masks = masks.iter().map(Sampler::mask).collect();
+        let masks: Vec<Sampler> = masks.iter().map(Sampler::mask).collect();
+        let bounds = masks.iter().map(AlphaBounds::new).collect();
         Ok(Paster {
             mesh,
             neighbours: mesh.neighbours(),
             field,
             masks,
+            bounds,
             params,
             samples,
             coverage,
@@ -362,28 +365,24 @@ impl<'a> Paster<'a> {
     /// Adds a patch: samples its mask in each clump tet, accumulates coverage, lists it
     /// where it shows, and measures how well it follows the field.
     fn record(&mut self, patch: Patch, tets: &[u32], frame: Option<Frame>) {
-        let mask = &self.masks[patch.source as usize];
-        let alphas: Vec<Vec<u8>> = tets
-            .par_iter()
-            .map(|&t| {
-                let w = patch.corners(self.mesh.tets[t as usize]);
-                self.samples
-                    .iter()
-                    .map(|b| to_byte(mask.alpha(w[0] * b[0] + w[1] * b[1] + w[2] * b[2] + w[3] * b[3])))
-                    .collect()
-            })
-            .collect();
+        let (mask, bounds) = (&self.masks[patch.source as usize], &self.bounds[patch.source as usize]);
+        let mut alphas = vec![0u8; tets.len() * SAMPLES];
+        let mut angles = vec![None; tets.len()];
+        alphas.par_chunks_mut(SAMPLES).zip(&mut angles).zip(tets).for_each(|((a, angle), &t)| {
+            tet_alphas(mask, bounds, &self.samples, patch.corners(self.mesh.tets[t as usize]), a);
+            if let (Some(f), true) = (&frame, a.iter().any(|x| *x >= 128)) {
+                *angle = Some(self.angle(t as usize, &patch, f));
+            }
+        });
         let index = self.out.patches.len() as u32;
-        for (&t, a) in tets.iter().zip(&alphas) {
+        for ((&t, a), angle) in tets.iter().zip(alphas.chunks_exact(SAMPLES)).zip(angles) {
             if a.iter().all(|x| *x == 0) {
                 continue;
             }
             let cov = &mut self.coverage[t as usize * SAMPLES..(t as usize + 1) * SAMPLES];
             cov.iter_mut().zip(a).for_each(|(c, x)| *c = c.saturating_add(*x));
             self.out.tet_patches[t as usize].push(index);
-            if let (Some(f), true) = (&frame, a.iter().any(|x| *x >= 128)) {
-                self.angles.push(self.angle(t as usize, &patch, f));
-            }
+            self.angles.extend(angle);
         }
         self.out.stats.mean_clump += (tets.len() as f64 - self.out.stats.mean_clump) / (index as f64 + 1.0);
         self.out.patches.push(prune(patch, self.mesh, tets, &alphas));
@@ -405,6 +404,25 @@ impl<'a> Paster<'a> {
                 image[self.params.axes[k]].clamp(-1.0, 1.0).acos().to_degrees()
             })
             .fold(0.0, f32::max)
+    }
+}
+
+/// A mask value at least this high shows as full coverage (255) at every sample.
+const FULL: f32 = 0.999;
+
+/// The coverage bytes of a tet whose corners have texture coordinates `w`, into `out`: 0
+/// or 255 at once where the mask's block bounds decide every sample, else sampled.
+fn tet_alphas(mask: &Sampler, bounds: &AlphaBounds, samples: &[[f32; 4]], w: [Vec3; 4], out: &mut [u8]) {
+    let lo = w[0].min(w[1]).min(w[2].min(w[3]));
+    let hi = w[0].max(w[1]).max(w[2].max(w[3]));
+    match bounds.range(lo, hi) {
+        (_, most) if most <= 0.0 => out.fill(0),
+        (least, _) if least >= FULL => out.fill(255),
+        _ => {
+            for (o, b) in out.iter_mut().zip(samples) {
+                *o = to_byte(mask.alpha(w[0] * b[0] + w[1] * b[1] + w[2] * b[2] + w[3] * b[3]));
+            }
+        }
     }
 }
 

@@ -29,9 +29,15 @@ impl Patch {
     }
 }
 
-/// Drops the vertices of tets the patch does not show in.
-pub fn prune(patch: Patch, mesh: &TetMesh, tets: &[u32], alphas: &[Vec<u8>]) -> Patch {
-    let shown: Vec<u32> = tets.iter().zip(alphas).filter(|(_, a)| a.iter().any(|x| *x > 0)).map(|(t, _)| *t).collect();
+/// Drops the vertices of tets the patch does not show in (`alphas`: [`SAMPLES`] coverage
+/// bytes per tet of `tets`).
+pub fn prune(patch: Patch, mesh: &TetMesh, tets: &[u32], alphas: &[u8]) -> Patch {
+    let shown: Vec<u32> = tets
+        .iter()
+        .zip(alphas.chunks_exact(SAMPLES))
+        .filter(|(_, a)| a.iter().any(|x| *x > 0))
+        .map(|(t, _)| *t)
+        .collect();
     let vertices = vertices_of(mesh, &shown);
     let coords = vertices.iter().map(|v| patch.coords[patch.vertices.binary_search(v).expect("vertex")]).collect();
     Patch { source: patch.source, vertices, coords }
@@ -79,7 +85,8 @@ pub fn sample_points() -> Vec<[f32; 4]> {
 
 /// Alpha in [0, 1] as a coverage byte.
 pub fn to_byte(a: f32) -> u8 {
-    (a.clamp(0.0, 1.0) * 255.0).round() as u8
+    // rounding half up by truncation: the value is not negative (and NaN clamps to 0)
+    (a.clamp(0.0, 1.0) * 255.0 + 0.5) as u8
 }
 
 /// Whether a tet with corner texture coords `w` reaches into the mask (sampled at its

@@ -29,11 +29,28 @@ impl Sampler {
         Sampler::pick(volume, if rgb.len() == 3 { &rgb } else { &[0, 0, 0] })
     }
 
+    /// The chosen channels, with one more voxel on the high side of each axis repeating
+    /// the last one, so a lookup reads its upper neighbours without clamping indices.
     fn pick(volume: &Volume, channels: &[usize]) -> Sampler {
         let n = volume.channel_count();
-        let data = volume.data().chunks_exact(n).flat_map(|v| channels.iter().map(|&c| v[c])).collect();
         let d = volume.dims();
+        let voxels = volume.data();
+        let mut data = Vec::with_capacity((d[0] + 1) * (d[1] + 1) * (d[2] + 1) * channels.len());
+        for z in 0..=d[2] {
+            for y in 0..=d[1] {
+                for x in 0..=d[0] {
+                    let i = x.min(d[0] - 1) + d[0] * (y.min(d[1] - 1) + d[1] * z.min(d[2] - 1));
+                    data.extend(channels.iter().map(|&c| voxels[i * n + c]));
+                }
+            }
+        }
         Sampler { dims: d, size: Vec3::new(d[0] as f32, d[1] as f32, d[2] as f32), channels: channels.len(), data }
+    }
+
+    /// Channel `c` of voxel (x, y, z).
+    fn value(&self, x: usize, y: usize, z: usize, c: usize) -> f32 {
+        let [dx, dy, _] = self.dims;
+        self.data[(x + (dx + 1) * (y + (dy + 1) * z)) * self.channels + c]
     }
 
     /// Alpha at `w`: trilinear inside the unit cube, 0 outside.
@@ -42,9 +59,17 @@ impl Sampler {
         if w.cmplt(Vec3::ZERO).any() || w.cmpgt(Vec3::ONE).any() {
             return 0.0;
         }
-        let mut out = [0.0];
-        self.lookup(w, &mut out);
-        out[0]
+        let p = (w * self.size - 0.5).clamp(Vec3::ZERO, self.size - 1.0);
+        let (x0, y0, z0) = (p.x as usize, p.y as usize, p.z as usize);
+        let t = p - Vec3::new(x0 as f32, y0 as f32, z0 as f32);
+        let (sx, sy) = (self.dims[0] + 1, (self.dims[0] + 1) * (self.dims[1] + 1));
+        let c = self.channels;
+        let d = &self.data[(x0 + sx * y0 + sy * z0) * c..];
+        let lerp = |a: f32, b: f32, t: f32| a + (b - a) * t;
+        let along_x = |o: usize| lerp(d[o * c], d[(o + 1) * c], t.x);
+        let near = lerp(along_x(0), along_x(sx), t.y);
+        let far = lerp(along_x(sy), along_x(sy + sx), t.y);
+        lerp(near, far, t.z)
     }
 
     /// R, G, B at `w`, clamped at the border.
@@ -58,17 +83,14 @@ impl Sampler {
     #[inline]
     fn lookup<const C: usize>(&self, w: Vec3, out: &mut [f32; C]) {
         let p = (w * self.size - 0.5).clamp(Vec3::ZERO, self.size - 1.0);
-        let base = p.floor();
-        let t = p - base;
-        let [dx, dy, _] = self.dims;
-        let (x0, y0, z0) = (base.x as usize, base.y as usize, base.z as usize);
-        let x1 = (x0 + 1).min(dx - 1) - x0;
-        let y1 = ((y0 + 1).min(dy - 1) - y0) * dx;
-        let z1 = ((z0 + 1).min(self.dims[2] - 1) - z0) * dx * dy;
-        let at = x0 + dx * (y0 + dy * z0);
-        let corners = [(0, 1.0 - t.x), (x1, t.x)];
-        for (dzo, wz) in [(0, 1.0 - t.z), (z1, t.z)] {
-            for (dyo, wy) in [(0, 1.0 - t.y), (y1, t.y)] {
+        // p is not negative, so truncation is the floor (without a libm call per axis)
+        let (x0, y0, z0) = (p.x as usize, p.y as usize, p.z as usize);
+        let t = p - Vec3::new(x0 as f32, y0 as f32, z0 as f32);
+        let (sx, sy) = (self.dims[0] + 1, (self.dims[0] + 1) * (self.dims[1] + 1));
+        let at = x0 + sx * y0 + sy * z0;
+        let corners = [(0, 1.0 - t.x), (1, t.x)];
+        for (dzo, wz) in [(0, 1.0 - t.z), (sy, t.z)] {
+            for (dyo, wy) in [(0, 1.0 - t.y), (sx, t.y)] {
                 for &(dxo, wx) in &corners {
                     let weight = wx * wy * wz;
                     let i = (at + dxo + dyo + dzo) * self.channels;
@@ -78,6 +100,66 @@ impl Sampler {
                 }
             }
         }
+    }
+}
+
+/// Voxels per block side of [`AlphaBounds`].
+const BLOCK: usize = 4;
+
+/// The least and greatest mask value per block of voxels, to tell without sampling that
+/// every lookup inside a box of texture space is 0, or full.
+#[derive(Debug, Clone)]
+pub struct AlphaBounds {
+    voxels: [usize; 3],
+    size: Vec3,
+    blocks: [usize; 3],
+    low: Vec<f32>,
+    high: Vec<f32>,
+}
+
+impl AlphaBounds {
+    /// The bounds of the first channel of `mask`. A block holding NaN is neither empty nor
+    /// full.
+    pub fn new(mask: &Sampler) -> AlphaBounds {
+        let voxels = mask.dims;
+        let blocks = voxels.map(|d| d.div_ceil(BLOCK));
+        let mut low = vec![f32::INFINITY; blocks.iter().product()];
+        let mut high = vec![f32::NEG_INFINITY; low.len()];
+        for z in 0..voxels[2] {
+            for y in 0..voxels[1] {
+                for x in 0..voxels[0] {
+                    let v = mask.value(x, y, z, 0);
+                    let b = x / BLOCK + blocks[0] * (y / BLOCK + blocks[1] * (z / BLOCK));
+                    let (lo, hi) = if v.is_nan() { (f32::NEG_INFINITY, f32::INFINITY) } else { (v, v) };
+                    low[b] = low[b].min(lo);
+                    high[b] = high[b].max(hi);
+                }
+            }
+        }
+        AlphaBounds { voxels, size: mask.size, blocks, low, high }
+    }
+
+    /// The least and greatest value [`Sampler::alpha`] can return at points of the box
+    /// `lo..=hi` (conservative: widened by a little for rounding, 0 counted as possible
+    /// where the box leaves the unit cube).
+    pub fn range(&self, lo: Vec3, hi: Vec3) -> (f32, f32) {
+        let (lo, hi) = (lo - 1e-4, hi + 1e-4);
+        let outside = lo.cmplt(Vec3::ZERO).any() || hi.cmpgt(Vec3::ONE).any();
+        let cell = |w: Vec3| (w * self.size - 0.5).clamp(Vec3::ZERO, self.size - 1.0);
+        let (a, b) = (cell(lo), cell(hi));
+        let first = [a.x, a.y, a.z].map(|p| p as usize / BLOCK);
+        let last = [(b.x, 0), (b.y, 1), (b.z, 2)].map(|(p, k)| ((p as usize + 1).min(self.voxels[k] - 1)) / BLOCK);
+        let (mut least, mut most) = (f32::INFINITY, f32::NEG_INFINITY);
+        for z in first[2]..=last[2] {
+            for y in first[1]..=last[1] {
+                for x in first[0]..=last[0] {
+                    let i = x + self.blocks[0] * (y + self.blocks[1] * z);
+                    least = least.min(self.low[i]);
+                    most = most.max(self.high[i]);
+                }
+            }
+        }
+        if outside { (least.min(0.0), most.max(0.0)) } else { (least, most) }
     }
 }
 
@@ -101,5 +183,40 @@ mod tests {
         let m = Sampler::mask(&v);
         assert_eq!(m.alpha(Vec3::new(1.01, 0.5, 0.5)), 0.0);
         assert!((m.alpha(Vec3::new(0.7, 0.5, 0.5)) - s.rgb(Vec3::new(0.7, 0.5, 0.5)).x).abs() < 1e-6);
+    }
+
+    #[test]
+    fn alpha_bounds_hold_every_lookup_in_the_box() {
+        let v = Volume::from_fn([13, 9, 7], vec![Channel::A], |x, y, z, o| {
+            o[0] = if x >= 8 {
+                1.0
+            } else if x < 4 {
+                0.0
+            } else {
+                ((x * 7 + y * 3 + z) % 5) as f32 / 4.0
+            };
+        })
+        .unwrap();
+        let m = Sampler::mask(&v);
+        let bounds = AlphaBounds::new(&m);
+        let mut seed = 1u32;
+        let mut next = || {
+            seed = seed.wrapping_mul(1664525).wrapping_add(1013904223);
+            (seed >> 8) as f32 / (1u32 << 24) as f32 * 1.2 - 0.1
+        };
+        for _ in 0..300 {
+            let (a, b) = (Vec3::new(next(), next(), next()), Vec3::new(next(), next(), next()));
+            let (lo, hi) = (a.min(b), a.min(b) + (a - b).abs() * 0.3);
+            let (least, most) = bounds.range(lo, hi);
+            for i in 0..=4 {
+                for j in 0..=4 {
+                    let w = lo + (hi - lo) * Vec3::new(i as f32 / 4.0, j as f32 / 4.0, (i + j) as f32 / 8.0);
+                    let a = m.alpha(w);
+                    assert!(a >= least - 1e-6 && a <= most + 1e-6, "{a} outside {least}..{most} at {w}");
+                }
+            }
+        }
+        assert_eq!(bounds.range(Vec3::new(0.0, 0.2, 0.2), Vec3::new(0.1, 0.8, 0.8)).1, 0.0);
+        assert_eq!(bounds.range(Vec3::new(0.8, 0.2, 0.2), Vec3::new(0.9, 0.8, 0.8)).0, 1.0);
     }
 }

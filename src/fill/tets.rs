@@ -12,6 +12,7 @@
 //! ```
 
 use glam::{Mat3, Vec3};
+use rayon::prelude::*;
 
 /// Marks "no neighbour" (a boundary face).
 pub const NONE: u32 = u32::MAX;
@@ -67,7 +68,8 @@ impl TetMesh {
                 keyed.push((key, t as u32, k as u8));
             }
         }
-        keyed.sort_unstable();
+        // every entry differs (tet and face), so any sort, on any thread count, gives one order
+        keyed.par_sort_unstable();
         let mut out = vec![[NONE; 4]; self.tets.len()];
         for pair in keyed.chunk_by(|a, b| a.0 == b.0).filter(|run| run.len() == 2) {
             let ((_, t0, k0), (_, t1, k1)) = (pair[0], pair[1]);

@@ -12,7 +12,7 @@
 //! coordinates of the vector `R_i` in tet i (they sum to 0). Each texture component is an
 //! independent sparse least-squares problem; the seed's centre is pinned by a heavy row.
 
-use super::solve::{Sparse, least_squares};
+use super::solve::{Sparse, least_squares_each};
 use super::tets::TetMesh;
 use glam::{Mat3, Vec3};
 
@@ -97,10 +97,11 @@ impl Warp<'_> {
         let seed = self.mesh.tets[self.tets[self.pin.0] as usize];
         a.push_row(seed.iter().map(|&v| (local(v), PIN_WEIGHT * 0.25)));
         targets.push(self.pin.1 * PIN_WEIGHT as f32);
-        for c in (0..3).filter(|c| Some(*c) != self.fixed) {
-            let b: Vec<f64> = targets.iter().map(|t| t[c] as f64).collect();
-            let mut x: Vec<f64> = coords.iter().map(|w| w[c] as f64).collect();
-            least_squares(&a, &b, &mut x, 1e-4, 300);
+        let solved: Vec<usize> = (0..3).filter(|c| Some(*c) != self.fixed).collect();
+        let bs: Vec<Vec<f64>> = solved.iter().map(|&c| targets.iter().map(|t| t[c] as f64).collect()).collect();
+        let mut xs: Vec<Vec<f64>> = solved.iter().map(|&c| coords.iter().map(|w| w[c] as f64).collect()).collect();
+        least_squares_each(&a, &bs, &mut xs, 1e-4, 300);
+        for (&c, x) in solved.iter().zip(xs) {
             for (w, x) in coords.iter_mut().zip(x) {
                 w[c] = x as f32;
             }
