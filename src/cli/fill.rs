@@ -101,6 +101,8 @@ pub fn run_fill(args: &FillArgs) -> Result<()> {
     let tets = mesher::tetrahedralize(&surface, spec.tets).map_err(|e| e.in_file(&args.mesh))?;
     let meshed = started.elapsed().as_secs_f64();
     warn_if_far(&args.mesh, tets.tets.len(), spec.tets);
+    let held = mesher::volume_check(&surface, &tets, spec.tets).map_err(|e| e.in_file(&args.mesh))?;
+    warn_if_lost(&args.mesh, &held);
     let missing = library::fill::missing(&spec)?;
     if !missing.is_empty() {
         eprintln!("building {} into {} first", missing.join(", "), spec.built.display());
@@ -154,10 +156,29 @@ pub fn run_fill(args: &FillArgs) -> Result<()> {
         eprintln!("  seam strength {seams:.2} (colour step across patch borders over within, central cuts)");
     }
     if let Some(path) = &args.json {
-        let json = serde_json::json!({ "fill": report, "seconds": total, "mesh_seconds": meshed, "bytes": bytes, "type": resolved.kind.name(), "seam_strength": seams });
+        let json = serde_json::json!({ "fill": report, "seconds": total, "mesh_seconds": meshed, "bytes": bytes, "type": resolved.kind.name(), "seam_strength": seams, "volume_share": held.share, "holding_tets": held.holding });
         io::write_bytes(path, serde_json::to_string_pretty(&json).expect("serializable").as_bytes())?;
     }
     Ok(())
+}
+
+/// Warn when the tet mesh lost part of the volume (a layer or limb thinner than the lattice
+/// spacing), with the tet count that keeps it.
+fn warn_if_lost(mesh: &Path, held: &mesher::VolumeCheck) {
+    if held.share >= mesher::HELD_VOLUME {
+        return;
+    }
+    let lost = (1.0 - held.share) * 100.0;
+    let advice = match held.holding {
+        Some(n) => format!("--tets {n} (or tets = {n} in the spec) keeps it"),
+        None => "no tet count up to 16 times this one keeps it; thicken the part".to_string(),
+    };
+    eprintln!(
+        "warning: {}: the tet mesh holds {:.1} % of the mesh's volume: {lost:.1} % is in parts thinner than \
+         the lattice spacing and will not be textured; {advice}",
+        mesh.display(),
+        held.share * 100.0
+    );
 }
 
 /// Warn when the tet mesh is more than 15 % off the count asked for.

@@ -130,6 +130,39 @@ pub fn tetrahedralize(mesh: &Mesh, target_tets: usize) -> Result<TetMesh> {
     })
 }
 
+/// The share of the surface's volume a tet mesh should hold; below it, a part thinner than
+/// the lattice spacing was lost (conforming alone moves the boundary by far less).
+pub const HELD_VOLUME: f64 = 0.95;
+
+/// How much of a surface's volume a tet mesh holds.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct VolumeCheck {
+    /// The tet mesh's volume over the surface's.
+    pub share: f64,
+    /// When the share is below [`HELD_VOLUME`]: the smallest tet count (doubling the
+    /// target up to 16 times it, within [`TARGET_TETS`]) whose mesh holds that share, if any.
+    pub holding: Option<usize>,
+}
+
+/// Compares the volume of `tets` (made from `mesh` for `target_tets`) with the volume
+/// `mesh` encloses, and where parts are lost, looks for a tet count that keeps them.
+pub fn volume_check(mesh: &Mesh, tets: &TetMesh, target_tets: usize) -> Result<VolumeCheck> {
+    let volume = check(mesh, target_tets)?;
+    let share = tets.volume() / volume;
+    if share >= HELD_VOLUME {
+        return Ok(VolumeCheck { share, holding: None });
+    }
+    let surface = area(mesh);
+    let larger = (1..=4).map(|k| target_tets << k).take_while(|n| TARGET_TETS.contains(n));
+    for count in larger {
+        let finer = at_spacing(mesh, spacing(volume, surface, count))?;
+        if finer.volume() / volume >= HELD_VOLUME {
+            return Ok(VolumeCheck { share, holding: Some(finer.tets.len()) });
+        }
+    }
+    Ok(VolumeCheck { share, holding: None })
+}
+
 /// How far from the target a tet count may be before the spacing is corrected (10 %).
 const COUNT_TOLERANCE: f64 = 0.10;
 

@@ -472,3 +472,46 @@ fn a_tet_count_far_from_the_target_is_warned_about() {
     let near = fill_with("10000");
     assert!(!near.contains("warning"), "{near}");
 }
+
+#[test]
+fn a_thin_part_the_tets_lose_is_warned_about_with_a_count_that_keeps_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // a cube and, beside it, a plate thinner than the lattice spacing at 3,000 tets
+    let cube = solidtex::mesh::shapes::cuboid(glam::Vec3::ZERO, glam::Vec3::ONE);
+    let plate = solidtex::mesh::shapes::cuboid(glam::Vec3::new(1.5, 0.0, 0.0), glam::Vec3::new(3.5, 2.0, 0.08));
+    let offset = cube.vertices.len() as u32;
+    let vertices = cube.vertices.iter().chain(&plate.vertices).copied().collect();
+    let triangles =
+        cube.triangles.iter().copied().chain(plate.triangles.iter().map(|t| t.map(|i| i + offset))).collect();
+    let both = solidtex::mesh::Mesh::new(vertices, triangles).unwrap();
+    solidtex::io::mesh_file::write_obj(&d.join("parts.obj"), &both).unwrap();
+    let spec = spec(d, "marble.toml", "exemplar = \"marble\"\n");
+    let fill_with = |tets: &str| {
+        let json = at(d, "p.json");
+        let run = solidtex(&[
+            "fill",
+            &at(d, "parts.obj"),
+            "--spec",
+            &spec,
+            "--tets",
+            tets,
+            "-o",
+            &at(d, "p.lst"),
+            "--json",
+            &json,
+        ]);
+        assert!(run.status.success(), "{}", stderr(&run));
+        let stats: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+        (stderr(&run), stats)
+    };
+    let (lost, stats) = fill_with("3000");
+    let share = stats["volume_share"].as_f64().unwrap();
+    assert!(share < 0.95, "the plate is kept at 3,000 tets: {share}");
+    assert!(lost.contains("parts.obj") && lost.contains("% of the mesh's volume"), "{lost}");
+    let holding = stats["holding_tets"].as_u64().expect("a count that keeps the plate");
+    assert!(lost.contains(&format!("--tets {holding}")), "{lost}");
+    let (kept, stats) = fill_with(&holding.to_string());
+    assert!(stats["volume_share"].as_f64().unwrap() >= 0.95, "{stats}");
+    assert!(!kept.contains("volume"), "{kept}");
+}
