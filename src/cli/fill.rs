@@ -4,6 +4,7 @@
 use super::commands::usage;
 use crate::error::{Error, Result};
 use crate::fill::render::{self, Textures, View};
+use crate::fill::view::Shading;
 use crate::fill::{self, Job, LstModel, mesher};
 use crate::io::{self, fill_spec, lst_file};
 use crate::library;
@@ -81,6 +82,12 @@ pub struct ViewArgs {
     /// Picture size in pixels, 8 to 4096.
     #[arg(long, default_value_t = 512)]
     pub size: usize,
+    /// Edges sharper than this many degrees stay sharp in the smooth shading, 0 to 180.
+    #[arg(long, default_value_t = crate::fill::view::DEFAULT_CREASE)]
+    pub crease: f32,
+    /// One normal per tet face instead of smooth shading (shows the tets).
+    #[arg(long)]
+    pub flat: bool,
     /// The PNG to write.
     #[arg(short, long)]
     pub output: PathBuf,
@@ -103,6 +110,7 @@ pub fn run_fill(args: &FillArgs) -> Result<()> {
     warn_if_far(&args.mesh, tets.tets.len(), spec.tets);
     let held = mesher::volume_check(&surface, &tets, spec.tets).map_err(|e| e.in_file(&args.mesh))?;
     warn_if_lost(&args.mesh, &held);
+    let distance = mesher::surface_distance(&surface, &tets).map_err(|e| e.in_file(&args.mesh))?;
     let missing = library::fill::missing(&spec)?;
     if !missing.is_empty() {
         eprintln!("building {} into {} first", missing.join(", "), spec.built.display());
@@ -138,6 +146,12 @@ pub fn run_fill(args: &FillArgs) -> Result<()> {
         "  layers per tet {:.1}, tets per clump {:.0}, field angle mean {:.1}° p95 {:.1}°, uncovered {}",
         p.mean_layers, p.mean_clump, p.angle_mean, p.angle_p95, p.forced
     );
+    eprintln!(
+        "  surface within {:.2} tet edges (tets to mesh {:.3}, mesh to tets {:.3}, creases included)",
+        distance.in_edges(),
+        distance.from_tets,
+        distance.from_surface
+    );
     if report.raised_scale > 0 {
         let share = report.raised_scale as f64 / report.tets.max(1) as f64 * 100.0;
         eprintln!(
@@ -156,7 +170,7 @@ pub fn run_fill(args: &FillArgs) -> Result<()> {
         eprintln!("  seam strength {seams:.2} (colour step across patch borders over within, central cuts)");
     }
     if let Some(path) = &args.json {
-        let json = serde_json::json!({ "fill": report, "seconds": total, "mesh_seconds": meshed, "bytes": bytes, "type": resolved.kind.name(), "seam_strength": seams, "volume_share": held.share, "holding_tets": held.holding });
+        let json = serde_json::json!({ "fill": report, "seconds": total, "mesh_seconds": meshed, "bytes": bytes, "type": resolved.kind.name(), "seam_strength": seams, "volume_share": held.share, "holding_tets": held.holding, "surface_distance": distance });
         io::write_bytes(path, serde_json::to_string_pretty(&json).expect("serializable").as_bytes())?;
     }
     Ok(())
@@ -314,13 +328,16 @@ pub fn run_view(args: &ViewArgs) -> Result<()> {
         io::values::within("--size", args.size, 8, MAX_PICTURE)?;
         io::values::within("--yaw", args.yaw, -360.0, 360.0)?;
         io::values::within("--pitch", args.pitch, -90.0, 90.0)?;
+        io::values::within("--crease", args.crease, 0.0, 180.0)?;
         Ok(())
     };
     checks().map_err(usage)?;
     io::check_folder(&args.output)?;
     let loaded = load_model(&args.model)?;
     let started = Instant::now();
-    let picture = crate::fill::view::surface(&loaded.model, &loaded.textures, args.yaw, args.pitch, args.size);
+    let shading = if args.flat { Shading::Flat } else { Shading::Smooth { crease: args.crease } };
+    let (model, textures) = (&loaded.model, &loaded.textures);
+    let picture = crate::fill::view::surface_shaded(model, textures, args.yaw, args.pitch, args.size, shading);
     let ms = started.elapsed().as_secs_f64() * 1000.0;
     io::write_rgb8(&args.output, &picture)?;
     eprintln!("wrote {} in {ms:.0} ms", args.output.display());

@@ -46,6 +46,7 @@
 
 pub(crate) mod closest;
 mod conform;
+mod features;
 mod inside;
 mod lattice;
 
@@ -53,8 +54,10 @@ use super::tets::TetMesh;
 use crate::error::{Error, Result};
 use crate::mesh::Mesh;
 use closest::Surface;
+use glam::Vec3;
 use inside::RayGrid;
 use lattice::Lattice;
+use rayon::prelude::*;
 use std::ops::RangeInclusive;
 
 /// The allowed values of `target_tets` in [`tetrahedralize`].
@@ -161,6 +164,54 @@ pub fn volume_check(mesh: &Mesh, tets: &TetMesh, target_tets: usize) -> Result<V
         }
     }
     Ok(VolumeCheck { share, holding: None })
+}
+
+/// How far the boundary of a tet mesh lies from the surface it was made from, both ways.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct SurfaceDistance {
+    /// The largest distance from a point of the tet mesh's boundary to the surface.
+    pub from_tets: f32,
+    /// The largest distance from a point of the surface (creases sampled densely) to the
+    /// tet mesh's boundary.
+    pub from_surface: f32,
+    /// The mean tet edge, the yardstick for both.
+    pub mean_edge: f32,
+}
+
+impl SurfaceDistance {
+    /// The two-sided (Hausdorff) distance in mean tet edges.
+    pub fn in_edges(&self) -> f32 {
+        self.from_tets.max(self.from_surface) / self.mean_edge.max(f32::MIN_POSITIVE)
+    }
+}
+
+/// The two-sided distance between the boundary of `tets` and `mesh`, sampled at the corners,
+/// edge midpoints and centres of the triangles on each side, and along the surface's creases
+/// every quarter of a tet edge.
+pub fn surface_distance(mesh: &Mesh, tets: &TetMesh) -> Result<SurfaceDistance> {
+    let mean_edge = crate::fill::mean_edge(tets);
+    let faces = tets.boundary_faces(&tets.neighbours());
+    let boundary = Mesh::new(tets.vertices.clone(), faces)?;
+    let (to_mesh, to_tets) = (Surface::new(mesh, mean_edge), Surface::new(&boundary, mean_edge));
+    let farthest = |points: Vec<Vec3>, onto: &Surface| {
+        points.par_iter().map(|p| onto.closest(*p).distance(*p)).reduce(|| 0.0, f32::max)
+    };
+    let mut on_surface = triangle_samples(mesh);
+    for [a, b] in features::creases(mesh) {
+        let steps = (a.distance(b) / (mean_edge / 4.0)).ceil().max(1.0) as usize;
+        on_surface.extend((0..=steps).map(|i| a.lerp(b, i as f32 / steps as f32)));
+    }
+    Ok(SurfaceDistance {
+        from_tets: farthest(triangle_samples(&boundary), &to_mesh),
+        from_surface: farthest(on_surface, &to_tets),
+        mean_edge,
+    })
+}
+
+/// The corners, edge midpoints and centre of every triangle of `mesh`.
+fn triangle_samples(mesh: &Mesh) -> Vec<Vec3> {
+    let corners = mesh.triangles.iter().map(|t| t.map(|i| mesh.vertices[i as usize]));
+    corners.flat_map(|[a, b, c]| [a, b, c, (a + b) / 2.0, (b + c) / 2.0, (c + a) / 2.0, (a + b + c) / 3.0]).collect()
 }
 
 /// How far from the target a tet count may be before the spacing is corrected (10 %).
@@ -421,5 +472,35 @@ mod tests {
             pool.install(|| tetrahedralize(&mesh, 2000).unwrap())
         };
         assert!(run(1) == run(3));
+    }
+
+    #[test]
+    fn the_boundary_stays_within_half_an_edge_of_the_surface_and_a_lost_part_is_seen() {
+        // smooth shapes; a cube turned off the lattice axes comes to 0.72 edges (its
+        // creases and corners are rounded off: not yet within the bound)
+        for name in ["fruit", "pipe"] {
+            let mesh = crate::mesh::shapes::named(name).unwrap();
+            let tets = tetrahedralize(&mesh, 5000).unwrap();
+            let d = surface_distance(&mesh, &tets).unwrap();
+            assert!(d.in_edges() <= 0.5, "{name}: {d:?}");
+        }
+        // a plate thinner than the spacing is lost: the surface is far from the tets there
+        let plate = Mesh::new(
+            cube(Vec3::ZERO, 1.0).vertices.iter().map(|p| *p * Vec3::new(2.0, 2.0, 0.03)).collect(),
+            cube(Vec3::ZERO, 1.0).triangles,
+        )
+        .unwrap();
+        let two = Mesh::new(
+            cube(Vec3::new(3.0, 0.0, 0.0), 1.0).vertices.into_iter().chain(plate.vertices.iter().copied()).collect(),
+            cube(Vec3::ZERO, 1.0)
+                .triangles
+                .iter()
+                .copied()
+                .chain(plate.triangles.iter().map(|t| t.map(|i| i + 8)))
+                .collect(),
+        )
+        .unwrap();
+        let d = surface_distance(&two, &tetrahedralize(&two, 2000).unwrap()).unwrap();
+        assert!(d.from_surface > d.mean_edge, "{d:?}");
     }
 }
