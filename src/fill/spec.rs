@@ -74,6 +74,10 @@ pub struct DepthSpec {
     pub surface: bool,
     /// Polylines at depth 1 (e.g. the core of a fruit).
     pub axes: Vec<Vec<Vec3>>,
+    /// The share of each axis polyline's length, from either end, over which its depth
+    /// falls from 1 to [`TAPER_END`] along a quarter ellipse, so the core rounds off
+    /// toward the ends instead of stopping squarely; 0 (no taper) to 0.5.
+    pub taper: f32,
     /// Points with their depth.
     pub points: Vec<(Vec3, f32)>,
     /// Face groups with their own depth.
@@ -117,7 +121,7 @@ pub fn constraints(spec: &FillSpec, surface: &Mesh, default_scale: f32) -> Resul
     let mut depth = surface_depth(spec, surface, &surface_values)?;
     for (i, axis) in spec.depth.axes.iter().enumerate() {
         check_inside(surface, axis, &format!("depth.axis[{i}]"))?;
-        depth.extend(resample(axis, size).into_iter().map(|p| (p, 1.0)));
+        depth.extend(tapered(&resample(axis, size), spec.depth.taper));
     }
     for (i, (p, d)) in spec.depth.points.iter().enumerate() {
         check_inside(surface, &[*p], &format!("depth.points[{i}]"))?;
@@ -161,6 +165,9 @@ pub fn ignored(spec: &FillSpec, kind: TextureType, sources: &[super::Source]) ->
     if depth_given && matches!(kind, TextureType::T0 | TextureType::T1a) {
         out.push(format!("[depth] is not used by type {kind}: it has no depth-varying layers"));
     }
+    if spec.depth.taper > 0.0 && spec.depth.axes.is_empty() {
+        out.push("depth.taper is not used: there is no depth axis to taper ([depth] axis)".to_string());
+    }
     if !spec.directions.is_empty() && matches!(kind, TextureType::T0 | TextureType::T1b) {
         out.push(format!(
             "[[direction]] is not used by type {kind}: its orientation is random about the depth gradient or everywhere"
@@ -199,6 +206,28 @@ fn stroke_samples(stroke: &[Vec3], size: f32) -> Vec<(Vec3, Vec3)> {
 }
 
 /// Points along a polyline about `size / STROKE_SAMPLES` apart (the corners included).
+/// The depth at the ends of a tapered axis.
+pub const TAPER_END: f32 = 0.5;
+
+/// The points of an axis polyline with their depth: 1, falling to [`TAPER_END`] over the
+/// share `taper` of the length at either end.
+fn tapered(points: &[Vec3], taper: f32) -> Vec<(Vec3, f32)> {
+    let mut along = vec![0.0f32; points.len()];
+    for i in 1..points.len() {
+        along[i] = along[i - 1] + points[i].distance(points[i - 1]);
+    }
+    let length = along.last().copied().unwrap_or(0.0);
+    let span = taper.clamp(0.0, 0.5) * length;
+    let depth = |s: f32| {
+        if span <= 0.0 {
+            return 1.0;
+        }
+        let u = (s.min(length - s) / span).clamp(0.0, 1.0);
+        TAPER_END + (1.0 - TAPER_END) * (1.0 - (1.0 - u) * (1.0 - u)).sqrt()
+    };
+    points.iter().zip(&along).map(|(p, s)| (*p, depth(*s))).collect()
+}
+
 fn resample(line: &[Vec3], size: f32) -> Vec<Vec3> {
     let step = size / STROKE_SAMPLES as f32;
     let mut out = vec![line[0]];
@@ -352,4 +381,23 @@ pub fn depth_axis(volume: &crate::Volume) -> Option<usize> {
         (volume.get(far[0], far[1], far[2], c) - volume.get(0, 0, 0, c)).abs()
     };
     (0..3).max_by(|x, y| step(*x).total_cmp(&step(*y)))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_tapered_axis_falls_from_1_in_the_middle_to_the_end_depth() {
+        let line: Vec<Vec3> = (0..=20).map(|i| Vec3::new(i as f32 / 10.0 - 1.0, 0.0, 0.0)).collect();
+        let flat = tapered(&line, 0.0);
+        assert!(flat.iter().all(|(_, d)| *d == 1.0));
+        let depths: Vec<f32> = tapered(&line, 0.5).iter().map(|(_, d)| *d).collect();
+        assert_eq!((depths[0], depths[20], depths[10]), (TAPER_END, TAPER_END, 1.0));
+        assert!(depths[..=10].windows(2).all(|w| w[1] > w[0]), "{depths:?}");
+        // a quarter ellipse: steep at the end, flat in the middle
+        assert!(depths[1] - depths[0] > 4.0 * (depths[10] - depths[9]), "{depths:?}");
+        let quarter: Vec<f32> = tapered(&line, 0.25).iter().map(|(_, d)| *d).collect();
+        assert!(quarter[5..=15].iter().all(|d| *d == 1.0) && quarter[4] < 1.0, "{quarter:?}");
+    }
 }

@@ -50,6 +50,7 @@ struct RawDepth {
     surface: Option<bool>,
     #[serde(default)]
     axis: Vec<Vec<[f32; 3]>>,
+    taper: Option<f32>,
     #[serde(default)]
     points: Vec<[f32; 4]>,
     #[serde(default)]
@@ -206,7 +207,13 @@ fn depth(raw: Option<RawDepth>) -> Result<DepthSpec> {
         }
         faces.push(FaceGroup { at: point(&field, f.at)?, crease, value: f.value });
     }
-    Ok(DepthSpec { surface: raw.surface.unwrap_or(true), axes, points, faces })
+    let taper = raw.taper.unwrap_or(0.0);
+    if !(0.0..=0.5).contains(&taper) {
+        return Err(Error::invalid(format!(
+            "depth.taper is {taper}; allowed are 0 (the core ends squarely) to 0.5 (the whole axis tapers)"
+        )));
+    }
+    Ok(DepthSpec { surface: raw.surface.unwrap_or(true), axes, taper, points, faces })
 }
 
 fn scales(raw: &[RawScale]) -> Result<Vec<(Vec3, f32)>> {

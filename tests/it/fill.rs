@@ -521,3 +521,39 @@ fn a_thin_part_the_tets_lose_is_warned_about_with_a_count_that_keeps_it() {
     assert!(stats["volume_share"].as_f64().unwrap() >= 0.95, "{stats}");
     assert!(!kept.contains("volume"), "{kept}");
 }
+
+#[test]
+fn a_tapered_axis_closes_the_kiwi_core_toward_its_ends() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let mesh = draw(d, "fruit");
+    // the pale core in a cut along the axis: its length (columns holding pale pixels) and
+    // its height in the middle column
+    let core = |name: &str, body: &str| {
+        let spec = spec(d, &format!("{name}.toml"), body);
+        fill(d, &mesh, &spec, &format!("{name}.lst"));
+        let png = at(d, &format!("{name}.png"));
+        let run =
+            solidtex(&["cut", &at(d, &format!("{name}.lst")), "--plane", "0,0,0,0,0,1", "--size", "256", "-o", &png]);
+        assert!(run.status.success(), "{}", stderr(&run));
+        let img = image::open(&png).unwrap().to_rgb8();
+        let pale = |x: u32, y: u32| img.get_pixel(x, y).0.iter().all(|c| *c > 178);
+        let columns: Vec<u32> = (0..256).filter(|&x| (0..256).any(|y| pale(x, y))).collect();
+        let middle = (0..256).filter(|&y| pale(128, y)).count();
+        (columns.len(), middle)
+    };
+    let (square, square_middle) = core("square", KIWI);
+    let tapered =
+        KIWI.replace("axis = [[[-0.75, 0, 0], [0.75, 0, 0]]]", "axis = [[[-0.75, 0, 0], [0.75, 0, 0]]]\ntaper = 0.5");
+    let (spindle, spindle_middle) = core("spindle", &tapered);
+    assert!(spindle as f32 <= 0.7 * square as f32, "core length {spindle} px tapered, {square} px not");
+    let ratio = spindle_middle as f32 / square_middle.max(1) as f32;
+    assert!(
+        (0.8..1.25).contains(&ratio),
+        "the middle of the core changed: {spindle_middle} against {square_middle} px"
+    );
+    // out of range is refused with the field and the range
+    let bad = spec(d, "bad.toml", &KIWI.replace("[depth]", "[depth]\ntaper = 0.7"));
+    let run = solidtex(&["fill", &mesh, "--spec", &bad, "-o", &at(d, "bad.lst")]);
+    assert_fails(&run, &["depth.taper", "0.7", "0.5"]);
+}
