@@ -185,7 +185,7 @@ fn warn_if_lost(mesh: &Path, held: &mesher::VolumeCheck) {
     let lost = (1.0 - held.share) * 100.0;
     let advice = match held.holding {
         Some(n) => format!("--tets {n} (or tets = {n} in the spec) keeps it"),
-        None => "no tet count up to 16 times this one keeps it; thicken the part".to_string(),
+        None => format!("no tet count up to {} keeps it; thicken the part", held.tried),
     };
     eprintln!(
         "warning: {}: the tet mesh holds {:.1} % of the mesh's volume: {lost:.1} % is in parts thinner than \

@@ -142,28 +142,32 @@ pub const HELD_VOLUME: f64 = 0.95;
 pub struct VolumeCheck {
     /// The tet mesh's volume over the surface's.
     pub share: f64,
-    /// When the share is below [`HELD_VOLUME`]: the smallest tet count (doubling the
-    /// target up to 16 times it, within [`TARGET_TETS`]) whose mesh holds that share, if any.
+    /// When the share is below [`HELD_VOLUME`]: the smallest target tet count (the target
+    /// doubled up to 4 times, within [`TARGET_TETS`]) whose [`tetrahedralize`] holds that
+    /// share, if any.
     pub holding: Option<usize>,
+    /// The largest target tried for `holding` (the given one when none was needed).
+    pub tried: usize,
 }
 
 /// Compares the volume of `tets` (made from `mesh` for `target_tets`) with the volume
-/// `mesh` encloses, and where parts are lost, looks for a tet count that keeps them.
+/// `mesh` encloses, and where parts are lost, looks for a target tet count that keeps them
+/// (meshing as [`tetrahedralize`] does, so the advice reproduces).
 pub fn volume_check(mesh: &Mesh, tets: &TetMesh, target_tets: usize) -> Result<VolumeCheck> {
     let volume = check(mesh, target_tets)?;
     let share = tets.volume() / volume;
+    let mut tried = target_tets;
     if share >= HELD_VOLUME {
-        return Ok(VolumeCheck { share, holding: None });
+        return Ok(VolumeCheck { share, holding: None, tried });
     }
-    let surface = area(mesh);
-    let larger = (1..=4).map(|k| target_tets << k).take_while(|n| TARGET_TETS.contains(n));
-    for count in larger {
-        let finer = at_spacing(mesh, spacing(volume, surface, count))?;
+    for count in (1..=4).map(|k| target_tets << k).take_while(|n| TARGET_TETS.contains(n)) {
+        tried = count;
+        let Ok(finer) = tetrahedralize(mesh, count) else { break };
         if finer.volume() / volume >= HELD_VOLUME {
-            return Ok(VolumeCheck { share, holding: Some(finer.tets.len()) });
+            return Ok(VolumeCheck { share, holding: Some(count), tried });
         }
     }
-    Ok(VolumeCheck { share, holding: None })
+    Ok(VolumeCheck { share, holding: None, tried })
 }
 
 /// How far the boundary of a tet mesh lies from the surface it was made from, both ways.

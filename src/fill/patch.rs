@@ -85,7 +85,8 @@ pub fn sample_points() -> Vec<[f32; 4]> {
 
 /// Alpha in [0, 1] as a coverage byte.
 pub fn to_byte(a: f32) -> u8 {
-    // rounding half up by truncation: the value is not negative (and NaN clamps to 0)
+    // rounding half up by truncation: the value is not negative (NaN stays NaN through the
+    // clamp and `as u8` turns it into 0)
     (a.clamp(0.0, 1.0) * 255.0 + 0.5) as u8
 }
 

@@ -1,8 +1,9 @@
 //! Small linear algebra the filling needs: a sparse matrix in compressed rows, least
 //! squares by conjugate gradients on the normal equations, and a dense solve for the RBF.
 //!
-//! Every solve runs in a fixed order on one thread (several right-hand sides may run side
-//! by side), so results do not depend on the thread count.
+//! Every sum runs in a fixed order (several right-hand sides may run side by side, and the
+//! rows of a large product are split across threads, each row summed alone), so results do
+//! not depend on the thread count.
 
 use rayon::prelude::*;
 

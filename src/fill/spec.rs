@@ -205,7 +205,6 @@ fn stroke_samples(stroke: &[Vec3], size: f32) -> Vec<(Vec3, Vec3)> {
         .collect()
 }
 
-/// Points along a polyline about `size / STROKE_SAMPLES` apart (the corners included).
 /// The depth at the ends of a tapered axis.
 pub const TAPER_END: f32 = 0.5;
 
@@ -219,7 +218,7 @@ fn tapered(points: &[Vec3], taper: f32) -> Vec<(Vec3, f32)> {
     let length = along.last().copied().unwrap_or(0.0);
     let span = taper.clamp(0.0, 0.5) * length;
     let depth = |s: f32| {
-        if span <= 0.0 {
+        if span.is_nan() || span <= 0.0 {
             return 1.0;
         }
         let u = (s.min(length - s) / span).clamp(0.0, 1.0);
@@ -228,6 +227,7 @@ fn tapered(points: &[Vec3], taper: f32) -> Vec<(Vec3, f32)> {
     points.iter().zip(&along).map(|(p, s)| (*p, depth(*s))).collect()
 }
 
+/// Points along a polyline about `size / STROKE_SAMPLES` apart (the corners included).
 fn resample(line: &[Vec3], size: f32) -> Vec<Vec3> {
     let step = size / STROKE_SAMPLES as f32;
     let mut out = vec![line[0]];
