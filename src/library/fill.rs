@@ -161,6 +161,8 @@ pub fn preview(
     };
     if matches!(probe.kind, TextureType::T1b | TextureType::T2a | TextureType::T2b) {
         spec.depth.axes = vec![axis.clone()];
+        // the fruit's core closes toward its ends, as the repository's kiwi spec does
+        spec.depth.taper = if shape == "fruit" { 0.5 } else { 0.0 };
     }
     spec.directions = vec![axis];
     let surface = crate::mesh::shapes::named(shape).expect("a drawn shape").canonical();
