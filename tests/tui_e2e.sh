@@ -117,6 +117,12 @@ press "built b" 60 B
 [ -f "$out/broken/a.exr" ] && [ -f "$out/broken/b.exr" ] || { echo "tui e2e: B did not build the valid entries"; exit 1; }
 press "recipe: broken2" 10 Up Up Up Down Down Down e
 press "solidtex library" 5 Escape
+# f. c copies an entry into the manifest, d twice deletes it: the file comes back byte for byte
+press "copied b as b-2" 10 Up c
+grep -q '^name = "b-2"' "$out/lib/broken.toml" || { echo "tui e2e: the copy is not in the manifest"; exit 1; }
+press "d again deletes b-2" 5 d
+press "deleted b-2" 10 d
+cmp -s "$out/lib/broken.toml" tests/manifests/two-broken.toml || { echo "tui e2e: copy then delete changed the manifest"; diff "$out/lib/broken.toml" tests/manifests/two-broken.toml; exit 1; }
 tmux send-keys -t "$session" q
 sleep 0.5
 if tmux has-session -t "$session" 2>/dev/null; then echo "tui e2e: q did not quit"; exit 1; fi

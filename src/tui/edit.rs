@@ -66,6 +66,58 @@ fn entry_mut<'a>(doc: &'a mut DocumentMut, name: &str) -> Result<&'a mut toml_ed
         .ok_or_else(|| format!("no exemplar named {name:?} in the manifest"))
 }
 
+/// The manifest with a copy of exemplar `name` right after it (and its steps), named
+/// `NAME-2` (or the first free `NAME-k`), and that name. Comments above the entry are not
+/// copied; everything else stays as it was.
+pub fn duplicate(text: &str, name: &str) -> Result<(String, String), String> {
+    let mut doc = parse(text)?;
+    let list = doc
+        .get_mut("exemplar")
+        .and_then(Item::as_array_of_tables_mut)
+        .ok_or("the manifest has no [[exemplar]] entries")?;
+    let taken = |n: &str| list.iter().any(|t| t.get("name").and_then(Item::as_str) == Some(n));
+    let copy_name = (2..).map(|k| format!("{name}-{k}")).find(|n| !taken(n)).expect("a free name");
+    let index = list
+        .iter()
+        .position(|t| t.get("name").and_then(Item::as_str) == Some(name))
+        .ok_or_else(|| format!("no exemplar named {name:?} in the manifest"))?;
+    let mut copy = list.get(index).expect("found above").clone();
+    // no position: the copy is written where it stands in the list, after the original
+    copy.set_position(None);
+    copy.decor_mut().set_prefix("\n");
+    if let Some(steps) = copy.get_mut("steps").and_then(Item::as_array_of_tables_mut) {
+        steps.iter_mut().for_each(|t| t.set_position(None));
+    }
+    copy.insert("name", toml_edit::value(copy_name.as_str()));
+    list.insert(index + 1, copy);
+    Ok((doc.to_string(), copy_name))
+}
+
+/// The manifest without exemplar `name` (and the comments right above it; the first
+/// entry's lines above it, the file's header, stay).
+pub fn delete(text: &str, name: &str) -> Result<String, String> {
+    let mut doc = parse(text)?;
+    let list = doc
+        .get_mut("exemplar")
+        .and_then(Item::as_array_of_tables_mut)
+        .ok_or("the manifest has no [[exemplar]] entries")?;
+    let index = list
+        .iter()
+        .position(|t| t.get("name").and_then(Item::as_str) == Some(name))
+        .ok_or_else(|| format!("no exemplar named {name:?} in the manifest"))?;
+    let removed = list.remove(index);
+    if index == 0
+        && let Some(next) = list.get_mut(0)
+    {
+        let header = removed.decor().prefix().and_then(|p| p.as_str()).unwrap_or("").to_string();
+        next.decor_mut().set_prefix(header);
+    }
+    if list.is_empty() {
+        doc.remove("exemplar");
+    }
+    Ok(doc.to_string())
+}
+
 /// The manifest with `key` of exemplar `name` set to the TOML value `value` (a new key is
 /// appended). Everything else — comments, spacing, order — stays as it was.
 pub fn set(text: &str, name: &str, key: &str, value: &str) -> Result<String, String> {
@@ -213,5 +265,34 @@ mod tests {
             crate::io::manifest::parse_plan(&out, std::path::Path::new("lib")).unwrap().entries[0].steps.len(),
             1
         );
+    }
+
+    #[test]
+    fn a_duplicate_follows_its_original_and_a_deletion_keeps_the_rest() {
+        let (out, name) = duplicate(TEXT, "a").unwrap();
+        assert_eq!(name, "a-2");
+        let a = out.find("name = \"a\"").unwrap();
+        let copy = out.find("name = \"a-2\"").unwrap();
+        let b = out.find("name = \"b\"").unwrap();
+        assert!(a < copy && copy < b, "{out}");
+        assert_eq!(out.matches("# the library").count(), 1, "{out}");
+        assert_eq!(fields(&out, "a-2").unwrap().len(), fields(&out, "a").unwrap().len());
+        // b's steps come along, and a second copy takes the next free name
+        let (out, name) = duplicate(&out, "b").unwrap();
+        assert_eq!(name, "b-2");
+        assert_eq!(fields(&out, "b-2").unwrap(), {
+            let mut f = fields(TEXT, "b").unwrap();
+            f[0].value = "\"b-2\"".into();
+            f
+        });
+        assert_eq!(duplicate(&out, "a").unwrap().1, "a-3");
+        let plan = crate::io::manifest::parse_plan(&out, std::path::Path::new("lib")).unwrap();
+        assert_eq!(plan.entries.iter().map(|e| e.name.as_str()).collect::<Vec<_>>(), ["a", "a-2", "b", "b-2"]);
+        // deleting: the others and the file's header stay, byte for byte
+        assert_eq!(delete(&out, "a-2").unwrap(), duplicate(TEXT, "b").unwrap().0);
+        let without_a = delete(TEXT, "a").unwrap();
+        assert!(without_a.starts_with("# the library\n\n[[exemplar]]\nname = \"b\""), "{without_a}");
+        assert!(delete(TEXT, "zz").unwrap_err().contains("zz"));
+        assert!(duplicate(TEXT, "zz").unwrap_err().contains("zz"));
     }
 }

@@ -37,6 +37,8 @@ fn library(code: KeyCode) -> Option<Message> {
         KeyCode::Char('b') => Some(Message::Build),
         KeyCode::Char('B') => Some(Message::BuildAll),
         KeyCode::Char('e') => Some(Message::Edit),
+        KeyCode::Char('c') => Some(Message::Duplicate),
+        KeyCode::Char('d') => Some(Message::Delete),
         KeyCode::PageDown => Some(Message::ScrollErrors(3)),
         KeyCode::PageUp => Some(Message::ScrollErrors(-3)),
         _ => None,
@@ -120,10 +122,12 @@ fn exemplar(code: KeyCode) -> Option<Message> {
 }
 
 /// The help text: one line per key.
-pub const HELP: [&str; 19] = [
+pub const HELP: [&str; 21] = [
     "up/down, j/k   choose an exemplar",
     "enter          open its slices",
     "b / B          build it / build all",
+    "c / d          copy the entry / delete it (d twice;",
+    "               built files stay)",
     "e              edit its recipe (enter edits a",
     "               value, s saves, u undo, r redo)",
     "x, y, z        choose the slice axis",
@@ -161,6 +165,8 @@ mod tests {
         assert!(matches!(key(&Screen::Library, press(KeyCode::Char('b'))), Some(Message::Build)));
         assert!(matches!(key(&Screen::Library, press(KeyCode::Down)), Some(Message::Down)));
         assert!(key(&Screen::Library, press(KeyCode::Char('x'))).is_none());
+        assert!(matches!(key(&Screen::Library, press(KeyCode::Char('c'))), Some(Message::Duplicate)));
+        assert!(matches!(key(&Screen::Library, press(KeyCode::Char('d'))), Some(Message::Delete)));
         let view = Screen::Exemplar(super::super::model::ExemplarView::new("a"));
         assert!(matches!(key(&view, press(KeyCode::Char('x'))), Some(Message::SelectAxis(Axis::X))));
         assert!(matches!(key(&view, press(KeyCode::PageUp)), Some(Message::MoveSlice(8))));

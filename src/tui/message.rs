@@ -39,6 +39,13 @@ pub enum Message {
     BuildCancelled(String, super::model::Item),
     /// Open the recipe editor of the selected exemplar.
     Edit,
+    /// Copy the selected entry in the manifest (right after it, named `NAME-2`).
+    Duplicate,
+    /// Delete the selected entry from the manifest (asks first).
+    Delete,
+    /// The manifest's entries changed: the reloaded list, its errors, the entry to select
+    /// and what happened; or why nothing changed.
+    EntriesChanged(Result<(Vec<super::model::Item>, Vec<String>, String, String), String>),
     /// The manifest text for the editor arrived.
     EditorReady(Result<String, String>),
     /// Start editing the selected field, or commit the value being typed.
@@ -125,4 +132,15 @@ pub enum Effect {
     LoadSeed(String),
     /// Append stamp steps to exemplar `name` in the manifest and save it.
     SaveSteps(String, Vec<super::model::StampStep>, String),
+    /// Copy or delete an entry of the manifest and save it.
+    ChangeEntry(EntryChange),
+}
+
+/// A change to the manifest's list of entries.
+#[derive(Debug, Clone, PartialEq)]
+pub enum EntryChange {
+    /// Copy exemplar `name`.
+    Duplicate(String),
+    /// Delete exemplar `name`.
+    Delete(String),
 }

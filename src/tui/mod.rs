@@ -19,7 +19,7 @@ mod update;
 mod view;
 mod view_edit;
 
-pub use message::{Effect, Message};
+pub use message::{Effect, EntryChange, Message};
 pub use model::{BuildState, FillPreview, Item, Model, Screen};
 pub use update::update;
 pub use view::draw;
@@ -179,6 +179,9 @@ fn start(effects: Vec<Effect>, model: &Model, send: &Sender<Message>) {
             Effect::SaveSteps(name, steps, file) => {
                 let _ = send.send(Message::Saved(save_steps(&manifest, &name, &steps, &file)));
             }
+            Effect::ChangeEntry(change) => {
+                let _ = send.send(Message::EntriesChanged(change_entry(&manifest, &output, &change)));
+            }
             Effect::Fill(name) => {
                 let result = library::fill::preview(&manifest, &output, &name, &crate::progress::NoProgress)
                     .map(Arc::new)
@@ -187,6 +190,30 @@ fn start(effects: Vec<Effect>, model: &Model, send: &Sender<Message>) {
             }
         });
     }
+}
+
+/// Copies or deletes an entry of the manifest, saves it and reloads the list: the list, its
+/// errors, the entry to select and a status line.
+fn change_entry(
+    manifest: &Path,
+    output: &Path,
+    change: &EntryChange,
+) -> Result<(Vec<Item>, Vec<String>, String, String), String> {
+    let text = io::read_text(manifest, "manifest").map_err(|e| e.to_string())?;
+    let (text, select, status) = match change {
+        EntryChange::Duplicate(name) => {
+            let (text, copy) = edit::duplicate(&text, name)?;
+            (text, copy.clone(), format!("copied {name} as {copy} (e edits it, b builds it)"))
+        }
+        EntryChange::Delete(name) => {
+            let text = edit::delete(&text, name)?;
+            let status = format!("deleted {name} from {}; its built files stay", manifest.display());
+            (text, String::new(), status)
+        }
+    };
+    io::write_bytes(manifest, text.as_bytes()).map_err(|e| e.to_string())?;
+    let (items, errors) = load_items(manifest, output);
+    Ok((items, errors, select, status))
 }
 
 /// Counts cancellations: a build stops when the count moves past the one it started with,
@@ -359,5 +386,40 @@ mod tests {
         assert!(matches!(cancelled, Message::BuildCancelled(n, r) if n == "m" && r == row));
         let failed = finished(&super::Outcome::Failed("m".into(), "no image".into()), Some(row));
         assert!(matches!(failed, Message::Built(n, Err(e)) if n == "m" && e == "no image"));
+    }
+
+    /// `c` copies the selected entry into the manifest, `d` twice deletes it: the file keeps
+    /// its comments and the other entries byte for byte, and the list follows.
+    #[test]
+    fn entries_are_copied_and_deleted_in_the_manifest() {
+        let dir = tempfile::tempdir().unwrap();
+        let manifest = dir.path().join("lib.toml");
+        let fixture = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/manifests/two-broken.toml");
+        std::fs::copy(fixture, &manifest).unwrap();
+        let original = std::fs::read_to_string(&manifest).unwrap();
+        let out = dir.path().join("out");
+        let (items, errors) = load_items(&manifest, &out);
+        let mut m = super::Model::new(manifest.clone(), out.clone(), items, errors);
+        let run = |m: &mut super::Model, message: Message| {
+            for effect in update(m, message) {
+                let Effect::ChangeEntry(change) = effect else { panic!("{effect:?}") };
+                update(m, Message::EntriesChanged(super::change_entry(&manifest, &out, &change)));
+            }
+        };
+        run(&mut m, Message::Duplicate);
+        let names: Vec<&str> = m.items.iter().map(|i| i.name.as_str()).collect();
+        assert_eq!(names, ["a", "a-2", "broken1", "b", "broken2"]);
+        assert_eq!((m.selected, m.status.contains("copied a as a-2")), (1, true), "{}", m.status);
+        // d asks; another key keeps the entry; d twice deletes the copy
+        run(&mut m, Message::Delete);
+        assert!(m.status.contains("d again deletes a-2"), "{}", m.status);
+        run(&mut m, Message::Down);
+        run(&mut m, Message::Up);
+        run(&mut m, Message::Delete);
+        assert_eq!(m.items.len(), 5, "the Down in between dropped the question");
+        run(&mut m, Message::Delete);
+        assert_eq!(m.items.len(), 4);
+        assert_eq!(std::fs::read_to_string(&manifest).unwrap(), original, "copy then delete gives the file back");
+        assert!(m.status.contains("deleted a-2") && m.status.contains("built files stay"), "{}", m.status);
     }
 }

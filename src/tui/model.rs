@@ -165,6 +165,8 @@ pub enum Confirm {
     Leave,
     /// Leave stamp mode.
     StampOff,
+    /// Delete the selected entry.
+    Delete,
 }
 
 /// The screen on top.

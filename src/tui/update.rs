@@ -1,6 +1,6 @@
 //! `update`: the only place the model changes. Pure: returns the work to start.
 
-use super::message::{Effect, Message};
+use super::message::{Effect, EntryChange, Message};
 use super::model::{BuildState, Confirm, ExemplarView, Model, Screen};
 use super::{editing, stamping};
 
@@ -17,6 +17,9 @@ pub fn update(model: &mut Model, message: Message) -> Vec<Effect> {
         Message::Open => return open(model),
         Message::Build => return build(model, false),
         Message::BuildAll => return build(model, true),
+        Message::Duplicate => return change_entry(model, false, asked),
+        Message::Delete => return change_entry(model, true, asked),
+        Message::EntriesChanged(result) => entries_changed(model, result),
         Message::ScrollErrors(lines) => {
             // The view stops at the last line; here only a bound that never overflows.
             let most = model.errors.iter().map(|e| e.len()).sum::<usize>();
@@ -90,6 +93,7 @@ fn from_key(message: &Message) -> bool {
     !matches!(
         message,
         Message::Loaded(..)
+            | Message::EntriesChanged(_)
             | Message::Built(..)
             | Message::BuildCancelled(..)
             | Message::EditorReady(_)
@@ -102,6 +106,39 @@ fn from_key(message: &Message) -> bool {
             | Message::BuildProgress(..)
             | Message::BuildWarning(..)
     )
+}
+
+/// `c` copies the selected entry in the manifest; `d` deletes it, asking first (a second
+/// `d`). Its built files stay in the output folder.
+fn change_entry(model: &mut Model, delete: bool, asked: Option<Confirm>) -> Vec<Effect> {
+    let Some(name) = model.items.get(model.selected).map(|i| i.name.clone()) else {
+        model.status = "the library has no entry to copy or delete".into();
+        return Vec::new();
+    };
+    if !delete {
+        model.status = format!("copying {name}");
+        return vec![Effect::ChangeEntry(EntryChange::Duplicate(name))];
+    }
+    if asked != Some(Confirm::Delete) {
+        model.confirm = Some(Confirm::Delete);
+        model.status =
+            format!("d again deletes {name} from the manifest (its built files stay); any other key keeps it");
+        return Vec::new();
+    }
+    model.status = format!("deleting {name}");
+    vec![Effect::ChangeEntry(EntryChange::Delete(name))]
+}
+
+/// The manifest's entries changed: the new list, the row of `select` chosen.
+fn entries_changed(model: &mut Model, result: Result<(Vec<super::model::Item>, Vec<String>, String, String), String>) {
+    match result {
+        Ok((items, errors, select, status)) => {
+            let row = items.iter().position(|i| i.name == select).unwrap_or(model.selected);
+            model.selected = row.min(items.len().saturating_sub(1));
+            (model.items, model.errors, model.status) = (items, errors, status);
+        }
+        Err(e) => model.status = format!("the manifest is unchanged: {e}"),
+    }
 }
 
 /// `q` or Ctrl-C: quit, asking first when recipe edits or stamps are unsaved.
@@ -136,7 +173,8 @@ fn back(model: &mut Model, asked: Option<Confirm>) -> Vec<Effect> {
     } else {
         // The left screen's messages do not follow onto the library.
         model.screen = Screen::Library;
-        model.status = format!("{} exemplar(s): enter opens, b builds, e edits", model.items.len());
+        model.status =
+            format!("{} exemplar(s): enter opens, b builds, e edits, c copies, d deletes", model.items.len());
     }
     Vec::new()
 }
