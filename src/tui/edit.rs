@@ -118,6 +118,54 @@ pub fn delete(text: &str, name: &str) -> Result<String, String> {
     Ok(doc.to_string())
 }
 
+/// Which step a field key such as `steps[2].count` belongs to.
+pub fn step_of(key: &str) -> Option<usize> {
+    step_key(key).0
+}
+
+fn steps_mut<'a>(doc: &'a mut DocumentMut, name: &str) -> Result<&'a mut toml_edit::ArrayOfTables, String> {
+    entry_mut(doc, name)?
+        .get_mut("steps")
+        .and_then(Item::as_array_of_tables_mut)
+        .ok_or_else(|| format!("{name} has no [[exemplar.steps]]"))
+}
+
+/// The manifest without step `index` of exemplar `name` (and the comments right above it).
+pub fn remove_step(text: &str, name: &str, index: usize) -> Result<String, String> {
+    let mut doc = parse(text)?;
+    let steps = steps_mut(&mut doc, name)?;
+    if index >= steps.len() {
+        return Err(format!("{name} has no step {index}"));
+    }
+    steps.remove(index);
+    if steps.is_empty() {
+        entry_mut(&mut doc, name)?.remove("steps");
+    }
+    Ok(doc.to_string())
+}
+
+/// The manifest with step `index` of exemplar `name` swapped with the one before it
+/// (`earlier`) or after it, each with its comments; and the step's new index.
+pub fn move_step(text: &str, name: &str, index: usize, earlier: bool) -> Result<(String, usize), String> {
+    let mut doc = parse(text)?;
+    let steps = steps_mut(&mut doc, name)?;
+    let other = if earlier { index.checked_sub(1) } else { Some(index + 1) };
+    let Some(other) = other.filter(|o| *o < steps.len() && index < steps.len()) else {
+        let end = if earlier { "first" } else { "last" };
+        return Err(format!("step {index} of {name} is already the {end}"));
+    };
+    let (lo, hi) = (index.min(other), index.max(other));
+    let (first, second) = (steps.get(lo).expect("in range").clone(), steps.get(hi).expect("in range").clone());
+    // tables are written in the order of their positions: the two trade places and positions
+    let (mut moved_up, mut moved_down) = (second, first);
+    let (p_lo, p_hi) = (moved_down.position(), moved_up.position());
+    moved_up.set_position(p_lo);
+    moved_down.set_position(p_hi);
+    steps.replace(lo, moved_up);
+    steps.replace(hi, moved_down);
+    Ok((doc.to_string(), other))
+}
+
 /// The manifest with `key` of exemplar `name` set to the TOML value `value` (a new key is
 /// appended). Everything else — comments, spacing, order — stays as it was.
 pub fn set(text: &str, name: &str, key: &str, value: &str) -> Result<String, String> {
@@ -294,5 +342,26 @@ mod tests {
         assert!(without_a.starts_with("# the library\n\n[[exemplar]]\nname = \"b\""), "{without_a}");
         assert!(delete(TEXT, "zz").unwrap_err().contains("zz"));
         assert!(duplicate(TEXT, "zz").unwrap_err().contains("zz"));
+    }
+
+    #[test]
+    fn steps_are_removed_and_reordered_with_their_comments() {
+        let text = TEXT.to_string() + "  # the second\n  [[exemplar.steps]]\n  blur = \"2,2,2\"\n  radius = 3\n";
+        let (moved, at) = move_step(&text, "b", 1, true).unwrap();
+        assert_eq!(at, 0);
+        let keys = |t: &str| fields(t, "b").unwrap().into_iter().map(|f| f.value).collect::<Vec<_>>();
+        assert_eq!(keys(&moved)[3..], ["\"2,2,2\"", "3", "\"1,1,1\"", "2"]);
+        assert!(moved.contains("  # the second\n  [[exemplar.steps]]\n  blur = \"2,2,2\""), "{moved}");
+        assert!(moved.find("2,2,2").unwrap() < moved.find("1,1,1").unwrap(), "{moved}");
+        assert_eq!(move_step(&moved, "b", 0, false).unwrap().0, text, "moving back gives the text back");
+        assert!(move_step(&text, "b", 0, true).unwrap_err().contains("already the first"));
+        assert!(move_step(&text, "b", 1, false).unwrap_err().contains("already the last"));
+        let removed = remove_step(&text, "b", 0).unwrap();
+        assert_eq!(keys(&removed)[3..], ["\"2,2,2\"", "3"]);
+        let none = remove_step(&removed, "b", 0).unwrap();
+        assert!(!none.contains("steps") && none.contains("size = 32"), "{none}");
+        assert!(remove_step(TEXT, "a", 0).unwrap_err().contains("no [[exemplar.steps]]"));
+        assert_eq!(step_of("steps[4].count"), Some(4));
+        assert_eq!(step_of("size"), None);
     }
 }

@@ -57,21 +57,30 @@ pub fn commit(model: &mut Model) -> Vec<Effect> {
         editor.error = Some("the name is the exemplar's identity: rename it in the file".into());
         return Vec::new();
     }
+    let edited = edit::set(&text, &editor.name, &field.key, &input);
+    keep(model, &folder, edited, format!("{} = {input}; previewing", field.key))
+}
+
+/// Keeps an edit of the editor's text (for undo, then previewed) when the manifest parser
+/// accepts the entry after it. A valid entry keeps only edits that leave it valid; an entry
+/// that already has a mistake keeps every well-formed edit, so its mistakes can be fixed one
+/// at a time. Otherwise the reason shows under the fields.
+fn keep(model: &mut Model, folder: &Path, edited: Result<String, String>, status: String) -> Vec<Effect> {
+    let Screen::Editor(editor) = &mut model.screen else { return Vec::new() };
+    let Some(text) = editor.text.clone() else { return Vec::new() };
     let name = editor.name.clone();
-    // A valid entry keeps only edits that leave it valid. An entry that already has a
-    // mistake keeps every well-formed edit, so its mistakes can be fixed one at a time.
-    let verdict = edit::set(&text, &name, &field.key, &input).map(|t| {
-        let still = check(&t, &folder, &name).err();
+    let verdict = edited.map(|t| {
+        let still = check(&t, folder, &name).err();
         (t, still)
     });
     match verdict {
-        Ok((new_text, still)) if still.is_none() || check(&text, &folder, &name).is_err() => {
+        Ok((new_text, still)) if still.is_none() || check(&text, folder, &name).is_err() => {
             editor.undo.push(text);
             editor.redo.clear();
             editor.text = Some(new_text);
             editor.input = None;
             editor.error = still.map(|e| format!("kept; the entry still has a mistake: {e}"));
-            model.status = format!("{} = {input}; previewing", field.key);
+            model.status = status;
             let Screen::Editor(editor) = &mut model.screen else { return Vec::new() };
             preview(editor)
         }
@@ -84,6 +93,42 @@ pub fn commit(model: &mut Model) -> Vec<Effect> {
             Vec::new()
         }
     }
+}
+
+/// `x` removes the step the selected field belongs to; `K` / `J` (`earlier` or not) move
+/// it before the previous step or after the next, the selection following it.
+pub fn step(model: &mut Model, remove: bool, earlier: bool) -> Vec<Effect> {
+    let folder = model.manifest.parent().unwrap_or(Path::new(".")).to_path_buf();
+    let Screen::Editor(editor) = &mut model.screen else { return Vec::new() };
+    let Some(text) = editor.text.clone() else { return Vec::new() };
+    let fields = edit::fields(&text, &editor.name).unwrap_or_default();
+    let Some(index) = fields.get(editor.selected).and_then(|f| edit::step_of(&f.key)) else {
+        model.status = "select a field of a step (steps[i].…) first".into();
+        return Vec::new();
+    };
+    let name = editor.name.clone();
+    if remove {
+        return keep(
+            model,
+            &folder,
+            edit::remove_step(&text, &name, index),
+            format!("removed step {index}; previewing"),
+        );
+    }
+    let moved = edit::move_step(&text, &name, index, earlier);
+    let to = moved.as_ref().map(|m| m.1).unwrap_or(index);
+    let offset = fields[editor.selected..].iter().take_while(|f| edit::step_of(&f.key) == Some(index)).count();
+    let effects = keep(model, &folder, moved.map(|m| m.0), format!("moved step {index} to {to}; previewing"));
+    if let Screen::Editor(editor) = &mut model.screen
+        && editor.error.is_none()
+        && let Some(t) = &editor.text
+    {
+        // the same field of the moved step stays selected
+        let fields = edit::fields(t, &editor.name).unwrap_or_default();
+        let end = fields.iter().rposition(|f| edit::step_of(&f.key) == Some(to)).map_or(editor.selected, |e| e + 1);
+        editor.selected = end.saturating_sub(offset).min(fields.len().saturating_sub(1));
+    }
+    effects
 }
 
 /// The manifest parser's verdict on entry `name` of `text` (other entries' mistakes are
@@ -287,6 +332,36 @@ mod tests {
         }
         update(&mut m, Message::Commit);
         assert!(editor(&m).text.as_deref().unwrap().contains("size = 24"), "{:?}", editor(&m).text);
+    }
+
+    /// `K`/`J` move the selected step with the selection, `x` removes it, `u` brings it
+    /// back; each kept change is previewed; outside a step the keys only say what they need.
+    #[test]
+    fn steps_are_moved_and_removed_in_the_editor() {
+        const STEPS: &str = "[[exemplar]]\nname = \"m\"\nrecipe = \"procedural:marble\"\nsize = 16\n  [[exemplar.steps]]\n  blur = \"1,1,1\"\n  radius = 2\n  [[exemplar.steps]]\n  blur = \"8,8,8\"\n  radius = 3\n";
+        let mut m = editing_in(STEPS, "m");
+        assert!(update(&mut m, Message::RemoveStep).is_empty());
+        assert!(m.status.contains("select a field of a step"), "{}", m.status);
+        let selected = |m: &Model| {
+            let e = editor(m);
+            edit::fields(e.text.as_deref().unwrap(), "m").unwrap()[e.selected].clone()
+        };
+        for _ in 0..6 {
+            update(&mut m, Message::Down);
+        }
+        assert_eq!((selected(&m).key.as_str(), selected(&m).value.as_str()), ("steps[1].radius", "3"));
+        let effects = update(&mut m, Message::MoveStep(true));
+        assert!(matches!(effects.as_slice(), [Effect::Preview { .. }]), "{effects:?}");
+        assert_eq!((selected(&m).key.as_str(), selected(&m).value.as_str()), ("steps[0].radius", "3"));
+        let text = editor(&m).text.clone().unwrap();
+        assert!(text.find("8,8,8").unwrap() < text.find("1,1,1").unwrap(), "{text}");
+        assert!(update(&mut m, Message::MoveStep(true)).is_empty());
+        assert!(editor(&m).error.as_deref().unwrap().contains("already the first"));
+        update(&mut m, Message::RemoveStep);
+        assert!(!editor(&m).text.as_deref().unwrap().contains("8,8,8"));
+        update(&mut m, Message::Undo);
+        update(&mut m, Message::Undo);
+        assert_eq!(editor(&m).text.as_deref(), Some(STEPS), "two undos give the text back");
     }
 
     /// A manifest whose entry "bad" has two mistakes (size 0, an unknown recipe).

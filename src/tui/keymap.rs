@@ -83,6 +83,9 @@ fn editor(code: KeyCode) -> Option<Message> {
         KeyCode::Char('u') => Some(Message::Undo),
         KeyCode::Char('r') => Some(Message::Redo),
         KeyCode::Char('s') => Some(Message::Save),
+        KeyCode::Char('x') => Some(Message::RemoveStep),
+        KeyCode::Char('K') => Some(Message::MoveStep(true)),
+        KeyCode::Char('J') => Some(Message::MoveStep(false)),
         _ => None,
     }
 }
@@ -122,14 +125,15 @@ fn exemplar(code: KeyCode) -> Option<Message> {
 }
 
 /// The help text: one line per key.
-pub const HELP: [&str; 21] = [
+pub const HELP: [&str; 22] = [
     "up/down, j/k   choose an exemplar",
     "enter          open its slices",
     "b / B          build it / build all",
     "c / d          copy the entry / delete it (d twice;",
     "               built files stay)",
     "e              edit its recipe (enter edits a",
-    "               value, s saves, u undo, r redo)",
+    "               value, s saves, u undo, r redo;",
+    "               on a step: x removes, K/J move)",
     "x, y, z        choose the slice axis",
     "arrows, hjkl   move the slice (page up/down: 8)",
     "c              cycle colour and single channels",

@@ -61,6 +61,10 @@ pub enum Message {
     Redo,
     /// Save the manifest.
     Save,
+    /// Remove the step of the selected field (editor).
+    RemoveStep,
+    /// Move the step of the selected field before the previous one (true) or after the next.
+    MoveStep(bool),
     /// The manifest was saved (or not).
     Saved(Result<String, String>),
     /// A preview finished: the edit generation it belongs to, the volume, and the

@@ -50,6 +50,8 @@ pub fn update(model: &mut Model, message: Message) -> Vec<Effect> {
         Message::Undo => return editing::undo(model, false),
         Message::Redo => return editing::undo(model, true),
         Message::Save => return editing::save(model),
+        Message::RemoveStep => return editing::step(model, true, false),
+        Message::MoveStep(earlier) => return editing::step(model, false, earlier),
         Message::Saved(result) => editing::saved(model, result),
         Message::Previewed(generation, result, warnings) => editing::previewed(model, generation, result, warnings),
         Message::FillPreview => return editing::open_fill(model),
