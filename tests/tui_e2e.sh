@@ -123,6 +123,16 @@ grep -q '^name = "b-2"' "$out/lib/broken.toml" || { echo "tui e2e: the copy is n
 press "d again deletes b-2" 5 d
 press "deleted b-2" 10 d
 cmp -s "$out/lib/broken.toml" tests/manifests/two-broken.toml || { echo "tui e2e: copy then delete changed the manifest"; diff "$out/lib/broken.toml" tests/manifests/two-broken.toml; exit 1; }
+# g. the editor adds a blur step at the centre (a), saved; x removes it again
+press "recipe: b[^r]" 10 Up e
+wait_for "size = 8" 10
+press "added a blur at 4,4,4" 10 a
+press "saved" 10 s
+grep -q '^  blur = "4,4,4"' "$out/lib/broken.toml" || { echo "tui e2e: the blur step was not saved"; exit 1; }
+press "removed step 0" 10 x
+press "saved" 10 s
+cmp -s "$out/lib/broken.toml" tests/manifests/two-broken.toml || { echo "tui e2e: adding then removing a step changed the manifest"; diff "$out/lib/broken.toml" tests/manifests/two-broken.toml; exit 1; }
+press "solidtex library" 5 Escape
 tmux send-keys -t "$session" q
 sleep 0.5
 if tmux has-session -t "$session" 2>/dev/null; then echo "tui e2e: q did not quit"; exit 1; fi

@@ -200,13 +200,29 @@ pub fn set(text: &str, name: &str, key: &str, value: &str) -> Result<String, Str
 /// The manifest with `steps` appended to exemplar `name`'s `[[exemplar.steps]]`, each a
 /// `stamp` or `scatter` of the seed mesh `file` in the dark seed colour.
 pub fn append_steps(text: &str, name: &str, steps: &[super::model::StampStep], file: &str) -> Result<String, String> {
+    append_tables(text, name, steps.iter().map(|step| step_table(step, file)).collect())
+}
+
+/// The manifest with a blur step appended to exemplar `name`: inside the sphere at voxel
+/// `at` of radius `radius` voxels.
+pub fn append_blur(text: &str, name: &str, at: [f32; 3], radius: f32) -> Result<String, String> {
+    let mut t = toml_edit::Table::new();
+    t.insert("blur", toml_edit::value(format!("{},{},{}", at[0], at[1], at[2])));
+    let radius =
+        if radius.fract() == 0.0 { toml_edit::value(radius as i64) } else { toml_edit::value(f64::from(radius)) };
+    t.insert("radius", radius);
+    append_tables(text, name, vec![t])
+}
+
+/// The manifest with `tables` appended to exemplar `name`'s steps, indented like its last
+/// step (or by two spaces).
+fn append_tables(text: &str, name: &str, tables: Vec<toml_edit::Table>) -> Result<String, String> {
     let mut doc = parse(text)?;
     let table = entry_mut(&mut doc, name)?;
     let existing = table.entry("steps").or_insert(Item::ArrayOfTables(toml_edit::ArrayOfTables::new()));
     let array = existing.as_array_of_tables_mut().ok_or("steps is not a list of [[exemplar.steps]] tables")?;
     let indent = array.iter().last().map_or_else(|| "  ".to_string(), step_indent);
-    for step in steps {
-        let mut table = step_table(step, file);
+    for mut table in tables {
         table.decor_mut().set_prefix(indent.clone());
         let keys: Vec<String> = table.iter().map(|(k, _)| k.to_string()).collect();
         for key in keys {

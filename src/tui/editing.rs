@@ -95,6 +95,48 @@ fn keep(model: &mut Model, folder: &Path, edited: Result<String, String>, status
     }
 }
 
+/// `a` appends a blur step at the centre of the entry's volume (radius an eighth of its
+/// smallest side) and selects it, for `Enter` to place and size it.
+pub fn add_blur(model: &mut Model) -> Vec<Effect> {
+    let folder = model.manifest.parent().unwrap_or(Path::new(".")).to_path_buf();
+    let Screen::Editor(editor) = &mut model.screen else { return Vec::new() };
+    let Some(text) = editor.text.clone() else { return Vec::new() };
+    let fields = edit::fields(&text, &editor.name).unwrap_or_default();
+    let size = fields.iter().find(|f| f.key == "size").map(|f| sides(&f.value)).unwrap_or_default();
+    let Some(size) = size else {
+        model.status = "the entry has no size to centre a blur on: add the step in the file".into();
+        return Vec::new();
+    };
+    let at = size.map(|s| (s / 2.0).floor());
+    let radius = (size.iter().copied().fold(f32::INFINITY, f32::min) / 8.0).round().max(1.0);
+    let name = editor.name.clone();
+    let status = format!("added a blur at {},{},{} radius {radius}; previewing", at[0], at[1], at[2]);
+    let effects = keep(model, &folder, edit::append_blur(&text, &name, at, radius), status);
+    if let Screen::Editor(editor) = &mut model.screen
+        && editor.error.is_none()
+        && let Some(t) = &editor.text
+    {
+        let count = edit::fields(t, &editor.name).map_or(0, |f| f.len());
+        editor.selected = count.saturating_sub(2);
+    }
+    effects
+}
+
+/// The sides of a `size` value: `64` or `[64, 64, 128]`.
+fn sides(value: &str) -> Option<[f32; 3]> {
+    let numbers: Vec<f32> = value
+        .trim_matches(['[', ']', ' '])
+        .split(',')
+        .map(|n| n.trim().parse::<f32>())
+        .collect::<Result<_, _>>()
+        .ok()?;
+    match numbers.as_slice() {
+        [s] => Some([*s; 3]),
+        [x, y, z] => Some([*x, *y, *z]),
+        _ => None,
+    }
+}
+
 /// `x` removes the step the selected field belongs to; `K` / `J` (`earlier` or not) move
 /// it before the previous step or after the next, the selection following it.
 pub fn step(model: &mut Model, remove: bool, earlier: bool) -> Vec<Effect> {
@@ -362,6 +404,15 @@ mod tests {
         update(&mut m, Message::Undo);
         update(&mut m, Message::Undo);
         assert_eq!(editor(&m).text.as_deref(), Some(STEPS), "two undos give the text back");
+        // a: a blur step at the centre, selected, accepted by the manifest's rules
+        let effects = update(&mut m, Message::AddBlur);
+        assert!(matches!(effects.as_slice(), [Effect::Preview { .. }]), "{effects:?}");
+        assert_eq!((selected(&m).key.as_str(), selected(&m).value.as_str()), ("steps[2].blur", "\"8,8,8\""));
+        let text = editor(&m).text.clone().unwrap();
+        assert!(text.ends_with("  [[exemplar.steps]]\n  blur = \"8,8,8\"\n  radius = 2\n"), "{text}");
+        assert!(check(&text, Path::new("lib"), "m").is_ok());
+        assert_eq!(sides("[16, 24, 40]"), Some([16.0, 24.0, 40.0]));
+        assert_eq!(sides("\"big\""), None);
     }
 
     /// A manifest whose entry "bad" has two mistakes (size 0, an unknown recipe).

@@ -61,6 +61,8 @@ pub enum Message {
     Redo,
     /// Save the manifest.
     Save,
+    /// Append a blur step to the entry being edited.
+    AddBlur,
     /// Remove the step of the selected field (editor).
     RemoveStep,
     /// Move the step of the selected field before the previous one (true) or after the next.

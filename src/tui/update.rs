@@ -50,6 +50,7 @@ pub fn update(model: &mut Model, message: Message) -> Vec<Effect> {
         Message::Undo => return editing::undo(model, false),
         Message::Redo => return editing::undo(model, true),
         Message::Save => return editing::save(model),
+        Message::AddBlur => return editing::add_blur(model),
         Message::RemoveStep => return editing::step(model, true, false),
         Message::MoveStep(earlier) => return editing::step(model, false, earlier),
         Message::Saved(result) => editing::saved(model, result),
