@@ -112,14 +112,20 @@ pub fn add_blur(model: &mut Model) -> Vec<Effect> {
     let name = editor.name.clone();
     let status = format!("added a blur at {},{},{} radius {radius}; previewing", at[0], at[1], at[2]);
     let effects = keep(model, &folder, edit::append_blur(&text, &name, at, radius), status);
+    reselect(model, |fields, _| fields.len().saturating_sub(2));
+    effects
+}
+
+/// After a kept edit, selects the field `pick` chooses from the new fields and the old
+/// selection (clamped to the list).
+fn reselect(model: &mut Model, pick: impl FnOnce(&[edit::Field], usize) -> usize) {
     if let Screen::Editor(editor) = &mut model.screen
         && editor.error.is_none()
         && let Some(t) = &editor.text
     {
-        let count = edit::fields(t, &editor.name).map_or(0, |f| f.len());
-        editor.selected = count.saturating_sub(2);
+        let fields = edit::fields(t, &editor.name).unwrap_or_default();
+        editor.selected = pick(&fields, editor.selected).min(fields.len().saturating_sub(1));
     }
-    effects
 }
 
 /// The sides of a `size` value: `64` or `[64, 64, 128]`.
@@ -161,15 +167,11 @@ pub fn step(model: &mut Model, remove: bool, earlier: bool) -> Vec<Effect> {
     let to = moved.as_ref().map(|m| m.1).unwrap_or(index);
     let offset = fields[editor.selected..].iter().take_while(|f| edit::step_of(&f.key) == Some(index)).count();
     let effects = keep(model, &folder, moved.map(|m| m.0), format!("moved step {index} to {to}; previewing"));
-    if let Screen::Editor(editor) = &mut model.screen
-        && editor.error.is_none()
-        && let Some(t) = &editor.text
-    {
-        // the same field of the moved step stays selected
-        let fields = edit::fields(t, &editor.name).unwrap_or_default();
-        let end = fields.iter().rposition(|f| edit::step_of(&f.key) == Some(to)).map_or(editor.selected, |e| e + 1);
-        editor.selected = end.saturating_sub(offset).min(fields.len().saturating_sub(1));
-    }
+    // the same field of the moved step stays selected
+    reselect(model, |fields, selected| {
+        let end = fields.iter().rposition(|f| edit::step_of(&f.key) == Some(to)).map_or(selected, |e| e + 1);
+        end.saturating_sub(offset)
+    });
     effects
 }
 

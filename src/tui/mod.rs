@@ -353,14 +353,20 @@ fn load_masks(output: &Path, name: &str) -> std::result::Result<Vec<(String, Arc
 mod tests {
     use super::{BuildState, Effect, Message, finished, load_items, update};
 
-    /// Broken entries are listed in manifest order (so they can be opened and fixed) with
-    /// every error below; `B` builds the valid ones, `b` on a broken one says why not.
-    #[test]
-    fn broken_entries_are_listed_and_only_valid_ones_build() {
+    /// A temporary copy of tests/manifests/two-broken.toml (valid a, b; broken1, broken2).
+    fn two_broken() -> (tempfile::TempDir, std::path::PathBuf) {
         let dir = tempfile::tempdir().unwrap();
         let manifest = dir.path().join("lib.toml");
         let fixture = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/manifests/two-broken.toml");
         std::fs::copy(fixture, &manifest).unwrap();
+        (dir, manifest)
+    }
+
+    /// Broken entries are listed in manifest order (so they can be opened and fixed) with
+    /// every error below; `B` builds the valid ones, `b` on a broken one says why not.
+    #[test]
+    fn broken_entries_are_listed_and_only_valid_ones_build() {
+        let (dir, manifest) = two_broken();
         let (items, errors) = load_items(&manifest, &dir.path().join("out"));
         let names: Vec<&str> = items.iter().map(|i| i.name.as_str()).collect();
         assert_eq!(names, ["a", "broken1", "b", "broken2"]);
@@ -392,10 +398,7 @@ mod tests {
     /// its comments and the other entries byte for byte, and the list follows.
     #[test]
     fn entries_are_copied_and_deleted_in_the_manifest() {
-        let dir = tempfile::tempdir().unwrap();
-        let manifest = dir.path().join("lib.toml");
-        let fixture = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/manifests/two-broken.toml");
-        std::fs::copy(fixture, &manifest).unwrap();
+        let (dir, manifest) = two_broken();
         let original = std::fs::read_to_string(&manifest).unwrap();
         let out = dir.path().join("out");
         let (items, errors) = load_items(&manifest, &out);
