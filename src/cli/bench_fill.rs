@@ -6,7 +6,7 @@ use super::bench::BenchArgs;
 use crate::error::Result;
 use crate::fill::render::{self, Textures, View};
 use crate::fill::spec::FillSpec;
-use crate::fill::{self, Job, LstModel, MaskRef, Source, mesher};
+use crate::fill::{self, Job, LstModel, MaskRef, Source, mesher, translucent};
 use crate::mask::{self, Layer};
 use crate::mesh::{Mesh, shapes};
 use crate::procedural::{Recipe, generate};
@@ -20,7 +20,7 @@ use std::time::Instant;
 const OTHERS: [&str; 4] = ["libigl_bunny.obj", "cgal_sphere.obj", "cgal_dragknob.obj", "cgal_pipe.obj"];
 
 /// The filling workloads of one mesh (`{}`: the mesh's name).
-const NAMES: [&str; 5] = ["tetmesh/{}/5k", "paste/{}/5k", "cut/{}/512", "view/{}/512", "bake/{}/64"];
+const NAMES: [&str; 6] = ["tetmesh/{}/5k", "paste/{}/5k", "cut/{}/512", "view/{}/512", "bake/{}/64", "render/{}/512"];
 
 /// The one large fill: the drawn fruit at 50,000 tets, where the parallel parts show.
 const LARGE: &str = "fill/large/fruit-2b/50k";
@@ -113,6 +113,20 @@ fn render_workloads(args: &BenchArgs, name: &str, model: &LstModel, textures: &T
         let v = render::bake(&[(model, textures)], 64, u64::MAX)?;
         let [x, y, z] = v.dims();
         Ok(format!("{x}x{y}x{z}"))
+    })?;
+    timed(args, &format!("fill/render/{name}/512"), || {
+        let settings = translucent::Settings {
+            yaw: 35.0,
+            pitch: 25.0,
+            size: 512,
+            slices: 200,
+            opacity: 0.3,
+            cutaway: None,
+            levels: (0.0, 1.0),
+            background: render::BACKGROUND,
+        };
+        let rendering = translucent::render(&[(model, textures)], translucent::Density::Uniform, &settings)?;
+        Ok(format!("{} slices", rendering.slices))
     })
 }
 

@@ -5,7 +5,7 @@ use super::commands::usage;
 use crate::error::{Error, Result};
 use crate::fill::render::{self, Textures, View};
 use crate::fill::view::Shading;
-use crate::fill::{self, Job, LstModel, mesher};
+use crate::fill::{self, Job, LstModel, mesher, translucent};
 use crate::io::{self, fill_spec, lst_file};
 use crate::library;
 use crate::library::fill::load_mask;
@@ -88,6 +88,61 @@ pub struct ViewArgs {
     /// One normal per tet face instead of smooth shading (shows the tets).
     #[arg(long)]
     pub flat: bool,
+    /// The PNG to write.
+    #[arg(short, long)]
+    pub output: PathBuf,
+}
+
+/// Where `render` takes each voxel's density from.
+#[derive(Debug, Clone, Copy, PartialEq, clap::ValueEnum)]
+pub enum DensityFrom {
+    /// The same everywhere inside.
+    Uniform,
+    /// The exemplars' `Density` channel, or else their alpha.
+    Alpha,
+    /// Dark colours dense, light ones clear.
+    Dark,
+    /// Light colours dense, dark ones clear.
+    Light,
+}
+
+/// The arguments of `solidtex render`.
+#[derive(Debug, clap::Args)]
+pub struct RenderArgs {
+    /// One or more models (.lst), combined as in `cut`.
+    #[arg(required = true)]
+    pub models: Vec<PathBuf>,
+    /// Degrees around the vertical axis, -360 to 360.
+    #[arg(long, default_value_t = 35.0, allow_hyphen_values = true)]
+    pub yaw: f32,
+    /// Degrees above the horizon, -90 to 90.
+    #[arg(long, default_value_t = 25.0, allow_hyphen_values = true)]
+    pub pitch: f32,
+    /// How opaque full-density material is across a tenth of the longest side of the
+    /// models' box, 0 to 0.9999.
+    #[arg(long, default_value_t = 0.3)]
+    pub opacity: f32,
+    /// Where the density comes from (default: alpha when every exemplar has a Density or A
+    /// channel, else uniform).
+    #[arg(long, value_enum)]
+    pub density: Option<DensityFrom>,
+    /// The density ramps from 0 at LO to 1 at HI, LO,HI within 0 to 1 (e.g. 0.7,0.9 shows
+    /// only the densest material).
+    #[arg(long, default_value = "0,1")]
+    pub levels: String,
+    /// The colour behind the models, R,G,B each 0 to 255 (a light one shows dense dark
+    /// material).
+    #[arg(long, default_value = "24,24,28")]
+    pub background: String,
+    /// Slices across the view, 16 to 4096.
+    #[arg(long, default_value_t = 200)]
+    pub slices: usize,
+    /// Take away the material on the normal's side of this plane, PX,PY,PZ,NX,NY,NZ.
+    #[arg(long, allow_hyphen_values = true)]
+    pub cutaway: Option<String>,
+    /// Picture size in pixels, 8 to 4096.
+    #[arg(long, default_value_t = 512)]
+    pub size: usize,
     /// The PNG to write.
     #[arg(short, long)]
     pub output: PathBuf,
@@ -250,9 +305,16 @@ impl Progress for Bar {
 struct Loaded {
     model: LstModel,
     textures: Textures,
+    /// When asked for: the density textures, or the volume file that has no density.
+    density: Option<std::result::Result<Textures, PathBuf>>,
 }
 
 fn load_model(path: &Path) -> Result<Loaded> {
+    load(path, false)
+}
+
+/// Reads a model and its sources' volumes and masks, and their density when `density`.
+fn load(path: &Path, density: bool) -> Result<Loaded> {
     let model = lst_file::read_lst(path)?;
     let base = path.parent().unwrap_or(Path::new("."));
     let budget = io::budget_from_env()?;
@@ -260,7 +322,8 @@ fn load_model(path: &Path) -> Result<Loaded> {
         model.sources.iter().map(|s| io::read_volume(&base.join(&s.volume), budget)).collect::<Result<Vec<_>>>()?;
     let masks = model.sources.iter().map(|s| load_mask(&s.mask, base)).collect::<Result<Vec<_>>>()?;
     let textures = Textures::new(&colour, &masks);
-    Ok(Loaded { model, textures })
+    let density = density.then(|| Textures::density(&colour, &masks).map_err(|i| base.join(&model.sources[i].volume)));
+    Ok(Loaded { model, textures, density })
 }
 
 fn load_models(paths: &[PathBuf]) -> Result<Vec<Loaded>> {
@@ -305,6 +368,90 @@ pub fn run_cut(args: &CutArgs) -> Result<()> {
     if let Some(seams) = cut.seam_strength() {
         eprintln!("  seam strength {seams:.2} (colour step across patch borders over within)");
     }
+    Ok(())
+}
+
+/// The settings of `render`, every number checked against its range.
+fn render_settings(args: &RenderArgs) -> Result<translucent::Settings> {
+    io::values::within("--size", args.size, 8, MAX_PICTURE)?;
+    io::values::within("--yaw", args.yaw, -360.0, 360.0)?;
+    io::values::within("--pitch", args.pitch, -90.0, 90.0)?;
+    io::values::within("--opacity", args.opacity, 0.0, 0.9999)?;
+    io::values::within("--slices", args.slices, 16, 4096)?;
+    let cutaway = match &args.cutaway {
+        None => None,
+        Some(text) => {
+            let v = io::values::numbers("--cutaway", text, &[6])?;
+            io::values::positions("--cutaway", text, &v)?;
+            let normal = glam::Vec3::new(v[3], v[4], v[5]);
+            if normal == glam::Vec3::ZERO {
+                return Err(Error::invalid(format!("--cutaway {text:?}: the normal NX,NY,NZ is zero")));
+            }
+            Some((glam::Vec3::new(v[0], v[1], v[2]), normal))
+        }
+    };
+    let v = io::values::numbers("--levels", &args.levels, &[2])?;
+    if !(0.0 <= v[0] && v[0] < v[1] && v[1] <= 1.0) {
+        return Err(Error::invalid(format!("--levels {:?}: LO,HI must rise within 0 to 1", args.levels)));
+    }
+    let (yaw, pitch, size, slices, opacity) = (args.yaw, args.pitch, args.size, args.slices, args.opacity);
+    let levels = (v[0], v[1]);
+    let b = io::values::numbers("--background", &args.background, &[3])?;
+    if b.iter().any(|c| !(0.0..=255.0).contains(c)) {
+        return Err(Error::invalid(format!("--background {:?}: R,G,B must each be 0 to 255", args.background)));
+    }
+    let background = [b[0], b[1], b[2]].map(|c| c.round() as u8);
+    Ok(translucent::Settings { yaw, pitch, size, slices, opacity, cutaway, levels, background })
+}
+
+/// Run `solidtex render`.
+pub fn run_render(args: &RenderArgs) -> Result<()> {
+    let settings = render_settings(args).map_err(usage)?;
+    io::check_folder(&args.output)?;
+    let wants_channel = matches!(args.density, None | Some(DensityFrom::Alpha));
+    let mut loaded = args.models.iter().map(|p| load(p, wants_channel)).collect::<Result<Vec<_>>>()?;
+    let (mut channel, mut lacking) = (Vec::new(), None);
+    for model in &mut loaded {
+        match model.density.take() {
+            Some(Ok(textures)) => channel.push(textures),
+            Some(Err(volume)) => _ = lacking.get_or_insert(volume),
+            None => {}
+        }
+    }
+    let from = match (args.density, &lacking) {
+        (Some(DensityFrom::Alpha), Some(volume)) => {
+            return Err(Error::invalid(format!(
+                "{}: --density alpha needs a Density or A channel in every exemplar and this one has neither; \
+                 allowed instead: uniform, dark, light",
+                volume.display()
+            )));
+        }
+        (Some(chosen), _) => chosen,
+        (None, None) => DensityFrom::Alpha,
+        (None, Some(_)) => DensityFrom::Uniform,
+    };
+    let density = match from {
+        DensityFrom::Uniform => translucent::Density::Uniform,
+        DensityFrom::Dark => translucent::Density::Dark,
+        DensityFrom::Light => translucent::Density::Light,
+        DensityFrom::Alpha => translucent::Density::Channel(&channel),
+    };
+    let started = Instant::now();
+    let rendering = translucent::render(&pairs(&loaded), density, &settings)?;
+    let seconds = started.elapsed().as_secs_f64();
+    io::write_rgb8(&args.output, &rendering.picture)?;
+    let name = format!("{from:?}").to_lowercase();
+    let why = if args.density.is_none() && from == DensityFrom::Uniform {
+        " (the exemplars have no Density or A channel; --density dark or light takes it from the colour)"
+    } else {
+        ""
+    };
+    eprintln!(
+        "wrote {} ({size}x{size}, {} slices, density {name}{why}) in {seconds:.2} s",
+        args.output.display(),
+        rendering.slices,
+        size = args.size
+    );
     Ok(())
 }
 

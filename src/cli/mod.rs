@@ -180,6 +180,8 @@ pub enum Command {
     Bake(fill::BakeArgs),
     /// Render the surface of a filled model as a PNG.
     View(fill::ViewArgs),
+    /// Render one or more filled models as translucent material (volume rendering) as a PNG.
+    Render(fill::RenderArgs),
 }
 
 /// Run one command of the command line. The terminal UI (`tui`, or no command) is the
@@ -217,6 +219,7 @@ pub fn run(command: Command) -> crate::Result<()> {
         Command::Cut(args) => fill::run_cut(&args),
         Command::Bake(args) => fill::run_bake(&args),
         Command::View(args) => fill::run_view(&args),
+        Command::Render(args) => fill::run_render(&args),
     }
 }
 

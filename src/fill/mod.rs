@@ -19,6 +19,7 @@ pub mod sampler;
 pub mod solve;
 pub mod spec;
 pub mod tets;
+pub mod translucent;
 pub mod view;
 pub mod warp;
 

@@ -40,6 +40,21 @@ impl Textures {
             masks: masks.iter().map(Sampler::mask).collect(),
         }
     }
+
+    /// The density of each colour volume in place of its colour (its `Density` channel, or
+    /// else its alpha), with the same masks; `Err(i)` when volume `i` has neither.
+    pub fn density(colour: &[Volume], masks: &[Volume]) -> std::result::Result<Textures, usize> {
+        let named = Channel::Named("Density".into());
+        let samplers = colour
+            .iter()
+            .enumerate()
+            .map(|(i, v)| {
+                let c = v.channel_index(&named).or_else(|| v.channel_index(&Channel::A)).ok_or(i)?;
+                Ok(Sampler::channel(v, c))
+            })
+            .collect::<std::result::Result<Vec<_>, usize>>()?;
+        Ok(Textures { colour: samplers, masks: masks.iter().map(Sampler::mask).collect() })
+    }
 }
 
 /// A rectangle of pixels on a plane in model space.

@@ -29,6 +29,11 @@ impl Sampler {
         Sampler::pick(volume, if rgb.len() == 3 { &rgb } else { &[0, 0, 0] })
     }
 
+    /// A sampler of channel `c` of `volume`, read as grey (its value three times).
+    pub fn channel(volume: &Volume, c: usize) -> Sampler {
+        Sampler::pick(volume, &[c, c, c])
+    }
+
     /// The chosen channels, with one more voxel on the high side of each axis repeating
     /// the last one, so a lookup reads its upper neighbours without clamping indices.
     fn pick(volume: &Volume, channels: &[usize]) -> Sampler {

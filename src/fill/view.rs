@@ -56,10 +56,7 @@ pub fn surface_shaded(
     size: usize,
     shading: Shading,
 ) -> Rgb8 {
-    let (yaw, pitch) = (yaw.to_radians(), pitch.to_radians());
-    let forward = -Vec3::new(yaw.sin() * pitch.cos(), pitch.sin(), yaw.cos() * pitch.cos());
-    let right = forward.cross(Vec3::Y).normalize_or(Vec3::X);
-    let up = right.cross(forward);
+    let (forward, right, up) = camera(yaw, pitch);
     let project = |p: Vec3| Vec2::new(right.dot(p), up.dot(p));
     let (lo, hi) = model
         .mesh
@@ -91,6 +88,15 @@ pub fn surface_shaded(
         out.put(i % size, i / size, c);
     }
     out
+}
+
+/// The axes of an orthographic camera `yaw` degrees around y and `pitch` degrees up from
+/// the +z side, looking at the origin: (forward, right, up), orthonormal.
+pub fn camera(yaw: f32, pitch: f32) -> (Vec3, Vec3, Vec3) {
+    let (yaw, pitch) = (yaw.to_radians(), pitch.to_radians());
+    let forward = -Vec3::new(yaw.sin() * pitch.cos(), pitch.sin(), yaw.cos() * pitch.cos());
+    let right = forward.cross(Vec3::Y).normalize_or(Vec3::X);
+    (forward, right, right.cross(forward))
 }
 
 /// A boundary face of the tet mesh: its tet, corners (vertex ids and points), unit normal

@@ -247,6 +247,65 @@ fn two_models_cut_together_and_the_surface_view_draws_the_model() {
     assert!(!d.join("bad.png").exists());
 }
 
+/// The pixels of a PNG whose every channel is at most `level` (0 to 255).
+fn darker_than(png: &str, level: u8) -> usize {
+    image::open(png).unwrap().to_rgb8().pixels().filter(|p| p.0.iter().all(|c| *c <= level)).count()
+}
+
+#[test]
+fn a_translucent_render_shows_the_seeds_inside_the_kiwi() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (mesh, spec) = (draw(d, "fruit"), spec(d, "kiwi.toml", KIWI));
+    fill(d, &mesh, &spec, "kiwi.lst");
+    let model = at(d, "kiwi.lst");
+    let render = |name: &str, extra: &[&str]| {
+        let png = at(d, name);
+        let mut args = vec!["render", &model, "--size", "128", "-o", &png];
+        args.extend_from_slice(extra);
+        let run = solidtex(&args);
+        assert!(run.status.success(), "{}", stderr(&run));
+        (png, stderr(&run))
+    };
+    // the exemplars have no density channel: uniform, and the message says why
+    let (plain, said) = render("plain.png", &[]);
+    assert!(said.contains("density uniform") && said.contains("Density or A"), "{said}");
+    let img = image::open(&plain).unwrap().to_rgb8();
+    let centre = img.get_pixel(64, 64).0;
+    assert!(centre[1] > centre[0] && centre[1] > centre[2], "green flesh seen through: {centre:?}");
+    assert_eq!(img.get_pixel(1, 1).0, [24, 24, 28], "the corner is background");
+    // on a light background, only the darkest material dense: the seeds show as dark specks
+    let light = ["--density", "dark", "--opacity", "0.99", "--background", "240,240,235"];
+    let (seeds, _) = render("seeds.png", &[&light[..], &["--levels", "0.7,0.85"]].concat());
+    let specks = darker_than(&seeds, 200);
+    assert!(specks > 100, "seeds seen through the fruit: {specks} dark pixels");
+    let (none, _) = render("none.png", &[&light[..], &["--levels", "0.97,1"]].concat());
+    assert_eq!(darker_than(&none, 200), 0, "nothing is that dense");
+    // cut away the half toward the camera (looking down -z): the pale core shows on the face
+    let (cut, _) = render("cut.png", &["--yaw", "0", "--pitch", "0", "--opacity", "0.95", "--cutaway", "0,0,0,0,0,1"]);
+    let core = pixel(&cut, 64, 64);
+    assert!(core.iter().all(|c| *c > 0.6), "the core on the cut face: {core:?}");
+    assert!(pixel(&plain, 64, 64)[2] < 0.5, "without the cutaway the core is hidden");
+    // bad values are refused, naming them, with nothing written
+    let bad = at(d, "bad.png");
+    let refused = |extra: &[&str], needles: &[&str], code: i32| {
+        let mut args = vec!["render", &model, "-o", &bad];
+        args.extend_from_slice(extra);
+        let run = solidtex(&args);
+        if code == 2 {
+            assert_usage(&run, needles)
+        } else {
+            assert_fails(&run, needles)
+        }
+        assert!(!Path::new(&bad).exists());
+    };
+    refused(&["--opacity", "1"], &["--opacity"], 2);
+    refused(&["--levels", "0.8,0.2"], &["--levels"], 2);
+    refused(&["--cutaway", "0,0,0,0,0,0"], &["--cutaway", "zero"], 2);
+    refused(&["--background", "0,0,300"], &["--background"], 2);
+    refused(&["--density", "alpha"], &["kiwi.exr", "Density or A"], 1);
+}
+
 #[test]
 fn a_manual_paste_shows_on_top_of_the_automatic_fill() {
     let dir = tempfile::tempdir().unwrap();

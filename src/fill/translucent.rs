@@ -1,0 +1,360 @@
+//! Volume rendering of translucent LST models (thesis §6.1.2 and Fig. 7.2b): slices across
+//! the viewing direction, each a planar cut of the models, composited front to back.
+//!
+//! ```text
+//!   yaw/pitch -> camera (right, up, forward) -> slices k = 0..n at depth d_k (front first)
+//!   per slice: cut -> colour c, density ρ in [0, 1] per pixel
+//!   per pixel: a = 1 - (1 - opacity)^(ρ Δ / L) ; colour += T a c ; T *= 1 - a
+//!   picture = colour + T background
+//! ```
+//!
+//! `Δ` is the distance between slices and `L` a tenth of the longest side of the models' box,
+//! so a ray through a length `ℓ` of full-density material keeps `(1 - opacity)^(ℓ / L)` of
+//! the light behind it (Beer–Lambert): `opacity` is how opaque the material is across a
+//! tenth of the model. Every pixel is composited on its own, so the picture does not depend on the
+//! thread count.
+
+use super::model::LstModel;
+#[cfg(test)]
+use super::render::BACKGROUND;
+use super::render::{Cut, Textures, View, bounds, cut_many};
+use super::view::camera;
+use crate::error::{Error, Result};
+use crate::render::{Rgb8, to_u8};
+use glam::{Vec2, Vec3};
+use rayon::prelude::*;
+
+/// Where each voxel's density comes from.
+#[derive(Clone, Copy)]
+pub enum Density<'a> {
+    /// The same everywhere inside the models.
+    Uniform,
+    /// Dark colours dense, light ones clear (1 - luma).
+    Dark,
+    /// Light colours dense, dark ones clear (luma).
+    Light,
+    /// A channel of the exemplars: these textures sample it in place of the colour (its
+    /// value is the red of the sampler, 0 to 1), one per model in the models' order.
+    Channel(&'a [Textures]),
+}
+
+/// How to render.
+#[derive(Debug, Clone, Copy)]
+pub struct Settings {
+    /// Degrees around the vertical axis.
+    pub yaw: f32,
+    /// Degrees above the horizon.
+    pub pitch: f32,
+    /// Picture side in pixels.
+    pub size: usize,
+    /// Slices across the view, front to back.
+    pub slices: usize,
+    /// How opaque full-density material is across a tenth of the longest side of the
+    /// models' box (0 to below 1).
+    pub opacity: f32,
+    /// A plane (point, normal): material on the side the normal points to is taken away.
+    pub cutaway: Option<(Vec3, Vec3)>,
+    /// The density ramps from 0 at the first to 1 at the second (0 <= first < second <= 1):
+    /// (0, 1) keeps it, (0.6, 0.8) keeps only the densest material.
+    pub levels: (f32, f32),
+    /// The colour behind the models.
+    pub background: [u8; 3],
+}
+
+/// A rendered picture and how much of it the models cover.
+pub struct Rendering {
+    /// RGB over [`BACKGROUND`].
+    pub picture: Rgb8,
+    /// Per pixel, the share of light the models stop (0 to 1), row by row.
+    pub opacity: Vec<f32>,
+    /// The slices composited (fewer than asked when every pixel became opaque).
+    pub slices: usize,
+}
+
+/// The longest side of the models' box over the length across which material is `opacity`
+/// opaque.
+pub const UNIT_SHARE: f32 = 10.0;
+
+/// The least transmittance that still counts: a pixel below it is opaque.
+const OPAQUE: f32 = 1.0 / 1024.0;
+
+/// Renders `models` (the first listed wins where they overlap, as in a cut) as translucent
+/// material.
+pub fn render(models: &[(&LstModel, &Textures)], density: Density, settings: &Settings) -> Result<Rendering> {
+    check(models, density, settings)?;
+    let (forward, frame) = frames(models, settings);
+    let depth = (frame.far - frame.near) / settings.slices as f32;
+    let (lo, hi) = bounds(models);
+    let unit = (hi - lo).max_element().max(1e-6) / UNIT_SHARE;
+    let absorb = (1.0 - settings.opacity).ln() * depth / unit;
+    let pixels = settings.size * settings.size;
+    let mut colour = vec![Vec3::ZERO; pixels];
+    let mut through = vec![1.0f32; pixels];
+    let mut done = 0;
+    for k in 0..settings.slices {
+        let view = frame.at(frame.near + (k as f32 + 0.5) * depth, forward);
+        let cut = cut_many(models, &view);
+        let rho = densities(models, density, &cut, &view, settings.levels);
+        let kept = kept(&view, settings.cutaway, forward * depth);
+        colour.par_iter_mut().zip(through.par_iter_mut()).enumerate().for_each(|(i, (c, t))| {
+            let p = cut.pixels[i];
+            let share = if p[3] > 0.0 && *t > OPAQUE { kept(i) } else { 0.0 };
+            if share > 0.0 {
+                let a = 1.0 - (absorb * rho[i] * share).exp();
+                *c += Vec3::new(p[0], p[1], p[2]) * (*t * a);
+                *t *= 1.0 - a;
+            }
+        });
+        done = k + 1;
+        if through.iter().all(|t| *t <= OPAQUE) {
+            break;
+        }
+    }
+    Ok(Rendering {
+        picture: picture(settings, &colour, &through),
+        opacity: through.iter().map(|t| 1.0 - t).collect(),
+        slices: done,
+    })
+}
+
+fn check(models: &[(&LstModel, &Textures)], density: Density, s: &Settings) -> Result<()> {
+    if !(8..=8192).contains(&s.size) || !(1..=8192).contains(&s.slices) {
+        return Err(Error::invalid(format!(
+            "render size {} must be 8 to 8192 pixels and slices {} 1 to 8192",
+            s.size, s.slices
+        )));
+    }
+    if !(0.0..1.0).contains(&s.opacity) {
+        return Err(Error::invalid(format!("opacity {} is out of range; allowed 0 to below 1", s.opacity)));
+    }
+    let (lo, hi) = s.levels;
+    if !(0.0 <= lo && lo < hi && hi <= 1.0) {
+        return Err(Error::invalid(format!("density levels {lo},{hi} must rise within 0 to 1")));
+    }
+    if let Some((p, n)) = s.cutaway
+        && !(p.is_finite() && n.is_finite() && n != Vec3::ZERO)
+    {
+        return Err(Error::invalid("the cutaway plane must be finite with a normal that is not zero"));
+    }
+    if let Density::Channel(t) = density
+        && t.len() != models.len()
+    {
+        return Err(Error::invalid(format!("{} density textures for {} models", t.len(), models.len())));
+    }
+    Ok(())
+}
+
+/// The picture plane: pixel steps across, and the depth range the models span.
+struct Frame {
+    corner: Vec3,
+    right: Vec3,
+    down: Vec3,
+    size: usize,
+    near: f32,
+    far: f32,
+}
+
+impl Frame {
+    /// The view of the slice at `depth` along `forward`.
+    fn at(&self, depth: f32, forward: Vec3) -> View {
+        View {
+            origin: self.corner + forward * depth,
+            right: self.right,
+            down: self.down,
+            width: self.size,
+            height: self.size,
+        }
+    }
+}
+
+/// The camera's forward direction and the square frame that holds the models' box.
+fn frames(models: &[(&LstModel, &Textures)], s: &Settings) -> (Vec3, Frame) {
+    let (forward, right, up) = camera(s.yaw, s.pitch);
+    let (lo, hi) = bounds(models);
+    let corners = (0..8).map(|i| Vec3::new([lo.x, hi.x][i & 1], [lo.y, hi.y][(i >> 1) & 1], [lo.z, hi.z][i >> 2]));
+    let (mut a, mut b) = (Vec2::INFINITY, Vec2::NEG_INFINITY);
+    let (mut near, mut far) = (f32::INFINITY, f32::NEG_INFINITY);
+    for p in corners {
+        let q = Vec2::new(right.dot(p), up.dot(p));
+        (a, b) = (a.min(q), b.max(q));
+        (near, far) = (near.min(forward.dot(p)), far.max(forward.dot(p)));
+    }
+    let side = (b - a).max_element().max(1e-6) * 1.04;
+    let mid = (a + b) / 2.0;
+    let step = side / s.size as f32;
+    let corner = right * (mid.x - side / 2.0) + up * (mid.y + side / 2.0);
+    let frame = Frame { corner, right: right * step, down: -up * step, size: s.size, near, far };
+    (forward, frame)
+}
+
+/// The density of every pixel of a slice, 0 to 1.
+fn densities(
+    models: &[(&LstModel, &Textures)],
+    density: Density,
+    cut: &Cut,
+    view: &View,
+    (lo, hi): (f32, f32),
+) -> Vec<f32> {
+    let luma = |p: &[f32; 4]| 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2];
+    let raw: Vec<f32> = match density {
+        Density::Uniform => vec![1.0; cut.pixels.len()],
+        Density::Dark => cut.pixels.iter().map(|p| 1.0 - luma(p)).collect(),
+        Density::Light => cut.pixels.iter().map(luma).collect(),
+        Density::Channel(textures) => {
+            let pairs: Vec<(&LstModel, &Textures)> = models.iter().map(|(m, _)| *m).zip(textures).collect();
+            cut_many(&pairs, view).pixels.iter().map(|p| p[0]).collect()
+        }
+    };
+    raw.into_iter().map(|r| ((r - lo) / (hi - lo)).clamp(0.0, 1.0)).collect()
+}
+
+/// The share of pixel `i`'s slab of a slice (`step` long along the ray, centred on the
+/// slice) that keeps its material: 1 with no cutaway, 0 behind the cutaway plane, a
+/// fraction where the plane crosses the slab, so its face shows no steps between slices.
+fn kept(view: &View, cutaway: Option<(Vec3, Vec3)>, step: Vec3) -> impl Fn(usize) -> f32 + Sync + '_ {
+    let plane = cutaway.map(|(point, normal)| (point, normal.normalize()));
+    move |i| match plane {
+        None => 1.0,
+        Some((point, normal)) => {
+            let side = normal.dot(view.point(i % view.width, i / view.width) - point);
+            let across = normal.dot(step).abs();
+            if across < 1e-9 { if side <= 0.0 { 1.0 } else { 0.0 } } else { (0.5 - side / across).clamp(0.0, 1.0) }
+        }
+    }
+}
+
+fn picture(settings: &Settings, colour: &[Vec3], through: &[f32]) -> Rgb8 {
+    let size = settings.size;
+    let mut out = Rgb8::new(size, size, settings.background);
+    let back = Vec3::from(settings.background.map(|c| c as f32 / 255.0));
+    for (i, (c, t)) in colour.iter().zip(through).enumerate() {
+        let p = *c + back * *t;
+        out.put(i % size, i / size, [p.x, p.y, p.z].map(to_u8));
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::fill::model::{MaskRef, Source};
+    use crate::fill::patch::Patch;
+    use crate::fill::tets::cube_lattice;
+    use crate::volume::{Channel, Volume};
+
+    /// The unit cube as one model of a single patch whose texture coordinates are the
+    /// positions, textured with `colour` (RGB) and a full mask.
+    fn cube(colour: Volume) -> (LstModel, Textures) {
+        let mesh = cube_lattice([4, 4, 4], 0.25);
+        let vertices: Vec<u32> = (0..mesh.vertices.len() as u32).collect();
+        let coords = mesh.vertices.clone();
+        let tet_patches = vec![vec![0]; mesh.tets.len()];
+        let source = Source { exemplar: "test".into(), volume: "test.exr".into(), mask: MaskRef::File("m.exr".into()) };
+        let model =
+            LstModel { mesh, sources: vec![source], patches: vec![Patch { source: 0, vertices, coords }], tet_patches };
+        let full = Volume::from_fn([4, 4, 4], vec![Channel::A], |_, _, _, o| o[0] = 1.0).unwrap();
+        (model, Textures::new(&[colour], &[full]))
+    }
+
+    fn flat(rgb: [f32; 3]) -> Volume {
+        Volume::from_fn([4, 4, 4], Channel::rgb(), |_, _, _, o| o.copy_from_slice(&rgb)).unwrap()
+    }
+
+    fn settings(yaw: f32, opacity: f32) -> Settings {
+        Settings {
+            yaw,
+            pitch: 0.0,
+            size: 64,
+            slices: 200,
+            opacity,
+            cutaway: None,
+            levels: (0.0, 1.0),
+            background: BACKGROUND,
+        }
+    }
+
+    /// The opacity Beer–Lambert predicts through `sides` sides of the unit cube.
+    fn through(opacity: f32, sides: f32) -> f32 {
+        1.0 - (1.0 - opacity).powf(sides * UNIT_SHARE)
+    }
+
+    #[test]
+    fn a_uniform_cube_stops_the_light_beer_lambert_predicts() {
+        let (model, textures) = cube(flat([1.0, 1.0, 1.0]));
+        let models = [(&model, &textures)];
+        for opacity in [0.03, 0.15] {
+            // face on: every ray crosses one side
+            let face = render(&models, Density::Uniform, &settings(0.0, opacity)).unwrap();
+            let (got, want) = (face.opacity[32 * 64 + 32], through(opacity, 1.0));
+            assert!((got - want).abs() < 1e-3, "face on, opacity {opacity}: {got} against {want}");
+            // turned 45°: the central ray crosses the diagonal, sqrt 2 sides
+            let turned = render(&models, Density::Uniform, &settings(45.0, opacity)).unwrap();
+            let (got, want) = (turned.opacity[32 * 64 + 32], through(opacity, 2f32.sqrt()));
+            assert!((got - want).abs() < 0.01, "diagonal, opacity {opacity}: {got} against {want}");
+            // off the cube there is nothing
+            assert_eq!(face.opacity[0], 0.0);
+        }
+    }
+
+    #[test]
+    fn colour_and_density_shape_the_picture() {
+        // a cube half black (x < 0.5), half white: dark density makes the black half opaque
+        let halves =
+            Volume::from_fn([8, 4, 4], Channel::rgb(), |x, _, _, o| o.fill(if x < 4 { 0.0 } else { 1.0 })).unwrap();
+        let (model, textures) = cube(halves);
+        let models = [(&model, &textures)];
+        let dark = render(&models, Density::Dark, &settings(0.0, 0.1)).unwrap();
+        let (left, right) = (dark.opacity[32 * 64 + 16], dark.opacity[32 * 64 + 48]);
+        let want = through(0.1, 1.0);
+        assert!((left - want).abs() < 1e-3 && right < 1e-3, "dark density: left {left}, right {right}");
+        let light = render(&models, Density::Light, &settings(0.0, 0.1)).unwrap();
+        assert!(light.opacity[32 * 64 + 16] < 1e-3 && (light.opacity[32 * 64 + 48] - want).abs() < 1e-3);
+        // a white cube, almost opaque, shows white; the light it lets through is the background's
+        let white = render(&models, Density::Uniform, &settings(0.0, 0.369)).unwrap();
+        let left = 1.0 - through(0.369, 1.0);
+        let want = (1.0 - left) * 255.0 + left * BACKGROUND[0] as f32;
+        assert!((white.picture.at(48, 32)[0] as f32 - want).abs() <= 1.0, "{:?}", white.picture.at(48, 32));
+    }
+
+    #[test]
+    fn a_density_channel_and_a_cutaway_take_material_away() {
+        let (model, textures) = cube(flat([1.0, 0.5, 0.2]));
+        // density from a channel: 0.5 everywhere halves the exponent
+        let half = Volume::from_fn([4, 4, 4], Channel::rgb(), |_, _, _, o| o.fill(0.5)).unwrap();
+        let (_, density) = cube(half);
+        let models = [(&model, &textures)];
+        let channel = render(&models, Density::Channel(std::slice::from_ref(&density)), &settings(0.0, 0.1)).unwrap();
+        let (got, want) = (channel.opacity[32 * 64 + 32], through(0.1, 0.5));
+        assert!((got - want).abs() < 1e-3, "half density through one side: {got} against {want}");
+        // cutting away the front half (z > 0.5, toward the camera) leaves half the thickness
+        let cut = Settings { cutaway: Some((Vec3::splat(0.5), Vec3::Z)), ..settings(0.0, 0.1) };
+        let got = render(&models, Density::Uniform, &cut).unwrap().opacity[32 * 64 + 32];
+        assert!((got - want).abs() < 1e-3, "half the cube: {got} against {want}");
+        // levels: density 0.5 ramped over 0.25..0.75 stays 0.5, over 0.5..1 becomes 0
+        let ramped = Settings { levels: (0.25, 0.75), ..settings(0.0, 0.1) };
+        let got =
+            render(&models, Density::Channel(std::slice::from_ref(&density)), &ramped).unwrap().opacity[32 * 64 + 32];
+        assert!((got - want).abs() < 1e-3, "{got}");
+        let high = Settings { levels: (0.5, 1.0), ..settings(0.0, 0.1) };
+        let got =
+            render(&models, Density::Channel(std::slice::from_ref(&density)), &high).unwrap().opacity[32 * 64 + 32];
+        assert_eq!(got, 0.0);
+        assert!(render(&models, Density::Uniform, &settings(0.0, 1.0)).is_err());
+        assert!(render(&models, Density::Channel(&[]), &settings(0.0, 0.5)).is_err());
+    }
+
+    #[test]
+    fn renders_do_not_depend_on_the_thread_count() {
+        let stripes = Volume::from_fn([8, 8, 8], Channel::rgb(), |x, y, z, o| {
+            o.copy_from_slice(&[(x % 3) as f32 / 2.0, (y % 2) as f32, (z % 4) as f32 / 3.0])
+        })
+        .unwrap();
+        let (model, textures) = cube(stripes);
+        let run = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            let s = Settings { pitch: 30.0, cutaway: Some((Vec3::splat(0.4), Vec3::ONE)), ..settings(20.0, 0.9) };
+            pool.install(|| render(&[(&model, &textures)], Density::Dark, &s).unwrap().picture.data)
+        };
+        assert_eq!(run(1), run(3));
+    }
+}
