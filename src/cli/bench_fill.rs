@@ -110,7 +110,7 @@ fn render_workloads(args: &BenchArgs, name: &str, model: &LstModel, textures: &T
         Ok(String::new())
     })?;
     timed(args, &format!("fill/bake/{name}/64"), || {
-        let v = render::bake(&[(model, textures)], 64, u64::MAX)?;
+        let v = render::bake(&[(model, textures)], &[], 64, u64::MAX)?;
         let [x, y, z] = v.dims();
         Ok(format!("{x}x{y}x{z}"))
     })?;

@@ -10,6 +10,7 @@ use crate::io::{self, fill_spec, lst_file};
 use crate::library;
 use crate::library::fill::load_mask;
 use crate::progress::Progress;
+use crate::volume::{Channel, Volume};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -49,6 +50,10 @@ pub struct CutArgs {
     /// Picture size in pixels, 8 to 4096.
     #[arg(long, default_value_t = 512)]
     pub size: usize,
+    /// Show this channel of the exemplars as grey instead of the colour: R, G, B, A, Depth,
+    /// Displacement or a named one (0 black to 1 white).
+    #[arg(long)]
+    pub channel: Option<String>,
     /// The PNG to write.
     #[arg(short, long)]
     pub output: PathBuf,
@@ -63,7 +68,8 @@ pub struct BakeArgs {
     /// Voxels along the longest side, 2 to 512.
     #[arg(long, default_value_t = 128)]
     pub res: usize,
-    /// The volume to write (RGBA; alpha 1 inside the model).
+    /// The volume to write: R, G, B, every other channel all the exemplars have (Depth,
+    /// Displacement, named ones), then A (1 inside the model).
     #[arg(short, long)]
     pub output: PathBuf,
 }
@@ -301,29 +307,55 @@ impl Progress for Bar {
     }
 }
 
-/// A model with the textures of its sources.
+/// A model with its sources' volumes, masks and colour textures.
 struct Loaded {
     model: LstModel,
     textures: Textures,
-    /// When asked for: the density textures, or the volume file that has no density.
-    density: Option<std::result::Result<Textures, PathBuf>>,
+    /// Each source's exemplar volume (every channel), and where it was read.
+    volumes: Vec<(Volume, PathBuf)>,
+    masks: Vec<Volume>,
+}
+
+impl Loaded {
+    /// Textures sampling the first of `wanted` each source has; `Err` names the volume
+    /// file that has none.
+    fn channel(&self, wanted: &[Channel]) -> std::result::Result<Textures, &Path> {
+        let colour: Vec<Volume> = self.volumes.iter().map(|(v, _)| v.clone()).collect();
+        Textures::channel(&colour, &self.masks, wanted).map_err(|i| self.volumes[i].1.as_path())
+    }
 }
 
 fn load_model(path: &Path) -> Result<Loaded> {
-    load(path, false)
-}
-
-/// Reads a model and its sources' volumes and masks, and their density when `density`.
-fn load(path: &Path, density: bool) -> Result<Loaded> {
     let model = lst_file::read_lst(path)?;
     let base = path.parent().unwrap_or(Path::new("."));
     let budget = io::budget_from_env()?;
-    let colour =
-        model.sources.iter().map(|s| io::read_volume(&base.join(&s.volume), budget)).collect::<Result<Vec<_>>>()?;
+    let volumes = model
+        .sources
+        .iter()
+        .map(|s| {
+            let file = base.join(&s.volume);
+            io::read_volume(&file, budget).map(|v| (v, file))
+        })
+        .collect::<Result<Vec<_>>>()?;
     let masks = model.sources.iter().map(|s| load_mask(&s.mask, base)).collect::<Result<Vec<_>>>()?;
+    let colour: Vec<Volume> = volumes.iter().map(|(v, _)| v.clone()).collect();
     let textures = Textures::new(&colour, &masks);
-    let density = density.then(|| Textures::density(&colour, &masks).map_err(|i| base.join(&model.sources[i].volume)));
-    Ok(Loaded { model, textures, density })
+    Ok(Loaded { model, textures, volumes, masks })
+}
+
+/// The channels beyond R, G, B and A that every source of every model has, in the first
+/// source's order, and those some source lacks.
+fn shared_channels(loaded: &[Loaded]) -> (Vec<Channel>, Vec<Channel>) {
+    let colour = [Channel::R, Channel::G, Channel::B, Channel::A];
+    let mut all: Vec<Channel> = Vec::new();
+    for (v, _) in loaded.iter().flat_map(|l| &l.volumes) {
+        for c in v.channels() {
+            if !colour.contains(c) && !all.contains(c) {
+                all.push(c.clone());
+            }
+        }
+    }
+    all.into_iter().partition(|c| loaded.iter().flat_map(|l| &l.volumes).all(|(v, _)| v.channel_index(c).is_some()))
 }
 
 fn load_models(paths: &[PathBuf]) -> Result<Vec<Loaded>> {
@@ -353,9 +385,17 @@ fn cut_values(args: &CutArgs) -> Result<Option<(glam::Vec3, glam::Vec3)>> {
 /// Run `solidtex cut`.
 pub fn run_cut(args: &CutArgs) -> Result<()> {
     let plane = cut_values(args).map_err(usage)?;
+    let wanted = args.channel.as_deref().map(Channel::parse).transpose().map_err(usage)?;
     io::check_folder(&args.output)?;
     let loaded = load_models(&args.models)?;
-    let models = pairs(&loaded);
+    let channel = match &wanted {
+        None => None,
+        Some(c) => Some(channel_textures(&loaded, c)?),
+    };
+    let models = match &channel {
+        None => pairs(&loaded),
+        Some(textures) => loaded.iter().map(|l| &l.model).zip(textures).collect(),
+    };
     let bounds = render::bounds(&models);
     let (point, normal) = plane.unwrap_or(((bounds.0 + bounds.1) / 2.0, glam::Vec3::Z));
     let view = View::framing(bounds, point, normal, args.size)?;
@@ -365,10 +405,33 @@ pub fn run_cut(args: &CutArgs) -> Result<()> {
     io::write_rgb8(&args.output, &cut.picture())?;
     let (shown, size) = (args.output.display(), args.size);
     eprintln!("wrote {shown} ({size}x{size}, {:.0} % inside) in {ms:.1} ms", cut.inside_share() * 100.0);
-    if let Some(seams) = cut.seam_strength() {
+    if let Some(c) = &wanted {
+        let inside = cut.pixels.iter().filter(|p| p[3] > 0.0).map(|p| p[0]);
+        let (lo, hi) = inside.fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), v| (a.min(v), b.max(v)));
+        eprintln!("  channel {c}: {lo:.3} to {hi:.3} inside (shown 0 black to 1 white)");
+    } else if let Some(seams) = cut.seam_strength() {
         eprintln!("  seam strength {seams:.2} (colour step across patch borders over within)");
     }
     Ok(())
+}
+
+/// Per model, textures sampling `channel`; the error names the volume that lacks it and
+/// the channels it has.
+fn channel_textures(loaded: &[Loaded], channel: &Channel) -> Result<Vec<Textures>> {
+    loaded
+        .iter()
+        .map(|l| {
+            l.channel(std::slice::from_ref(channel)).map_err(|file| {
+                let has = l.volumes.iter().find(|(_, f)| f == file).map(|(v, _)| v.channels()).unwrap_or_default();
+                let names: Vec<&str> = has.iter().map(Channel::name).collect();
+                Error::invalid(format!(
+                    "{}: the exemplar has no channel {channel}; it has {}",
+                    file.display(),
+                    names.join(", ")
+                ))
+            })
+        })
+        .collect()
 }
 
 /// The settings of `render`, every number checked against its range.
@@ -408,18 +471,11 @@ fn render_settings(args: &RenderArgs) -> Result<translucent::Settings> {
 pub fn run_render(args: &RenderArgs) -> Result<()> {
     let settings = render_settings(args).map_err(usage)?;
     io::check_folder(&args.output)?;
-    let wants_channel = matches!(args.density, None | Some(DensityFrom::Alpha));
-    let mut loaded = args.models.iter().map(|p| load(p, wants_channel)).collect::<Result<Vec<_>>>()?;
-    let (mut channel, mut lacking) = (Vec::new(), None);
-    for model in &mut loaded {
-        match model.density.take() {
-            Some(Ok(textures)) => channel.push(textures),
-            Some(Err(volume)) => _ = lacking.get_or_insert(volume),
-            None => {}
-        }
-    }
-    let from = match (args.density, &lacking) {
-        (Some(DensityFrom::Alpha), Some(volume)) => {
+    let loaded = load_models(&args.models)?;
+    let channel: std::result::Result<Vec<Textures>, &Path> =
+        loaded.iter().map(|l| l.channel(&render::density_channels())).collect();
+    let from = match (args.density, &channel) {
+        (Some(DensityFrom::Alpha), Err(volume)) => {
             return Err(Error::invalid(format!(
                 "{}: --density alpha needs a Density or A channel in every exemplar and this one has neither; \
                  allowed instead: uniform, dark, light",
@@ -427,9 +483,10 @@ pub fn run_render(args: &RenderArgs) -> Result<()> {
             )));
         }
         (Some(chosen), _) => chosen,
-        (None, None) => DensityFrom::Alpha,
-        (None, Some(_)) => DensityFrom::Uniform,
+        (None, Ok(_)) => DensityFrom::Alpha,
+        (None, Err(_)) => DensityFrom::Uniform,
     };
+    let channel = channel.unwrap_or_default();
     let density = match from {
         DensityFrom::Uniform => translucent::Density::Uniform,
         DensityFrom::Dark => translucent::Density::Dark,
@@ -461,11 +518,27 @@ pub fn run_bake(args: &BakeArgs) -> Result<()> {
     let models: Vec<&Path> = args.models.iter().map(PathBuf::as_path).collect();
     io::check_output(&args.output, &models)?;
     let loaded = load_models(&args.models)?;
+    let (shared, left_out) = shared_channels(&loaded);
+    for c in &left_out {
+        eprintln!("warning: channel {c} is not in every exemplar the models use; it is left out of the bake");
+    }
+    let textures = shared.iter().map(|c| channel_textures(&loaded, c)).collect::<Result<Vec<_>>>()?;
+    let carried: Vec<render::Carried> = shared
+        .iter()
+        .zip(&textures)
+        .map(|(c, t)| render::Carried { channel: c.clone(), textures: t.iter().collect() })
+        .collect();
     let started = Instant::now();
-    let volume = render::bake(&pairs(&loaded), args.res, io::budget_from_env()?)?;
+    let volume = render::bake(&pairs(&loaded), &carried, args.res, io::budget_from_env()?)?;
     io::write_volume(&args.output, &volume)?;
     let [x, y, z] = volume.dims();
-    eprintln!("wrote {} ({x}x{y}x{z}) in {:.2} s", args.output.display(), started.elapsed().as_secs_f64());
+    let names: Vec<&str> = volume.channels().iter().map(Channel::name).collect();
+    eprintln!(
+        "wrote {} ({x}x{y}x{z}, {}) in {:.2} s",
+        args.output.display(),
+        names.join(", "),
+        started.elapsed().as_secs_f64()
+    );
     Ok(())
 }
 

@@ -41,20 +41,33 @@ impl Textures {
         }
     }
 
-    /// The density of each colour volume in place of its colour (its `Density` channel, or
-    /// else its alpha), with the same masks; `Err(i)` when volume `i` has neither.
-    pub fn density(colour: &[Volume], masks: &[Volume]) -> std::result::Result<Textures, usize> {
-        let named = Channel::Named("Density".into());
+    /// Channel `wanted` of each colour volume (the first of the list it has) in place of
+    /// its colour, read as grey, with the same masks; `Err(i)` when volume `i` has none.
+    pub fn channel(colour: &[Volume], masks: &[Volume], wanted: &[Channel]) -> std::result::Result<Textures, usize> {
         let samplers = colour
             .iter()
             .enumerate()
             .map(|(i, v)| {
-                let c = v.channel_index(&named).or_else(|| v.channel_index(&Channel::A)).ok_or(i)?;
+                let c = wanted.iter().find_map(|w| v.channel_index(w)).ok_or(i)?;
                 Ok(Sampler::channel(v, c))
             })
             .collect::<std::result::Result<Vec<_>, usize>>()?;
         Ok(Textures { colour: samplers, masks: masks.iter().map(Sampler::mask).collect() })
     }
+}
+
+/// The channels a density is read from, in order of preference.
+pub fn density_channels() -> [Channel; 2] {
+    [Channel::Named("Density".into()), Channel::A]
+}
+
+/// A channel carried through a bake besides the colour: its role and, per model, the
+/// textures that sample it.
+pub struct Carried<'a> {
+    /// The channel.
+    pub channel: Channel,
+    /// One per model, in the models' order.
+    pub textures: Vec<&'a Textures>,
 }
 
 /// A rectangle of pixels on a plane in model space.
@@ -346,23 +359,49 @@ pub fn cut_many(models: &[(&LstModel, &Textures)], view: &View) -> Cut {
     out
 }
 
-/// Samples models into an RGBA volume of `res` voxels along the longest side of their box
-/// (alpha is 1 inside): a stack of axis-aligned cuts.
-pub fn bake(models: &[(&LstModel, &Textures)], res: usize, budget: u64) -> Result<Volume> {
+/// Samples models into a volume of `res` voxels along the longest side of their box: R, G,
+/// B, then the `carried` channels, then A (1 inside); a stack of axis-aligned cuts.
+pub fn bake(models: &[(&LstModel, &Textures)], carried: &[Carried], res: usize, budget: u64) -> Result<Volume> {
     if !(2..=1024).contains(&res) {
         return Err(Error::invalid(format!("bake resolution {res} is out of range; allowed 2 to 1024")));
+    }
+    if let Some(c) = carried.iter().find(|c| c.textures.len() != models.len()) {
+        return Err(Error::invalid(format!(
+            "channel {} has {} textures for {} models",
+            c.channel,
+            c.textures.len(),
+            models.len()
+        )));
     }
     let (lo, hi) = bounds(models);
     let step = (hi - lo).max_element() / res as f32;
     let dims = ((hi - lo) / step).ceil().as_uvec3().max(glam::UVec3::ONE).to_array().map(|d| d as usize);
-    crate::volume::check_size(dims, 4, budget)?;
-    let mut data = Vec::with_capacity(dims[0] * dims[1] * dims[2] * 4);
+    let channels: Vec<Channel> = [Channel::R, Channel::G, Channel::B]
+        .into_iter()
+        .chain(carried.iter().map(|c| c.channel.clone()))
+        .chain([Channel::A])
+        .collect();
+    crate::volume::check_size(dims, channels.len(), budget)?;
+    let mut data = Vec::with_capacity(dims[0] * dims[1] * dims[2] * channels.len());
     for z in 0..dims[2] {
         let origin = Vec3::new(lo.x, lo.y, lo.z + (z as f32 + 0.5) * step);
         let view = View { origin, right: Vec3::X * step, down: Vec3::Y * step, width: dims[0], height: dims[1] };
-        data.extend(cut_many(models, &view).pixels.into_iter().flatten());
+        let colour = cut_many(models, &view).pixels;
+        let extra: Vec<Vec<[f32; 4]>> = carried
+            .iter()
+            .map(|c| {
+                let pairs: Vec<(&LstModel, &Textures)> =
+                    models.iter().map(|(m, _)| *m).zip(c.textures.iter().copied()).collect();
+                cut_many(&pairs, &view).pixels
+            })
+            .collect();
+        for (i, p) in colour.iter().enumerate() {
+            data.extend_from_slice(&p[..3]);
+            data.extend(extra.iter().map(|e| e[i][0]));
+            data.push(p[3]);
+        }
     }
-    Volume::from_data(dims, Channel::rgba(), data)
+    Volume::from_data(dims, channels, data)
 }
 
 #[cfg(test)]

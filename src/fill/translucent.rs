@@ -33,8 +33,8 @@ pub enum Density<'a> {
     Dark,
     /// Light colours dense, dark ones clear (luma).
     Light,
-    /// A channel of the exemplars: these textures sample it in place of the colour (its
-    /// value is the red of the sampler, 0 to 1), one per model in the models' order.
+    /// A channel of the exemplars: these textures sample it in place of the colour (see
+    /// [`Textures::channel`]), one per model in the models' order.
     Channel(&'a [Textures]),
 }
 

@@ -306,6 +306,57 @@ fn a_translucent_render_shows_the_seeds_inside_the_kiwi() {
     refused(&["--density", "alpha"], &["kiwi.exr", "Density or A"], 1);
 }
 
+const STRATA: &str = r#"
+exemplar = "strata"
+seed = 1
+tets = 2000
+[depth]
+surface = false
+[[depth.faces]]
+at = [0, 0.5, 0]
+value = 0
+[[depth.faces]]
+at = [0, -0.5, 0]
+value = 1
+"#;
+
+#[test]
+fn the_exemplars_other_channels_survive_the_fill_into_cuts_and_bakes() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (mesh, spec) = (draw(d, "block"), spec(d, "strata.toml", STRATA));
+    fill(d, &mesh, &spec, "strata.lst");
+    let model = at(d, "strata.lst");
+    // the block's top (y = 0.5) is depth 0, its bottom depth 1: the Depth channel says so
+    let png = at(d, "depth.png");
+    let run = solidtex(&["cut", &model, "--channel", "Depth", "--plane", "0,0,0,1,0,0", "--size", "64", "-o", &png]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    assert!(stderr(&run).contains("channel Depth: 0.0"), "{}", stderr(&run));
+    // the block's 1 x 1 end seen along x: 64 px span 1.04 units, its rows 1 to 62
+    let column: Vec<f32> = (3..61).map(|y| pixel(&png, 32, y)[0]).collect();
+    assert!(column[0] < 0.1 && column[57] > 0.9, "depth from top to bottom: {column:?}");
+    assert!(column.windows(2).all(|w| w[1] >= w[0] - 0.02), "depth grows downward: {column:?}");
+    // the bake carries it between the colour and the inside mask
+    let exr = at(d, "baked.exr");
+    let run = solidtex(&["bake", &model, "--res", "16", "-o", &exr]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let v = solidtex::io::read_volume(Path::new(&exr), u64::MAX).unwrap();
+    let names: Vec<&str> = v.channels().iter().map(|c| c.name()).collect();
+    assert_eq!(names, ["R", "G", "B", "Depth", "A"]);
+    let [x, y, z] = v.dims();
+    // voxel y grows with model y: the low rows are the block's bottom (depth 1)
+    let (bottom, top) = (v.get(x / 2, 1, z / 2, 3), v.get(x / 2, y - 2, z / 2, 3));
+    assert!(top < 0.2 && bottom > 0.8, "depth at the bottom {bottom}, at the top {top}");
+    // a channel no exemplar has is refused, naming the exemplar file and what it has
+    let bad = at(d, "bad.png");
+    assert_fails(
+        &solidtex(&["cut", &model, "--channel", "Displacement", "-o", &bad]),
+        &["strata.exr", "R, G, B, Depth"],
+    );
+    assert_usage(&solidtex(&["cut", &model, "--channel", "a b", "-o", &bad]), &["channel name"]);
+    assert!(!Path::new(&bad).exists());
+}
+
 #[test]
 fn a_manual_paste_shows_on_top_of_the_automatic_fill() {
     let dir = tempfile::tempdir().unwrap();
