@@ -14,7 +14,7 @@ use crate::volume::{Channel, Image2d};
 use glam::Vec3;
 
 /// Names of the drawable cross-sections.
-pub const NAMES: [&str; 3] = ["kiwi", "carrot", "trunk"];
+pub const NAMES: [&str; 4] = ["kiwi", "carrot", "trunk", "bark"];
 
 /// Draw the cross-section `name` at `width` x `height` pixels.
 pub fn draw(name: &str, width: usize, height: usize, seed: u64) -> Result<Image2d> {
@@ -22,6 +22,7 @@ pub fn draw(name: &str, width: usize, height: usize, seed: u64) -> Result<Image2
         "kiwi" => kiwi,
         "carrot" => carrot,
         "trunk" => trunk,
+        "bark" => bark,
         other => {
             return Err(Error::invalid(format!("unknown cross-section {other:?}; allowed: {}", NAMES.join(", "))));
         }
@@ -85,6 +86,17 @@ fn trunk(u: f32, depth: f32, seed: u64, _aspect: f32) -> [f32; 3] {
     let sap = mix([0.86, 0.72, 0.50], [0.70, 0.52, 0.32], late);
     let heart = mix([0.72, 0.50, 0.30], [0.52, 0.33, 0.18], late);
     mix(sap, heart, smooth(0.62, 0.7, depth)).map(|c| c + 0.02 * n(seed ^ 5, u, depth, 6.0))
+}
+
+/// Bark relief, grey, for a sweep's Displacement channel: near the outside (row 0) twelve
+/// ridges around with wandering furrows between them, fading to 0.5 (no displacement)
+/// below the skin.
+fn bark(u: f32, depth: f32, seed: u64, _aspect: f32) -> [f32; 3] {
+    let phase = (u * 12.0 + 0.35 * n(seed, u, depth, 0.5)).fract();
+    let plateau = smooth(0.0, 0.3, phase) * (1.0 - smooth(0.7, 1.0, phase));
+    let ridge = 0.1 + 0.85 * plateau * (0.85 + 0.3 * n(seed ^ 3, u, depth, 2.0));
+    let v = ridge + (0.5 - ridge) * smooth(0.06, 0.2, depth);
+    [v; 3]
 }
 
 /// A kiwi-like seed: a slightly flattened teardrop 2 units long along z, with

@@ -68,6 +68,9 @@ pub struct Sweep {
     pub noise: Option<Noise>,
     /// Exterior skin at depth 0, if any (needs `depth_axis`).
     pub skin: Option<Skin>,
+    /// A grey relief the size of the cross-section, swept like it into a Displacement
+    /// channel (its first channel; 0.5 leaves a surface in place), if any.
+    pub displacement: Option<Image2d>,
 }
 
 /// Sweep `image` into a volume; `seed` drives the noise.
@@ -83,7 +86,11 @@ pub fn sweep(image: &Image2d, params: &Sweep, seed: u64) -> Result<Volume> {
     if params.depth_axis.is_some() {
         channels.push(Channel::Depth);
     }
+    if params.displacement.is_some() {
+        channels.push(Channel::Displacement);
+    }
     let n_in = image.channel_count();
+    let relief_at = n_in + usize::from(params.depth_axis.is_some());
     let fields = params.noise.map(|n| NoiseFields::new(n, seed));
     let volume = Volume::from_fn_par(dims, channels, |x, y, z, out| {
         let p = [x, y, z];
@@ -97,6 +104,11 @@ pub fn sweep(image: &Image2d, params: &Sweep, seed: u64) -> Result<Volume> {
         }
         if let Some(d) = params.depth_axis {
             out[n_in] = if dims[d.index()] > 1 { p[d.index()] as f32 / (dims[d.index()] - 1) as f32 } else { 0.0 };
+        }
+        if let Some(relief) = &params.displacement {
+            let mut grey = [0.0];
+            sample_bilinear(relief, q[a], q[b], &mut grey);
+            out[relief_at] = grey[0];
         }
     })?;
     let mut volume = volume;
@@ -116,6 +128,17 @@ fn check(image: &Image2d, params: &Sweep) -> Result<()> {
     if let Some(d) = params.depth_axis.filter(|d| *d == params.axis) {
         return Err(Error::invalid(format!(
             "the depth axis {d} is the sweep axis; depth must run along one of the cross-section's axes"
+        )));
+    }
+    if let Some(relief) = &params.displacement
+        && (relief.width(), relief.height()) != (image.width(), image.height())
+    {
+        return Err(Error::invalid(format!(
+            "the displacement image is {}x{} but the cross-section is {}x{}; they must be the same size",
+            relief.width(),
+            relief.height(),
+            image.width(),
+            image.height()
         )));
     }
     if params.skin.is_some() && params.depth_axis.is_none() {
@@ -269,7 +292,23 @@ mod tests {
     }
 
     fn plain(length: usize) -> Sweep {
-        Sweep { length, axis: Axis::X, depth_axis: Some(Axis::Z), noise: None, skin: None }
+        Sweep { length, axis: Axis::X, depth_axis: Some(Axis::Z), noise: None, skin: None, displacement: None }
+    }
+
+    #[test]
+    fn a_relief_image_becomes_the_displacement_channel() {
+        let relief =
+            Image2d::from_data(6, 10, Channel::grey(), (0..60).map(|i| (i % 6) as f32 / 5.0).collect()).unwrap();
+        let v = sweep(&rows(), &Sweep { displacement: Some(relief), ..plain(3) }, 1).unwrap();
+        let names: Vec<&str> = v.channels().iter().map(Channel::name).collect();
+        assert_eq!(names, ["R", "G", "B", "Depth", "Displacement"]);
+        // the relief's column i is the volume's y = i on every slice along the sweep
+        for (x, y, z) in [(0, 0, 0), (2, 3, 7), (1, 5, 9)] {
+            assert!((v.get(x, y, z, 4) - y as f32 / 5.0).abs() < 1e-6, "{x} {y} {z}");
+        }
+        let small = Image2d::from_data(3, 10, Channel::grey(), vec![0.5; 30]).unwrap();
+        let err = sweep(&rows(), &Sweep { displacement: Some(small), ..plain(3) }, 1).unwrap_err().to_string();
+        assert!(err.contains("3x10") && err.contains("6x10"), "{err}");
     }
 
     #[test]

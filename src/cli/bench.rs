@@ -106,6 +106,7 @@ fn hand_made() -> Result<Vec<(&'static str, Work)>> {
                 width: 2.0,
                 width_noise: 0.5,
             }),
+            displacement: None,
         };
         crate::sweep::sweep(&section, &params, 1).map(|_| ())
     });

@@ -94,6 +94,10 @@ pub struct ViewArgs {
     /// One normal per tet face instead of smooth shading (shows the tets).
     #[arg(long)]
     pub flat: bool,
+    /// Displacement mapping: move the surface along its normal by SCALE x (the exemplars'
+    /// Displacement channel - 0.5), in model units, -1000 to 1000.
+    #[arg(long, allow_hyphen_values = true)]
+    pub displacement: Option<f32>,
     /// The PNG to write.
     #[arg(short, long)]
     pub output: PathBuf,
@@ -549,6 +553,9 @@ pub fn run_view(args: &ViewArgs) -> Result<()> {
         io::values::within("--yaw", args.yaw, -360.0, 360.0)?;
         io::values::within("--pitch", args.pitch, -90.0, 90.0)?;
         io::values::within("--crease", args.crease, 0.0, 180.0)?;
+        if let Some(scale) = args.displacement {
+            io::values::within("--displacement", scale, -1000.0, 1000.0)?;
+        }
         Ok(())
     };
     checks().map_err(usage)?;
@@ -557,9 +564,25 @@ pub fn run_view(args: &ViewArgs) -> Result<()> {
     let started = Instant::now();
     let shading = if args.flat { Shading::Flat } else { Shading::Smooth { crease: args.crease } };
     let (model, textures) = (&loaded.model, &loaded.textures);
-    let picture = crate::fill::view::surface_shaded(model, textures, args.yaw, args.pitch, args.size, shading);
+    let camera = (args.yaw, args.pitch);
+    let (picture, note) = match args.displacement {
+        None => (crate::fill::view::surface_shaded(model, textures, camera.0, camera.1, args.size, shading), None),
+        Some(scale) => {
+            let channel = channel_textures(std::slice::from_ref(&loaded), &Channel::Displacement)?.remove(0);
+            let d = crate::fill::view::Displacement { textures: &channel, scale };
+            let (picture, triangles) =
+                crate::fill::view::surface_displaced(model, textures, d, camera, args.size, shading);
+            (
+                picture,
+                Some(format!("  displaced by {scale} x (Displacement - 0.5) along the normal, {triangles} triangles")),
+            )
+        }
+    };
     let ms = started.elapsed().as_secs_f64() * 1000.0;
     io::write_rgb8(&args.output, &picture)?;
     eprintln!("wrote {} in {ms:.0} ms", args.output.display());
+    if let Some(note) = note {
+        eprintln!("{note}");
+    }
     Ok(())
 }

@@ -36,6 +36,10 @@ pub struct SweepArgs {
     /// How much the skin thickness varies, in voxels, 0 to 64.
     #[arg(long, default_value_t = 0.0)]
     pub skin_noise: f32,
+    /// A grey relief image the size of the cross-section, swept into a Displacement channel
+    /// (0.5 leaves a surface in place; `view --displacement` uses it).
+    #[arg(long)]
+    pub displacement: Option<PathBuf>,
     /// Seed for the noise (any 64-bit whole number).
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -62,7 +66,8 @@ pub fn sweep_params(args: &SweepArgs) -> Result<Sweep> {
             Ok(Skin { look, width: args.skin_width, width_noise: args.skin_noise })
         })
         .transpose()?;
-    Ok(Sweep { length: args.length, axis, depth_axis, noise, skin })
+    let displacement = args.displacement.as_deref().map(io::read_image).transpose()?;
+    Ok(Sweep { length: args.length, axis, depth_axis, noise, skin, displacement })
 }
 
 /// The axes and noise of a sweep, every number checked against its range.
@@ -87,7 +92,8 @@ fn sweep_values(args: &SweepArgs) -> Result<(Axis, Option<Axis>, Option<sweep::N
 pub fn run_sweep(args: &SweepArgs) -> Result<()> {
     sweep_values(args).map_err(usage)?;
     let skin_file = args.skin.as_deref().map(Path::new).filter(|p| p.is_file());
-    let inputs: Vec<&Path> = [Some(args.image.as_path()), skin_file].into_iter().flatten().collect();
+    let inputs: Vec<&Path> =
+        [Some(args.image.as_path()), skin_file, args.displacement.as_deref()].into_iter().flatten().collect();
     io::check_output(&args.output, &inputs)?;
     let params = sweep_params(args)?;
     let image = io::read_image(&args.image)?;

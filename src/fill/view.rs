@@ -56,6 +56,47 @@ pub fn surface_shaded(
     size: usize,
     shading: Shading,
 ) -> Rgb8 {
+    draw(model, textures, None, (yaw, pitch), size, shading).0
+}
+
+/// Displacement mapping (thesis §7, Figs. 5.1d and 7.1c): the surface moved along its
+/// normal by `scale x (d - MIDLEVEL)`, `d` the exemplars' Displacement channel sampled on
+/// the surface.
+#[derive(Clone, Copy)]
+pub struct Displacement<'a> {
+    /// Textures sampling the displacement (see [`Textures::channel`]).
+    pub textures: &'a Textures,
+    /// Model units per unit of displacement.
+    pub scale: f32,
+}
+
+/// The displacement value that leaves the surface in place (as Blender's midlevel).
+pub const MIDLEVEL: f32 = 0.5;
+
+/// The finest subdivision of a boundary face: its edges split in this many parts.
+const MAX_LEVEL: usize = 32;
+
+/// [`surface_shaded`] with the boundary subdivided (triangles about two pixels across)
+/// and displaced, lit by the displaced triangles' normals; also the triangles drawn.
+pub fn surface_displaced(
+    model: &LstModel,
+    textures: &Textures,
+    displacement: Displacement,
+    (yaw, pitch): (f32, f32),
+    size: usize,
+    shading: Shading,
+) -> (Rgb8, usize) {
+    draw(model, textures, Some(displacement), (yaw, pitch), size, shading)
+}
+
+fn draw(
+    model: &LstModel,
+    textures: &Textures,
+    displacement: Option<Displacement>,
+    (yaw, pitch): (f32, f32),
+    size: usize,
+    shading: Shading,
+) -> (Rgb8, usize) {
     let (forward, right, up) = camera(yaw, pitch);
     let project = |p: Vec3| Vec2::new(right.dot(p), up.dot(p));
     let (lo, hi) = model
@@ -70,7 +111,13 @@ pub fn surface_shaded(
         let q = (project(p) - centre) * scale;
         Vec2::new(q.x + size as f32 / 2.0, size as f32 / 2.0 - q.y)
     };
-    let hits = rasterize(model, size, &to_pixel, forward, shading);
+    let mut facets = facets(model, shading);
+    if let Some(d) = displacement {
+        let edges = facets.iter().flat_map(|f| (0..3).map(|k| (f.shown[k] - f.shown[(k + 1) % 3]).length()));
+        let pixels = edges.fold(0.0f32, f32::max) * scale;
+        facets = displaced(model, &facets, d, ((pixels / 2.0).ceil() as usize).clamp(1, MAX_LEVEL));
+    }
+    let hits = rasterize(&facets, size, &to_pixel, forward);
     let light = (up * 0.6 - forward + right * 0.3).normalize();
     let colours: Vec<[u8; 3]> = hits
         .par_iter()
@@ -87,7 +134,7 @@ pub fn surface_shaded(
     for (i, c) in colours.into_iter().enumerate() {
         out.put(i % size, i / size, c);
     }
-    out
+    (out, facets.len())
 }
 
 /// The axes of an orthographic camera `yaw` degrees around y and `pitch` degrees up from
@@ -156,26 +203,95 @@ fn corner_normals(faces: &[Face], shading: Shading) -> Vec<[Vec3; 3]> {
         .collect()
 }
 
-fn rasterize(
-    model: &LstModel,
-    size: usize,
-    to_pixel: &dyn Fn(Vec3) -> Vec2,
-    forward: Vec3,
-    shading: Shading,
-) -> Vec<Option<Hit>> {
+/// A triangle to draw: the points shown (on the boundary, or displaced), the points its
+/// colour is sampled at (on the boundary, a little inside its tet), its tet and the
+/// shading normal at each corner.
+struct Facet {
+    tet: u32,
+    shown: [Vec3; 3],
+    sampled: [Vec3; 3],
+    normals: [Vec3; 3],
+}
+
+impl Facet {
+    /// The unit normal of the shown triangle (outward, as the boundary faces are).
+    fn normal(&self) -> Vec3 {
+        let s = self.shown;
+        (s[1] - s[0]).cross(s[2] - s[0]).normalize_or_zero()
+    }
+}
+
+/// Blends three corner values at barycentric `b`.
+fn at<T: std::ops::Mul<f32, Output = T> + std::ops::Add<Output = T> + Copy>(v: [T; 3], b: [f32; 3]) -> T {
+    v[0] * b[0] + v[1] * b[1] + v[2] * b[2]
+}
+
+/// The boundary faces as facets, with their corner normals under `shading`.
+fn facets(model: &LstModel, shading: Shading) -> Vec<Facet> {
     let faces = boundary_faces(model);
     let normals = corner_normals(&faces, shading);
+    faces
+        .iter()
+        .zip(normals)
+        .map(|(f, normals)| {
+            let p = f.corners;
+            let inward = (model.mesh.centroid(f.tet) - (p[0] + p[1] + p[2]) / 3.0) * 1e-3;
+            Facet { tet: f.tet as u32, shown: p, sampled: p.map(|c| c + inward), normals }
+        })
+        .collect()
+}
+
+/// Each facet split into `level`² triangles whose corners move along the blended normal
+/// by `scale x (d - MIDLEVEL)`; every new triangle is lit by its own normal.
+fn displaced(model: &LstModel, facets: &[Facet], d: Displacement, level: usize) -> Vec<Facet> {
+    let row = |j: usize| (0..j).map(|r| level + 1 - r).sum::<usize>();
+    facets
+        .par_iter()
+        .flat_map_iter(|f| {
+            let mut corners = Vec::with_capacity((level + 1) * (level + 2) / 2);
+            for j in 0..=level {
+                for i in 0..=level - j {
+                    let (s, t) = (i as f32 / level as f32, j as f32 / level as f32);
+                    let b = [1.0 - s - t, s, t];
+                    let sampled = at(f.sampled, b);
+                    let normal = at(f.normals, b).normalize_or(f.normal());
+                    let value = shade_point(model, d.textures, f.tet as usize, sampled)[0];
+                    corners.push((sampled, at(f.shown, b) + normal * d.scale * (value - MIDLEVEL)));
+                }
+            }
+            let id = move |i: usize, j: usize| row(j) + i;
+            let mut out = Vec::with_capacity(level * level);
+            for j in 0..level {
+                for i in 0..level - j {
+                    out.push([id(i, j), id(i + 1, j), id(i, j + 1)]);
+                    if i + j + 1 < level {
+                        out.push([id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)]);
+                    }
+                }
+            }
+            let tet = f.tet;
+            out.into_iter().map(move |k| {
+                let shown = k.map(|c| corners[c].1);
+                let mut facet = Facet { tet, shown, sampled: k.map(|c| corners[c].0), normals: [Vec3::ZERO; 3] };
+                facet.normals = [facet.normal(); 3];
+                facet
+            })
+        })
+        .collect()
+}
+
+fn rasterize(facets: &[Facet], size: usize, to_pixel: &dyn Fn(Vec3) -> Vec2, forward: Vec3) -> Vec<Option<Hit>> {
     let mut hits: Vec<Option<Hit>> = vec![None; size * size];
-    for (f, n) in faces.iter().zip(&normals) {
-        if f.normal.dot(forward) >= 0.0 {
+    for f in facets {
+        let flat = f.normal();
+        if flat.dot(forward) >= 0.0 {
             continue;
         }
-        let p = f.corners;
-        let inward = (model.mesh.centroid(f.tet) - (p[0] + p[1] + p[2]) / 3.0) * 1e-3;
-        draw_triangle(&mut hits, size, p.map(to_pixel), |b| {
-            let point = p[0] * b[0] + p[1] * b[1] + p[2] * b[2];
-            let normal = (n[0] * b[0] + n[1] * b[1] + n[2] * b[2]).normalize_or(f.normal);
-            Hit { depth: forward.dot(point), tet: f.tet as u32, point: point + inward, normal }
+        draw_triangle(&mut hits, size, f.shown.map(to_pixel), |b| Hit {
+            depth: forward.dot(at(f.shown, b)),
+            tet: f.tet,
+            point: at(f.sampled, b),
+            normal: at(f.normals, b).normalize_or(flat),
         });
     }
     hits
@@ -241,6 +357,41 @@ mod tests {
         }
         all.sort_unstable();
         all[all.len() * 98 / 100]
+    }
+
+    #[test]
+    fn displacement_moves_a_flat_face_along_its_normal_by_the_channel() {
+        // the unit cube, one patch whose texture coordinates are the positions; the
+        // displacement channel is x itself (texel centres of an 8-voxel ramp)
+        let mesh = crate::fill::tets::cube_lattice([4, 4, 4], 0.25);
+        let vertices: Vec<u32> = (0..mesh.vertices.len() as u32).collect();
+        let patch = Patch { source: 0, coords: mesh.vertices.clone(), vertices };
+        let source = Source { exemplar: "ramp".into(), volume: "ramp.exr".into(), mask: MaskRef::File("m.exr".into()) };
+        let tet_patches = vec![vec![0]; mesh.tets.len()];
+        let model = LstModel { mesh, sources: vec![source], patches: vec![patch], tet_patches };
+        let ramp = Volume::from_fn([8, 2, 2], vec![Channel::Displacement], |x, _, _, o| o[0] = (x as f32 + 0.5) / 8.0)
+            .unwrap();
+        let full = Volume::from_fn([2; 3], vec![Channel::A], |_, _, _, o| o.fill(1.0)).unwrap();
+        let textures = Textures::channel(&[ramp], &[full], &[Channel::Displacement]).unwrap();
+        let d = Displacement { textures: &textures, scale: 0.2 };
+        let plain = facets(&model, Shading::Smooth { crease: DEFAULT_CREASE });
+        let moved = displaced(&model, &plain, d, 4);
+        assert_eq!(moved.len(), plain.len() * 16);
+        let mut checked = 0;
+        for f in moved.iter().filter(|f| f.sampled.iter().all(|p| p.y > 0.99)) {
+            for (shown, sampled) in f.shown.iter().zip(f.sampled) {
+                if (0.1..0.9).contains(&sampled.x) {
+                    let want = Vec3::new(sampled.x, 1.0 + 0.2 * (sampled.x - MIDLEVEL), sampled.z);
+                    assert!((*shown - want).length() < 2e-3, "{shown} against {want}");
+                    checked += 1;
+                }
+            }
+            assert!(f.normal().y > 0.9, "the top stays facing up, tilted by the ramp: {}", f.normal());
+        }
+        assert!(checked > 500, "{checked} corners on the top face");
+        // no displacement channel, no move: scale 0 leaves every corner on the face
+        let still = displaced(&model, &plain, Displacement { scale: 0.0, ..d }, 2);
+        assert!(still.iter().all(|f| f.shown.iter().zip(f.sampled).all(|(a, b)| (*a - b).length() < 2e-3)));
     }
 
     #[test]

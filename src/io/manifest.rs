@@ -39,6 +39,7 @@ struct RawExemplar {
     skin: Option<String>,
     skin_width: Option<f32>,
     skin_noise: Option<f32>,
+    displacement: Option<String>,
     ey: Option<String>,
     ez: Option<String>,
     depth_image: Option<String>,
@@ -112,6 +113,8 @@ pub struct SweepSpec {
     pub noise: Option<Noise>,
     /// Skin look, width and width noise, if any.
     pub skin: Option<(SkinSource, f32, f32)>,
+    /// A grey relief image swept into a Displacement channel, if any.
+    pub displacement: Option<PathBuf>,
 }
 
 /// A synthesis recipe (see [`crate::synth`]), with file paths resolved.
@@ -532,7 +535,8 @@ fn sweep_spec(raw: &RawExemplar, folder: &Path) -> Result<SweepSpec> {
             Ok((look, width, width_noise))
         })
         .transpose()?;
-    Ok(SweepSpec { image, length, axis, depth_axis, noise, skin })
+    let displacement = raw.displacement.as_deref().map(|p| folder.join(p));
+    Ok(SweepSpec { image, length, axis, depth_axis, noise, skin, displacement })
 }
 
 /// Sweep noise with each part in its range; `label` names the option or field.

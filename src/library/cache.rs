@@ -193,6 +193,7 @@ pub fn input_files(entry: &Entry) -> Vec<PathBuf> {
             if let Some((SkinSource::Image(p), _, _)) = &spec.skin {
                 files.push(p.clone());
             }
+            files.extend(spec.displacement.iter().cloned());
         }
         Source::Synth(spec) => {
             files.push(spec.image.clone());
@@ -245,6 +246,9 @@ pub fn canonical(entry: &Entry, folder: &Path) -> String {
                     SkinSource::Image(p) => c.path("sweep.skin.image", p),
                 }
                 c.floats("sweep.skin.width", &[*width, *noise]);
+            }
+            if let Some(p) = &s.displacement {
+                c.path("sweep.displacement", p);
             }
         }
         Source::Synth(s) => {

@@ -166,7 +166,15 @@ fn swept(spec: &SweepSpec, dims: Option<[usize; 3]>, seed: u64) -> Result<Volume
             Some(Skin { look, width: *width, width_noise: *noise })
         }
     };
-    let params = Sweep { length: spec.length, axis: spec.axis, depth_axis: spec.depth_axis, noise: spec.noise, skin };
+    let displacement = spec.displacement.as_deref().map(io::read_image).transpose()?;
+    let params = Sweep {
+        length: spec.length,
+        axis: spec.axis,
+        depth_axis: spec.depth_axis,
+        noise: spec.noise,
+        skin,
+        displacement,
+    };
     sweep::sweep(&image, &params, seed).map_err(|e| e.in_file(&spec.image))
 }
 

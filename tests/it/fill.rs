@@ -357,6 +357,62 @@ fn the_exemplars_other_channels_survive_the_fill_into_cuts_and_bakes() {
     assert!(!Path::new(&bad).exists());
 }
 
+const TRUNK: &str = r#"
+exemplar = "trunk"
+seed = 1
+tets = 6000
+[depth]
+surface = false
+axis = [[[0, 0, 0.1], [0, 0, 1.9]]]
+[[depth.faces]]
+at = [0.5, 0, 1]
+crease = 30
+value = 0
+[[direction]]
+points = [[0, 0, 0.1], [0, 0, 1.9]]
+"#;
+
+/// The 95th percentile of the brightness steps between horizontal neighbours off the
+/// background, in the picture's right third (the log's side, away from its end).
+fn rough(png: &str) -> u8 {
+    let img = image::open(png).unwrap().to_rgb8();
+    let mut steps = Vec::new();
+    for y in 0..img.height() {
+        for x in img.width() * 2 / 3..img.width() - 1 {
+            let (a, b) = (img.get_pixel(x, y).0, img.get_pixel(x + 1, y).0);
+            if a != [24, 24, 28] && b != [24, 24, 28] {
+                steps.push(a[0].abs_diff(b[0]));
+            }
+        }
+    }
+    steps.sort_unstable();
+    steps[steps.len() * 95 / 100]
+}
+
+#[test]
+fn displacement_mapping_raises_the_bark_into_furrows() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (mesh, spec) = (draw(d, "log"), spec(d, "trunk.toml", TRUNK));
+    fill(d, &mesh, &spec, "trunk.lst");
+    let model = at(d, "trunk.lst");
+    let (plain, raised) = (at(d, "plain.png"), at(d, "raised.png"));
+    assert!(solidtex(&["view", &model, "--size", "160", "-o", &plain]).status.success());
+    let run = solidtex(&["view", &model, "--size", "160", "--displacement", "0.1", "-o", &raised]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    assert!(stderr(&run).contains("0.1 x (Displacement - 0.5)"), "{}", stderr(&run));
+    let (smooth, furrowed) = (rough(&plain), rough(&raised));
+    assert!(smooth <= 6 && furrowed >= 12, "brightness steps: plain {smooth}, displaced {furrowed}");
+    // the kiwi's exemplar has no relief: refused, naming its file and the channel
+    let (fruit, kiwi) = (draw(d, "fruit"), self::spec(d, "kiwi.toml", KIWI));
+    fill(d, &fruit, &kiwi, "kiwi.lst");
+    let bad = at(d, "bad.png");
+    let run = solidtex(&["view", &at(d, "kiwi.lst"), "--displacement", "0.1", "-o", &bad]);
+    assert_fails(&run, &["kiwi.exr", "Displacement"]);
+    assert_usage(&solidtex(&["view", &model, "--displacement", "5000", "-o", &bad]), &["--displacement"]);
+    assert!(!Path::new(&bad).exists());
+}
+
 #[test]
 fn a_manual_paste_shows_on_top_of_the_automatic_fill() {
     let dir = tempfile::tempdir().unwrap();
