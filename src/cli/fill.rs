@@ -52,8 +52,24 @@ pub struct CutArgs {
     pub size: usize,
     /// Show this channel of the exemplars as grey instead of the colour: R, G, B, A, Depth,
     /// Displacement or a named one (0 black to 1 white).
-    #[arg(long)]
+    #[arg(long, conflicts_with = "stroke")]
     pub channel: Option<String>,
+    /// Cut along a stroke instead of a plane: X,Y,Z;X,Y,Z;... (two or more points) swept
+    /// along --extrude; repeat for several cuts. Draws a lit 3D view of what stays.
+    #[arg(long, allow_hyphen_values = true, conflicts_with = "plane")]
+    pub stroke: Vec<String>,
+    /// The direction strokes are swept along, NX,NY,NZ (default: the view direction).
+    #[arg(long, allow_hyphen_values = true, requires = "stroke")]
+    pub extrude: Option<String>,
+    /// A point on the side of every stroke to keep, X,Y,Z (default: the model's centre).
+    #[arg(long, allow_hyphen_values = true, requires = "stroke")]
+    pub keep: Option<String>,
+    /// With --stroke: degrees around the vertical axis, -360 to 360.
+    #[arg(long, default_value_t = 35.0, allow_hyphen_values = true)]
+    pub yaw: f32,
+    /// With --stroke: degrees above the horizon, -90 to 90.
+    #[arg(long, default_value_t = 25.0, allow_hyphen_values = true)]
+    pub pitch: f32,
     /// The PNG to write.
     #[arg(short, long)]
     pub output: PathBuf,
@@ -386,8 +402,71 @@ fn cut_values(args: &CutArgs) -> Result<Option<(glam::Vec3, glam::Vec3)>> {
     Ok(Some((glam::Vec3::new(v[0], v[1], v[2]), normal)))
 }
 
+/// A point or direction X,Y,Z of `option`, each within the position limit.
+fn vector(option: &str, text: &str) -> Result<glam::Vec3> {
+    let v = io::values::numbers(option, text, &[3])?;
+    io::values::positions(option, text, &v)?;
+    Ok(glam::Vec3::new(v[0], v[1], v[2]))
+}
+
+/// The strokes, extrude direction and keep point of a stroke cut, checked.
+fn stroke_values(args: &CutArgs) -> Result<(Vec<fill::carve::Stroke>, Option<glam::Vec3>)> {
+    io::values::within("--size", args.size, 8, MAX_PICTURE)?;
+    io::values::within("--yaw", args.yaw, -360.0, 360.0)?;
+    io::values::within("--pitch", args.pitch, -90.0, 90.0)?;
+    let extrude = match &args.extrude {
+        Some(text) => vector("--extrude", text)?,
+        None => crate::fill::view::camera(args.yaw, args.pitch).0,
+    };
+    if extrude == glam::Vec3::ZERO {
+        return Err(Error::invalid("--extrude: the direction NX,NY,NZ is zero"));
+    }
+    let strokes = args
+        .stroke
+        .iter()
+        .map(|text| {
+            let points = text.split(';').map(|p| vector("--stroke", p.trim())).collect::<Result<Vec<_>>>()?;
+            if points.len() < 2 {
+                return Err(Error::invalid(format!("--stroke {text:?}: give two or more points X,Y,Z;X,Y,Z")));
+            }
+            Ok(fill::carve::Stroke { points, extrude })
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let keep = args.keep.as_deref().map(|k| vector("--keep", k)).transpose()?;
+    Ok((strokes, keep))
+}
+
+/// Run `solidtex cut --stroke`: a lit 3D view of the model cut along strokes.
+fn run_stroke_cut(args: &CutArgs) -> Result<()> {
+    let (strokes, keep) = stroke_values(args).map_err(usage)?;
+    if args.models.len() > 1 {
+        return Err(usage(Error::invalid("--stroke cuts one model; give one .lst")));
+    }
+    io::check_folder(&args.output)?;
+    let loaded = load_model(&args.models[0])?;
+    let bounds = render::bounds(&[(&loaded.model, &loaded.textures)]);
+    let keep = keep.unwrap_or((bounds.0 + bounds.1) / 2.0);
+    let started = Instant::now();
+    let camera = (args.yaw, args.pitch);
+    let carving = fill::carve::carve(&loaded.model, &loaded.textures, &strokes, keep, camera, args.size)
+        .map_err(|e| e.in_file(&args.models[0]))?;
+    let ms = started.elapsed().as_secs_f64() * 1000.0;
+    io::write_rgb8(&args.output, &carving.picture)?;
+    eprintln!(
+        "wrote {} ({size}x{size}, {} stroke cut(s), cut faces on {:.0} % of the picture) in {ms:.0} ms",
+        args.output.display(),
+        strokes.len(),
+        carving.cut_share * 100.0,
+        size = args.size
+    );
+    Ok(())
+}
+
 /// Run `solidtex cut`.
 pub fn run_cut(args: &CutArgs) -> Result<()> {
+    if !args.stroke.is_empty() {
+        return run_stroke_cut(args);
+    }
     let plane = cut_values(args).map_err(usage)?;
     let wanted = args.channel.as_deref().map(Channel::parse).transpose().map_err(usage)?;
     io::check_folder(&args.output)?;

@@ -9,6 +9,7 @@
 //!  exemplar masks (splotch or outer/middle/inner) -+
 //! ```
 
+pub mod carve;
 pub mod field;
 pub mod mesher;
 pub mod model;

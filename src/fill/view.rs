@@ -17,11 +17,76 @@ use rayon::prelude::*;
 
 /// What each pixel sees: the tet, the surface point, the shading normal.
 #[derive(Clone, Copy)]
-struct Hit {
-    depth: f32,
-    tet: u32,
-    point: Vec3,
-    normal: Vec3,
+pub(super) struct Hit {
+    /// Distance along the view direction (nearest wins).
+    pub depth: f32,
+    /// The tet whose patches colour the point.
+    pub tet: u32,
+    /// The point sampled for colour.
+    pub point: Vec3,
+    /// The shading normal.
+    pub normal: Vec3,
+}
+
+/// An orthographic camera framing a model: its axes and the model-to-pixel map.
+pub(super) struct Frame {
+    /// The view direction.
+    pub forward: Vec3,
+    right: Vec3,
+    up: Vec3,
+    centre: Vec2,
+    scale: f32,
+    /// Picture side in pixels.
+    pub size: usize,
+}
+
+impl Frame {
+    /// The camera `yaw`/`pitch` degrees around the model, its vertices filling the
+    /// picture with a margin.
+    pub fn new(model: &LstModel, (yaw, pitch): (f32, f32), size: usize) -> Frame {
+        let (forward, right, up) = camera(yaw, pitch);
+        let project = |p: Vec3| Vec2::new(right.dot(p), up.dot(p));
+        let (lo, hi) = model
+            .mesh
+            .vertices
+            .iter()
+            .fold((Vec2::INFINITY, Vec2::NEG_INFINITY), |(a, b), p| (a.min(project(*p)), b.max(project(*p))));
+        let side = (hi - lo).max_element().max(1e-6) * 1.08;
+        Frame { forward, right, up, centre: (lo + hi) / 2.0, scale: size as f32 / side, size }
+    }
+
+    /// Where a model point lands in the picture, in pixels.
+    pub fn to_pixel(&self, p: Vec3) -> Vec2 {
+        let q = (Vec2::new(self.right.dot(p), self.up.dot(p)) - self.centre) * self.scale;
+        Vec2::new(q.x + self.size as f32 / 2.0, self.size as f32 / 2.0 - q.y)
+    }
+
+    /// Model units per pixel.
+    pub fn pixel(&self) -> f32 {
+        1.0 / self.scale
+    }
+
+    /// The picture of `hits`: each point's composited colour, lit by a light over the
+    /// viewer's shoulder.
+    pub fn shade(&self, model: &LstModel, textures: &Textures, hits: &[Option<Hit>]) -> Rgb8 {
+        let light = (self.up * 0.6 - self.forward + self.right * 0.3).normalize();
+        let colours: Vec<[u8; 3]> = hits
+            .par_iter()
+            .map(|hit| match hit {
+                None => BACKGROUND,
+                Some(h) => {
+                    let c = shade_point(model, textures, h.tet as usize, h.point);
+                    let lit = 0.35 + 0.65 * h.normal.dot(light).max(0.0);
+                    [c[0], c[1], c[2]].map(|v| to_u8(v * lit))
+                }
+            })
+            .collect();
+        let mut out = Rgb8::new(self.size, self.size, BACKGROUND);
+        for (i, c) in colours.into_iter().enumerate() {
+            out.put(i % self.size, i / self.size, c);
+        }
+        out
+    }
 }
 
 /// How the surface is lit.
@@ -93,48 +158,19 @@ fn draw(
     model: &LstModel,
     textures: &Textures,
     displacement: Option<Displacement>,
-    (yaw, pitch): (f32, f32),
+    camera: (f32, f32),
     size: usize,
     shading: Shading,
 ) -> (Rgb8, usize) {
-    let (forward, right, up) = camera(yaw, pitch);
-    let project = |p: Vec3| Vec2::new(right.dot(p), up.dot(p));
-    let (lo, hi) = model
-        .mesh
-        .vertices
-        .iter()
-        .fold((Vec2::INFINITY, Vec2::NEG_INFINITY), |(a, b), p| (a.min(project(*p)), b.max(project(*p))));
-    let side = (hi - lo).max_element().max(1e-6) * 1.08;
-    let scale = size as f32 / side;
-    let centre = (lo + hi) / 2.0;
-    let to_pixel = |p: Vec3| {
-        let q = (project(p) - centre) * scale;
-        Vec2::new(q.x + size as f32 / 2.0, size as f32 / 2.0 - q.y)
-    };
+    let frame = Frame::new(model, camera, size);
     let mut facets = facets(model, shading);
     if let Some(d) = displacement {
         let edges = facets.iter().flat_map(|f| (0..3).map(|k| (f.shown[k] - f.shown[(k + 1) % 3]).length()));
-        let pixels = edges.fold(0.0f32, f32::max) * scale;
+        let pixels = edges.fold(0.0f32, f32::max) / frame.pixel();
         facets = displaced(model, &facets, d, ((pixels / 2.0).ceil() as usize).clamp(1, MAX_LEVEL));
     }
-    let hits = rasterize(&facets, size, &to_pixel, forward);
-    let light = (up * 0.6 - forward + right * 0.3).normalize();
-    let colours: Vec<[u8; 3]> = hits
-        .par_iter()
-        .map(|hit| match hit {
-            None => BACKGROUND,
-            Some(h) => {
-                let c = shade_point(model, textures, h.tet as usize, h.point);
-                let lit = 0.35 + 0.65 * h.normal.dot(light).max(0.0);
-                [c[0], c[1], c[2]].map(|v| to_u8(v * lit))
-            }
-        })
-        .collect();
-    let mut out = Rgb8::new(size, size, BACKGROUND);
-    for (i, c) in colours.into_iter().enumerate() {
-        out.put(i % size, i / size, c);
-    }
-    (out, facets.len())
+    let hits = rasterize(&facets, &frame, |_| true);
+    (frame.shade(model, textures, &hits), facets.len())
 }
 
 /// The axes of an orthographic camera `yaw` degrees around y and `pitch` degrees up from
@@ -206,7 +242,7 @@ fn corner_normals(faces: &[Face], shading: Shading) -> Vec<[Vec3; 3]> {
 /// A triangle to draw: the points shown (on the boundary, or displaced), the points its
 /// colour is sampled at (on the boundary, a little inside its tet), its tet and the
 /// shading normal at each corner.
-struct Facet {
+pub(super) struct Facet {
     tet: u32,
     shown: [Vec3; 3],
     sampled: [Vec3; 3],
@@ -227,7 +263,7 @@ fn at<T: std::ops::Mul<f32, Output = T> + std::ops::Add<Output = T> + Copy>(v: [
 }
 
 /// The boundary faces as facets, with their corner normals under `shading`.
-fn facets(model: &LstModel, shading: Shading) -> Vec<Facet> {
+pub(super) fn facets(model: &LstModel, shading: Shading) -> Vec<Facet> {
     let faces = boundary_faces(model);
     let normals = corner_normals(&faces, shading);
     faces
@@ -280,24 +316,35 @@ fn displaced(model: &LstModel, facets: &[Facet], d: Displacement, level: usize) 
         .collect()
 }
 
-fn rasterize(facets: &[Facet], size: usize, to_pixel: &dyn Fn(Vec3) -> Vec2, forward: Vec3) -> Vec<Option<Hit>> {
-    let mut hits: Vec<Option<Hit>> = vec![None; size * size];
+/// The nearest front-facing facet at each pixel, among the points `keep` accepts.
+pub(super) fn rasterize(facets: &[Facet], frame: &Frame, keep: impl Fn(Vec3) -> bool) -> Vec<Option<Hit>> {
+    let mut hits: Vec<Option<Hit>> = vec![None; frame.size * frame.size];
     for f in facets {
         let flat = f.normal();
-        if flat.dot(forward) >= 0.0 {
+        if flat.dot(frame.forward) >= 0.0 {
             continue;
         }
-        draw_triangle(&mut hits, size, f.shown.map(to_pixel), |b| Hit {
-            depth: forward.dot(at(f.shown, b)),
-            tet: f.tet,
-            point: at(f.sampled, b),
-            normal: at(f.normals, b).normalize_or(flat),
+        draw_triangle(&mut hits, frame.size, f.shown.map(|p| frame.to_pixel(p)), |b| {
+            let shown = at(f.shown, b);
+            keep(shown).then(|| Hit {
+                depth: frame.forward.dot(shown),
+                tet: f.tet,
+                point: at(f.sampled, b),
+                normal: at(f.normals, b).normalize_or(flat),
+            })
         });
     }
     hits
 }
 
-fn draw_triangle(hits: &mut [Option<Hit>], size: usize, s: [Vec2; 3], hit_at: impl Fn([f32; 3]) -> Hit) {
+/// Writes the hits of a triangle (`s`: its corners in pixels; `hit_at`: the hit at
+/// barycentric point, or none to leave the pixel) where they are nearer than what is there.
+pub(super) fn draw_triangle(
+    hits: &mut [Option<Hit>],
+    size: usize,
+    s: [Vec2; 3],
+    hit_at: impl Fn([f32; 3]) -> Option<Hit>,
+) {
     let area = (s[1] - s[0]).perp_dot(s[2] - s[0]);
     if area.abs() < 1e-12 {
         return;
@@ -313,7 +360,7 @@ fn draw_triangle(hits: &mut [Option<Hit>], size: usize, s: [Vec2; 3], hit_at: im
             if b.iter().any(|w| *w < -1e-4) {
                 continue;
             }
-            let hit = hit_at(b);
+            let Some(hit) = hit_at(b) else { continue };
             let slot = &mut hits[y * size + x];
             if slot.is_none_or(|old| hit.depth < old.depth) {
                 *slot = Some(hit);

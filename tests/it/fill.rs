@@ -414,6 +414,49 @@ fn displacement_mapping_raises_the_bark_into_furrows() {
 }
 
 #[test]
+fn stroke_cuts_show_the_inside_of_what_they_keep() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (mesh, spec) = (draw(d, "fruit"), spec(d, "kiwi.toml", KIWI));
+    fill(d, &mesh, &spec, "kiwi.lst");
+    let model = at(d, "kiwi.lst");
+    // cut the fruit across its axis (x) at 0, keep x < 0; seen from +x the face shows
+    let png = at(d, "half.png");
+    let args = ["cut", &model, "--stroke", "0,-1,0;0,1,0", "--extrude", "0,0,1", "--keep", "-0.5,0,0"];
+    let run = solidtex(&[&args[..], &["--yaw", "90", "--pitch", "0", "--size", "128", "-o", &png]].concat());
+    assert!(run.status.success(), "{}", stderr(&run));
+    assert!(stderr(&run).contains("cut faces on"), "{}", stderr(&run));
+    let core = pixel(&png, 64, 64);
+    assert!(core.iter().all(|c| *c > 0.6), "the pale core in the middle of the face: {core:?}");
+    let flesh = pixel(&png, 64, 64 + 25);
+    assert!(flesh[1] > flesh[0] && flesh[1] > flesh[2], "green flesh around it: {flesh:?}");
+    // keeping the other half, the camera sees the skin
+    let skin_png = at(d, "skin.png");
+    let other = ["cut", &model, "--stroke", "0,-1,0;0,1,0", "--extrude", "0,0,1", "--keep", "0.5,0,0"];
+    assert!(
+        solidtex(&[&other[..], &["--yaw", "90", "--pitch", "0", "--size", "128", "-o", &skin_png]].concat())
+            .status
+            .success()
+    );
+    let skin = pixel(&skin_png, 64, 64);
+    assert!(skin[0] > skin[1] && skin[0] < 0.6, "brown skin: {skin:?}");
+    // bad strokes are refused, naming the option, nothing written
+    let bad = at(d, "bad.png");
+    assert_usage(&solidtex(&["cut", &model, "--stroke", "0,0,0", "-o", &bad]), &["--stroke", "two or more"]);
+    assert_usage(
+        &solidtex(&["cut", &model, "--stroke", "0,0,0;1,0,0", "--extrude", "0,0,0", "-o", &bad]),
+        &["--extrude"],
+    );
+    let along = solidtex(&["cut", &model, "--stroke", "0,0,0;0,0,1", "--extrude", "0,0,1", "-o", &bad]);
+    assert_fails(&along, &["kiwi.lst", "two points apart"]);
+    assert_usage(
+        &solidtex(&["cut", &model, "--stroke", "0,0,0;1,0,0", "--plane", "0,0,0,0,0,1", "-o", &bad]),
+        &["--plane"],
+    );
+    assert!(!Path::new(&bad).exists());
+}
+
+#[test]
 fn a_manual_paste_shows_on_top_of_the_automatic_fill() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();

@@ -1,0 +1,334 @@
+//! Cutting by strokes (thesis §6.1.1): each stroke is a polyline swept along a direction
+//! into a surface that splits the model in two; the side holding a chosen point stays.
+//! Several strokes keep what lies on the kept side of every one. The result is drawn as a
+//! lit 3D view: the model's surface where it stays, and each cut face inside the model,
+//! textured by the patches there.
+//!
+//! ```text
+//!   stroke p0 p1 ... pn, extrude e -> the surface { p(s) + t e }; side(x) = left (+) / right (-)
+//!                                      of the polyline seen along e (ends continue straight)
+//!   per pixel, nearest of: boundary faces where every stroke keeps the point,
+//!                          each stroke's surface where the model holds the point and the
+//!                          other strokes keep it
+//! ```
+
+use super::model::LstModel;
+use super::render::Textures;
+use super::tets::TetMesh;
+use super::view::{Frame, Hit, Shading, draw_triangle, facets, rasterize};
+use crate::error::{Error, Result};
+use crate::render::Rgb8;
+use glam::{Vec2, Vec3};
+
+/// A polyline swept along a direction.
+#[derive(Debug, Clone)]
+pub struct Stroke {
+    /// Two or more points.
+    pub points: Vec<Vec3>,
+    /// The direction the polyline is swept along (not zero; normalized on use).
+    pub extrude: Vec3,
+}
+
+/// A stroke ready to test points: the polyline seen along its direction.
+struct Side {
+    extrude: Vec3,
+    u: Vec3,
+    v: Vec3,
+    points: Vec<Vec2>,
+    /// +1 or -1: the sign of the kept side.
+    kept: f32,
+}
+
+impl Side {
+    fn new(stroke: &Stroke, keep: Vec3) -> Result<Side> {
+        let e = stroke.extrude.try_normalize().ok_or_else(|| Error::invalid("a stroke's extrude direction is zero"))?;
+        let u = e.any_orthonormal_vector();
+        let v = e.cross(u);
+        let mut points: Vec<Vec2> = stroke.points.iter().map(|p| Vec2::new(u.dot(*p), v.dot(*p))).collect();
+        points.dedup_by(|a, b| a.distance(*b) < 1e-6);
+        if points.len() < 2 {
+            return Err(Error::invalid(
+                "a stroke needs two points apart when seen along its extrude direction (it sweeps a line into a surface)",
+            ));
+        }
+        let mut side = Side { extrude: e, u, v, points, kept: 1.0 };
+        let at_keep = side.signed(keep);
+        if at_keep == 0.0 {
+            return Err(Error::invalid(format!(
+                "the keep point {keep} lies on a stroke's surface; move it to one side"
+            )));
+        }
+        side.kept = at_keep.signum();
+        Ok(side)
+    }
+
+    /// Positive left of the polyline (seen along the extrude direction, the first end
+    /// continuing backward and the last forward), negative right, 0 on it.
+    fn signed(&self, p: Vec3) -> f32 {
+        let q = Vec2::new(self.u.dot(p), self.v.dot(p));
+        let n = self.points.len() - 1;
+        let mut best = (f32::INFINITY, 0.0f32);
+        for i in 0..n {
+            let (a, b) = (self.points[i], self.points[i + 1]);
+            let d = b - a;
+            let t = (q - a).dot(d) / d.length_squared();
+            let t = match (i == 0, i + 1 == n) {
+                (true, true) => t,
+                (true, false) => t.min(1.0),
+                (false, true) => t.max(0.0),
+                (false, false) => t.clamp(0.0, 1.0),
+            };
+            let closest = a + d * t;
+            let normal = if (t <= 0.0 && i > 0) || (t >= 1.0 && i + 1 < n) {
+                // a corner: both segments meet there; their left normals averaged
+                let j = if t <= 0.0 { i - 1 } else { i + 1 };
+                let other = if j < i { a - self.points[j] } else { self.points[j + 1] - b };
+                left(d) + left(other)
+            } else {
+                left(d)
+            };
+            let distance = q.distance_squared(closest);
+            if distance < best.0 {
+                best = (distance, (q - closest).dot(normal));
+            }
+        }
+        best.1
+    }
+
+    /// Whether `p` is on the kept side (or on the surface).
+    fn keeps(&self, p: Vec3) -> bool {
+        self.signed(p) * self.kept >= 0.0
+    }
+}
+
+fn left(d: Vec2) -> Vec2 {
+    Vec2::new(-d.y, d.x).normalize_or_zero()
+}
+
+/// What a carved view drew.
+pub struct Carving {
+    /// The lit picture.
+    pub picture: Rgb8,
+    /// Share of the picture's pixels that show a cut face.
+    pub cut_share: f64,
+}
+
+/// Draws `model` cut by `strokes`, keeping the side of each that holds `keep`, seen from
+/// `camera` (yaw, pitch degrees) at `size` pixels.
+pub fn carve(
+    model: &LstModel,
+    textures: &Textures,
+    strokes: &[Stroke],
+    keep: Vec3,
+    camera: (f32, f32),
+    size: usize,
+) -> Result<Carving> {
+    if strokes.is_empty() {
+        return Err(Error::invalid("no stroke to cut by"));
+    }
+    let sides = strokes.iter().map(|s| Side::new(s, keep)).collect::<Result<Vec<_>>>()?;
+    let frame = Frame::new(model, camera, size);
+    let shading = Shading::Smooth { crease: super::view::DEFAULT_CREASE };
+    let mut hits = rasterize(&facets(model, shading), &frame, |p| sides.iter().all(|s| s.keeps(p)));
+    let boundary: Vec<Option<f32>> = hits.iter().map(|h| h.map(|h| h.depth)).collect();
+    let grid = TetGrid::new(&model.mesh);
+    let reach = reach(&model.mesh, &strokes.iter().flat_map(|s| s.points.iter().copied()).collect::<Vec<_>>());
+    for (k, side) in sides.iter().enumerate() {
+        let others = |p: Vec3| sides.iter().enumerate().all(|(j, s)| j == k || s.keeps(p));
+        for quad in surface(side, reach) {
+            let normal = (quad[1] - quad[0]).cross(quad[2] - quad[0]).normalize_or_zero();
+            let facing = if normal.dot(frame.forward) > 0.0 { -normal } else { normal };
+            for tri in [[quad[0], quad[1], quad[2]], [quad[0], quad[2], quad[3]]] {
+                draw_triangle(&mut hits, size, tri.map(|p| frame.to_pixel(p)), |b| {
+                    let p = tri[0] * b[0] + tri[1] * b[1] + tri[2] * b[2];
+                    let tet = grid.locate(&model.mesh, p)?;
+                    others(p).then_some(Hit { depth: frame.forward.dot(p), tet, point: p, normal: facing })
+                });
+            }
+        }
+    }
+    let cut = hits.iter().zip(&boundary).filter(|(h, b)| h.is_some_and(|h| **b != Some(h.depth))).count();
+    Ok(Carving { picture: frame.shade(model, textures, &hits), cut_share: cut as f64 / (size * size) as f64 })
+}
+
+/// A length that carries a stroke's surface past the model on every side.
+fn reach(mesh: &TetMesh, points: &[Vec3]) -> f32 {
+    let (lo, hi) = mesh.vertices.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(a, b), p| (a.min(*p), b.max(*p)));
+    let centre = (lo + hi) / 2.0;
+    let far = points.iter().map(|p| p.distance(centre)).fold(0.0f32, f32::max);
+    2.0 * ((hi - lo).length() + far + centre.length())
+}
+
+/// The stroke's surface as quads (corners in order), its ends carried `reach` further.
+fn surface(side: &Side, reach: f32) -> Vec<[Vec3; 4]> {
+    // the polyline on the plane through the origin across the extrude direction
+    let points: Vec<Vec3> = side.points.iter().map(|q| side.u * q.x + side.v * q.y).collect();
+    let n = points.len() - 1;
+    let e = side.extrude * reach;
+    (0..n)
+        .map(|i| {
+            let (mut a, mut b) = (points[i], points[i + 1]);
+            let d = (b - a).normalize();
+            if i == 0 {
+                a -= d * reach;
+            }
+            if i + 1 == n {
+                b += d * reach;
+            }
+            [a - e, b - e, b + e, a + e]
+        })
+        .collect()
+}
+
+/// Tets binned on a grid of cells by their bounding boxes, to find the tet holding a point.
+struct TetGrid {
+    lo: Vec3,
+    cell: f32,
+    dims: [usize; 3],
+    offsets: Vec<u32>,
+    tets: Vec<u32>,
+}
+
+impl TetGrid {
+    fn new(mesh: &TetMesh) -> TetGrid {
+        let (lo, hi) =
+            mesh.vertices.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(a, b), p| (a.min(*p), b.max(*p)));
+        let volume = mesh.volume().max(1e-12) as f32;
+        let cell = (volume / mesh.tets.len().max(1) as f32).cbrt().max((hi - lo).max_element() / 128.0).max(1e-6);
+        let dims = ((hi - lo) / cell).ceil().as_uvec3().max(glam::UVec3::ONE).to_array().map(|d| d as usize);
+        let index = |p: Vec3| {
+            let c = ((p - lo) / cell).floor().max(Vec3::ZERO);
+            [0, 1, 2].map(|k| (c[k] as usize).min(dims[k] - 1))
+        };
+        let mut pairs: Vec<(u32, u32)> = Vec::new();
+        for (t, _) in mesh.tets.iter().enumerate() {
+            let c = mesh.corners(t);
+            let (a, b) = (
+                index(c.iter().copied().fold(Vec3::INFINITY, Vec3::min)),
+                index(c.iter().copied().fold(Vec3::NEG_INFINITY, Vec3::max)),
+            );
+            for z in a[2]..=b[2] {
+                for y in a[1]..=b[1] {
+                    for x in a[0]..=b[0] {
+                        pairs.push(((x + dims[0] * (y + dims[1] * z)) as u32, t as u32));
+                    }
+                }
+            }
+        }
+        pairs.sort_unstable();
+        let mut offsets = vec![0u32; dims.iter().product::<usize>() + 1];
+        for (c, _) in &pairs {
+            offsets[*c as usize + 1] += 1;
+        }
+        for i in 1..offsets.len() {
+            offsets[i] += offsets[i - 1];
+        }
+        TetGrid { lo, cell, dims, offsets, tets: pairs.into_iter().map(|(_, t)| t).collect() }
+    }
+
+    /// The first tet (by index) holding `p`, if any.
+    fn locate(&self, mesh: &TetMesh, p: Vec3) -> Option<u32> {
+        let c = ((p - self.lo) / self.cell).floor();
+        if c.cmplt(Vec3::ZERO).any() {
+            return None;
+        }
+        let [x, y, z] = [c.x as usize, c.y as usize, c.z as usize];
+        if x >= self.dims[0] || y >= self.dims[1] || z >= self.dims[2] {
+            return None;
+        }
+        let i = x + self.dims[0] * (y + self.dims[1] * z);
+        let range = self.offsets[i] as usize..self.offsets[i + 1] as usize;
+        self.tets[range].iter().copied().find(|&t| mesh.barycentric(t as usize, p).iter().all(|w| *w >= -1e-5))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::fill::model::{MaskRef, Source};
+    use crate::fill::patch::Patch;
+    use crate::fill::render::{View, cut};
+    use crate::fill::tets::cube_lattice;
+    use crate::volume::{Channel, Volume};
+
+    fn side(points: &[[f32; 3]], extrude: Vec3, keep: Vec3) -> Side {
+        let stroke = Stroke { points: points.iter().map(|p| Vec3::from(*p)).collect(), extrude };
+        Side::new(&stroke, keep).unwrap()
+    }
+
+    #[test]
+    fn a_bent_stroke_splits_space_into_the_inside_and_outside_of_its_bend() {
+        // a V in the xy plane, swept along z: inside the V is left of the stroke
+        let v = side(&[[-1.0, 1.0, 0.0], [0.0, 0.0, 0.0], [1.0, 1.0, 0.0]], Vec3::Z, Vec3::new(0.0, 0.5, 0.0));
+        for (p, inside) in
+            [([0.0, 0.5, 3.0], true), ([0.0, -0.5, -2.0], false), ([0.9, 0.95, 0.0], true), ([3.0, 0.0, 0.0], false)]
+        {
+            assert_eq!(v.keeps(Vec3::from(p)), inside, "{p:?}");
+            assert_eq!(v.signed(Vec3::from(p)) > 0.0, inside, "{p:?}");
+        }
+        // the ends continue straight: far along the first segment's line the side holds
+        assert!(v.keeps(Vec3::new(-5.0, 5.5, 0.0)) && !v.keeps(Vec3::new(-5.0, 4.5, 0.0)));
+        let on = Stroke { points: vec![Vec3::ZERO, Vec3::X], extrude: Vec3::Z };
+        assert!(Side::new(&on, Vec3::new(0.5, 0.0, 1.0)).is_err(), "a keep point on the surface is refused");
+        let along = Stroke { points: vec![Vec3::ZERO, Vec3::Z], extrude: Vec3::Z };
+        assert!(Side::new(&along, Vec3::X).is_err(), "a stroke along its own sweep makes no surface");
+    }
+
+    /// The unit cube, one patch whose texture coordinates are the positions, coloured by
+    /// position (R = x, G = y, B = 0.5).
+    fn cube() -> (LstModel, Textures) {
+        let mesh = cube_lattice([4, 4, 4], 0.25);
+        let vertices: Vec<u32> = (0..mesh.vertices.len() as u32).collect();
+        let patch = Patch { source: 0, coords: mesh.vertices.clone(), vertices };
+        let source = Source { exemplar: "ramp".into(), volume: "ramp.exr".into(), mask: MaskRef::File("m.exr".into()) };
+        let tet_patches = vec![vec![0]; mesh.tets.len()];
+        let model = LstModel { mesh, sources: vec![source], patches: vec![patch], tet_patches };
+        let colour = Volume::from_fn([16; 3], Channel::rgb(), |x, y, _, o| {
+            o.copy_from_slice(&[(x as f32 + 0.5) / 16.0, (y as f32 + 0.5) / 16.0, 0.5])
+        })
+        .unwrap();
+        let full = Volume::from_fn([2; 3], vec![Channel::A], |_, _, _, o| o.fill(1.0)).unwrap();
+        (model, Textures::new(&[colour], &[full]))
+    }
+
+    #[test]
+    fn a_straight_stroke_cuts_the_face_the_planar_cut_shows() {
+        let (model, textures) = cube();
+        let size = 64;
+        // the stroke runs along x at z = 0.5 and is swept along y: the plane z = 0.5
+        let stroke = Stroke { points: vec![Vec3::new(-1.0, 0.3, 0.5), Vec3::new(2.0, 0.3, 0.5)], extrude: Vec3::Y };
+        let below = Vec3::new(0.5, 0.5, 0.2);
+        let carved = carve(&model, &textures, std::slice::from_ref(&stroke), below, (0.0, 0.0), size).unwrap();
+        let plane = View::framing((Vec3::ZERO, Vec3::ONE), Vec3::splat(0.5), Vec3::Z, size).unwrap();
+        let planar = cut(&model, &textures, &plane);
+        // looking down -z from +z at the face z = 0.5, lit at 0.35 + 0.65 (n . light)
+        let lit = 0.35 + 0.65 * Vec3::Z.dot(Vec3::new(0.3, 0.6, 1.0).normalize());
+        let mut compared = 0;
+        for y in 4..size - 4 {
+            for x in 4..size - 4 {
+                let (mx, my) =
+                    (0.5 + (x as f32 + 0.5 - 32.0) * 1.08 / 64.0, 0.5 - (y as f32 + 0.5 - 32.0) * 1.08 / 64.0);
+                if !(0.05..0.95).contains(&mx) || !(0.05..0.95).contains(&my) {
+                    continue;
+                }
+                let step = 1.04 / size as f32;
+                let (i, j) = (((mx + 0.02) / step) as usize, ((1.02 - my) / step) as usize);
+                let want = planar.pixels[j * size + i];
+                let got = carved.picture.at(x, y);
+                for k in 0..3 {
+                    let expected = want[k] * lit * 255.0;
+                    assert!(
+                        (got[k] as f32 - expected).abs() < 8.0,
+                        "pixel {x},{y} channel {k}: {got:?} against {want:?}"
+                    );
+                }
+                compared += 1;
+            }
+        }
+        assert!(compared > 2500, "{compared}");
+        assert!(carved.cut_share > 0.6, "the face fills most of the picture: {}", carved.cut_share);
+        // keeping the other side, the camera sees the cube's own top (z = 1): no cut face
+        let above = carve(&model, &textures, &[stroke], Vec3::new(0.5, 0.5, 0.8), (0.0, 0.0), size).unwrap();
+        assert_eq!(above.cut_share, 0.0);
+    }
+}
