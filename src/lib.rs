@@ -7,7 +7,7 @@
 //!  2D photos / cross-sections --> sweep (+noise, +skin) --+
 //!  seed meshes (OBJ/STL/PLY) ---> stamp ------------------+--> Volume --> classify
 //!  2D exemplars (Ex, Ey, Ez) ---> synthesize (Kopf 2007) -+      |
-//!  procedural recipes ----------> marble, strata, wood ---+      +--> masks
+//!  procedural recipes ----------> marble, strata, wood, ..+      +--> masks
 //!                                                                v
 //!              exemplar library (manifest + built files) --> fill backend --> cuts
 //! ```

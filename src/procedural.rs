@@ -19,11 +19,18 @@ pub enum Recipe {
     Strata,
     /// A piece of a log: growth rings around an axis parallel to x, fibres along x.
     Wood,
+    /// Sponge-cake crumb: pale yellow with fine grain (bubbles are scattered on top).
+    Sponge,
+    /// Whipped cream: near white with soft swirls.
+    Cream,
+    /// Chocolate glaze: dark brown with faint lighter streaks.
+    Chocolate,
 }
 
 impl Recipe {
     /// All recipes.
-    pub const ALL: [Recipe; 3] = [Recipe::Marble, Recipe::Strata, Recipe::Wood];
+    pub const ALL: [Recipe; 6] =
+        [Recipe::Marble, Recipe::Strata, Recipe::Wood, Recipe::Sponge, Recipe::Cream, Recipe::Chocolate];
 
     /// The recipe's name in manifests.
     pub fn name(self) -> &'static str {
@@ -31,6 +38,9 @@ impl Recipe {
             Recipe::Marble => "marble",
             Recipe::Strata => "strata",
             Recipe::Wood => "wood",
+            Recipe::Sponge => "sponge",
+            Recipe::Cream => "cream",
+            Recipe::Chocolate => "chocolate",
         }
     }
 
@@ -40,6 +50,7 @@ impl Recipe {
             Recipe::Marble => TextureType::T0,
             Recipe::Strata => TextureType::T1b,
             Recipe::Wood => TextureType::T2a,
+            Recipe::Sponge | Recipe::Cream | Recipe::Chocolate => TextureType::T0,
         }
     }
 }
@@ -54,10 +65,10 @@ impl FromStr for Recipe {
     type Err = Error;
 
     fn from_str(text: &str) -> Result<Recipe> {
-        Recipe::ALL
-            .into_iter()
-            .find(|r| r.name() == text)
-            .ok_or_else(|| Error::invalid(format!("unknown procedural recipe {text:?}; allowed: marble, strata, wood")))
+        Recipe::ALL.into_iter().find(|r| r.name() == text).ok_or_else(|| {
+            let names: Vec<&str> = Recipe::ALL.iter().map(|r| r.name()).collect();
+            Error::invalid(format!("unknown procedural recipe {text:?}; allowed: {}", names.join(", ")))
+        })
     }
 }
 
@@ -79,6 +90,14 @@ pub fn generate(recipe: Recipe, dims: [usize; 3], seed: u64) -> Result<Volume> {
         Recipe::Wood => Volume::from_fn(dims, Channel::rgb(), |x, y, z, o| {
             o.copy_from_slice(&wood(seed, unit(x, y, z, size), size))
         })?,
+        Recipe::Sponge | Recipe::Cream | Recipe::Chocolate => {
+            let paint = match recipe {
+                Recipe::Sponge => sponge,
+                Recipe::Cream => cream,
+                _ => chocolate,
+            };
+            Volume::from_fn(dims, Channel::rgb(), |x, y, z, o| o.copy_from_slice(&paint(seed, unit(x, y, z, size))))?
+        }
     };
     let mut meta = Meta { texture_type: Some(recipe.texture_type()), provenance: Vec::new() };
     meta.set("recipe", format!("procedural:{recipe}"));
@@ -123,6 +142,25 @@ fn wood(seed: u64, p: Vec3, size: Vec3) -> [f32; 3] {
     let late = ((ring - 0.7) / 0.3).clamp(0.0, 1.0);
     let streak = 0.06 * fbm(seed ^ 0x77, Vec3::new(p.x * 2.0, p.y * 40.0, p.z * 40.0), [2, 40, 40], 2);
     mix([0.82, 0.62, 0.40], [0.52, 0.32, 0.18], late).map(|c| c + streak)
+}
+
+fn sponge(seed: u64, p: Vec3) -> [f32; 3] {
+    let crumb = fbm(seed, p * 12.0, [12; 3], 3);
+    let fine = fbm(seed ^ 0x5f, p * 32.0, [32; 3], 2);
+    mix([0.95, 0.82, 0.52], [0.80, 0.62, 0.34], (0.45 + 0.9 * crumb + 0.5 * fine).clamp(0.0, 1.0))
+}
+
+fn cream(seed: u64, p: Vec3) -> [f32; 3] {
+    let swirl = fbm(seed, p * 3.0, [3; 3], 4);
+    let band = (std::f32::consts::TAU * (p.y * 2.0 + 2.0 * swirl)).sin() * 0.5 + 0.5;
+    let grain = 0.015 * fbm(seed ^ 0x3c, p * 24.0, [24; 3], 2);
+    mix([0.99, 0.97, 0.91], [0.93, 0.88, 0.76], 0.35 * band).map(|c| c + grain)
+}
+
+fn chocolate(seed: u64, p: Vec3) -> [f32; 3] {
+    let streak = fbm(seed, Vec3::new(p.x * 2.0, p.y * 6.0, p.z * 2.0), [2, 6, 2], 4);
+    let sheen = (0.5 + 1.2 * streak).clamp(0.0, 1.0).powi(3);
+    mix([0.24, 0.13, 0.07], [0.45, 0.28, 0.17], sheen)
 }
 
 fn mix(a: [f32; 3], b: [f32; 3], t: f32) -> [f32; 3] {

@@ -54,8 +54,9 @@ pub struct CutArgs {
     /// Displacement or a named one (0 black to 1 white).
     #[arg(long, conflicts_with = "stroke")]
     pub channel: Option<String>,
-    /// Cut along a stroke instead of a plane: X,Y,Z;X,Y,Z;... (two or more points) swept
-    /// along --extrude; repeat for several cuts. Draws a lit 3D view of what stays.
+    /// Cut along a stroke instead of a plane: X,Y,Z;X,Y,Z;... (two or more points, `;` or
+    /// `/` between them) swept along --extrude; repeat for several cuts. Draws a lit 3D
+    /// view of what stays.
     #[arg(long, allow_hyphen_values = true, conflicts_with = "plane")]
     pub stroke: Vec<String>,
     /// The direction strokes are swept along, NX,NY,NZ (default: the view direction).
@@ -93,8 +94,9 @@ pub struct BakeArgs {
 /// The arguments of `solidtex view`.
 #[derive(Debug, clap::Args)]
 pub struct ViewArgs {
-    /// The model (.lst).
-    pub model: PathBuf,
+    /// One or more models (.lst); each pixel shows the nearest surface.
+    #[arg(required = true)]
+    pub models: Vec<PathBuf>,
     /// Degrees around the vertical axis, -360 to 360.
     #[arg(long, default_value_t = 35.0, allow_hyphen_values = true)]
     pub yaw: f32,
@@ -425,9 +427,11 @@ fn stroke_values(args: &CutArgs) -> Result<(Vec<fill::carve::Stroke>, Option<gla
         .stroke
         .iter()
         .map(|text| {
-            let points = text.split(';').map(|p| vector("--stroke", p.trim())).collect::<Result<Vec<_>>>()?;
+            let points = text.split([';', '/']).map(|p| vector("--stroke", p.trim())).collect::<Result<Vec<_>>>()?;
             if points.len() < 2 {
-                return Err(Error::invalid(format!("--stroke {text:?}: give two or more points X,Y,Z;X,Y,Z")));
+                return Err(Error::invalid(format!(
+                    "--stroke {text:?}: give two or more points X,Y,Z;X,Y,Z (or X,Y,Z/X,Y,Z)"
+                )));
             }
             Ok(fill::carve::Stroke { points, extrude })
         })
@@ -639,24 +643,20 @@ pub fn run_view(args: &ViewArgs) -> Result<()> {
     };
     checks().map_err(usage)?;
     io::check_folder(&args.output)?;
-    let loaded = load_model(&args.model)?;
+    let loaded = load_models(&args.models)?;
     let started = Instant::now();
     let shading = if args.flat { Shading::Flat } else { Shading::Smooth { crease: args.crease } };
-    let (model, textures) = (&loaded.model, &loaded.textures);
     let camera = (args.yaw, args.pitch);
-    let (picture, note) = match args.displacement {
-        None => (crate::fill::view::surface_shaded(model, textures, camera.0, camera.1, args.size, shading), None),
-        Some(scale) => {
-            let channel = channel_textures(std::slice::from_ref(&loaded), &Channel::Displacement)?.remove(0);
-            let d = crate::fill::view::Displacement { textures: &channel, scale };
-            let (picture, triangles) =
-                crate::fill::view::surface_displaced(model, textures, d, camera, args.size, shading);
-            (
-                picture,
-                Some(format!("  displaced by {scale} x (Displacement - 0.5) along the normal, {triangles} triangles")),
-            )
-        }
+    let relief = match args.displacement {
+        None => None,
+        Some(scale) => Some((channel_textures(&loaded, &Channel::Displacement)?, scale)),
     };
+    let displacement =
+        relief.as_ref().map(|(textures, scale)| crate::fill::view::Displacement { textures, scale: *scale });
+    let (picture, triangles) = crate::fill::view::surfaces(&pairs(&loaded), displacement, camera, args.size, shading);
+    let note = args
+        .displacement
+        .map(|scale| format!("  displaced by {scale} x (Displacement - 0.5) along the normal, {triangles} triangles"));
     let ms = started.elapsed().as_secs_f64() * 1000.0;
     io::write_rgb8(&args.output, &picture)?;
     eprintln!("wrote {} in {ms:.0} ms", args.output.display());

@@ -280,8 +280,9 @@ fn blur_values(args: &BlurArgs) -> Result<glam::Vec3> {
 /// `solidtex draw`.
 #[derive(Debug, clap::Args)]
 pub struct DrawArgs {
-    /// kiwi, carrot or trunk (a cross-section image), seed (a seed mesh), or a closed shape
-    /// to fill: fruit, pipe, log or block.
+    /// kiwi, carrot, trunk or bark (a cross-section or relief image), seed or bubble (a mesh
+    /// to stamp), a closed shape to fill (fruit, pipe, log or block), or cake (a folder of
+    /// layer meshes and their fill specs).
     pub what: String,
     /// Image size WxH, each side 2 to 4096 (columns around the object, rows from the outside in).
     #[arg(long, default_value = "64x64")]
@@ -289,9 +290,53 @@ pub struct DrawArgs {
     /// Seed for the noise.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// The PNG (cross-section) or mesh file (.obj, .stl, .ply) to write.
+    /// The PNG (cross-section) or mesh file (.obj, .stl, .ply) to write; for cake, the
+    /// folder to write (made, or replaced if solidtex wrote it).
     #[arg(short, long)]
     pub output: PathBuf,
+    /// For cake: the library the fill specs name.
+    #[arg(long, default_value = "exemplars/library.toml")]
+    pub library: PathBuf,
+    /// For cake: the folder the fill specs build the library into.
+    #[arg(long, default_value = "out")]
+    pub built: PathBuf,
+}
+
+/// `solidtex draw cake`: the layer meshes and one fill spec per layer, in a folder.
+fn draw_cake(args: &DrawArgs) -> Result<()> {
+    let here = std::env::current_dir().map_err(|e| Error::io(Path::new("."), e))?;
+    let (library, built) = (here.join(&args.library), here.join(&args.built));
+    if !library.is_file() {
+        return Err(Error::file(&library, "the library for the cake's fill specs does not exist (--library)"));
+    }
+    let layers = crate::mesh::shapes::cake();
+    io::write_folder(&args.output, |dir| {
+        for layer in &layers {
+            io::mesh_file::write_mesh(&dir.join(format!("{}.obj", layer.name)), &layer.mesh)?;
+            let spec = format!(
+                "# The cake's {name} layer, written by `solidtex draw cake`. Fill it with\n\
+                 #   solidtex fill {name}.obj --spec {name}.toml -o {name}.lst\n\
+                 exemplar = \"{exemplar}\"\nlibrary = {library:?}\nbuilt = {built:?}\ntype = \"0\"\n\
+                 scale = {scale}\ntets = {tets}\nseed = 1\n",
+                name = layer.name,
+                exemplar = layer.exemplar,
+                scale = layer.scale,
+                tets = layer.tets,
+            );
+            io::write_bytes(&dir.join(format!("{}.toml", layer.name)), spec.as_bytes())?;
+        }
+        Ok(())
+    })?;
+    let names: Vec<&str> = layers.iter().map(|l| l.name).collect();
+    eprintln!("wrote {} (layers {}, each a mesh and a fill spec)", args.output.display(), names.join(", "));
+    let dir = args.output.display();
+    eprintln!(
+        "  fill each:  for l in {}; do solidtex fill {dir}/$l.obj --spec {dir}/$l.toml -o {dir}/$l.lst; done",
+        names.join(" ")
+    );
+    let models: Vec<String> = names.iter().map(|n| format!("{dir}/{n}.lst")).collect();
+    eprintln!("  then:       solidtex cut {} --plane 0,0.5,0,0,0,1 -o cake_cut.png", models.join(" "));
+    Ok(())
 }
 
 /// `WxH` with each side 2 to 4096 pixels.
@@ -307,9 +352,15 @@ fn draw_size(text: &str) -> Result<(usize, usize)> {
 
 /// Run `solidtex draw`.
 pub fn run_draw(args: &DrawArgs) -> Result<()> {
+    if args.what == "cake" {
+        return draw_cake(args);
+    }
     io::check_folder(&args.output)?;
-    if args.what == "seed" {
-        let mesh = crate::sections::seed_mesh(32, 32)?;
+    if args.what == "seed" || args.what == "bubble" {
+        let mesh = match args.what.as_str() {
+            "seed" => crate::sections::seed_mesh(32, 32)?,
+            _ => crate::mesh::shapes::ellipsoid(glam::Vec3::ONE, 8, 12),
+        };
         io::mesh_file::write_mesh(&args.output, &mesh)?;
         eprintln!("wrote {} ({} triangles)", args.output.display(), mesh.triangles.len());
         return Ok(());

@@ -127,9 +127,9 @@ pub fn carve(
         return Err(Error::invalid("no stroke to cut by"));
     }
     let sides = strokes.iter().map(|s| Side::new(s, keep)).collect::<Result<Vec<_>>>()?;
-    let frame = Frame::new(model, camera, size);
+    let frame = Frame::new(&[model], camera, size);
     let shading = Shading::Smooth { crease: super::view::DEFAULT_CREASE };
-    let mut hits = rasterize(&facets(model, shading), &frame, |p| sides.iter().all(|s| s.keeps(p)));
+    let mut hits = rasterize(&facets(model, 0, shading), &frame, |p| sides.iter().all(|s| s.keeps(p)));
     let boundary: Vec<Option<f32>> = hits.iter().map(|h| h.map(|h| h.depth)).collect();
     let grid = TetGrid::new(&model.mesh);
     let reach = reach(&model.mesh, &strokes.iter().flat_map(|s| s.points.iter().copied()).collect::<Vec<_>>());
@@ -142,13 +142,13 @@ pub fn carve(
                 draw_triangle(&mut hits, size, tri.map(|p| frame.to_pixel(p)), |b| {
                     let p = tri[0] * b[0] + tri[1] * b[1] + tri[2] * b[2];
                     let tet = grid.locate(&model.mesh, p)?;
-                    others(p).then_some(Hit { depth: frame.forward.dot(p), tet, point: p, normal: facing })
+                    others(p).then_some(Hit { depth: frame.forward.dot(p), model: 0, tet, point: p, normal: facing })
                 });
             }
         }
     }
     let cut = hits.iter().zip(&boundary).filter(|(h, b)| h.is_some_and(|h| **b != Some(h.depth))).count();
-    Ok(Carving { picture: frame.shade(model, textures, &hits), cut_share: cut as f64 / (size * size) as f64 })
+    Ok(Carving { picture: frame.shade(&[(model, textures)], &hits), cut_share: cut as f64 / (size * size) as f64 })
 }
 
 /// A length that carries a stroke's surface past the model on every side.

@@ -167,8 +167,8 @@ impl Cut {
     }
 
     /// Seam strength: the mean colour step (RGB distance) between neighbouring pixels
-    /// where the patch that shows most changes, over the mean step between neighbours of
-    /// the same patch. 1 means a patch border is as smooth as the texture inside a patch;
+    /// where the patch that shows most changes (within one model), over the mean step
+    /// between neighbours of the same patch. 1 means a patch border is as smooth as the texture inside a patch;
     /// `None` when the cut has no border or no pair inside one patch.
     pub fn seam_strength(&self) -> Option<f64> {
         let (mut across, mut within) = ((0.0f64, 0usize), (0.0f64, 0usize));
@@ -178,7 +178,8 @@ impl Cut {
                 let i = y * w + x;
                 for j in [(x + 1 < w).then_some(i + 1), (y + 1 < h).then_some(i + w)].into_iter().flatten() {
                     let (a, b) = (self.patches[i], self.patches[j]);
-                    if a == NO_PATCH || b == NO_PATCH {
+                    // outside, or where one model (material) meets another: no seam
+                    if a == NO_PATCH || b == NO_PATCH || a / MODEL_STRIDE != b / MODEL_STRIDE {
                         continue;
                     }
                     let (p, q) = (self.pixels[i], self.pixels[j]);

@@ -20,6 +20,8 @@ use rayon::prelude::*;
 pub(super) struct Hit {
     /// Distance along the view direction (nearest wins).
     pub depth: f32,
+    /// Which of the models drawn.
+    pub model: u32,
     /// The tet whose patches colour the point.
     pub tet: u32,
     /// The point sampled for colour.
@@ -41,15 +43,14 @@ pub(super) struct Frame {
 }
 
 impl Frame {
-    /// The camera `yaw`/`pitch` degrees around the model, its vertices filling the
+    /// The camera `yaw`/`pitch` degrees around the models, their vertices filling the
     /// picture with a margin.
-    pub fn new(model: &LstModel, (yaw, pitch): (f32, f32), size: usize) -> Frame {
+    pub fn new(models: &[&LstModel], (yaw, pitch): (f32, f32), size: usize) -> Frame {
         let (forward, right, up) = camera(yaw, pitch);
         let project = |p: Vec3| Vec2::new(right.dot(p), up.dot(p));
-        let (lo, hi) = model
-            .mesh
-            .vertices
+        let (lo, hi) = models
             .iter()
+            .flat_map(|m| m.mesh.vertices.iter())
             .fold((Vec2::INFINITY, Vec2::NEG_INFINITY), |(a, b), p| (a.min(project(*p)), b.max(project(*p))));
         let side = (hi - lo).max_element().max(1e-6) * 1.08;
         Frame { forward, right, up, centre: (lo + hi) / 2.0, scale: size as f32 / side, size }
@@ -68,13 +69,14 @@ impl Frame {
 
     /// The picture of `hits`: each point's composited colour, lit by a light over the
     /// viewer's shoulder.
-    pub fn shade(&self, model: &LstModel, textures: &Textures, hits: &[Option<Hit>]) -> Rgb8 {
+    pub fn shade(&self, models: &[(&LstModel, &Textures)], hits: &[Option<Hit>]) -> Rgb8 {
         let light = (self.up * 0.6 - self.forward + self.right * 0.3).normalize();
         let colours: Vec<[u8; 3]> = hits
             .par_iter()
             .map(|hit| match hit {
                 None => BACKGROUND,
                 Some(h) => {
+                    let (model, textures) = models[h.model as usize];
                     let c = shade_point(model, textures, h.tet as usize, h.point);
                     let lit = 0.35 + 0.65 * h.normal.dot(light).max(0.0);
                     [c[0], c[1], c[2]].map(|v| to_u8(v * lit))
@@ -121,7 +123,7 @@ pub fn surface_shaded(
     size: usize,
     shading: Shading,
 ) -> Rgb8 {
-    draw(model, textures, None, (yaw, pitch), size, shading).0
+    surfaces(&[(model, textures)], None, (yaw, pitch), size, shading).0
 }
 
 /// Displacement mapping (thesis §7, Figs. 5.1d and 7.1c): the surface moved along its
@@ -129,8 +131,8 @@ pub fn surface_shaded(
 /// the surface.
 #[derive(Clone, Copy)]
 pub struct Displacement<'a> {
-    /// Textures sampling the displacement (see [`Textures::channel`]).
-    pub textures: &'a Textures,
+    /// Per model, textures sampling the displacement (see [`Textures::channel`]).
+    pub textures: &'a [Textures],
     /// Model units per unit of displacement.
     pub scale: f32,
 }
@@ -141,36 +143,32 @@ pub const MIDLEVEL: f32 = 0.5;
 /// The finest subdivision of a boundary face: its edges split in this many parts.
 const MAX_LEVEL: usize = 32;
 
-/// [`surface_shaded`] with the boundary subdivided (triangles about two pixels across)
-/// and displaced, lit by the displaced triangles' normals; also the triangles drawn.
-pub fn surface_displaced(
-    model: &LstModel,
-    textures: &Textures,
-    displacement: Displacement,
-    (yaw, pitch): (f32, f32),
-    size: usize,
-    shading: Shading,
-) -> (Rgb8, usize) {
-    draw(model, textures, Some(displacement), (yaw, pitch), size, shading)
-}
-
-fn draw(
-    model: &LstModel,
-    textures: &Textures,
+/// The surfaces of several models (each pixel shows the nearest), seen from `camera`
+/// (yaw, pitch degrees); with a displacement, the boundary is subdivided into triangles
+/// about two pixels across and displaced, lit by the displaced triangles' normals. Also
+/// the triangles drawn.
+pub fn surfaces(
+    models: &[(&LstModel, &Textures)],
     displacement: Option<Displacement>,
     camera: (f32, f32),
     size: usize,
     shading: Shading,
 ) -> (Rgb8, usize) {
-    let frame = Frame::new(model, camera, size);
-    let mut facets = facets(model, shading);
-    if let Some(d) = displacement {
-        let edges = facets.iter().flat_map(|f| (0..3).map(|k| (f.shown[k] - f.shown[(k + 1) % 3]).length()));
-        let pixels = edges.fold(0.0f32, f32::max) / frame.pixel();
-        facets = displaced(model, &facets, d, ((pixels / 2.0).ceil() as usize).clamp(1, MAX_LEVEL));
+    let meshes: Vec<&LstModel> = models.iter().map(|(m, _)| *m).collect();
+    let frame = Frame::new(&meshes, camera, size);
+    let mut all = Vec::new();
+    for (i, (model, _)) in models.iter().enumerate() {
+        let mut facets = facets(model, i as u32, shading);
+        if let Some(d) = displacement {
+            let edges = facets.iter().flat_map(|f| (0..3).map(|k| (f.shown[k] - f.shown[(k + 1) % 3]).length()));
+            let pixels = edges.fold(0.0f32, f32::max) / frame.pixel();
+            let level = ((pixels / 2.0).ceil() as usize).clamp(1, MAX_LEVEL);
+            facets = displaced(model, &facets, &d.textures[i], d.scale, level);
+        }
+        all.extend(facets);
     }
-    let hits = rasterize(&facets, &frame, |_| true);
-    (frame.shade(model, textures, &hits), facets.len())
+    let hits = rasterize(&all, &frame, |_| true);
+    (frame.shade(models, &hits), all.len())
 }
 
 /// The axes of an orthographic camera `yaw` degrees around y and `pitch` degrees up from
@@ -243,6 +241,7 @@ fn corner_normals(faces: &[Face], shading: Shading) -> Vec<[Vec3; 3]> {
 /// colour is sampled at (on the boundary, a little inside its tet), its tet and the
 /// shading normal at each corner.
 pub(super) struct Facet {
+    model: u32,
     tet: u32,
     shown: [Vec3; 3],
     sampled: [Vec3; 3],
@@ -262,8 +261,9 @@ fn at<T: std::ops::Mul<f32, Output = T> + std::ops::Add<Output = T> + Copy>(v: [
     v[0] * b[0] + v[1] * b[1] + v[2] * b[2]
 }
 
-/// The boundary faces as facets, with their corner normals under `shading`.
-pub(super) fn facets(model: &LstModel, shading: Shading) -> Vec<Facet> {
+/// The boundary faces of model number `index` as facets, with their corner normals under
+/// `shading`.
+pub(super) fn facets(model: &LstModel, index: u32, shading: Shading) -> Vec<Facet> {
     let faces = boundary_faces(model);
     let normals = corner_normals(&faces, shading);
     faces
@@ -272,14 +272,14 @@ pub(super) fn facets(model: &LstModel, shading: Shading) -> Vec<Facet> {
         .map(|(f, normals)| {
             let p = f.corners;
             let inward = (model.mesh.centroid(f.tet) - (p[0] + p[1] + p[2]) / 3.0) * 1e-3;
-            Facet { tet: f.tet as u32, shown: p, sampled: p.map(|c| c + inward), normals }
+            Facet { model: index, tet: f.tet as u32, shown: p, sampled: p.map(|c| c + inward), normals }
         })
         .collect()
 }
 
 /// Each facet split into `level`² triangles whose corners move along the blended normal
 /// by `scale x (d - MIDLEVEL)`; every new triangle is lit by its own normal.
-fn displaced(model: &LstModel, facets: &[Facet], d: Displacement, level: usize) -> Vec<Facet> {
+fn displaced(model: &LstModel, facets: &[Facet], textures: &Textures, scale: f32, level: usize) -> Vec<Facet> {
     let row = |j: usize| (0..j).map(|r| level + 1 - r).sum::<usize>();
     facets
         .par_iter()
@@ -291,8 +291,8 @@ fn displaced(model: &LstModel, facets: &[Facet], d: Displacement, level: usize) 
                     let b = [1.0 - s - t, s, t];
                     let sampled = at(f.sampled, b);
                     let normal = at(f.normals, b).normalize_or(f.normal());
-                    let value = shade_point(model, d.textures, f.tet as usize, sampled)[0];
-                    corners.push((sampled, at(f.shown, b) + normal * d.scale * (value - MIDLEVEL)));
+                    let value = shade_point(model, textures, f.tet as usize, sampled)[0];
+                    corners.push((sampled, at(f.shown, b) + normal * scale * (value - MIDLEVEL)));
                 }
             }
             let id = move |i: usize, j: usize| row(j) + i;
@@ -305,10 +305,10 @@ fn displaced(model: &LstModel, facets: &[Facet], d: Displacement, level: usize) 
                     }
                 }
             }
-            let tet = f.tet;
+            let (model, tet) = (f.model, f.tet);
             out.into_iter().map(move |k| {
                 let shown = k.map(|c| corners[c].1);
-                let mut facet = Facet { tet, shown, sampled: k.map(|c| corners[c].0), normals: [Vec3::ZERO; 3] };
+                let mut facet = Facet { model, tet, shown, sampled: k.map(|c| corners[c].0), normals: [Vec3::ZERO; 3] };
                 facet.normals = [facet.normal(); 3];
                 facet
             })
@@ -328,6 +328,7 @@ pub(super) fn rasterize(facets: &[Facet], frame: &Frame, keep: impl Fn(Vec3) -> 
             let shown = at(f.shown, b);
             keep(shown).then(|| Hit {
                 depth: frame.forward.dot(shown),
+                model: f.model,
                 tet: f.tet,
                 point: at(f.sampled, b),
                 normal: at(f.normals, b).normalize_or(flat),
@@ -420,9 +421,8 @@ mod tests {
             .unwrap();
         let full = Volume::from_fn([2; 3], vec![Channel::A], |_, _, _, o| o.fill(1.0)).unwrap();
         let textures = Textures::channel(&[ramp], &[full], &[Channel::Displacement]).unwrap();
-        let d = Displacement { textures: &textures, scale: 0.2 };
-        let plain = facets(&model, Shading::Smooth { crease: DEFAULT_CREASE });
-        let moved = displaced(&model, &plain, d, 4);
+        let plain = facets(&model, 0, Shading::Smooth { crease: DEFAULT_CREASE });
+        let moved = displaced(&model, &plain, &textures, 0.2, 4);
         assert_eq!(moved.len(), plain.len() * 16);
         let mut checked = 0;
         for f in moved.iter().filter(|f| f.sampled.iter().all(|p| p.y > 0.99)) {
@@ -437,7 +437,7 @@ mod tests {
         }
         assert!(checked > 500, "{checked} corners on the top face");
         // no displacement channel, no move: scale 0 leaves every corner on the face
-        let still = displaced(&model, &plain, Displacement { scale: 0.0, ..d }, 2);
+        let still = displaced(&model, &plain, &textures, 0.0, 2);
         assert!(still.iter().all(|f| f.shown.iter().zip(f.sampled).all(|(a, b)| (*a - b).length() < 2e-3)));
     }
 

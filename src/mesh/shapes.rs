@@ -3,6 +3,7 @@
 //! All are outward-facing and watertight (shared vertices, no seams).
 
 use super::Mesh;
+use glam::Affine3A;
 use glam::Vec3;
 use std::f32::consts::{PI, TAU};
 
@@ -100,6 +101,44 @@ pub fn cuboid(lo: Vec3, hi: Vec3) -> Mesh {
     let quads = [[0, 2, 3, 1], [4, 5, 7, 6], [0, 1, 5, 4], [2, 6, 7, 3], [0, 4, 6, 2], [1, 3, 7, 5]];
     let triangles = quads.iter().flat_map(|&[a, b, c, d]| [[a, b, c], [a, c, d]]).collect();
     Mesh::new(vertices, triangles).expect("a valid box").oriented()
+}
+
+/// One layer of the cake `solidtex draw cake` makes: its file stem, its mesh, and how to
+/// fill it (the library exemplar, the texture scale in model units, the tet count).
+pub struct CakeLayer {
+    /// File stem, e.g. `sponge-low`.
+    pub name: &'static str,
+    /// A closed disc of the cake, its axis vertical (y).
+    pub mesh: Mesh,
+    /// The exemplar that fills it.
+    pub exemplar: &'static str,
+    /// Texture cube side in model units.
+    pub scale: f32,
+    /// Tets asked for.
+    pub tets: usize,
+}
+
+/// A round layer cake of radius 1 standing on y = 0: sponge, cream, sponge and a thin
+/// chocolate glaze on top (thesis Fig. 7.2d), each layer its own closed mesh; neighbouring
+/// layers share their flat faces.
+pub fn cake() -> Vec<CakeLayer> {
+    // (name, exemplar, bottom, top, scale, tets): thinner layers get more tets so the
+    // lattice has cells across them
+    let layers = [
+        ("sponge-low", "sponge", 0.0, 0.42, 0.9, 5000),
+        ("cream", "cream", 0.42, 0.56, 0.7, 8000),
+        ("sponge-high", "sponge", 0.56, 0.98, 0.9, 5000),
+        ("glaze", "chocolate", 0.98, 1.08, 0.6, 12000),
+    ];
+    let stand_up = Affine3A::from_rotation_x(-std::f32::consts::FRAC_PI_2);
+    layers
+        .into_iter()
+        .map(|(name, exemplar, bottom, top, scale, tets)| {
+            let disc = cylinder(1.0, top - bottom, 96, 2);
+            let mesh = disc.transformed(Affine3A::from_translation(Vec3::new(0.0, bottom, 0.0)) * stand_up);
+            CakeLayer { name, mesh, exemplar, scale, tets }
+        })
+        .collect()
 }
 
 /// The named shapes `solidtex draw` makes, in model units of about 2.

@@ -93,9 +93,22 @@ fn build_makes_the_default_library() {
     let run = solidtex(&["build", manifest, "-o", &out]);
     assert!(run.status.success(), "{}", stderr(&run));
     assert!(stderr(&run).contains("built  wood 64x64x64"), "{}", stderr(&run));
-    assert!(stderr(&run).contains("10 built, 0 cached, 0 failed"), "{}", stderr(&run));
+    assert!(stderr(&run).contains("13 built, 0 cached, 0 failed"), "{}", stderr(&run));
     let names = listing(&dir.path().join("lib"));
-    for name in ["marble", "strata", "wood", "kiwi", "carrot", "trunk", "gravel", "grass", "brick"] {
+    for name in [
+        "marble",
+        "strata",
+        "wood",
+        "kiwi",
+        "carrot",
+        "trunk",
+        "gravel",
+        "grass",
+        "brick",
+        "sponge",
+        "cream",
+        "chocolate",
+    ] {
         assert!(names.contains(&format!("{name}.exr")) && names.contains(&format!("{name}.sheet.png")), "{names:?}");
     }
     for extra in ["marble-synth.mask.exr", "marble-synth.nrrd", "kiwi.masks", "report.md", "report.html"] {

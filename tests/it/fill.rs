@@ -457,6 +457,57 @@ fn stroke_cuts_show_the_inside_of_what_they_keep() {
 }
 
 #[test]
+fn a_cake_of_four_fills_shows_every_layer_without_gaps() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let cake = at(d, "cake");
+    let run = solidtex(&["draw", "cake", "-o", &cake, "--library", &library(), "--built", &at(d, "built")]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let layers = ["sponge-low", "cream", "sponge-high", "glaze"];
+    let mut models = Vec::new();
+    for layer in layers {
+        let (mesh, spec) = (format!("{cake}/{layer}.obj"), format!("{cake}/{layer}.toml"));
+        let out = format!("{cake}/{layer}.lst");
+        let run = solidtex(&["fill", &mesh, "--spec", &spec, "-o", &out]);
+        assert!(run.status.success(), "{layer}: {}", stderr(&run));
+        assert!(!stderr(&run).contains("holds"), "{layer} keeps its volume: {}", stderr(&run));
+        models.push(out);
+    }
+    // a vertical cut through the axis: 128 px span 2 x 1.04 units; y from 0 to 1.08
+    let png = at(d, "cut.png");
+    let mut args: Vec<&str> = vec!["cut"];
+    args.extend(models.iter().map(String::as_str));
+    args.extend(["--plane", "0,0.5,0,0,0,1", "--size", "128", "-o", &png]);
+    let run = solidtex(&args);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let img = image::open(&png).unwrap().to_rgb8();
+    let (step, top) = (2.08 / 128.0, 64.0 - 0.54 / (2.08 / 128.0));
+    let at_height = |y: f32| img.get_pixel(64, (top + (1.08 - y) / step) as u32).0.map(|c| c as f32 / 255.0);
+    let column: Vec<[f32; 3]> = (1..54).map(|k| at_height(k as f32 * 0.02)).collect();
+    assert!(column.iter().all(|c| *c != [24.0 / 255.0, 24.0 / 255.0, 28.0 / 255.0]), "a gap in the column");
+    let (sponge, cream, glaze) = (at_height(0.2), at_height(0.49), at_height(1.03));
+    assert!(sponge[0] > 0.5 && sponge[2] < 0.6 * sponge[0], "sponge is yellow: {sponge:?}");
+    assert!(cream.iter().all(|c| *c > 0.85), "cream is near white: {cream:?}");
+    assert!(glaze[0] < 0.55 && glaze[0] > glaze[2], "the glaze is dark brown: {glaze:?}");
+    assert!(at_height(0.8)[2] < 0.6 * at_height(0.8)[0], "sponge again above the cream");
+    // the surface view and the volume rendering take all four too
+    let view = at(d, "view.png");
+    let mut args: Vec<&str> = vec!["view"];
+    args.extend(models.iter().map(String::as_str));
+    args.extend(["--size", "96", "-o", &view]);
+    assert!(solidtex(&args).status.success());
+    // drawing again is refused while the folder holds files it did not write (the fills);
+    // a fresh folder is drawn again in place, until the user adds a file
+    assert!(!solidtex(&["draw", "cake", "-o", &cake, "--library", &library()]).status.success());
+    let fresh = at(d, "fresh");
+    assert!(solidtex(&["draw", "cake", "-o", &fresh, "--library", &library()]).status.success());
+    assert!(solidtex(&["draw", "cake", "-o", &fresh, "--library", &library()]).status.success());
+    std::fs::write(d.join("fresh/notes.txt"), "mine").unwrap();
+    assert!(!solidtex(&["draw", "cake", "-o", &fresh, "--library", &library()]).status.success());
+    assert_eq!(std::fs::read_to_string(d.join("fresh/notes.txt")).unwrap(), "mine");
+}
+
+#[test]
 fn a_manual_paste_shows_on_top_of_the_automatic_fill() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();

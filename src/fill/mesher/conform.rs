@@ -3,6 +3,7 @@
 //! against the surface are given up, and the vertices around poor tets are eased.
 
 use super::closest::Surface;
+use super::features::Features;
 use crate::fill::tets::{FACES, NONE, TetMesh};
 use glam::Vec3;
 use rayon::prelude::*;
@@ -22,9 +23,14 @@ const SMOOTH_BELOW: f32 = 40.0;
 /// How many sweeps of smoothing there are.
 const SMOOTHING_PASSES: usize = 2;
 
+/// How far from a crease (in lengths of the boundary edge that crosses it) a vertex may be
+/// moved onto it.
+const CREASE_REACH: f32 = 0.75;
+
 /// Moves the boundary vertices of `mesh` onto `surface`, gives up the tets that would be
-/// flattened, eases and smooths, and drops loose tets and unused vertices.
-pub(super) fn conform(mesh: &mut TetMesh, surface: &Surface) {
+/// flattened, moves vertices onto the creases the boundary cuts across, eases and smooths,
+/// and drops loose tets and unused vertices.
+pub(super) fn conform(mesh: &mut TetMesh, surface: &Surface, features: &Features) {
     let mut work = Work::new(mesh);
     for _ in 0..ROUNDS {
         let stuck = work.snap_boundary(surface);
@@ -33,11 +39,13 @@ pub(super) fn conform(mesh: &mut TetMesh, surface: &Surface) {
             work.give_up(&blockers);
             continue;
         }
-        work.relax(surface);
+        work.relax(surface, &[]);
         if stuck.is_empty() {
             break;
         }
     }
+    let on_crease = work.align_creases(surface, features);
+    work.relax(surface, &on_crease);
     work.smooth();
     work.finish();
 }
@@ -157,9 +165,93 @@ impl<'a> Work<'a> {
         corners
     }
 
-    /// Eases the corners of the poor tets (boundary vertices along the surface).
-    fn relax(&mut self, surface: &Surface) {
+    /// The edges of the boundary faces of the live tets, each once, sorted.
+    fn boundary_edges(&self) -> Vec<(u32, u32)> {
+        let mut edges = Vec::new();
+        for (t, tet) in self.mesh.tets.iter().enumerate().filter(|(t, _)| self.alive[*t]) {
+            for (k, face) in FACES.iter().enumerate() {
+                let across = self.neighbours[t][k];
+                if across == NONE || !self.alive[across as usize] {
+                    let f = face.map(|s| tet[s]);
+                    edges.extend([(f[0], f[1]), (f[1], f[2]), (f[2], f[0])].map(|(a, b)| (a.min(b), a.max(b))));
+                }
+            }
+        }
+        edges.sort_unstable();
+        edges.dedup();
+        edges
+    }
+
+    /// Where a boundary edge joins vertices whose closest surface points lie on two
+    /// different patches (it cuts across a crease), moves the endpoint nearer the crease
+    /// onto it (as far as the tets stay good), so the boundary follows sharp edges.
+    /// Which vertices it put on a crease.
+    fn align_creases(&mut self, surface: &Surface, features: &Features) -> Vec<bool> {
+        if features.creases.is_empty() {
+            return Vec::new();
+        }
+        let vertices = &self.mesh.vertices;
+        let patch: Vec<u32> = (0..vertices.len())
+            .into_par_iter()
+            .map(|v| if self.boundary[v] { features.patch[surface.closest_triangle(vertices[v]).0] } else { u32::MAX })
+            .collect();
+        let mut on_crease = vec![false; vertices.len()];
+        self.snap_corners(features, &mut on_crease);
+        let edges = self.boundary_edges();
+        for (a, b) in edges.iter().chain(&edges).copied() {
+            let (a, b) = (a as usize, b as usize);
+            if on_crease[a] || on_crease[b] || patch[a] == patch[b] {
+                continue;
+            }
+            let (pa, pb) = (self.mesh.vertices[a], self.mesh.vertices[b]);
+            let reach = CREASE_REACH * pa.distance(pb);
+            // only the creases between the two patches
+            let pair = (patch[a].min(patch[b]), patch[a].max(patch[b]));
+            let between = features.creases.iter().zip(&features.sides).filter(|(_, s)| **s == pair).map(|(c, _)| c);
+            let (Some(ca), Some(cb)) = (nearest_on(between.clone(), pa), nearest_on(between, pb)) else { continue };
+            let mut order = [(a, ca, pa.distance(ca)), (b, cb, pb.distance(cb))];
+            if order[1].2 < order[0].2 {
+                order.swap(0, 1);
+            }
+            for (v, target, distance) in order {
+                if distance <= reach && self.move_towards(v as u32, target) {
+                    on_crease[v] = true;
+                    break;
+                }
+            }
+        }
+        on_crease
+    }
+
+    /// Moves the boundary vertex nearest each corner of the surface (where three creases
+    /// meet) onto it, if it is within a lattice cell and the tets stay good.
+    fn snap_corners(&mut self, features: &Features, on_crease: &mut [bool]) {
+        let boundary: Vec<u32> = (0..self.mesh.vertices.len() as u32).filter(|&v| self.boundary[v as usize]).collect();
+        let cell = crate::fill::mean_edge(self.mesh);
+        for corner in &features.corners {
+            let nearest = boundary.iter().copied().filter(|&v| !on_crease[v as usize]).min_by(|&a, &b| {
+                let (da, db) = (
+                    self.mesh.vertices[a as usize].distance(*corner),
+                    self.mesh.vertices[b as usize].distance(*corner),
+                );
+                da.total_cmp(&db).then(a.cmp(&b))
+            });
+            if let Some(v) = nearest
+                && self.mesh.vertices[v as usize].distance(*corner) <= cell
+                && self.move_towards(v, *corner)
+            {
+                on_crease[v as usize] = true;
+            }
+        }
+    }
+
+    /// Eases the corners of the poor tets (boundary vertices along the surface), but not
+    /// the `fixed` ones.
+    fn relax(&mut self, surface: &Surface, fixed: &[bool]) {
         for v in self.corners_of_poor_tets(EASE_BELOW) {
+            if fixed.get(v as usize).copied().unwrap_or(false) {
+                continue;
+            }
             let best = ease(self, v, self.boundary[v as usize].then_some(surface));
             self.mesh.vertices[v as usize] = best;
         }
@@ -196,6 +288,21 @@ impl<'a> Work<'a> {
         });
         drop_unused(self.mesh);
     }
+}
+
+/// The closest point to `p` on any of `segments` (none if there are none).
+fn nearest_on<'s>(segments: impl Iterator<Item = &'s [Vec3; 2]>, p: Vec3) -> Option<Vec3> {
+    let mut best = (f32::INFINITY, None);
+    for [a, b] in segments {
+        let d = *b - *a;
+        let t = ((p - *a).dot(d) / d.length_squared().max(f32::MIN_POSITIVE)).clamp(0.0, 1.0);
+        let q = *a + d * t;
+        let distance = q.distance_squared(p);
+        if distance < best.0 {
+            best = (distance, Some(q));
+        }
+    }
+    best.1
 }
 
 /// The position that most raises the smallest dihedral angle around `v`: a pattern search
