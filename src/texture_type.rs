@@ -107,7 +107,9 @@ impl TextureType {
                 "outer/middle/inner masks by depth; scale 1/|grad depth| so the skin lands on the surface"
             }
             TextureType::T2c | TextureType::T2d => {
-                "not tileable enough for lapping; the prototype and solidtex do not fill these"
+                "not lapped: every patch would have to sit at the same place in the exemplar along the \
+                 axes it varies on, so copies of its one-of-a-kind parts would land all over the model \
+                 (docs/fill.md); fill the tileable part as 2-b and stamp the rest"
             }
         }
     }

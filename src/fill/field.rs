@@ -95,7 +95,9 @@ fn check_required(kind: TextureType, c: &Constraints) -> Result<()> {
     let needs = |what: &str| Err(Error::invalid(format!("texture type {kind} needs {what} in the fill spec")));
     match kind {
         TextureType::T2c | TextureType::T2d => Err(Error::invalid(format!(
-            "texture type {kind} cannot be filled (not tileable enough for lapping); allowed: 0, 1-a, 1-b, 2-a, 2-b"
+            "texture type {kind} cannot be filled: it varies along more axes than lapped patches can follow \
+             (copies of its one-of-a-kind parts would land all over the model; see docs/fill.md); \
+             allowed: 0, 1-a, 1-b, 2-a, 2-b"
         ))),
         TextureType::T1a if c.directions.is_empty() => needs("at least one direction stroke ([[direction]])"),
         TextureType::T2a | TextureType::T2b if c.directions.is_empty() => {

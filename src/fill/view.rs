@@ -241,16 +241,16 @@ fn corner_normals(faces: &[Face], shading: Shading) -> Vec<[Vec3; 3]> {
 /// colour is sampled at (on the boundary, a little inside its tet), its tet and the
 /// shading normal at each corner.
 pub(super) struct Facet {
-    model: u32,
-    tet: u32,
-    shown: [Vec3; 3],
-    sampled: [Vec3; 3],
-    normals: [Vec3; 3],
+    pub model: u32,
+    pub tet: u32,
+    pub shown: [Vec3; 3],
+    pub sampled: [Vec3; 3],
+    pub normals: [Vec3; 3],
 }
 
 impl Facet {
     /// The unit normal of the shown triangle (outward, as the boundary faces are).
-    fn normal(&self) -> Vec3 {
+    pub fn normal(&self) -> Vec3 {
         let s = self.shown;
         (s[1] - s[0]).cross(s[2] - s[0]).normalize_or_zero()
     }
