@@ -59,10 +59,10 @@ grep -q "^# The default exemplar library" "$out/lib/library.toml" || { echo "tui
 press "solidtex library" 5 Escape
 # stamp mode: a seed moved, stamped and saved as a manifest step
 press "XY z=" 10 Enter
-press "stamp mode (kiwi_seed.obj)" 10 m
+press "stamp mode (bubble.obj)" 10 m
 press "stamped" 5 Right Right r + Enter
 press "saved the steps" 5 s
-grep -q '^  stamp = "kiwi_seed.obj"' "$out/lib/library.toml" || { echo "tui e2e: the stamp step was not saved"; exit 1; }
+grep -q '^  stamp = "bubble.obj"' "$out/lib/library.toml" || { echo "tui e2e: the stamp step was not saved"; exit 1; }
 press "solidtex library" 5 Escape
 # b. a build cancelled mid-synthesis says so and keeps the previous output byte for byte
 press "built marble-synth" 120 Up Up Up Down Down Down Down Down Down b
