@@ -59,7 +59,7 @@ pub struct CutArgs {
     /// view of what stays.
     #[arg(long, allow_hyphen_values = true, conflicts_with = "plane")]
     pub stroke: Vec<String>,
-    /// The direction strokes are swept along, NX,NY,NZ (default: the view direction).
+    /// The direction strokes are swept along, NX,NY,NZ (needed with --stroke).
     #[arg(long, allow_hyphen_values = true, requires = "stroke")]
     pub extrude: Option<String>,
     /// A point on the side of every stroke to keep, X,Y,Z (default: the model's centre).
@@ -333,8 +333,10 @@ impl Progress for Bar {
 struct Loaded {
     model: LstModel,
     textures: Textures,
-    /// Each source's exemplar volume (every channel), and where it was read.
-    volumes: Vec<(Volume, PathBuf)>,
+    /// Each source's exemplar volume (every channel).
+    volumes: Vec<Volume>,
+    /// Where each was read.
+    files: Vec<PathBuf>,
     masks: Vec<Volume>,
 }
 
@@ -342,8 +344,7 @@ impl Loaded {
     /// Textures sampling the first of `wanted` each source has; `Err` names the volume
     /// file that has none.
     fn channel(&self, wanted: &[Channel]) -> std::result::Result<Textures, &Path> {
-        let colour: Vec<Volume> = self.volumes.iter().map(|(v, _)| v.clone()).collect();
-        Textures::channel(&colour, &self.masks, wanted).map_err(|i| self.volumes[i].1.as_path())
+        Textures::channel(&self.volumes, &self.masks, wanted).map_err(|i| self.files[i].as_path())
     }
 }
 
@@ -351,18 +352,11 @@ fn load_model(path: &Path) -> Result<Loaded> {
     let model = lst_file::read_lst(path)?;
     let base = path.parent().unwrap_or(Path::new("."));
     let budget = io::budget_from_env()?;
-    let volumes = model
-        .sources
-        .iter()
-        .map(|s| {
-            let file = base.join(&s.volume);
-            io::read_volume(&file, budget).map(|v| (v, file))
-        })
-        .collect::<Result<Vec<_>>>()?;
+    let files: Vec<PathBuf> = model.sources.iter().map(|s| base.join(&s.volume)).collect();
+    let volumes = files.iter().map(|f| io::read_volume(f, budget)).collect::<Result<Vec<_>>>()?;
     let masks = model.sources.iter().map(|s| load_mask(&s.mask, base)).collect::<Result<Vec<_>>>()?;
-    let colour: Vec<Volume> = volumes.iter().map(|(v, _)| v.clone()).collect();
-    let textures = Textures::new(&colour, &masks);
-    Ok(Loaded { model, textures, volumes, masks })
+    let textures = Textures::new(&volumes, &masks);
+    Ok(Loaded { model, textures, volumes, files, masks })
 }
 
 /// The channels beyond R, G, B and A that every source of every model has, in the first
@@ -370,17 +364,24 @@ fn load_model(path: &Path) -> Result<Loaded> {
 fn shared_channels(loaded: &[Loaded]) -> (Vec<Channel>, Vec<Channel>) {
     let colour = [Channel::R, Channel::G, Channel::B, Channel::A];
     let mut all: Vec<Channel> = Vec::new();
-    for (v, _) in loaded.iter().flat_map(|l| &l.volumes) {
+    for v in loaded.iter().flat_map(|l| &l.volumes) {
         for c in v.channels() {
             if !colour.contains(c) && !all.contains(c) {
                 all.push(c.clone());
             }
         }
     }
-    all.into_iter().partition(|c| loaded.iter().flat_map(|l| &l.volumes).all(|(v, _)| v.channel_index(c).is_some()))
+    all.into_iter().partition(|c| loaded.iter().flat_map(|l| &l.volumes).all(|v| v.channel_index(c).is_some()))
 }
 
 fn load_models(paths: &[PathBuf]) -> Result<Vec<Loaded>> {
+    if paths.len() > render::MAX_MODELS {
+        return Err(usage(Error::invalid(format!(
+            "{} models given; at most {} combine in one picture or volume",
+            paths.len(),
+            render::MAX_MODELS
+        ))));
+    }
     paths.iter().map(|p| load_model(p)).collect()
 }
 
@@ -394,6 +395,8 @@ const MAX_PICTURE: usize = 4096;
 /// The plane of `cut` (`None`: the default), every number checked against its range.
 fn cut_values(args: &CutArgs) -> Result<Option<(glam::Vec3, glam::Vec3)>> {
     io::values::within("--size", args.size, 8, MAX_PICTURE)?;
+    io::values::within("--yaw", args.yaw, -360.0, 360.0)?;
+    io::values::within("--pitch", args.pitch, -90.0, 90.0)?;
     let Some(text) = &args.plane else { return Ok(None) };
     let v = io::values::numbers("--plane", text, &[6])?;
     io::values::positions("--plane", text, &v)?;
@@ -416,14 +419,7 @@ fn stroke_values(args: &CutArgs) -> Result<(Vec<fill::carve::Stroke>, Option<gla
     io::values::within("--size", args.size, 8, MAX_PICTURE)?;
     io::values::within("--yaw", args.yaw, -360.0, 360.0)?;
     io::values::within("--pitch", args.pitch, -90.0, 90.0)?;
-    let extrude = match &args.extrude {
-        Some(text) => vector("--extrude", text)?,
-        None => crate::fill::view::camera(args.yaw, args.pitch).0,
-    };
-    if extrude == glam::Vec3::ZERO {
-        return Err(Error::invalid("--extrude: the direction NX,NY,NZ is zero"));
-    }
-    let strokes = args
+    let polylines = args
         .stroke
         .iter()
         .map(|text| {
@@ -433,9 +429,17 @@ fn stroke_values(args: &CutArgs) -> Result<(Vec<fill::carve::Stroke>, Option<gla
                     "--stroke {text:?}: give two or more points X,Y,Z;X,Y,Z (or X,Y,Z/X,Y,Z)"
                 )));
             }
-            Ok(fill::carve::Stroke { points, extrude })
+            Ok(points)
         })
         .collect::<Result<Vec<_>>>()?;
+    let Some(text) = &args.extrude else {
+        return Err(Error::invalid("--stroke needs --extrude NX,NY,NZ, the direction the stroke is swept along"));
+    };
+    let extrude = vector("--extrude", text)?;
+    if extrude.try_normalize().is_none() {
+        return Err(Error::invalid("--extrude: the direction NX,NY,NZ is zero or too small"));
+    }
+    let strokes = polylines.into_iter().map(|points| fill::carve::Stroke { points, extrude }).collect();
     let keep = args.keep.as_deref().map(|k| vector("--keep", k)).transpose()?;
     Ok((strokes, keep))
 }
@@ -509,7 +513,7 @@ fn channel_textures(loaded: &[Loaded], channel: &Channel) -> Result<Vec<Textures
         .iter()
         .map(|l| {
             l.channel(std::slice::from_ref(channel)).map_err(|file| {
-                let has = l.volumes.iter().find(|(_, f)| f == file).map(|(v, _)| v.channels()).unwrap_or_default();
+                let has = l.files.iter().position(|f| f == file).map(|i| l.volumes[i].channels()).unwrap_or_default();
                 let names: Vec<&str> = has.iter().map(Channel::name).collect();
                 Error::invalid(format!(
                     "{}: the exemplar has no channel {channel}; it has {}",
@@ -534,8 +538,8 @@ fn render_settings(args: &RenderArgs) -> Result<translucent::Settings> {
             let v = io::values::numbers("--cutaway", text, &[6])?;
             io::values::positions("--cutaway", text, &v)?;
             let normal = glam::Vec3::new(v[3], v[4], v[5]);
-            if normal == glam::Vec3::ZERO {
-                return Err(Error::invalid(format!("--cutaway {text:?}: the normal NX,NY,NZ is zero")));
+            if normal.try_normalize().is_none() {
+                return Err(Error::invalid(format!("--cutaway {text:?}: the normal NX,NY,NZ is zero or too small")));
             }
             Some((glam::Vec3::new(v[0], v[1], v[2]), normal))
         }
@@ -559,8 +563,9 @@ pub fn run_render(args: &RenderArgs) -> Result<()> {
     let settings = render_settings(args).map_err(usage)?;
     io::check_folder(&args.output)?;
     let loaded = load_models(&args.models)?;
+    let wanted = matches!(args.density, None | Some(DensityFrom::Alpha));
     let channel: std::result::Result<Vec<Textures>, &Path> =
-        loaded.iter().map(|l| l.channel(&render::density_channels())).collect();
+        if wanted { loaded.iter().map(|l| l.channel(&render::density_channels())).collect() } else { Ok(Vec::new()) };
     let from = match (args.density, &channel) {
         (Some(DensityFrom::Alpha), Err(volume)) => {
             return Err(Error::invalid(format!(

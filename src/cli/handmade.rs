@@ -309,6 +309,13 @@ fn draw_cake(args: &DrawArgs) -> Result<()> {
     if !library.is_file() {
         return Err(Error::file(&library, "the library for the cake's fill specs does not exist (--library)"));
     }
+    // TOML strings (quoted and escaped as TOML wants); a path that is not UTF-8 cannot be one
+    let quoted = |p: &Path| {
+        p.to_str()
+            .map(|s| toml::Value::String(s.to_string()).to_string())
+            .ok_or_else(|| Error::file(p, "is not UTF-8, so a fill spec cannot name it"))
+    };
+    let (library, built) = (quoted(&library)?, quoted(&built)?);
     let layers = crate::mesh::shapes::cake();
     io::write_folder(&args.output, |dir| {
         for layer in &layers {
@@ -316,7 +323,7 @@ fn draw_cake(args: &DrawArgs) -> Result<()> {
             let spec = format!(
                 "# The cake's {name} layer, written by `solidtex draw cake`. Fill it with\n\
                  #   solidtex fill {name}.obj --spec {name}.toml -o {name}.lst\n\
-                 exemplar = \"{exemplar}\"\nlibrary = {library:?}\nbuilt = {built:?}\ntype = \"0\"\n\
+                 exemplar = \"{exemplar}\"\nlibrary = {library}\nbuilt = {built}\ntype = \"0\"\n\
                  scale = {scale}\ntets = {tets}\nseed = 1\n",
                 name = layer.name,
                 exemplar = layer.exemplar,

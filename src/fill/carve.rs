@@ -131,7 +131,7 @@ pub fn carve(
     let shading = Shading::Smooth { crease: super::view::DEFAULT_CREASE };
     let mut hits = rasterize(&facets(model, 0, shading), &frame, |p| sides.iter().all(|s| s.keeps(p)));
     let boundary: Vec<Option<f32>> = hits.iter().map(|h| h.map(|h| h.depth)).collect();
-    let grid = TetGrid::new(&model.mesh);
+    let grid = TetGrid::new(&model.mesh)?;
     let reach = reach(&model.mesh, &strokes.iter().flat_map(|s| s.points.iter().copied()).collect::<Vec<_>>());
     for (k, side) in sides.iter().enumerate() {
         let others = |p: Vec3| sides.iter().enumerate().all(|(j, s)| j == k || s.keeps(p));
@@ -189,8 +189,12 @@ struct TetGrid {
     tets: Vec<u32>,
 }
 
+/// The most (cell, tet) entries a [`TetGrid`] holds; a model whose tets would need more
+/// (long thin tets across many cells) is refused.
+const MAX_GRID_ENTRIES: usize = 32_000_000;
+
 impl TetGrid {
-    fn new(mesh: &TetMesh) -> TetGrid {
+    fn new(mesh: &TetMesh) -> Result<TetGrid> {
         let (lo, hi) =
             mesh.vertices.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(a, b), p| (a.min(*p), b.max(*p)));
         let volume = mesh.volume().max(1e-12) as f32;
@@ -200,13 +204,28 @@ impl TetGrid {
             let c = ((p - lo) / cell).floor().max(Vec3::ZERO);
             [0, 1, 2].map(|k| (c[k] as usize).min(dims[k] - 1))
         };
-        let mut pairs: Vec<(u32, u32)> = Vec::new();
-        for (t, _) in mesh.tets.iter().enumerate() {
+        let span = |t: usize| {
             let c = mesh.corners(t);
-            let (a, b) = (
-                index(c.iter().copied().fold(Vec3::INFINITY, Vec3::min)),
-                index(c.iter().copied().fold(Vec3::NEG_INFINITY, Vec3::max)),
+            let (lo, hi) = (
+                c.iter().copied().fold(Vec3::INFINITY, Vec3::min),
+                c.iter().copied().fold(Vec3::NEG_INFINITY, Vec3::max),
             );
+            (index(lo), index(hi))
+        };
+        let entries = (0..mesh.tets.len())
+            .map(|t| {
+                let (a, b) = span(t);
+                (0..3).map(|k| b[k] - a[k] + 1).product::<usize>()
+            })
+            .fold(0usize, usize::saturating_add);
+        if entries > MAX_GRID_ENTRIES {
+            return Err(Error::invalid(format!(
+                "the model's tets are too long for a stroke cut ({entries} grid entries; at most {MAX_GRID_ENTRIES})"
+            )));
+        }
+        let mut pairs: Vec<(u32, u32)> = Vec::with_capacity(entries);
+        for t in 0..mesh.tets.len() {
+            let (a, b) = span(t);
             for z in a[2]..=b[2] {
                 for y in a[1]..=b[1] {
                     for x in a[0]..=b[0] {
@@ -223,7 +242,7 @@ impl TetGrid {
         for i in 1..offsets.len() {
             offsets[i] += offsets[i - 1];
         }
-        TetGrid { lo, cell, dims, offsets, tets: pairs.into_iter().map(|(_, t)| t).collect() }
+        Ok(TetGrid { lo, cell, dims, offsets, tets: pairs.into_iter().map(|(_, t)| t).collect() })
     }
 
     /// The first tet (by index) holding `p`, if any.

@@ -148,6 +148,8 @@ pub struct Cut {
 pub const NO_PATCH: u32 = u32::MAX;
 /// Patch numbers of one model in [`Cut::patches`] stay below this.
 const MODEL_STRIDE: u32 = 1 << 26;
+/// The most models a cut, bake, view or rendering combines (their patch numbers share a u32).
+pub const MAX_MODELS: usize = 63;
 
 impl Cut {
     /// As an 8-bit picture over [`BACKGROUND`].
@@ -349,7 +351,7 @@ pub fn cut_many(models: &[(&LstModel, &Textures)], view: &View) -> Cut {
         patches: vec![NO_PATCH; view.width * view.height],
     });
     for (m, other) in cuts.enumerate() {
-        let offset = (m as u32 + 1) * MODEL_STRIDE;
+        let offset = (m as u32 + 1).saturating_mul(MODEL_STRIDE);
         for ((p, q), (a, b)) in out.pixels.iter_mut().zip(other.pixels).zip(out.patches.iter_mut().zip(other.patches)) {
             if p[3] == 0.0 {
                 *p = q;

@@ -63,11 +63,12 @@ pub struct Settings {
 
 /// A rendered picture and how much of it the models cover.
 pub struct Rendering {
-    /// RGB over [`BACKGROUND`].
+    /// RGB over the settings' background.
     pub picture: Rgb8,
     /// Per pixel, the share of light the models stop (0 to 1), row by row.
     pub opacity: Vec<f32>,
-    /// The slices composited (fewer than asked when every pixel became opaque).
+    /// The slices composited: all of them, unless every pixel of the picture became
+    /// opaque first (the frame's margin usually keeps some clear).
     pub slices: usize,
 }
 
@@ -144,7 +145,7 @@ fn check(models: &[(&LstModel, &Textures)], density: Density, s: &Settings) -> R
         return Err(Error::invalid(format!("density levels {lo},{hi} must rise within 0 to 1")));
     }
     if let Some((p, n)) = s.cutaway
-        && !(p.is_finite() && n.is_finite() && n != Vec3::ZERO)
+        && !(p.is_finite() && n.try_normalize().is_some())
     {
         return Err(Error::invalid("the cutaway plane must be finite with a normal that is not zero"));
     }

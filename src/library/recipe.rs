@@ -167,6 +167,19 @@ fn swept(spec: &SweepSpec, dims: Option<[usize; 3]>, seed: u64) -> Result<Volume
         }
     };
     let displacement = spec.displacement.as_deref().map(io::read_image).transpose()?;
+    if let (Some(relief), Some(path)) = (&displacement, &spec.displacement)
+        && (relief.width(), relief.height()) != (image.width(), image.height())
+    {
+        return Err(Error::invalid(format!(
+            "the displacement image is {}x{} but the cross-section {} is {}x{}; they must be the same size",
+            relief.width(),
+            relief.height(),
+            spec.image.display(),
+            image.width(),
+            image.height()
+        ))
+        .in_file(path));
+    }
     let params = Sweep {
         length: spec.length,
         axis: spec.axis,

@@ -11,6 +11,7 @@
 mod edit;
 mod editing;
 mod graphics;
+mod keybar;
 mod keymap;
 mod message;
 mod model;

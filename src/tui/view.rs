@@ -9,7 +9,7 @@ use ratatui::Frame;
 use ratatui::buffer::Buffer;
 use ratatui::layout::{Constraint, Layout, Rect};
 use ratatui::style::{Color, Modifier, Style};
-use ratatui::text::Line;
+use ratatui::text::{Line, Span};
 use ratatui::widgets::{Block, Borders, Clear, Paragraph, Row, Table, Widget, Wrap};
 
 /// Smallest usable terminal.
@@ -34,7 +34,9 @@ pub fn draw_with(frame: &mut Frame, model: &Model, graphics: Option<&mut super::
     // A long status (an error with its reason) gets as many lines as it needs, up to four,
     // beside the key hints rather than under them.
     let status_lines = wrapped_lines(&model.status, area.width.saturating_sub(16)).clamp(1, 4);
-    let [main, status] = Layout::vertical([Constraint::Min(3), Constraint::Length(status_lines)]).areas(area);
+    let [main, bar, status] =
+        Layout::vertical([Constraint::Min(3), Constraint::Length(1), Constraint::Length(status_lines)]).areas(area);
+    key_bar(frame, model, bar);
     match &model.screen {
         Screen::Library => library(frame, model, main),
         Screen::Exemplar(view) => exemplar(frame, view, main, graphics),
@@ -48,6 +50,26 @@ pub fn draw_with(frame: &mut Frame, model: &Model, graphics: Option<&mut super::
     if model.help {
         help(frame, area);
     }
+}
+
+/// The screen's keys on one line: key, what it does; a key that cannot act now dimmed,
+/// with the reason.
+fn key_bar(frame: &mut Frame, model: &Model, area: Rect) {
+    let mut spans: Vec<Span> = Vec::new();
+    for h in super::keybar::hints(model) {
+        spans.push(Span::raw(" "));
+        match h.why_not {
+            None => {
+                spans.push(Span::styled(h.keys, Style::new().fg(Color::Yellow)));
+                spans.push(Span::styled(format!(" {} ", h.action), Style::new().fg(Color::Gray)));
+            }
+            Some(why) => {
+                let dim = Style::new().fg(Color::DarkGray);
+                spans.push(Span::styled(format!("{} {} ({why}) ", h.keys, h.action), dim));
+            }
+        }
+    }
+    frame.render_widget(Paragraph::new(Line::from(spans)), area);
 }
 
 fn library(frame: &mut Frame, model: &Model, area: Rect) {

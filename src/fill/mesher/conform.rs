@@ -195,6 +195,9 @@ impl<'a> Work<'a> {
             .into_par_iter()
             .map(|v| if self.boundary[v] { features.patch[surface.closest_triangle(vertices[v]).0] } else { u32::MAX })
             .collect();
+        // crease indices sorted by the patches on their two sides, to find those between two
+        let mut by_pair: Vec<((u32, u32), usize)> = features.sides.iter().copied().zip(0..).collect();
+        by_pair.sort_unstable();
         let mut on_crease = vec![false; vertices.len()];
         self.snap_corners(features, &mut on_crease);
         let edges = self.boundary_edges();
@@ -207,7 +210,9 @@ impl<'a> Work<'a> {
             let reach = CREASE_REACH * pa.distance(pb);
             // only the creases between the two patches
             let pair = (patch[a].min(patch[b]), patch[a].max(patch[b]));
-            let between = features.creases.iter().zip(&features.sides).filter(|(_, s)| **s == pair).map(|(c, _)| c);
+            let first = by_pair.partition_point(|e| e.0 < pair);
+            let run = by_pair[first..].iter().take_while(|e| e.0 == pair);
+            let between = run.map(|e| &features.creases[e.1]);
             let (Some(ca), Some(cb)) = (nearest_on(between.clone(), pa), nearest_on(between, pb)) else { continue };
             let mut order = [(a, ca, pa.distance(ca)), (b, cb, pb.distance(cb))];
             if order[1].2 < order[0].2 {

@@ -1,0 +1,174 @@
+//! The key bar: the keys of the screen on top, one line, always shown; a key that cannot
+//! act now is dimmed and says why (lazygit's rule). Pure: the model in, hints out.
+
+use super::edit;
+use super::model::{BuildState, Editor, Model, Screen};
+
+/// One key (or group of keys) and what it does.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Hint {
+    /// The key as shown, e.g. `enter` or `x/y/z`.
+    pub keys: &'static str,
+    /// What it does.
+    pub action: &'static str,
+    /// Why it does nothing now, if it does not.
+    pub why_not: Option<&'static str>,
+}
+
+fn hint(keys: &'static str, action: &'static str) -> Hint {
+    Hint { keys, action, why_not: None }
+}
+
+fn unless(keys: &'static str, action: &'static str, why_not: Option<&'static str>) -> Hint {
+    Hint { keys, action, why_not }
+}
+
+/// The hints of the screen on top of `model`, most used first (`?` help and `q` quit stay
+/// at the right of the status line).
+pub fn hints(model: &Model) -> Vec<Hint> {
+    match &model.screen {
+        Screen::Library => library(model),
+        Screen::Exemplar(view) if view.stamp.is_some() => vec![
+            hint("arrows/pgup/pgdn", "move"),
+            hint("r/R", "turn"),
+            hint("+/-", "scale"),
+            hint("enter", "stamp"),
+            hint("n", "scatter"),
+            hint("u", "undo"),
+            hint("s", "save"),
+            hint("m", "leave"),
+        ],
+        Screen::Exemplar(view) => {
+            let loading = view.volume.is_none().then_some("loading");
+            vec![
+                hint("x/y/z", "axis"),
+                hint("arrows", "slice"),
+                hint("c", "channel"),
+                hint("+/-", "zoom"),
+                unless("a", "masks", view.layers.is_empty().then_some("no masks built")),
+                unless("f", "fill", loading),
+                unless("m", "stamp", loading),
+                hint("esc", "back"),
+            ]
+        }
+        Screen::Editor(editor) if editor.input.is_some() => {
+            vec![hint("enter", "keep the value"), hint("esc", "drop it"), hint("ctrl-u", "clear")]
+        }
+        Screen::Editor(editor) => editing(editor),
+        Screen::Fill(view) => {
+            let filling = view.filled.is_none().then_some("filling");
+            vec![unless("x/y/z", "cut axis", filling), unless("arrows", "move the cut", filling), hint("esc", "back")]
+        }
+    }
+}
+
+fn library(model: &Model) -> Vec<Hint> {
+    let item = model.items.get(model.selected);
+    let state = item.map(|i| &i.state);
+    let open = match state {
+        None => Some("no entry"),
+        Some(BuildState::NotBuilt) => Some("not built: b"),
+        Some(BuildState::Broken(_)) => Some("a mistake: e"),
+        _ => None,
+    };
+    let build = match state {
+        None => Some("no entry"),
+        Some(BuildState::Building) => Some("building"),
+        Some(BuildState::Broken(_)) => Some("a mistake: e"),
+        _ => None,
+    };
+    let building_all = model.items.iter().any(|i| matches!(i.state, BuildState::Building)).then_some("building");
+    let none = item.is_none().then_some("no entry");
+    vec![
+        unless("enter", "open", open),
+        unless("b", "build", build),
+        unless("B", "build all", building_all),
+        unless("e", "edit", none),
+        unless("c", "copy", none),
+        unless("d", "delete", none),
+    ]
+}
+
+fn editing(editor: &Editor) -> Vec<Hint> {
+    let loading = editor.text.is_none().then_some("loading");
+    let on_step = editor
+        .text
+        .as_deref()
+        .and_then(|text| edit::fields(text, &editor.name).ok())
+        .and_then(|fields| fields.get(editor.selected).and_then(|f| edit::step_of(&f.key)))
+        .is_some();
+    let not_step = (!on_step).then_some("not on a step");
+    let unsaved = editor.text.as_deref().is_some_and(|t| t != editor.saved);
+    vec![
+        unless("enter", "edit", loading),
+        unless("s", "save", (!unsaved).then_some("no changes")),
+        unless("u", "undo", editor.undo.is_empty().then_some("nothing to undo")),
+        unless("r", "redo", editor.redo.is_empty().then_some("nothing to redo")),
+        unless("a", "add blur", loading),
+        unless("x", "remove step", not_step),
+        unless("K/J", "move step", not_step),
+        hint("esc", "back"),
+    ]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::tui::model::{ExemplarView, Item};
+    use std::path::PathBuf;
+
+    fn library_of(states: Vec<BuildState>) -> Model {
+        let items = states
+            .into_iter()
+            .enumerate()
+            .map(|(i, state)| Item { name: format!("e{i}"), declared: None, size: None, state })
+            .collect();
+        Model::new(PathBuf::from("library.toml"), PathBuf::from("out"), items, Vec::new())
+    }
+
+    fn why(hints: &[Hint], keys: &str) -> Option<&'static str> {
+        hints.iter().find(|h| h.keys == keys).unwrap_or_else(|| panic!("no {keys} in {hints:?}")).why_not
+    }
+
+    #[test]
+    fn library_keys_say_why_they_cannot_act() {
+        let mut m = library_of(vec![BuildState::NotBuilt, BuildState::Built("0".into()), BuildState::Building]);
+        let h = hints(&m);
+        assert_eq!(why(&h, "enter"), Some("not built: b"));
+        assert_eq!(why(&h, "b"), None);
+        assert_eq!(why(&h, "B"), Some("building"), "another entry is building");
+        m.selected = 1;
+        assert_eq!(why(&hints(&m), "enter"), None);
+        m.selected = 2;
+        assert_eq!(why(&hints(&m), "b"), Some("building"));
+        let empty = library_of(Vec::new());
+        assert_eq!(why(&hints(&empty), "e"), Some("no entry"));
+    }
+
+    #[test]
+    fn each_screen_shows_its_own_keys() {
+        let mut m = library_of(vec![BuildState::Built("0".into())]);
+        m.screen = Screen::Exemplar(ExemplarView::new("e0"));
+        let h = hints(&m);
+        assert_eq!(why(&h, "f"), Some("loading"), "the volume is not loaded yet");
+        assert!(h.iter().all(|h| h.keys != "b"), "no library keys on the exemplar screen");
+        let text = "[[exemplar]]\nname = \"e0\"\nrecipe = \"procedural:marble\"\nsize = 8\n\n  \
+                    [[exemplar.steps]]\n  blur = \"4,4,4\"\n  radius = 2\n";
+        let editor = |selected: usize| Editor {
+            name: "e0".into(),
+            text: Some(text.into()),
+            saved: text.into(),
+            selected,
+            ..Editor::default()
+        };
+        m.screen = Screen::Editor(editor(0));
+        let h = hints(&m);
+        assert_eq!(why(&h, "x"), Some("not on a step"));
+        assert_eq!(why(&h, "s"), Some("no changes"));
+        assert_eq!(why(&h, "u"), Some("nothing to undo"));
+        m.screen = Screen::Editor(editor(3));
+        assert_eq!(why(&hints(&m), "x"), None, "the blur step's field is selected");
+        m.screen = Screen::Editor(Editor { input: Some("4".into()), ..editor(3) });
+        assert_eq!(hints(&m)[0].action, "keep the value");
+    }
+}
