@@ -148,9 +148,30 @@ fn gauge(progress: Option<&(String, f32)>) -> String {
     format!("{level} {}{} {:.0}%", "#".repeat(filled), "-".repeat(8 - filled), fraction * 100.0)
 }
 
+/// Where the seed is: position (voxels), rotation (degrees about an axis), scale (voxels
+/// per mesh unit).
+fn readout(p: &crate::stamp::Placement) -> String {
+    let (axis, angle) = p.rotation.to_axis_angle();
+    let degrees = angle.to_degrees().round();
+    let turned = if degrees == 0.0 || degrees == 360.0 {
+        "not turned".to_string()
+    } else {
+        format!("turned {degrees}° about {:.2},{:.2},{:.2}", axis.x, axis.y, axis.z)
+    };
+    let s = p.scale;
+    let scale =
+        if s.x == s.y && s.y == s.z { format!("{:.2}", s.x) } else { format!("{:.2},{:.2},{:.2}", s.x, s.y, s.z) };
+    format!("at {:.0},{:.0},{:.0}, {turned}, scale {scale}", p.at.x, p.at.y, p.at.z)
+}
+
 fn exemplar(frame: &mut Frame, view: &ExemplarView, area: Rect, mut graphics: Option<&mut super::graphics::Graphics>) {
     let title = match &view.stamp {
-        Some(s) => format!(" {}  STAMP MODE: {} step(s) unsaved; m leaves ", view.name, s.steps.len()),
+        Some(s) => format!(
+            " {}  STAMP MODE: {}; {} step(s) unsaved; m leaves ",
+            view.name,
+            readout(&s.placement),
+            s.steps.len()
+        ),
         None => {
             let shown = view.layers.get(view.layer).map_or("exemplar", |l| l.0.as_str());
             let zoom = if view.zoom > 1 { format!(" x{}", view.zoom) } else { String::new() };
@@ -533,5 +554,19 @@ mod tests {
         // Half-blocks at the rim draw their inside half; the default colour never fills a half.
         let rim = cells.iter().filter(|p| matches!(buffer[**p].symbol(), "▀" | "▄") && buffer[**p].fg == Color::Reset);
         assert_eq!(rim.count(), 0, "a half-block whose coloured half is the terminal's default");
+    }
+
+    #[test]
+    fn stamp_mode_reads_out_where_the_seed_is() {
+        use glam::{Quat, Vec3};
+        let mut p = crate::stamp::Placement {
+            at: Vec3::new(12.0, 30.4, 40.0),
+            rotation: Quat::IDENTITY,
+            scale: Vec3::splat(3.0),
+        };
+        assert_eq!(readout(&p), "at 12,30,40, not turned, scale 3.00");
+        p.rotation = Quat::from_axis_angle(Vec3::Y, 15f32.to_radians());
+        p.scale = Vec3::new(2.0, 2.0, 3.0);
+        assert_eq!(readout(&p), "at 12,30,40, turned 15° about 0.00,1.00,0.00, scale 2.00,2.00,3.00");
     }
 }
