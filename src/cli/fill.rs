@@ -37,6 +37,26 @@ pub struct FillArgs {
     pub seed: Option<u64>,
 }
 
+/// The camera of a 3D picture (`view`, `render`, `cut --stroke`).
+#[derive(Debug, clap::Args)]
+pub struct CameraArgs {
+    /// Degrees around the vertical axis, -360 to 360.
+    #[arg(long, default_value_t = 35.0, allow_hyphen_values = true)]
+    pub yaw: f32,
+    /// Degrees above the horizon, -90 to 90.
+    #[arg(long, default_value_t = 25.0, allow_hyphen_values = true)]
+    pub pitch: f32,
+}
+
+impl CameraArgs {
+    /// (yaw, pitch), each checked against its range.
+    fn checked(&self) -> Result<(f32, f32)> {
+        io::values::within("--yaw", self.yaw, -360.0, 360.0)?;
+        io::values::within("--pitch", self.pitch, -90.0, 90.0)?;
+        Ok((self.yaw, self.pitch))
+    }
+}
+
 /// The arguments of `solidtex cut`.
 #[derive(Debug, clap::Args)]
 pub struct CutArgs {
@@ -65,12 +85,9 @@ pub struct CutArgs {
     /// A point on the side of every stroke to keep, X,Y,Z (default: the model's centre).
     #[arg(long, allow_hyphen_values = true, requires = "stroke")]
     pub keep: Option<String>,
-    /// With --stroke: degrees around the vertical axis, -360 to 360.
-    #[arg(long, default_value_t = 35.0, allow_hyphen_values = true)]
-    pub yaw: f32,
-    /// With --stroke: degrees above the horizon, -90 to 90.
-    #[arg(long, default_value_t = 25.0, allow_hyphen_values = true)]
-    pub pitch: f32,
+    /// With --stroke: where the 3D view looks from.
+    #[command(flatten)]
+    pub camera: CameraArgs,
     /// The PNG to write.
     #[arg(short, long)]
     pub output: PathBuf,
@@ -97,12 +114,9 @@ pub struct ViewArgs {
     /// One or more models (.lst); each pixel shows the nearest surface.
     #[arg(required = true)]
     pub models: Vec<PathBuf>,
-    /// Degrees around the vertical axis, -360 to 360.
-    #[arg(long, default_value_t = 35.0, allow_hyphen_values = true)]
-    pub yaw: f32,
-    /// Degrees above the horizon, -90 to 90.
-    #[arg(long, default_value_t = 25.0, allow_hyphen_values = true)]
-    pub pitch: f32,
+    /// Where the picture looks from.
+    #[command(flatten)]
+    pub camera: CameraArgs,
     /// Picture size in pixels, 8 to 4096.
     #[arg(long, default_value_t = 512)]
     pub size: usize,
@@ -140,12 +154,9 @@ pub struct RenderArgs {
     /// One or more models (.lst), combined as in `cut`.
     #[arg(required = true)]
     pub models: Vec<PathBuf>,
-    /// Degrees around the vertical axis, -360 to 360.
-    #[arg(long, default_value_t = 35.0, allow_hyphen_values = true)]
-    pub yaw: f32,
-    /// Degrees above the horizon, -90 to 90.
-    #[arg(long, default_value_t = 25.0, allow_hyphen_values = true)]
-    pub pitch: f32,
+    /// Where the picture looks from.
+    #[command(flatten)]
+    pub camera: CameraArgs,
     /// How opaque full-density material is across a tenth of the longest side of the
     /// models' box, 0 to 0.9999.
     #[arg(long, default_value_t = 0.3)]
@@ -395,16 +406,20 @@ const MAX_PICTURE: usize = 4096;
 /// The plane of `cut` (`None`: the default), every number checked against its range.
 fn cut_values(args: &CutArgs) -> Result<Option<(glam::Vec3, glam::Vec3)>> {
     io::values::within("--size", args.size, 8, MAX_PICTURE)?;
-    io::values::within("--yaw", args.yaw, -360.0, 360.0)?;
-    io::values::within("--pitch", args.pitch, -90.0, 90.0)?;
-    let Some(text) = &args.plane else { return Ok(None) };
-    let v = io::values::numbers("--plane", text, &[6])?;
-    io::values::positions("--plane", text, &v)?;
+    args.camera.checked()?;
+    args.plane.as_deref().map(|text| plane("--plane", text)).transpose()
+}
+
+/// A plane PX,PY,PZ,NX,NY,NZ of `option`: a point and a normal, each number within the
+/// position limit, the normal long enough to have a direction.
+fn plane(option: &str, text: &str) -> Result<(glam::Vec3, glam::Vec3)> {
+    let v = io::values::numbers(option, text, &[6])?;
+    io::values::positions(option, text, &v)?;
     let normal = glam::Vec3::new(v[3], v[4], v[5]);
-    if normal == glam::Vec3::ZERO {
-        return Err(Error::invalid(format!("--plane {text:?}: the normal NX,NY,NZ is zero")));
+    if normal.try_normalize().is_none() {
+        return Err(Error::invalid(format!("{option} {text:?}: the normal NX,NY,NZ is zero or too small")));
     }
-    Ok(Some((glam::Vec3::new(v[0], v[1], v[2]), normal)))
+    Ok((glam::Vec3::new(v[0], v[1], v[2]), normal))
 }
 
 /// A point or direction X,Y,Z of `option`, each within the position limit.
@@ -417,8 +432,7 @@ fn vector(option: &str, text: &str) -> Result<glam::Vec3> {
 /// The strokes, extrude direction and keep point of a stroke cut, checked.
 fn stroke_values(args: &CutArgs) -> Result<(Vec<fill::carve::Stroke>, Option<glam::Vec3>)> {
     io::values::within("--size", args.size, 8, MAX_PICTURE)?;
-    io::values::within("--yaw", args.yaw, -360.0, 360.0)?;
-    io::values::within("--pitch", args.pitch, -90.0, 90.0)?;
+    args.camera.checked()?;
     let polylines = args
         .stroke
         .iter()
@@ -455,7 +469,7 @@ fn run_stroke_cut(args: &CutArgs) -> Result<()> {
     let bounds = render::bounds(&[(&loaded.model, &loaded.textures)]);
     let keep = keep.unwrap_or((bounds.0 + bounds.1) / 2.0);
     let started = Instant::now();
-    let camera = (args.yaw, args.pitch);
+    let camera = (args.camera.yaw, args.camera.pitch);
     let carving = fill::carve::carve(&loaded.model, &loaded.textures, &strokes, keep, camera, args.size)
         .map_err(|e| e.in_file(&args.models[0]))?;
     let ms = started.elapsed().as_secs_f64() * 1000.0;
@@ -528,27 +542,16 @@ fn channel_textures(loaded: &[Loaded], channel: &Channel) -> Result<Vec<Textures
 /// The settings of `render`, every number checked against its range.
 fn render_settings(args: &RenderArgs) -> Result<translucent::Settings> {
     io::values::within("--size", args.size, 8, MAX_PICTURE)?;
-    io::values::within("--yaw", args.yaw, -360.0, 360.0)?;
-    io::values::within("--pitch", args.pitch, -90.0, 90.0)?;
+    args.camera.checked()?;
     io::values::within("--opacity", args.opacity, 0.0, 0.9999)?;
     io::values::within("--slices", args.slices, 16, 4096)?;
-    let cutaway = match &args.cutaway {
-        None => None,
-        Some(text) => {
-            let v = io::values::numbers("--cutaway", text, &[6])?;
-            io::values::positions("--cutaway", text, &v)?;
-            let normal = glam::Vec3::new(v[3], v[4], v[5]);
-            if normal.try_normalize().is_none() {
-                return Err(Error::invalid(format!("--cutaway {text:?}: the normal NX,NY,NZ is zero or too small")));
-            }
-            Some((glam::Vec3::new(v[0], v[1], v[2]), normal))
-        }
-    };
+    let cutaway = args.cutaway.as_deref().map(|text| plane("--cutaway", text)).transpose()?;
     let v = io::values::numbers("--levels", &args.levels, &[2])?;
     if !(0.0 <= v[0] && v[0] < v[1] && v[1] <= 1.0) {
         return Err(Error::invalid(format!("--levels {:?}: LO,HI must rise within 0 to 1", args.levels)));
     }
-    let (yaw, pitch, size, slices, opacity) = (args.yaw, args.pitch, args.size, args.slices, args.opacity);
+    let (yaw, pitch) = (args.camera.yaw, args.camera.pitch);
+    let (size, slices, opacity) = (args.size, args.slices, args.opacity);
     let levels = (v[0], v[1]);
     let b = io::values::numbers("--background", &args.background, &[3])?;
     if b.iter().any(|c| !(0.0..=255.0).contains(c)) {
@@ -638,8 +641,7 @@ pub fn run_bake(args: &BakeArgs) -> Result<()> {
 pub fn run_view(args: &ViewArgs) -> Result<()> {
     let checks = || -> Result<()> {
         io::values::within("--size", args.size, 8, MAX_PICTURE)?;
-        io::values::within("--yaw", args.yaw, -360.0, 360.0)?;
-        io::values::within("--pitch", args.pitch, -90.0, 90.0)?;
+        args.camera.checked()?;
         io::values::within("--crease", args.crease, 0.0, 180.0)?;
         if let Some(scale) = args.displacement {
             io::values::within("--displacement", scale, -1000.0, 1000.0)?;
@@ -651,7 +653,7 @@ pub fn run_view(args: &ViewArgs) -> Result<()> {
     let loaded = load_models(&args.models)?;
     let started = Instant::now();
     let shading = if args.flat { Shading::Flat } else { Shading::Smooth { crease: args.crease } };
-    let camera = (args.yaw, args.pitch);
+    let camera = (args.camera.yaw, args.camera.pitch);
     let relief = match args.displacement {
         None => None,
         Some(scale) => Some((channel_textures(&loaded, &Channel::Displacement)?, scale)),

@@ -39,6 +39,14 @@ fn fill(dir: &Path, mesh: &str, spec: &str, out: &str) -> serde_json::Value {
     serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap()
 }
 
+/// Draws `shape` into `dir` and fills it by a spec of `body` (named after `name`) into
+/// `NAME.lst`; the model's path.
+fn filled(dir: &Path, shape: &str, name: &str, body: &str) -> String {
+    let (mesh, spec) = (draw(dir, shape), spec(dir, &format!("{name}.toml"), body));
+    fill(dir, &mesh, &spec, &format!("{name}.lst"));
+    at(dir, &format!("{name}.lst"))
+}
+
 fn pixel(png: &str, x: u32, y: u32) -> [f32; 3] {
     let img = image::open(png).unwrap().to_rgb8();
     img.get_pixel(x, y).0.map(|c| c as f32 / 255.0)
@@ -256,9 +264,7 @@ fn darker_than(png: &str, level: u8) -> usize {
 fn a_translucent_render_shows_the_seeds_inside_the_kiwi() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let (mesh, spec) = (draw(d, "fruit"), spec(d, "kiwi.toml", KIWI));
-    fill(d, &mesh, &spec, "kiwi.lst");
-    let model = at(d, "kiwi.lst");
+    let model = filled(d, "fruit", "kiwi", KIWI);
     let render = |name: &str, extra: &[&str]| {
         let png = at(d, name);
         let mut args = vec!["render", &model, "--size", "128", "-o", &png];
@@ -324,9 +330,7 @@ value = 1
 fn the_exemplars_other_channels_survive_the_fill_into_cuts_and_bakes() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let (mesh, spec) = (draw(d, "block"), spec(d, "strata.toml", STRATA));
-    fill(d, &mesh, &spec, "strata.lst");
-    let model = at(d, "strata.lst");
+    let model = filled(d, "block", "strata", STRATA);
     // the block's top (y = 0.5) is depth 0, its bottom depth 1: the Depth channel says so
     let png = at(d, "depth.png");
     let run = solidtex(&["cut", &model, "--channel", "Depth", "--plane", "0,0,0,1,0,0", "--size", "64", "-o", &png]);
@@ -393,9 +397,7 @@ fn rough(png: &str) -> u8 {
 fn displacement_mapping_raises_the_bark_into_furrows() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let (mesh, spec) = (draw(d, "log"), spec(d, "trunk.toml", TRUNK));
-    fill(d, &mesh, &spec, "trunk.lst");
-    let model = at(d, "trunk.lst");
+    let model = filled(d, "log", "trunk", TRUNK);
     let (plain, raised) = (at(d, "plain.png"), at(d, "raised.png"));
     assert!(solidtex(&["view", &model, "--size", "160", "-o", &plain]).status.success());
     let run = solidtex(&["view", &model, "--size", "160", "--displacement", "0.1", "-o", &raised]);
@@ -417,9 +419,7 @@ fn displacement_mapping_raises_the_bark_into_furrows() {
 fn stroke_cuts_show_the_inside_of_what_they_keep() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let (mesh, spec) = (draw(d, "fruit"), spec(d, "kiwi.toml", KIWI));
-    fill(d, &mesh, &spec, "kiwi.lst");
-    let model = at(d, "kiwi.lst");
+    let model = filled(d, "fruit", "kiwi", KIWI);
     // cut the fruit across its axis (x) at 0, keep x < 0; seen from +x the face shows
     let png = at(d, "half.png");
     let args = ["cut", &model, "--stroke", "0,-1,0;0,1,0", "--extrude", "0,0,1", "--keep", "-0.5,0,0"];
