@@ -369,7 +369,14 @@ impl<'a> Paster<'a> {
         let mut alphas = vec![0u8; tets.len() * SAMPLES];
         let mut angles = vec![None; tets.len()];
         alphas.par_chunks_mut(SAMPLES).zip(&mut angles).zip(tets).for_each(|((a, angle), &t)| {
-            tet_alphas(mask, bounds, &self.samples, patch.corners(self.mesh.tets[t as usize]), a);
+            let corners = patch.corners(self.mesh.tets[t as usize]);
+            if self.covered(t as usize) {
+                // nothing to add: only whether the patch shows there (and shows half) matters
+                a.fill(0);
+                a[0] = tet_shows(mask, bounds, &self.samples, corners);
+            } else {
+                tet_alphas(mask, bounds, &self.samples, corners, a);
+            }
             if let (Some(f), true) = (&frame, a.iter().any(|x| *x >= 128)) {
                 *angle = Some(self.angle(t as usize, &patch, f));
             }
@@ -409,6 +416,27 @@ impl<'a> Paster<'a> {
 
 /// A mask value at least this high shows as full coverage (255) at every sample.
 const FULL: f32 = 0.999;
+
+/// The largest coverage byte of a tet whose corners have texture coordinates `w`, as far as
+/// it matters: the first of at least 128 found ends the search.
+fn tet_shows(mask: &Sampler, bounds: &AlphaBounds, samples: &[[f32; 4]], w: [Vec3; 4]) -> u8 {
+    let lo = w[0].min(w[1]).min(w[2].min(w[3]));
+    let hi = w[0].max(w[1]).max(w[2].max(w[3]));
+    match bounds.range(lo, hi) {
+        (_, most) if most <= 0.0 => 0,
+        (least, _) if least >= FULL => 255,
+        _ => {
+            let mut most = 0;
+            for b in samples {
+                most = most.max(to_byte(mask.alpha(w[0] * b[0] + w[1] * b[1] + w[2] * b[2] + w[3] * b[3])));
+                if most >= 128 {
+                    break;
+                }
+            }
+            most
+        }
+    }
+}
 
 /// The coverage bytes of a tet whose corners have texture coordinates `w`, into `out`: 0
 /// or 255 at once where the mask's block bounds decide every sample, else sampled.

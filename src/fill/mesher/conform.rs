@@ -110,12 +110,26 @@ impl<'a> Work<'a> {
 
     /// Snaps every boundary vertex, twice (a vertex blocked in the first sweep may be free
     /// once its neighbours moved); the vertices that did not get all the way.
+    /// The closest points are looked up in parallel before each sweep: a vertex's target
+    /// depends on its own position only, which no other vertex's move changes.
     fn snap_boundary(&mut self, surface: &Surface) -> Vec<u32> {
         let mut stuck: Vec<u32> = (0..self.mesh.vertices.len() as u32).filter(|&v| self.boundary[v as usize]).collect();
         for _ in 0..2 {
-            stuck.retain(|&v| !self.move_towards(v, surface.closest(self.mesh.vertices[v as usize])));
+            let targets = self.closest_of(&stuck, surface);
+            let mut still = Vec::new();
+            for (&v, target) in stuck.iter().zip(targets) {
+                if !self.move_towards(v, target) {
+                    still.push(v);
+                }
+            }
+            stuck = still;
         }
         stuck
+    }
+
+    /// The closest surface points of `vertices`.
+    fn closest_of(&self, vertices: &[u32], surface: &Surface) -> Vec<Vec3> {
+        vertices.par_iter().map(|&v| surface.closest(self.mesh.vertices[v as usize])).collect()
     }
 
     /// Moves `v` the whole way to `target` when that keeps its tets good, else by the largest
@@ -138,8 +152,7 @@ impl<'a> Work<'a> {
     /// boundary vertices (giving them up exposes no interior vertex), sorted.
     fn blockers(&self, stuck: &[u32], surface: &Surface) -> Vec<u32> {
         let mut found: Vec<u32> = Vec::new();
-        for &v in stuck {
-            let target = surface.closest(self.mesh.vertices[v as usize]);
+        for (&v, target) in stuck.iter().zip(self.closest_of(stuck, surface)) {
             let spoilt =
                 self.star(v).iter().filter(|&&t| worst_with(self.mesh, &[t], v, target) > cos_deg(MIN_DIHEDRAL));
             found.extend(spoilt.filter(|&&t| self.mesh.tets[t as usize].iter().all(|&u| self.boundary[u as usize])));
