@@ -169,7 +169,8 @@ impl Case {
 
     /// Meshes `mesh` into about `tets` tets and fills it.
     fn fill_with(&self, mesh: &Mesh, tets: usize) -> Result<(LstModel, fill::FillReport)> {
-        let tets = mesher::tetrahedralize(mesh, tets)?;
+        let spec = FillSpec { tets, ..self.spec.clone() };
+        let (tets, _) = fill::tetrahedralize(mesh, &spec)?;
         let job = Job {
             surface: mesh,
             spec: &self.spec,

@@ -199,7 +199,7 @@ pub fn run_fill(args: &FillArgs) -> Result<()> {
     spec.seed = args.seed.unwrap_or(spec.seed);
     let surface = io::mesh_file::read_mesh(&args.mesh)?.canonical();
     let started = Instant::now();
-    let tets = mesher::tetrahedralize(&surface, spec.tets).map_err(|e| e.in_file(&args.mesh))?;
+    let (tets, refined) = fill::tetrahedralize(&surface, &spec).map_err(|e| e.in_file(&args.mesh))?;
     let meshed = started.elapsed().as_secs_f64();
     warn_if_far(&args.mesh, tets.tets.len(), spec.tets);
     let held = mesher::volume_check(&surface, &tets, spec.tets).map_err(|e| e.in_file(&args.mesh))?;
@@ -246,6 +246,9 @@ pub fn run_fill(args: &FillArgs) -> Result<()> {
         distance.from_tets,
         distance.from_surface
     );
+    if refined > 0 {
+        eprintln!("  {refined} of the tets from refining near the depth axis, so its core is round");
+    }
     if report.raised_scale > 0 {
         let share = report.raised_scale as f64 / report.tets.max(1) as f64 * 100.0;
         eprintln!(
@@ -264,7 +267,7 @@ pub fn run_fill(args: &FillArgs) -> Result<()> {
         eprintln!("  seam strength {seams:.2} (colour step across patch borders over within, central cuts)");
     }
     if let Some(path) = &args.json {
-        let json = serde_json::json!({ "fill": report, "seconds": total, "mesh_seconds": meshed, "bytes": bytes, "type": resolved.kind.name(), "seam_strength": seams, "volume_share": held.share, "holding_tets": held.holding, "surface_distance": distance });
+        let json = serde_json::json!({ "fill": report, "seconds": total, "mesh_seconds": meshed, "bytes": bytes, "type": resolved.kind.name(), "seam_strength": seams, "refined_tets": refined, "volume_share": held.share, "holding_tets": held.holding, "surface_distance": distance });
         io::write_bytes(path, serde_json::to_string_pretty(&json).expect("serializable").as_bytes())?;
     }
     Ok(())

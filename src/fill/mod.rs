@@ -15,6 +15,7 @@ pub mod mesher;
 pub mod model;
 pub mod paste;
 pub mod patch;
+pub mod refine;
 pub mod render;
 pub mod sampler;
 pub mod solve;
@@ -99,6 +100,58 @@ pub fn fill(job: &Job, mesh: TetMesh, progress: &dyn Progress) -> Result<(LstMod
     let model =
         LstModel { mesh, sources: job.sources.clone(), patches: pasted.patches, tet_patches: pasted.tet_patches };
     Ok((model, report))
+}
+
+/// The tet mesh a fill of `surface` by `spec` uses: the lattice mesh, refined near the
+/// spec's depth axes; when the refinement takes the count more than 15 % past `spec.tets`,
+/// the lattice is made again, coarser by the share the refinement added. Also how many
+/// tets the refinement added.
+pub fn tetrahedralize(surface: &Mesh, spec: &FillSpec) -> Result<(TetMesh, usize)> {
+    let mut tets = mesher::tetrahedralize(surface, spec.tets)?;
+    let added = refine_axes(&mut tets, &spec.depth.axes);
+    let total = tets.tets.len() as f64;
+    if added == 0 || total <= spec.tets as f64 * (1.0 + COUNT_TOLERANCE) {
+        return Ok((tets, added));
+    }
+    // the refinement adds about the same share to a coarser lattice: leave room for it
+    let lattice = (total - added as f64).max(1.0);
+    let target = (spec.tets as f64 * lattice / total).max(*mesher::TARGET_TETS.start() as f64);
+    let mut again = mesher::tetrahedralize(surface, target.round() as usize)?;
+    let added = refine_axes(&mut again, &spec.depth.axes);
+    Ok((again, added))
+}
+
+/// How far past the tet count asked for the refinement may take it (15 %) before the
+/// lattice is made again, coarser.
+const COUNT_TOLERANCE: f64 = 0.15;
+
+/// How far from a depth axis tets are refined, in mean tet edges.
+const AXIS_REACH_EDGES: f32 = 0.9;
+/// The longest edge wanted there, in mean tet edges.
+const AXIS_EDGE: f32 = 1.0;
+
+/// Refines the tets within [`AXIS_REACH_EDGES`] of the depth `axes` until their longest
+/// edges are at most [`AXIS_EDGE`] (thesis §7.1, Fig. 7.3): the depth field peaks along an
+/// axis, and over lattice-sized tets the core it draws is square. Returns how many tets
+/// were added.
+fn refine_axes(mesh: &mut TetMesh, axes: &[Vec<Vec3>]) -> usize {
+    if axes.is_empty() {
+        return 0;
+    }
+    let edge = mean_edge(mesh);
+    let (reach, wanted) = (AXIS_REACH_EDGES * edge, AXIS_EDGE * edge);
+    let size = |p: Vec3| {
+        let near = axes.iter().any(|line| line.windows(2).any(|s| distance_to_segment(p, s[0], s[1]) <= reach));
+        if near { wanted } else { f32::INFINITY }
+    };
+    refine::refine(mesh, &size)
+}
+
+/// The distance from `p` to the segment `a`-`b`.
+fn distance_to_segment(p: Vec3, a: Vec3, b: Vec3) -> f32 {
+    let d = b - a;
+    let t = ((p - a).dot(d) / d.length_squared().max(f32::MIN_POSITIVE)).clamp(0.0, 1.0);
+    p.distance(a + d * t)
 }
 
 fn unit(axis: usize) -> Vec3 {

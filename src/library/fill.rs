@@ -8,7 +8,7 @@ use crate::TextureType;
 use crate::error::{Error, Result};
 use crate::fill::render::Textures;
 use crate::fill::spec::{self, FillSpec};
-use crate::fill::{self, FillPreview, Job, MaskRef, Source, mesher};
+use crate::fill::{self, FillPreview, Job, MaskRef, Source};
 use crate::io::{self, manifest};
 use crate::mask::Layer;
 use crate::volume::{Axis, Volume};
@@ -166,7 +166,7 @@ pub fn preview(
     }
     spec.directions = vec![axis];
     let surface = crate::mesh::shapes::named(shape).expect("a drawn shape").canonical();
-    let tets = mesher::tetrahedralize(&surface, spec.tets)?;
+    let (tets, _) = fill::tetrahedralize(&surface, &spec)?;
     let job = Job {
         surface: &surface,
         spec: &spec,
