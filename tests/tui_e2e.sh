@@ -36,7 +36,16 @@ wait_for "not built" 5
 press "built marble (measured type 0)" 60 b
 press "XY z=32/63 colour" 10 Enter
 press "YZ x=34/63" 5 x Right Right
-press "cycle colour" 5 '?'
+press "keys: slices" 5 '?'
+wait_for "cycle colour" 5
+# the help's search: only the matching keys stay; f does not open a fill under the help
+press "/zoom_" 5 / z o o m
+screen | grep -q "cycle colour" && { echo "tui e2e: the search kept a key without 'zoom'"; screen; exit 1; }
+press "/zoom  (/ changes it" 5 Enter
+tmux send-keys -t "$session" f
+sleep 0.3
+screen | grep -q "fill preview" && { echo "tui e2e: f acted under the help"; screen; exit 1; }
+press "/ search  esc close" 5 Escape
 tmux send-keys -t "$session" Escape
 sleep 0.5
 # fill preview: a shape filled with marble, the cut moved

@@ -11,9 +11,10 @@
 //!       \|/                   \|/
 //!        d                     d
 //! ```
-//! The edge split is the longest edge of a tet that asks for a finer size (longest-edge
-//! bisection keeps the shapes of lattice tets within a few similarity classes). A split
-//! that would leave any tet around the edge with a dihedral angle under
+//! The edge split is the longest edge of a tet that asks for a finer size, after the longer
+//! edges of the tets around it (Rivara's longest-edge propagation: every split halves the
+//! longest edge of each tet it cuts, which keeps lattice tets within a few similarity
+//! classes). A split that would leave any tet around the edge with a dihedral angle under
 //! [`MIN_DIHEDRAL_DEGREES`](super::mesher::MIN_DIHEDRAL_DEGREES) is not made.
 
 use super::tets::{TetMesh, min_dihedral};
@@ -57,7 +58,10 @@ fn split_longest(
 ) -> bool {
     let min = super::mesher::MIN_DIHEDRAL_DEGREES;
     let mut path = vec![edge];
-    while let Some(&(a, b)) = path.last() {
+    for _ in 0..MAX_STEPS {
+        let Some(&(a, b)) = path.last() else {
+            return true;
+        };
         let shared = tets_around(mesh, around, (a, b));
         if shared.is_empty() {
             // split on the way by a longer neighbour's propagation
@@ -83,12 +87,15 @@ fn split_longest(
             }
         }
     }
-    true
+    refused.insert(edge);
+    false
 }
 
 /// Longest-edge paths longer than this are not followed (a path on a mesh of good tets is
 /// a few edges long).
 const MAX_PATH: usize = 64;
+/// Steps (path extensions and splits) one refinement may take before it is given up.
+const MAX_STEPS: usize = 4096;
 
 /// The tets that hold both `a` and `b`.
 fn tets_around(mesh: &TetMesh, around: &[Vec<u32>], (a, b): (u32, u32)) -> Vec<u32> {

@@ -1,7 +1,7 @@
 //! Keys to messages, per screen: a pure function, unit-tested.
 
 use super::message::Message;
-use super::model::{Editor, Screen};
+use super::model::{Editor, Help, Screen};
 use crate::volume::Axis;
 use crossterm::event::{KeyCode, KeyEvent, KeyModifiers};
 
@@ -26,6 +26,23 @@ pub fn key(screen: &Screen, event: KeyEvent) -> Option<Message> {
         Screen::Exemplar(_) => common.or(exemplar(event.code)),
         Screen::Editor(_) => esc(common).or(editor(event.code)),
         Screen::Fill(_) => common.or(fill(event.code)),
+    }
+}
+
+/// The message a key means while the help is shown: `/` searches, typed keys edit the
+/// search, esc clears it (or closes the help), `?` closes it; other keys do nothing.
+pub fn help_key(help: &Help, event: KeyEvent) -> Option<Message> {
+    if event.modifiers.contains(KeyModifiers::CONTROL) && event.code == KeyCode::Char('c') {
+        return Some(Message::Quit);
+    }
+    match (help.typing, event.code) {
+        (_, KeyCode::Esc) => Some(Message::Back),
+        (true, KeyCode::Enter) | (false, KeyCode::Char('/')) => Some(Message::HelpSearch),
+        (true, KeyCode::Backspace) => Some(Message::HelpType(None)),
+        (true, KeyCode::Char(c)) => Some(Message::HelpType(Some(c))),
+        (false, KeyCode::Char('?')) => Some(Message::Help),
+        (false, KeyCode::Char('q')) => Some(Message::Quit),
+        _ => None,
     }
 }
 
@@ -125,31 +142,103 @@ fn exemplar(code: KeyCode) -> Option<Message> {
     }
 }
 
-/// The help text: one line per key.
-pub const HELP: [&str; 22] = [
-    "up/down, j/k   choose an exemplar",
-    "enter          open its slices",
-    "b / B          build it / build all",
-    "c / d          copy the entry / delete it (d twice;",
-    "               built files stay)",
-    "e              edit its recipe (enter edits a",
-    "               value, s saves, u undo, r redo;",
-    "               a adds a blur; on a step: x removes",
-    "               it, K/J move it)",
-    "x, y, z        choose the slice axis",
-    "arrows, hjkl   move the slice (page up/down: 8)",
-    "c              cycle colour and single channels",
-    "+/-, a         zoom; show the masks in turn",
-    "f              fill a shape with it, then",
-    "               x/y/z + arrows move the cut",
-    "m              stamp mode: arrows move the seed,",
-    "               r turn, +/- scale, enter, n, u, s",
-    "esc            back (asks if work is unsaved)",
-    "?              this help",
-    "q, ctrl-c      quit (asks if work is unsaved)",
-    "builds run in the background: the list shows",
-    "their state and the type the build measured",
+/// One screen's keys for the help: its title and (keys, what they do) rows.
+pub type Section = (&'static str, &'static [(&'static str, &'static str)]);
+
+/// The keys of every screen, for the help.
+pub const SECTIONS: [Section; 6] = [
+    (
+        "library",
+        &[
+            ("up/down, j/k", "choose an exemplar"),
+            ("enter", "open its slices"),
+            ("b / B", "build it / build all"),
+            ("c", "copy the entry (right after it, NAME-2)"),
+            ("d d", "delete the entry (built files stay)"),
+            ("e", "edit its recipe"),
+            ("pgup/pgdn", "scroll the manifest's mistakes"),
+        ],
+    ),
+    (
+        "slices",
+        &[
+            ("x, y, z", "choose the slice axis"),
+            ("arrows, hjkl", "move the slice (pgup/pgdn: 8)"),
+            ("c", "cycle colour and single channels"),
+            ("+/-", "zoom"),
+            ("a", "show the masks in turn"),
+            ("f", "fill a shape with it"),
+            ("m", "stamp mode"),
+        ],
+    ),
+    (
+        "stamp mode",
+        &[
+            ("arrows, hjkl", "move the seed (pgup/pgdn: in depth)"),
+            ("r / R", "turn it 15 degrees"),
+            ("+/-", "scale it"),
+            ("enter", "stamp it"),
+            ("n", "scatter copies of it"),
+            ("u", "undo the last stamp"),
+            ("s", "save the steps into the manifest"),
+            ("m", "leave stamp mode"),
+        ],
+    ),
+    (
+        "recipe editor",
+        &[
+            ("up/down, j/k", "choose a value"),
+            ("enter", "edit it (enter keeps, esc drops)"),
+            ("s", "save the manifest"),
+            ("u / r", "undo / redo"),
+            ("a", "add a blur step"),
+            ("x", "remove the step under the cursor"),
+            ("K / J", "move that step up / down"),
+        ],
+    ),
+    ("fill preview", &[("x, y, z", "choose the cut axis"), ("arrows, hjkl", "move the cut (pgup/pgdn: more)")]),
+    (
+        "everywhere",
+        &[
+            ("esc", "back (asks if work is unsaved)"),
+            ("?", "this help; / searches it"),
+            ("q, ctrl-c", "quit (asks if work is unsaved)"),
+        ],
+    ),
 ];
+
+/// The help's section for `screen` (it is shown first).
+pub fn section_of(screen: &Screen) -> &'static str {
+    match screen {
+        Screen::Library => "library",
+        Screen::Exemplar(v) if v.stamp.is_some() => "stamp mode",
+        Screen::Exemplar(_) => "slices",
+        Screen::Editor(_) => "recipe editor",
+        Screen::Fill(_) => "fill preview",
+    }
+}
+
+/// Rows of the help: (keys, what they do).
+pub type Rows = Vec<(&'static str, &'static str)>;
+
+/// The help's sections in the order shown for `screen` (its own first, `everywhere` last),
+/// each with the rows whose keys or action hold `query` (any case); sections left empty
+/// are dropped.
+pub fn help_rows(screen: &Screen, query: &str) -> Vec<(&'static str, Rows)> {
+    let query = query.to_lowercase();
+    let own = section_of(screen);
+    let order = SECTIONS.iter().filter(|s| s.0 == own).chain(SECTIONS.iter().filter(|s| s.0 != own));
+    order
+        .filter_map(|&(title, rows)| {
+            let kept: Rows = rows
+                .iter()
+                .copied()
+                .filter(|(k, a)| k.to_lowercase().contains(&query) || a.to_lowercase().contains(&query))
+                .collect();
+            (!kept.is_empty()).then_some((title, kept))
+        })
+        .collect()
+}
 
 #[cfg(test)]
 mod tests {
@@ -162,6 +251,36 @@ mod tests {
             modifiers: KeyModifiers::NONE,
             kind: KeyEventKind::Press,
             state: crossterm::event::KeyEventState::NONE,
+        }
+    }
+
+    #[test]
+    fn the_help_shows_the_screen_on_top_first_and_finds_keys_in_any_case() {
+        let editor = Screen::Editor(Editor::default());
+        let titles = |screen: &Screen, q: &str| help_rows(screen, q).iter().map(|r| r.0).collect::<Vec<_>>();
+        assert_eq!(titles(&editor, "")[0], "recipe editor");
+        assert_eq!(titles(&Screen::Library, "").last(), Some(&"everywhere"));
+        assert_eq!(titles(&Screen::Library, "").len(), SECTIONS.len());
+        assert_eq!(titles(&Screen::Library, "STAMP"), ["slices", "stamp mode"]);
+        let stamp_rows = &help_rows(&Screen::Library, "stamp")[1].1;
+        assert!(stamp_rows.iter().all(|(k, a)| k.contains("stamp") || a.contains("stamp")), "{stamp_rows:?}");
+        assert!(help_rows(&editor, "no such key").is_empty());
+        // every key the library screen answers to is in its section
+        let library = &SECTIONS[0].1;
+        for key in ["enter", "b / B", "c", "d d", "e"] {
+            assert!(library.iter().any(|(k, _)| *k == key), "{key}");
+        }
+    }
+
+    /// docs/tui.md lists every key of the help in its table, screen by screen.
+    #[test]
+    fn the_docs_list_the_keys_the_help_shows() {
+        let docs = include_str!("../../docs/tui.md");
+        for (title, rows) in SECTIONS {
+            let at = docs.find(&format!("**{title}**")).unwrap_or_else(|| panic!("no table for {title}"));
+            for (keys, action) in rows {
+                assert!(docs[at..].contains(&format!("| `{keys}` | {action} |")), "{title}: {keys}");
+            }
         }
     }
 

@@ -22,6 +22,10 @@ pub enum Message {
     ScrollErrors(i32),
     /// Toggle the help overlay.
     Help,
+    /// In the help: start typing a search (`/`), or stop typing and keep it (enter).
+    HelpSearch,
+    /// In the help: add a character to the search, or remove the last one (`None`).
+    HelpType(Option<char>),
     /// Leave.
     Quit,
     /// Choose the axis the slice keys move.

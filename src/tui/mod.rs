@@ -129,7 +129,10 @@ fn event_loop(
         if event::poll(Duration::from_millis(100)).map_err(fail)?
             && let Event::Key(key) = event::read().map_err(fail)?
             && key.kind == KeyEventKind::Press
-            && let Some(message) = keymap::key(&model.screen, key)
+            && let Some(message) = match &model.help {
+                Some(help) => keymap::help_key(help, key),
+                None => keymap::key(&model.screen, key),
+            }
         {
             start(update(model, message), model, send);
         }

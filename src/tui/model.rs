@@ -199,8 +199,8 @@ pub struct Model {
     pub selected: usize,
     /// The screen on top.
     pub screen: Screen,
-    /// Show the help overlay.
-    pub help: bool,
+    /// The help overlay, when shown.
+    pub help: Option<Help>,
     /// One line of status at the bottom.
     pub status: String,
     /// Leave the program.
@@ -211,6 +211,15 @@ pub struct Model {
     pub progress: std::collections::BTreeMap<String, (String, f32)>,
     /// The latest pyramid level a synthesis build finished: exemplar -> (`2/3`, volume).
     pub previews: std::collections::BTreeMap<String, (String, Arc<Volume>)>,
+}
+
+/// The help overlay: the keys of every screen, the one on top first, filtered by a query.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Help {
+    /// Only keys whose text holds this (any case) are shown.
+    pub query: String,
+    /// Whether keys type into the query (after `/`).
+    pub typing: bool,
 }
 
 impl Model {
@@ -229,7 +238,7 @@ impl Model {
             error_scroll: 0,
             selected: 0,
             screen: Screen::Library,
-            help: false,
+            help: None,
             status,
             quit: false,
             confirm: None,

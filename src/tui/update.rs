@@ -10,7 +10,20 @@ pub fn update(model: &mut Model, message: Message) -> Vec<Effect> {
     let asked = if from_key(&message) { model.confirm.take() } else { model.confirm };
     match message {
         Message::Quit => quit(model, asked),
-        Message::Help => model.help = !model.help,
+        Message::Help => model.help = if model.help.is_some() { None } else { Some(Default::default()) },
+        Message::HelpSearch => {
+            if let Some(help) = &mut model.help {
+                help.typing = !help.typing;
+            }
+        }
+        Message::HelpType(c) => {
+            if let Some(help) = model.help.as_mut().filter(|h| h.typing) {
+                match c {
+                    Some(c) => help.query.push(c),
+                    None => _ = help.query.pop(),
+                }
+            }
+        }
         Message::Back => return back(model, asked),
         Message::Up => select(model, -1),
         Message::Down => select(model, 1),
@@ -155,12 +168,17 @@ fn quit(model: &mut Model, asked: Option<Confirm>) {
     }
 }
 
-/// Esc: close the help, cancel running builds, or go back to the library (asking first
-/// when work is unsaved). The library is the first screen: Esc there never quits.
+/// Esc: clear the help's search or close the help, cancel running builds, or go back to
+/// the library (asking first when work is unsaved). The library is the first screen: Esc
+/// there never quits.
 fn back(model: &mut Model, asked: Option<Confirm>) -> Vec<Effect> {
     let on_library = matches!(model.screen, Screen::Library);
-    if model.help {
-        model.help = false;
+    if let Some(help) = &mut model.help {
+        if help.typing || !help.query.is_empty() {
+            *help = Default::default();
+        } else {
+            model.help = None;
+        }
     } else if on_library && model.items.iter().any(|i| i.state == BuildState::Building) {
         model.status = "cancelling the running builds; their previous outputs are kept".into();
         return vec![Effect::CancelBuilds];
@@ -387,6 +405,37 @@ mod tests {
         let item = |n: &str, state| Item { name: n.into(), declared: Some("0".into()), size: Some([8; 3]), state };
         let items = vec![item("a", BuildState::Built("0".into())), item("b", BuildState::NotBuilt)];
         Model::new(PathBuf::from("lib.toml"), PathBuf::from("out"), items, Vec::new())
+    }
+
+    /// The help's search: `/` starts it, keys type it (keys of the screen below do
+    /// nothing), esc clears it, esc again closes the help.
+    #[test]
+    fn the_help_is_searched_and_closed_with_esc() {
+        use crate::tui::keymap::{help_key, help_rows};
+        use crossterm::event::{KeyCode, KeyEvent, KeyModifiers};
+        let press = |m: &Model, code| help_key(m.help.as_ref().unwrap(), KeyEvent::new(code, KeyModifiers::NONE));
+        let mut m = model();
+        update(&mut m, Message::Help);
+        assert!(press(&m, KeyCode::Char('b')).is_none(), "b does not build under the help");
+        for code in [KeyCode::Char('/'), KeyCode::Char('b'), KeyCode::Char('l'), KeyCode::Char('x'), KeyCode::Backspace]
+        {
+            let message = press(&m, code).expect("a help key");
+            assert!(update(&mut m, message).is_empty());
+        }
+        for code in "ur".chars().map(KeyCode::Char).chain([KeyCode::Enter]) {
+            let message = press(&m, code).unwrap();
+            update(&mut m, message);
+        }
+        let help = m.help.clone().unwrap();
+        assert_eq!((help.query.as_str(), help.typing), ("blur", false));
+        let rows = help_rows(&m.screen, &help.query);
+        assert_eq!(rows.iter().map(|r| r.0).collect::<Vec<_>>(), ["recipe editor"], "{rows:?}");
+        assert!(m.items.iter().all(|i| i.state != BuildState::Building), "nothing was built");
+        let esc = press(&m, KeyCode::Esc).unwrap();
+        update(&mut m, esc.clone());
+        assert_eq!(m.help, Some(Default::default()), "esc clears the search");
+        update(&mut m, esc);
+        assert_eq!(m.help, None, "esc again closes the help");
     }
 
     #[test]

@@ -1,8 +1,7 @@
 //! `view`: draws the model, nothing else. Slices are truecolour half-blocks: each terminal
 //! cell shows two voxels, the upper as the foreground of '▀' and the lower as its background.
 
-use super::keymap::HELP;
-use super::model::{BuildState, ExemplarView, Model, Screen};
+use super::model::{BuildState, ExemplarView, Help, Model, Screen};
 use crate::render::ColourMap;
 use crate::volume::{Axis, Image2d};
 use ratatui::Frame;
@@ -47,8 +46,8 @@ pub fn draw_with(frame: &mut Frame, model: &Model, graphics: Option<&mut super::
     let text = Paragraph::new(model.status.as_str()).style(Style::new().fg(Color::Gray)).wrap(Wrap { trim: false });
     frame.render_widget(text, left);
     frame.render_widget(Paragraph::new(" ? help  q quit").style(Style::new().fg(Color::DarkGray)), right);
-    if model.help {
-        help(frame, area);
+    if let Some(h) = &model.help {
+        help(frame, area, &model.screen, h);
     }
 }
 
@@ -322,12 +321,55 @@ pub fn wrapped_lines(text: &str, width: u16) -> u16 {
     text.lines().map(|l| l.chars().count().div_ceil(width).max(1)).sum::<usize>().min(u16::MAX as usize) as u16
 }
 
-fn help(frame: &mut Frame, area: Rect) {
-    let (w, h) = (52u16.min(area.width), (HELP.len() as u16 + 2).min(area.height));
+/// The help overlay: the keys of the screen on top first, then the others, those matching
+/// the search with the match highlighted; the search line at the bottom.
+fn help(frame: &mut Frame, area: Rect, screen: &Screen, state: &Help) {
+    let sections = super::keymap::help_rows(screen, &state.query);
+    let mut text: Vec<Line> = Vec::new();
+    for (title, rows) in &sections {
+        text.push(Line::from(Span::styled(*title, Style::new().add_modifier(Modifier::BOLD))));
+        for (keys, action) in rows {
+            let mut spans = vec![Span::raw("  ")];
+            spans.extend(marked(&format!("{keys:<14}"), &state.query));
+            spans.extend(marked(action, &state.query));
+            text.push(Line::from(spans));
+        }
+    }
+    if sections.is_empty() {
+        text.push(Line::from(format!("no key matches '{}'", state.query)));
+    }
+    let search = match (state.typing, state.query.is_empty()) {
+        (true, _) => format!("/{}_  (enter keeps it, esc clears)", state.query),
+        (false, false) => format!("/{}  (/ changes it, esc clears)", state.query),
+        (false, true) => "/ search  esc close".to_string(),
+    };
+    let (w, h) = (60u16.min(area.width), (text.len() as u16 + 3).min(area.height));
     let rect = Rect::new(area.x + (area.width - w) / 2, area.y + (area.height - h) / 2, w, h);
-    let text: Vec<Line> = HELP.iter().map(|l| Line::from(*l)).collect();
+    let [body, bottom] = Layout::vertical([Constraint::Min(1), Constraint::Length(1)]).areas(Rect::new(
+        rect.x + 1,
+        rect.y + 1,
+        rect.width.saturating_sub(2),
+        rect.height.saturating_sub(2),
+    ));
+    let title = format!(" keys: {} ", super::keymap::section_of(screen));
     frame.render_widget(Clear, rect);
-    frame.render_widget(Paragraph::new(text).block(Block::default().borders(Borders::ALL).title(" keys ")), rect);
+    frame.render_widget(Block::default().borders(Borders::ALL).title(title), rect);
+    frame.render_widget(Paragraph::new(text), body);
+    frame.render_widget(Paragraph::new(search).style(Style::new().fg(Color::Yellow)), bottom);
+}
+
+/// `text` as spans, the first match of `query` (any case) highlighted.
+fn marked<'a>(text: &str, query: &str) -> Vec<Span<'a>> {
+    let found = (!query.is_empty()).then(|| text.to_lowercase().find(&query.to_lowercase())).flatten();
+    match found {
+        // lower-casing keeps byte offsets for the ASCII the help is written in
+        Some(at) if text.is_char_boundary(at) && text.is_char_boundary(at + query.len()) => vec![
+            Span::raw(text[..at].to_string()),
+            Span::styled(text[at..at + query.len()].to_string(), Style::new().fg(Color::Black).bg(Color::Yellow)),
+            Span::raw(text[at + query.len()..].to_string()),
+        ],
+        _ => vec![Span::raw(text.to_string())],
+    }
 }
 
 #[cfg(test)]
@@ -399,9 +441,21 @@ mod tests {
         let (text, _) = screen(&model(), 40, 10);
         assert!(text.contains("terminal too small: 40x10"), "{text}");
         let mut m = model();
-        m.help = true;
-        let (text, _) = screen(&m, 80, 24);
-        assert!(text.contains("keys") && text.contains("cycle colour"), "{text}");
+        m.help = Some(Help::default());
+        let (text, _) = screen(&m, 80, 40);
+        assert!(text.contains("keys: library") && text.contains("cycle colour"), "{text}");
+        assert!(text.contains("/ search  esc close"), "{text}");
+        // a search keeps the matching keys, highlighted, and says how to change it
+        m.help = Some(Help { query: "Zoom".into(), typing: false });
+        let (text, buffer) = screen(&m, 80, 40);
+        assert!(text.contains("zoom") && !text.contains("cycle colour"), "{text}");
+        assert!(text.contains("/Zoom  (/ changes it, esc clears)"), "{text}");
+        let highlighted =
+            buffer.content().iter().filter(|c| c.bg == Color::Yellow).map(|c| c.symbol()).collect::<String>();
+        assert_eq!(highlighted, "zoom");
+        m.help = Some(Help { query: "qqq".into(), typing: true });
+        let (text, _) = screen(&m, 80, 40);
+        assert!(text.contains("no key matches 'qqq'") && text.contains("/qqq_"), "{text}");
     }
 
     /// The exemplar view of `volume`, its central slices shown.
