@@ -107,7 +107,7 @@ press "stamped" 5 Right Right Right Enter
 press "unsaved stamps" 5 Escape
 press "saved the steps" 5 s
 press "solidtex library" 5 Escape
-sed -i 's/^  count = 180$/  count = 600/' "$out/lib/library.toml"
+sed -i 's/^  count = 280$/  count = 600/' "$out/lib/library.toml"
 press "recipe: kiwi" 10 e
 wait_for "no room for the rest" 60
 if screen | grep -q "stale"; then echo "tui e2e: the preview after a stamp at x > 31 is stale"; screen; exit 1; fi
@@ -142,6 +142,16 @@ press "removed step 0" 10 x
 press "saved" 10 s
 cmp -s "$out/lib/broken.toml" tests/manifests/two-broken.toml || { echo "tui e2e: adding then removing a step changed the manifest"; diff "$out/lib/broken.toml" tests/manifests/two-broken.toml; exit 1; }
 press "solidtex library" 5 Escape
+# h. r renames the entry (a taken name refused with the reason); renaming it back gives the
+# file back byte for byte
+press "new name: b_" 5 r
+press "already has an exemplar" 10 C-u a Enter
+press "new name: b_" 5 r
+press "renamed b to bark" 10 C-u b a r k Enter
+grep -q '^name = "bark"' "$out/lib/broken.toml" || { echo "tui e2e: the new name is not in the manifest"; exit 1; }
+press "new name: bark_" 5 r
+press "renamed bark to b" 10 C-u b Enter
+cmp -s "$out/lib/broken.toml" tests/manifests/two-broken.toml || { echo "tui e2e: renaming back changed the manifest"; diff "$out/lib/broken.toml" tests/manifests/two-broken.toml; exit 1; }
 tmux send-keys -t "$session" q
 sleep 0.5
 if tmux has-session -t "$session" 2>/dev/null; then echo "tui e2e: q did not quit"; exit 1; fi

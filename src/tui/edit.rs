@@ -118,6 +118,18 @@ pub fn delete(text: &str, name: &str) -> Result<String, String> {
     Ok(doc.to_string())
 }
 
+/// The manifest with exemplar `name` renamed `new` (its comments and layout kept). Refused:
+/// a name the manifest does not allow (ASCII letters, digits, '-' and '_') or one taken.
+pub fn rename(text: &str, name: &str, new: &str) -> Result<String, String> {
+    if new.is_empty() || !new.chars().all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_') {
+        return Err(format!("{new:?} is not a name the manifest allows: use ASCII letters, digits, '-' and '_'"));
+    }
+    if new != name && fields(text, new).is_ok() {
+        return Err(format!("the manifest already has an exemplar named {new:?}"));
+    }
+    set(text, name, "name", &format!("{new:?}"))
+}
+
 /// Which step a field key such as `steps[2].count` belongs to.
 pub fn step_of(key: &str) -> Option<usize> {
     step_key(key).0
@@ -358,6 +370,18 @@ mod tests {
         assert!(without_a.starts_with("# the library\n\n[[exemplar]]\nname = \"b\""), "{without_a}");
         assert!(delete(TEXT, "zz").unwrap_err().contains("zz"));
         assert!(duplicate(TEXT, "zz").unwrap_err().contains("zz"));
+    }
+
+    #[test]
+    fn a_rename_changes_only_the_name() {
+        let out = rename(TEXT, "a", "a_new-1").unwrap();
+        assert_eq!(out, TEXT.replacen("name = \"a\"", "name = \"a_new-1\"", 1));
+        assert!(rename(TEXT, "a", "b").unwrap_err().contains("already has an exemplar named \"b\""));
+        for bad in ["", "a b", "ä", "a/b"] {
+            assert!(rename(TEXT, "a", bad).unwrap_err().contains("not a name the manifest allows"), "{bad:?}");
+        }
+        assert!(rename(TEXT, "zz", "y").unwrap_err().contains("zz"));
+        assert_eq!(rename(TEXT, "a", "a").unwrap(), TEXT);
     }
 
     #[test]

@@ -26,6 +26,9 @@ fn unless(keys: &'static str, action: &'static str, why_not: Option<&'static str
 /// The hints of the screen on top of `model`, most used first (`?` help and `q` quit stay
 /// at the right of the status line).
 pub fn hints(model: &Model) -> Vec<Hint> {
+    if model.rename.is_some() {
+        return vec![hint("enter", "rename"), hint("esc", "keep the name"), hint("ctrl-u", "clear")];
+    }
     match &model.screen {
         Screen::Library => library(model),
         Screen::Exemplar(view) if view.stamp.is_some() => vec![
@@ -86,6 +89,7 @@ fn library(model: &Model) -> Vec<Hint> {
         unless("e", "edit", none),
         unless("c", "copy", none),
         unless("d", "delete", none),
+        unless("r", "rename", none),
     ]
 }
 

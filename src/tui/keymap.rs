@@ -56,6 +56,7 @@ fn library(code: KeyCode) -> Option<Message> {
         KeyCode::Char('e') => Some(Message::Edit),
         KeyCode::Char('c') => Some(Message::Duplicate),
         KeyCode::Char('d') => Some(Message::Delete),
+        KeyCode::Char('r') => Some(Message::Rename),
         KeyCode::PageDown => Some(Message::ScrollErrors(3)),
         KeyCode::PageUp => Some(Message::ScrollErrors(-3)),
         _ => None,
@@ -84,7 +85,7 @@ fn stamping(code: KeyCode) -> Option<Message> {
 
 /// Keys while a value is typed: Enter commits, Esc drops it, the rest edit it as a text
 /// field (tui-input: arrows, Home, End, Backspace, Delete, Ctrl-U, Ctrl-W, Ctrl-A, Ctrl-E).
-fn typing(event: KeyEvent) -> Option<Message> {
+pub fn typing(event: KeyEvent) -> Option<Message> {
     match event.code {
         KeyCode::Enter => Some(Message::Commit),
         KeyCode::Esc => Some(Message::Cancel),
@@ -155,6 +156,7 @@ pub const SECTIONS: [Section; 6] = [
             ("b / B", "build it / build all"),
             ("c", "copy the entry (right after it, NAME-2)"),
             ("d d", "delete the entry (built files stay)"),
+            ("r", "rename the entry (enter keeps, esc drops)"),
             ("e", "edit its recipe"),
             ("pgup/pgdn", "scroll the manifest's mistakes"),
         ],

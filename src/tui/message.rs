@@ -47,6 +47,8 @@ pub enum Message {
     Duplicate,
     /// Delete the selected entry from the manifest (asks first).
     Delete,
+    /// Start renaming the selected entry (a prompt with its name).
+    Rename,
     /// The manifest's entries changed: the reloaded list, its errors, the entry to select
     /// and what happened; or why nothing changed.
     EntriesChanged(Result<(Vec<super::model::Item>, Vec<String>, String, String), String>),
@@ -153,4 +155,6 @@ pub enum EntryChange {
     Duplicate(String),
     /// Delete exemplar `name`.
     Delete(String),
+    /// Rename exemplar `name` (first) to the second name.
+    Rename(String, String),
 }

@@ -129,9 +129,10 @@ fn event_loop(
         if event::poll(Duration::from_millis(100)).map_err(fail)?
             && let Event::Key(key) = event::read().map_err(fail)?
             && key.kind == KeyEventKind::Press
-            && let Some(message) = match &model.help {
-                Some(help) => keymap::help_key(help, key),
-                None => keymap::key(&model.screen, key),
+            && let Some(message) = match (&model.help, &model.rename) {
+                (Some(help), _) => keymap::help_key(help, key),
+                (None, Some(_)) => keymap::typing(key),
+                (None, None) => keymap::key(&model.screen, key),
             }
         {
             start(update(model, message), model, send);
@@ -196,8 +197,8 @@ fn start(effects: Vec<Effect>, model: &Model, send: &Sender<Message>) {
     }
 }
 
-/// Copies or deletes an entry of the manifest, saves it and reloads the list: the list, its
-/// errors, the entry to select and a status line.
+/// Copies, deletes or renames an entry of the manifest, saves it and reloads the list: the
+/// list, its errors, the entry to select and a status line.
 fn change_entry(
     manifest: &Path,
     output: &Path,
@@ -213,6 +214,11 @@ fn change_entry(
             let text = edit::delete(&text, name)?;
             let status = format!("deleted {name} from {}; its built files stay", manifest.display());
             (text, String::new(), status)
+        }
+        EntryChange::Rename(name, new) => {
+            let text = edit::rename(&text, name, new)?;
+            let status = format!("renamed {name} to {new}; the files built as {name} stay (b builds {new})");
+            (text, new.clone(), status)
         }
     };
     io::write_bytes(manifest, text.as_bytes()).map_err(|e| e.to_string())?;
@@ -428,5 +434,26 @@ mod tests {
         assert_eq!(m.items.len(), 4);
         assert_eq!(std::fs::read_to_string(&manifest).unwrap(), original, "copy then delete gives the file back");
         assert!(m.status.contains("deleted a-2") && m.status.contains("built files stay"), "{}", m.status);
+        // r renames the selected entry; a taken name is refused with the reason
+        let type_name = |m: &mut super::Model, name: &str| {
+            run(m, Message::Rename);
+            run(m, Message::Input(tui_input::InputRequest::DeleteLine));
+            name.chars().for_each(|c| run(m, Message::Input(tui_input::InputRequest::InsertChar(c))));
+            run(m, Message::Commit);
+        };
+        m.selected = 0;
+        type_name(&mut m, "b");
+        assert!(m.status.contains("already has an exemplar named \"b\""), "{}", m.status);
+        assert_eq!(std::fs::read_to_string(&manifest).unwrap(), original);
+        type_name(&mut m, "apple");
+        assert_eq!(m.items[m.selected].name, "apple");
+        assert!(m.status.contains("renamed a to apple"), "{}", m.status);
+        assert!(std::fs::read_to_string(&manifest).unwrap().contains("name = \"apple\""));
+        type_name(&mut m, "a");
+        assert_eq!(std::fs::read_to_string(&manifest).unwrap(), original, "renaming back gives the file back");
+        // esc drops the prompt and keeps the name
+        run(&mut m, Message::Rename);
+        run(&mut m, Message::Cancel);
+        assert!(m.rename.is_none() && m.status.contains("the name stays"));
     }
 }

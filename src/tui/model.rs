@@ -201,6 +201,8 @@ pub struct Model {
     pub screen: Screen,
     /// The help overlay, when shown.
     pub help: Option<Help>,
+    /// The new name being typed for the selected library entry.
+    pub rename: Option<tui_input::Input>,
     /// One line of status at the bottom.
     pub status: String,
     /// Leave the program.
@@ -239,6 +241,7 @@ impl Model {
             selected: 0,
             screen: Screen::Library,
             help: None,
+            rename: None,
             status,
             quit: false,
             confirm: None,

@@ -52,6 +52,15 @@ pub fn update(model: &mut Model, message: Message) -> Vec<Effect> {
         Message::BuildCancelled(name, row) => cancelled(model, &name, row),
         Message::Edit => return editing::open_editor(model),
         Message::EditorReady(result) => return editing::editor_ready(model, result),
+        Message::Rename => start_rename(model),
+        Message::Commit if model.rename.is_some() => return finish_rename(model),
+        Message::Input(request) if model.rename.is_some() => {
+            model.rename.as_mut().expect("checked").handle(request);
+        }
+        Message::Cancel if model.rename.is_some() => {
+            model.rename = None;
+            model.status = "the name stays".into();
+        }
         Message::Commit => return editing::commit(model),
         Message::Input(request) => editing::input(model, request),
         Message::Cancel => {
@@ -143,6 +152,29 @@ fn change_entry(model: &mut Model, delete: bool, asked: Option<Confirm>) -> Vec<
     }
     model.status = format!("deleting {name}");
     vec![Effect::ChangeEntry(EntryChange::Delete(name))]
+}
+
+/// `r` on the library: a prompt for the selected entry's new name, its name filled in.
+fn start_rename(model: &mut Model) {
+    let Some(name) = model.items.get(model.selected).map(|i| i.name.clone()) else {
+        model.status = "the library has no entry to rename".into();
+        return;
+    };
+    model.status = format!("new name for {name} (enter renames, esc keeps it)");
+    model.rename = Some(name.as_str().into());
+}
+
+/// Enter in the rename prompt: rename the entry in the manifest (the worker refuses a name
+/// the manifest does not allow or one taken, and says why).
+fn finish_rename(model: &mut Model) -> Vec<Effect> {
+    let new = model.rename.take().map(|i| i.value().to_string()).unwrap_or_default();
+    let Some(name) = model.items.get(model.selected).map(|i| i.name.clone()) else { return Vec::new() };
+    if new == name {
+        model.status = "the name stays".into();
+        return Vec::new();
+    }
+    model.status = format!("renaming {name} to {new}");
+    vec![Effect::ChangeEntry(EntryChange::Rename(name, new))]
 }
 
 /// The manifest's entries changed: the new list, the row of `select` chosen.

@@ -32,7 +32,11 @@ pub fn draw_with(frame: &mut Frame, model: &Model, graphics: Option<&mut super::
     }
     // A long status (an error with its reason) gets as many lines as it needs, up to four,
     // beside the key hints rather than under them.
-    let status_lines = wrapped_lines(&model.status, area.width.saturating_sub(16)).clamp(1, 4);
+    let status_text = match &model.rename {
+        Some(input) => format!("new name: {}_  (enter renames, esc keeps the name)", input.value()),
+        None => model.status.clone(),
+    };
+    let status_lines = wrapped_lines(&status_text, area.width.saturating_sub(16)).clamp(1, 4);
     let [main, bar, status] =
         Layout::vertical([Constraint::Min(3), Constraint::Length(1), Constraint::Length(status_lines)]).areas(area);
     key_bar(frame, model, bar);
@@ -43,7 +47,7 @@ pub fn draw_with(frame: &mut Frame, model: &Model, graphics: Option<&mut super::
         Screen::Fill(view) => super::view_edit::fill(frame, view, main),
     }
     let [left, right] = Layout::horizontal([Constraint::Min(10), Constraint::Length(16)]).areas(status);
-    let text = Paragraph::new(model.status.as_str()).style(Style::new().fg(Color::Gray)).wrap(Wrap { trim: false });
+    let text = Paragraph::new(status_text).style(Style::new().fg(Color::Gray)).wrap(Wrap { trim: false });
     frame.render_widget(text, left);
     frame.render_widget(Paragraph::new(" ? help  q quit").style(Style::new().fg(Color::DarkGray)), right);
     if let Some(h) = &model.help {
@@ -456,6 +460,11 @@ mod tests {
         m.help = Some(Help { query: "qqq".into(), typing: true });
         let (text, _) = screen(&m, 80, 40);
         assert!(text.contains("no key matches 'qqq'") && text.contains("/qqq_"), "{text}");
+        // the rename prompt shows what is typed, and the key bar its keys
+        m.help = None;
+        m.rename = Some("ab".into());
+        let (text, _) = screen(&m, 80, 24);
+        assert!(text.contains("new name: ab_") && text.contains("keep the name"), "{text}");
     }
 
     /// The exemplar view of `volume`, its central slices shown.
