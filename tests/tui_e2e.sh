@@ -100,6 +100,9 @@ wait_for "solidtex library" 10
 # i. entries edited since their build are found stale when the UI opens, with the reason
 wait_for "changed since their last build (select one to see why)" 5
 press "marble changed since its last build (the recipe changed)" 5 Down Up
+# R rebuilds the changed entries only
+press "built marble" 60 R
+screen | grep -q "changed since built" && { echo "tui e2e: R left a changed entry"; screen; exit 1; }
 press "built kiwi" 60 Down Down Down b
 press "XY z=32/63" 10 Enter
 press "stamp mode" 10 m

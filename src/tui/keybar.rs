@@ -77,10 +77,12 @@ fn library(model: &Model) -> Vec<Hint> {
     let build = match state {
         None => Some("no entry"),
         Some(BuildState::Building) => Some("building"),
+        Some(BuildState::Queued) => Some("waiting"),
         Some(BuildState::Broken(_)) => Some("a mistake: e"),
         _ => None,
     };
-    let building_all = model.items.iter().any(|i| matches!(i.state, BuildState::Building)).then_some("building");
+    let building_all = model.items.iter().any(|i| i.state.busy()).then_some("building");
+    let changed = model.items.iter().any(|i| matches!(i.state, BuildState::Changed(..)));
     let none = item.is_none().then_some("no entry");
     vec![
         unless("enter", "open", open),
@@ -90,6 +92,7 @@ fn library(model: &Model) -> Vec<Hint> {
         unless("c", "copy", none),
         unless("d", "delete", none),
         unless("r", "rename", none),
+        unless("R", "rebuild changed", (!changed).then_some("none changed")),
     ]
 }
 

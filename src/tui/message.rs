@@ -18,6 +18,10 @@ pub enum Message {
     Build,
     /// Build every exemplar.
     BuildAll,
+    /// Build the exemplars changed since their last build.
+    BuildChanged,
+    /// A build took its turn: these exemplars build now (the others asked wait).
+    BuildStarted(Vec<String>),
     /// Scroll the manifest's error list by this many lines.
     ScrollErrors(i32),
     /// Toggle the help overlay.

@@ -238,6 +238,7 @@ static BUILDING: Mutex<()> = Mutex::new(());
 fn build(manifest: &Path, output: &Path, names: Vec<String>, send: &Sender<Message>) {
     let cancels = CANCELS.load(Ordering::SeqCst);
     let _turn = BUILDING.lock().unwrap_or_else(|e| e.into_inner());
+    let _ = send.send(Message::BuildStarted(names.clone()));
     let request = library::Request {
         manifest: manifest.to_path_buf(),
         output: output.to_path_buf(),

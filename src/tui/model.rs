@@ -11,6 +11,8 @@ pub enum BuildState {
     NotBuilt,
     /// A build is running.
     Building,
+    /// Asked to build, waiting for the build before it to finish.
+    Queued,
     /// Built; the classified type from the build record.
     Built(String),
     /// Built (the classified type), but its recipe or inputs changed since (why): the
@@ -20,6 +22,13 @@ pub enum BuildState {
     Failed(String),
     /// The manifest entry has a mistake (this message): `e` opens it to fix.
     Broken(String),
+}
+
+impl BuildState {
+    /// Whether a build of it runs or waits to run.
+    pub fn busy(&self) -> bool {
+        matches!(self, BuildState::Building | BuildState::Queued)
+    }
 }
 
 /// One exemplar of the library list.

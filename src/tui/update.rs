@@ -30,6 +30,12 @@ pub fn update(model: &mut Model, message: Message) -> Vec<Effect> {
         Message::Open => return open(model),
         Message::Build => return build(model, false),
         Message::BuildAll => return build(model, true),
+        Message::BuildChanged => return build_changed(model),
+        Message::BuildStarted(names) => {
+            for item in model.items.iter_mut().filter(|i| i.state == BuildState::Queued && names.contains(&i.name)) {
+                item.state = BuildState::Building;
+            }
+        }
         Message::Duplicate => return change_entry(model, false, asked),
         Message::Delete => return change_entry(model, true, asked),
         Message::EntriesChanged(result) => entries_changed(model, result),
@@ -129,6 +135,7 @@ fn from_key(message: &Message) -> bool {
             | Message::SeedLoaded(_)
             | Message::BuildPreview(..)
             | Message::BuildProgress(..)
+            | Message::BuildStarted(_)
             | Message::BuildWarning(..)
     )
 }
@@ -211,7 +218,7 @@ fn back(model: &mut Model, asked: Option<Confirm>) -> Vec<Effect> {
         } else {
             model.help = None;
         }
-    } else if on_library && model.items.iter().any(|i| i.state == BuildState::Building) {
+    } else if on_library && model.items.iter().any(|i| i.state.busy()) {
         model.status = "cancelling the running builds; their previous outputs are kept".into();
         return vec![Effect::CancelBuilds];
     } else if on_library {
@@ -337,14 +344,8 @@ fn open(model: &mut Model) -> Vec<Effect> {
 }
 
 fn build(model: &mut Model, all: bool) -> Vec<Effect> {
-    let names: Vec<String> = model
-        .items
-        .iter()
-        .enumerate()
-        .filter(|(i, item)| (all || *i == model.selected) && item.state != BuildState::Building)
-        .filter(|(_, item)| !matches!(item.state, BuildState::Broken(_)))
-        .map(|(_, item)| item.name.clone())
-        .collect();
+    let selected = model.selected;
+    let names = wanted(model, |i, _| all || i == selected);
     if names.is_empty() {
         if let Some(BuildState::Broken(reason)) = model.items.get(model.selected).map(|i| &i.state)
             && !all
@@ -353,10 +354,38 @@ fn build(model: &mut Model, all: bool) -> Vec<Effect> {
         }
         return Vec::new();
     }
-    for item in model.items.iter_mut().filter(|i| names.contains(&i.name)) {
-        item.state = BuildState::Building;
+    queue(model, names)
+}
+
+/// `R`: build the entries changed since their last build.
+fn build_changed(model: &mut Model) -> Vec<Effect> {
+    let names = wanted(model, |_, state| matches!(state, BuildState::Changed(..)));
+    if names.is_empty() {
+        model.status = "no entry changed since its last build".into();
+        return Vec::new();
     }
-    model.status = format!("building {} (esc cancels)", names.join(", "));
+    queue(model, names)
+}
+
+/// The names of the entries `pick` chooses (by row and state) that can build now.
+fn wanted(model: &Model, pick: impl Fn(usize, &BuildState) -> bool) -> Vec<String> {
+    let rows = model.items.iter().enumerate().filter(|(i, item)| pick(*i, &item.state));
+    rows.filter(|(_, item)| !item.state.busy() && !matches!(item.state, BuildState::Broken(_)))
+        .map(|(_, item)| item.name.clone())
+        .collect()
+}
+
+/// Marks `names` waiting for their turn (the worker says when it starts) and starts it.
+fn queue(model: &mut Model, names: Vec<String>) -> Vec<Effect> {
+    let waiting = model.items.iter().any(|i| i.state.busy());
+    for item in model.items.iter_mut().filter(|i| names.contains(&i.name)) {
+        item.state = BuildState::Queued;
+    }
+    model.status = if waiting {
+        format!("{} wait(s) for the build before them (esc cancels all)", names.join(", "))
+    } else {
+        format!("building {} (esc cancels)", names.join(", "))
+    };
     vec![Effect::Build(names)]
 }
 
@@ -481,6 +510,8 @@ mod tests {
         assert!(update(&mut m, Message::Open).is_empty(), "b is not built");
         assert!(m.status.contains("press b"));
         assert_eq!(update(&mut m, Message::Build), vec![Effect::Build(vec!["b".into()])]);
+        assert_eq!(m.items[1].state, BuildState::Queued, "until the worker takes its turn");
+        update(&mut m, Message::BuildStarted(vec!["b".into()]));
         assert_eq!(m.items[1].state, BuildState::Building);
         assert!(update(&mut m, Message::Build).is_empty(), "no second build while one runs");
         let row = Item {
@@ -514,11 +545,31 @@ mod tests {
         assert!(m.quit);
     }
 
+    /// R builds only the entries changed since their last build; a build asked while
+    /// another runs waits its turn, and says so.
+    #[test]
+    fn r_rebuilds_the_changed_entries_and_later_builds_wait_their_turn() {
+        let mut m = model();
+        assert!(update(&mut m, Message::BuildChanged).is_empty());
+        assert!(m.status.contains("no entry changed"), "{}", m.status);
+        m.items[0].state = BuildState::Changed("0".into(), "the recipe changed".into());
+        update(&mut m, Message::Down);
+        assert_eq!(update(&mut m, Message::Build), vec![Effect::Build(vec!["b".into()])]);
+        update(&mut m, Message::BuildStarted(vec!["b".into()]));
+        assert_eq!(update(&mut m, Message::BuildChanged), vec![Effect::Build(vec!["a".into()])]);
+        assert_eq!((&m.items[0].state, &m.items[1].state), (&BuildState::Queued, &BuildState::Building));
+        assert!(m.status.contains("a wait(s) for the build before them"), "{}", m.status);
+        assert!(update(&mut m, Message::BuildChanged).is_empty(), "a is already queued");
+        update(&mut m, Message::BuildStarted(vec!["a".into()]));
+        assert_eq!(m.items[0].state, BuildState::Building);
+    }
+
     #[test]
     fn build_progress_shows_and_esc_cancels_running_builds() {
         let mut m = model();
         update(&mut m, Message::Down);
         update(&mut m, Message::Build);
+        update(&mut m, Message::BuildStarted(vec!["b".into()]));
         update(&mut m, Message::BuildProgress("b".into(), "level 2/3, iteration 1: searched".into(), 0.4));
         update(&mut m, Message::BuildProgress("a".into(), "level 1/3".into(), 0.1));
         assert_eq!(m.progress.len(), 1, "only running builds report");

@@ -106,6 +106,7 @@ fn library(frame: &mut Frame, model: &Model, area: Rect) {
         let (state, measured) = match &item.state {
             BuildState::NotBuilt => ("not built".to_string(), "-".to_string()),
             BuildState::Building => (gauge(model.progress.get(&item.name)), "-".to_string()),
+            BuildState::Queued => ("waiting (queued)".to_string(), "-".to_string()),
             BuildState::Built(t) => ("built".to_string(), t.clone()),
             BuildState::Changed(t, _) => ("changed since built".to_string(), t.clone()),
             BuildState::Failed(e) => (format!("failed: {e}"), "-".to_string()),
@@ -425,8 +426,12 @@ mod tests {
         let mut m = model();
         m.items[1].state = BuildState::Building;
         m.progress.insert("marble".into(), ("level 2/3, iteration 1: searched".into(), 0.48));
+        m.items[0].state = BuildState::Queued;
         let (text, _) = screen(&m, 80, 24);
-        assert!(text.contains("level 2/3 ####---- 48%"), "{text}");
+        assert!(text.contains("level 2/3 ####---- 48%") && text.contains("waiting (queued)"), "{text}");
+        let (text, _) = screen(&m, 140, 24);
+        assert!(text.contains("R rebuild changed (none changed)"), "{text}");
+        m.items[0].state = BuildState::Built("1-b".into());
         m.selected = 1;
         let level =
             Volume::from_fn([8, 8, 8], Channel::rgb(), |_, _, _, o| o.copy_from_slice(&[0.0, 0.0, 1.0])).unwrap();
