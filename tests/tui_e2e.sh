@@ -48,6 +48,11 @@ screen | grep -q "fill preview" && { echo "tui e2e: f acted under the help"; scr
 press "/ search  esc close" 5 Escape
 tmux send-keys -t "$session" Escape
 sleep 0.5
+# E exports the exemplar: every format, its contact sheet and the slice on screen
+press "exported 8 files" 30 E
+for f in marble.exr marble.nrrd marble.vol marble.vdb marble.dds marble.png marble.sheet.png marble.slice-x34.png; do
+  [ -s "$out/built/exports/marble/$f" ] || { echo "tui e2e: the export lacks $f"; ls "$out/built/exports/marble"; exit 1; }
+done
 # fill preview: a shape filled with marble, the cut moved
 press "fill preview: marble" 5 f
 wait_for "patches" 60

@@ -139,6 +139,7 @@ fn exemplar(code: KeyCode) -> Option<Message> {
         KeyCode::Char('+') | KeyCode::Char('=') => Some(Message::Zoom(true)),
         KeyCode::Char('-') => Some(Message::Zoom(false)),
         KeyCode::Char('a') => Some(Message::NextLayer),
+        KeyCode::Char('E') => Some(Message::Export),
         KeyCode::Backspace => Some(Message::Back),
         _ => None,
     }
@@ -173,6 +174,7 @@ pub const SECTIONS: [Section; 6] = [
             ("a", "show the masks in turn"),
             ("f", "fill a shape with it"),
             ("m", "stamp mode"),
+            ("E", "export: every format, contact sheet, this slice"),
         ],
     ),
     (

@@ -53,6 +53,11 @@ pub enum Message {
     Delete,
     /// Start renaming the selected entry (a prompt with its name).
     Rename,
+    /// Export the exemplar on screen.
+    Export,
+    /// An export finished: the folder, the files written and the formats that cannot hold
+    /// the volume (with the reason); or why it failed.
+    Exported(Result<(String, Vec<String>, Vec<String>), String>),
     /// The manifest's entries changed: the reloaded list, its errors, the entry to select
     /// and what happened; or why nothing changed.
     EntriesChanged(Result<(Vec<super::model::Item>, Vec<String>, String, String), String>),
@@ -150,6 +155,9 @@ pub enum Effect {
     SaveSteps(String, Vec<super::model::StampStep>, String),
     /// Copy or delete an entry of the manifest and save it.
     ChangeEntry(EntryChange),
+    /// Write exemplar `name`'s volume in every interchange format, its contact sheet and
+    /// the slice on screen (axis, index) into `OUTPUT/exports/NAME/`.
+    Export(String, Arc<Volume>, Axis, usize),
 }
 
 /// A change to the manifest's list of entries.

@@ -28,6 +28,7 @@ pub use view::draw;
 use crate::error::{Error, Result};
 use crate::io;
 use crate::library::{self, Freshness, Observer, Outcome};
+use crate::volume::{Axis, Volume};
 use crossterm::event::{self, Event, KeyEventKind};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -187,6 +188,10 @@ fn start(effects: Vec<Effect>, model: &Model, send: &Sender<Message>) {
             Effect::ChangeEntry(change) => {
                 let _ = send.send(Message::EntriesChanged(change_entry(&manifest, &output, &change)));
             }
+            Effect::Export(name, volume, axis, index) => {
+                let result = export(&output, &name, &volume, axis, index).map_err(|e| e.to_string());
+                let _ = send.send(Message::Exported(result));
+            }
             Effect::Fill(name) => {
                 let result = library::fill::preview(&manifest, &output, &name, &crate::progress::NoProgress)
                     .map(Arc::new)
@@ -224,6 +229,44 @@ fn change_entry(
     io::write_bytes(manifest, text.as_bytes()).map_err(|e| e.to_string())?;
     let (items, errors) = load_items(manifest, output);
     Ok((items, errors, select, status))
+}
+
+/// The formats `E` writes an exemplar in (by extension), besides its contact sheet and the
+/// slice on screen.
+const EXPORTS: [&str; 6] = ["exr", "nrrd", "vol", "vdb", "dds", "png"];
+
+/// What an export wrote: the folder, the files written, and the formats that cannot hold
+/// this volume with the reason.
+type Exported = (String, Vec<String>, Vec<String>);
+
+/// Writes `volume` in every format of [`EXPORTS`] that can hold it (the PNG as an atlas),
+/// its contact sheet and its slice `index` across `axis` into the folder
+/// `OUTPUT/exports/NAME/`, replaced as a whole (a folder there that holds files solidtex
+/// did not write is refused).
+fn export(output: &Path, name: &str, volume: &Volume, axis: Axis, index: usize) -> Result<Exported> {
+    let parent = output.join("exports");
+    std::fs::create_dir_all(&parent).map_err(|e| Error::io(&parent, e))?;
+    let folder = parent.join(name);
+    let (mut written, mut skipped) = (Vec::new(), Vec::new());
+    io::write_folder(&folder, |dir| {
+        for ext in EXPORTS {
+            let file = format!("{name}.{ext}");
+            match io::write_volume(&dir.join(&file), volume) {
+                Ok(()) => written.push(file),
+                Err(Error::File { message, .. }) => skipped.push(format!("{file} ({message})")),
+                Err(e) => return Err(e),
+            }
+        }
+        let sheet = format!("{name}.sheet.png");
+        io::write_rgb8(&dir.join(&sheet), &crate::render::sheet(volume, name))?;
+        let slice = format!("{name}.slice-{axis}{index}.png");
+        let image = volume.slice(axis, index)?;
+        let picture = crate::render::picture(&image, crate::render::ColourMap::for_channels(volume.channels()), 1);
+        io::write_rgb8(&dir.join(&slice), &picture)?;
+        written.extend([sheet, slice]);
+        Ok(())
+    })?;
+    Ok((folder.display().to_string(), written, skipped))
 }
 
 /// Counts cancellations: a build stops when the count moves past the one it started with,
@@ -363,6 +406,49 @@ fn load_masks(output: &Path, name: &str) -> std::result::Result<Vec<(String, Arc
 #[cfg(test)]
 mod tests {
     use super::{BuildState, Effect, Message, finished, load_items, update};
+
+    /// `E` on the slices writes every format, the contact sheet and the slice on screen
+    /// into OUTPUT/exports/NAME/, replacing its own export; a folder there holding a file
+    /// solidtex did not write is refused, and that file stays.
+    #[test]
+    fn e_exports_the_volume_in_every_format_beside_the_slice_on_screen() {
+        use crate::tui::model::{ExemplarView, Model, Screen};
+        use crate::volume::{Axis, Channel, Volume};
+        let dir = tempfile::tempdir().unwrap();
+        let volume = Volume::from_fn([6, 5, 4], Channel::rgb(), |x, y, z, o| {
+            o.copy_from_slice(&[x as f32 / 5.0, y as f32 / 4.0, z as f32 / 3.0])
+        })
+        .unwrap();
+        let mut m = Model::new(dir.path().join("lib.toml"), dir.path().join("out"), Vec::new(), Vec::new());
+        let mut view = ExemplarView::new("ramp");
+        assert!(update(&mut m, Message::Export).is_empty(), "not on the slices");
+        (view.axis, view.index) = (Axis::Y, [3, 2, 1]);
+        m.screen = Screen::Exemplar(view.clone());
+        assert!(update(&mut m, Message::Export).is_empty() && m.status.contains("loading"), "{}", m.status);
+        view.volume = Some(std::sync::Arc::new(volume.clone()));
+        m.screen = Screen::Exemplar(view);
+        let effects = update(&mut m, Message::Export);
+        let [Effect::Export(name, v, axis, index)] = &effects[..] else { panic!("{effects:?}") };
+        assert_eq!((name.as_str(), *axis, *index), ("ramp", Axis::Y, 2));
+        for _ in 0..2 {
+            let exported = super::export(&m.output, name, v, *axis, *index).unwrap();
+            update(&mut m, Message::Exported(Ok(exported)));
+        }
+        assert!(m.status.contains("exported 7 files into") && m.status.contains("ramp.slice-y2.png"), "{}", m.status);
+        assert!(m.status.contains("not ramp.vol (") && m.status.contains("cubes only"), "{}", m.status);
+        let folder = m.output.join("exports/ramp");
+        assert!(!folder.join("ramp.vol").exists());
+        for ext in ["exr", "nrrd", "vdb", "dds", "png"] {
+            let back = crate::io::read_volume(&folder.join(format!("ramp.{ext}")), u64::MAX).unwrap();
+            assert_eq!(back.dims(), [6, 5, 4], "{ext}");
+        }
+        let slice = image::open(folder.join("ramp.slice-y2.png")).unwrap();
+        assert_eq!((slice.width(), slice.height()), (6, 4), "an x-z slice");
+        std::fs::write(folder.join("notes.txt"), "mine").unwrap();
+        let refused = super::export(&m.output, "ramp", &volume, Axis::Z, 0).unwrap_err().to_string();
+        assert!(refused.contains("exports/ramp"), "{refused}");
+        assert_eq!(std::fs::read_to_string(folder.join("notes.txt")).unwrap(), "mine");
+    }
 
     /// A temporary copy of tests/manifests/two-broken.toml (valid a, b; broken1, broken2).
     fn two_broken() -> (tempfile::TempDir, std::path::PathBuf) {

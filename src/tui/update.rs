@@ -59,6 +59,19 @@ pub fn update(model: &mut Model, message: Message) -> Vec<Effect> {
         Message::Edit => return editing::open_editor(model),
         Message::EditorReady(result) => return editing::editor_ready(model, result),
         Message::Rename => start_rename(model),
+        Message::Export => return export(model),
+        Message::Exported(result) => {
+            model.status = match result {
+                Ok((folder, files, skipped)) => {
+                    let mut text = format!("exported {} files into {folder}: {}", files.len(), files.join(", "));
+                    if !skipped.is_empty() {
+                        text += &format!("; not {}", skipped.join(", not "));
+                    }
+                    text
+                }
+                Err(e) => format!("nothing exported: {e}"),
+            }
+        }
         Message::Commit if model.rename.is_some() => return finish_rename(model),
         Message::Input(request) if model.rename.is_some() => {
             model.rename.as_mut().expect("checked").handle(request);
@@ -136,6 +149,7 @@ fn from_key(message: &Message) -> bool {
             | Message::BuildPreview(..)
             | Message::BuildProgress(..)
             | Message::BuildStarted(_)
+            | Message::Exported(_)
             | Message::BuildWarning(..)
     )
 }
@@ -159,6 +173,18 @@ fn change_entry(model: &mut Model, delete: bool, asked: Option<Confirm>) -> Vec<
     }
     model.status = format!("deleting {name}");
     vec![Effect::ChangeEntry(EntryChange::Delete(name))]
+}
+
+/// `E` on the slices: export the volume on screen (once it has loaded).
+fn export(model: &mut Model) -> Vec<Effect> {
+    let Screen::Exemplar(view) = &model.screen else { return Vec::new() };
+    let Some(volume) = view.volume.clone() else {
+        model.status = "the volume is still loading".into();
+        return Vec::new();
+    };
+    let index = view.index[view.axis.index()];
+    model.status = format!("exporting {}", view.name);
+    vec![Effect::Export(view.name.clone(), volume, view.axis, index)]
 }
 
 /// `r` on the library: a prompt for the selected entry's new name, its name filled in.
