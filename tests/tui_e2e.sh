@@ -55,9 +55,15 @@ for f in marble.exr marble.nrrd marble.vol marble.vdb marble.dds marble.png marb
 done
 # fill preview: a shape filled with marble, the cut moved
 press "fill preview: marble" 5 f
-wait_for "patches" 60
+wait_for "tets, [0-9]* patches" 60
 press "cut across z at +0.00" 5 PageUp z
 press "cut across z at +0.05" 5 Right
+# E exports the cut as a PNG; a second export never replaces the first
+press "marble.fill-cut-z+0.05.png" 30 E
+press "marble.fill-cut-z+0.05-2.png" 30 E
+for f in marble.fill-cut-z+0.05.png marble.fill-cut-z+0.05-2.png; do
+  [ -s "$out/built/exports/$f" ] || { echo "tui e2e: the cut export lacks $f"; ls "$out/built/exports"; exit 1; }
+done
 press "back to marble" 5 Escape
 press "solidtex library" 5 Escape
 # recipe editor: size 64 -> 32 (validated, previewed), saved with the comments kept

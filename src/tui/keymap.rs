@@ -119,6 +119,7 @@ fn fill(code: KeyCode) -> Option<Message> {
         KeyCode::Left | KeyCode::Down | KeyCode::Char('h') | KeyCode::Char('j') => Some(Message::MovePlane(-0.05)),
         KeyCode::PageUp => Some(Message::MovePlane(0.25)),
         KeyCode::PageDown => Some(Message::MovePlane(-0.25)),
+        KeyCode::Char('E') => Some(Message::Export),
         KeyCode::Backspace => Some(Message::Back),
         _ => None,
     }
@@ -202,7 +203,14 @@ pub const SECTIONS: [Section; 6] = [
             ("K / J", "move that step up / down"),
         ],
     ),
-    ("fill preview", &[("x, y, z", "choose the cut axis"), ("arrows, hjkl", "move the cut (pgup/pgdn: more)")]),
+    (
+        "fill preview",
+        &[
+            ("x, y, z", "choose the cut axis"),
+            ("arrows, hjkl", "move the cut (pgup/pgdn: more)"),
+            ("E", "export the cut as a 512x512 PNG"),
+        ],
+    ),
     (
         "everywhere",
         &[

@@ -158,6 +158,19 @@ pub enum Effect {
     /// Write exemplar `name`'s volume in every interchange format, its contact sheet and
     /// the slice on screen (axis, index) into `OUTPUT/exports/NAME/`.
     Export(String, Arc<Volume>, Axis, usize),
+    /// Write the fill preview's cut of exemplar `name` (across the axis, at the offset) as a
+    /// 512² PNG into `OUTPUT/exports/`.
+    ExportCut(String, SharedFill, Axis, f32),
+}
+
+/// A fill preview handed to a worker; two are equal when they are the same one.
+#[derive(Debug, Clone)]
+pub struct SharedFill(pub Arc<super::model::FillPreview>);
+
+impl PartialEq for SharedFill {
+    fn eq(&self, other: &SharedFill) -> bool {
+        Arc::ptr_eq(&self.0, &other.0)
+    }
 }
 
 /// A change to the manifest's list of entries.

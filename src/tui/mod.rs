@@ -192,6 +192,10 @@ fn start(effects: Vec<Effect>, model: &Model, send: &Sender<Message>) {
                 let result = export(&output, &name, &volume, axis, index).map_err(|e| e.to_string());
                 let _ = send.send(Message::Exported(result));
             }
+            Effect::ExportCut(name, filled, axis, offset) => {
+                let result = export_cut(&output, &name, &filled.0, axis, offset).map_err(|e| e.to_string());
+                let _ = send.send(Message::Exported(result));
+            }
             Effect::Fill(name) => {
                 let result = library::fill::preview(&manifest, &output, &name, &crate::progress::NoProgress)
                     .map(Arc::new)
@@ -267,6 +271,22 @@ fn export(output: &Path, name: &str, volume: &Volume, axis: Axis, index: usize) 
         Ok(())
     })?;
     Ok((folder.display().to_string(), written, skipped))
+}
+
+/// Writes the fill preview's cut across `axis` at `offset` as a 512² PNG into
+/// `OUTPUT/exports/`, named after the exemplar and the plane; an existing file of that name
+/// is never replaced: the first free `-2`, `-3` ... name is taken.
+fn export_cut(output: &Path, name: &str, filled: &FillPreview, axis: Axis, offset: f32) -> Result<Exported> {
+    let folder = output.join("exports");
+    std::fs::create_dir_all(&folder).map_err(|e| Error::io(&folder, e))?;
+    let stem = format!("{name}.fill-cut-{axis}{offset:+.2}");
+    let file = std::iter::once(format!("{stem}.png"))
+        .chain((2..).map(|k| format!("{stem}-{k}.png")))
+        .find(|f| !folder.join(f).exists())
+        .expect("a free name");
+    let cut = view_edit::cut_of(filled, axis, offset, 512)?;
+    io::write_rgb8(&folder.join(&file), &cut.picture())?;
+    Ok((folder.display().to_string(), vec![file], Vec::new()))
 }
 
 /// Counts cancellations: a build stops when the count moves past the one it started with,

@@ -1,6 +1,6 @@
 //! `update`: the only place the model changes. Pure: returns the work to start.
 
-use super::message::{Effect, EntryChange, Message};
+use super::message::{Effect, EntryChange, Message, SharedFill};
 use super::model::{BuildState, Confirm, ExemplarView, Model, Screen};
 use super::{editing, stamping};
 
@@ -175,8 +175,17 @@ fn change_entry(model: &mut Model, delete: bool, asked: Option<Confirm>) -> Vec<
     vec![Effect::ChangeEntry(EntryChange::Delete(name))]
 }
 
-/// `E` on the slices: export the volume on screen (once it has loaded).
+/// `E`: on the slices, export the volume on screen (once it has loaded); in the fill
+/// preview, its cut.
 fn export(model: &mut Model) -> Vec<Effect> {
+    if let Screen::Fill(view) = &model.screen {
+        let Some(filled) = view.filled.clone() else {
+            model.status = "the fill is still running".into();
+            return Vec::new();
+        };
+        model.status = format!("exporting the cut of {}", view.name);
+        return vec![Effect::ExportCut(view.name.clone(), SharedFill(filled), view.axis, view.offset)];
+    }
     let Screen::Exemplar(view) = &model.screen else { return Vec::new() };
     let Some(volume) = view.volume.clone() else {
         model.status = "the volume is still loading".into();

@@ -111,14 +111,32 @@ pub fn fill(frame: &mut Frame, view: &FillView, area: Rect) {
         " fill preview: {}  cut across {} at {:+.2} (-1 to 1 across the model) ",
         view.name, view.axis, view.offset
     );
-    let block =
-        Block::default().borders(Borders::ALL).title(title).title_bottom(" x/y/z cut axis  arrows move  esc back ");
+    let block = Block::default()
+        .borders(Borders::ALL)
+        .title(title)
+        .title_bottom(" x/y/z cut axis  arrows move  E export  esc back ");
     let inner = block.inner(area);
     frame.render_widget(block, area);
     match &view.filled {
         None => frame.render_widget(Paragraph::new("filling (tet mesh, field, patches)..."), inner),
         Some(filled) => frame.render_widget(CutWidget { view, filled }, inner),
     }
+}
+
+/// The cut of a fill preview across `axis` at `offset` (-1 to 1 across the model), `size`
+/// pixels square.
+pub fn cut_of(
+    filled: &super::model::FillPreview,
+    axis: crate::volume::Axis,
+    offset: f32,
+    size: usize,
+) -> crate::error::Result<render::Cut> {
+    let models = [(&filled.model, &filled.textures)];
+    let (lo, hi) = render::bounds(&models);
+    let mut normal = Vec3::ZERO;
+    normal[axis.index()] = 1.0;
+    let point = (lo + hi) / 2.0 + normal * (hi - lo) / 2.0 * offset;
+    Ok(render::cut_many(&models, &View::framing((lo, hi), point, normal, size)?))
 }
 
 struct CutWidget<'a> {
@@ -129,13 +147,7 @@ struct CutWidget<'a> {
 impl Widget for CutWidget<'_> {
     fn render(self, area: Rect, buf: &mut Buffer) {
         let size = (area.width as usize).min(2 * area.height as usize);
-        let models = [(&self.filled.model, &self.filled.textures)];
-        let (lo, hi) = render::bounds(&models);
-        let mut normal = Vec3::ZERO;
-        normal[self.view.axis.index()] = 1.0;
-        let point = (lo + hi) / 2.0 + normal * (hi - lo) / 2.0 * self.view.offset;
-        let Ok(plane) = View::framing((lo, hi), point, normal, size.max(8)) else { return };
-        let cut = render::cut_many(&models, &plane);
+        let Ok(cut) = cut_of(self.filled, self.view.axis, self.view.offset, size.max(8)) else { return };
         let px = |x: usize, y: usize| {
             let p = cut.pixels[y * cut.width + x];
             (p[3] > 0.0).then(|| Color::Rgb(to_u8(p[0]), to_u8(p[1]), to_u8(p[2])))
