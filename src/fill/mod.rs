@@ -141,17 +141,11 @@ fn refine_axes(mesh: &mut TetMesh, axes: &[Vec<Vec3>]) -> usize {
     let edge = mean_edge(mesh);
     let (reach, wanted) = (AXIS_REACH_EDGES * edge, AXIS_EDGE * edge);
     let size = |p: Vec3| {
-        let near = axes.iter().any(|line| line.windows(2).any(|s| distance_to_segment(p, s[0], s[1]) <= reach));
+        let near = |s: &[Vec3]| p.distance(crate::mesh::closest_on_segment(p, s[0], s[1])) <= reach;
+        let near = axes.iter().any(|line| line.windows(2).any(near));
         if near { wanted } else { f32::INFINITY }
     };
     refine::refine(mesh, &size)
-}
-
-/// The distance from `p` to the segment `a`-`b`.
-fn distance_to_segment(p: Vec3, a: Vec3, b: Vec3) -> f32 {
-    let d = b - a;
-    let t = ((p - a).dot(d) / d.length_squared().max(f32::MIN_POSITIVE)).clamp(0.0, 1.0);
-    p.distance(a + d * t)
 }
 
 fn unit(axis: usize) -> Vec3 {

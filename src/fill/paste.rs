@@ -417,40 +417,44 @@ impl<'a> Paster<'a> {
 /// A mask value at least this high shows as full coverage (255) at every sample.
 const FULL: f32 = 0.999;
 
-/// The largest coverage byte of a tet whose corners have texture coordinates `w`, as far as
-/// it matters: the first of at least 128 found ends the search.
-fn tet_shows(mask: &Sampler, bounds: &AlphaBounds, samples: &[[f32; 4]], w: [Vec3; 4]) -> u8 {
+/// The coverage byte every sample of a tet whose corners have texture coordinates `w`
+/// takes, when the mask's block bounds decide it (0 or 255) without sampling.
+fn decided(bounds: &AlphaBounds, w: &[Vec3; 4]) -> Option<u8> {
     let lo = w[0].min(w[1]).min(w[2].min(w[3]));
     let hi = w[0].max(w[1]).max(w[2].max(w[3]));
     match bounds.range(lo, hi) {
-        (_, most) if most <= 0.0 => 0,
-        (least, _) if least >= FULL => 255,
-        _ => {
-            let mut most = 0;
-            for b in samples {
-                most = most.max(to_byte(mask.alpha(w[0] * b[0] + w[1] * b[1] + w[2] * b[2] + w[3] * b[3])));
-                if most >= 128 {
-                    break;
-                }
-            }
-            most
-        }
+        (_, most) if most <= 0.0 => Some(0),
+        (least, _) if least >= FULL => Some(255),
+        _ => None,
     }
+}
+
+/// The coverage byte of sample `b` (barycentric) of a tet with texture coordinates `w`.
+fn sample(mask: &Sampler, w: &[Vec3; 4], b: &[f32; 4]) -> u8 {
+    to_byte(mask.alpha(w[0] * b[0] + w[1] * b[1] + w[2] * b[2] + w[3] * b[3]))
+}
+
+/// The largest coverage byte of a tet whose corners have texture coordinates `w`, as far as
+/// it matters: the first of at least 128 found ends the search.
+fn tet_shows(mask: &Sampler, bounds: &AlphaBounds, samples: &[[f32; 4]], w: [Vec3; 4]) -> u8 {
+    decided(bounds, &w).unwrap_or_else(|| {
+        let mut most = 0;
+        for b in samples {
+            most = most.max(sample(mask, &w, b));
+            if most >= 128 {
+                break;
+            }
+        }
+        most
+    })
 }
 
 /// The coverage bytes of a tet whose corners have texture coordinates `w`, into `out`: 0
 /// or 255 at once where the mask's block bounds decide every sample, else sampled.
 fn tet_alphas(mask: &Sampler, bounds: &AlphaBounds, samples: &[[f32; 4]], w: [Vec3; 4], out: &mut [u8]) {
-    let lo = w[0].min(w[1]).min(w[2].min(w[3]));
-    let hi = w[0].max(w[1]).max(w[2].max(w[3]));
-    match bounds.range(lo, hi) {
-        (_, most) if most <= 0.0 => out.fill(0),
-        (least, _) if least >= FULL => out.fill(255),
-        _ => {
-            for (o, b) in out.iter_mut().zip(samples) {
-                *o = to_byte(mask.alpha(w[0] * b[0] + w[1] * b[1] + w[2] * b[2] + w[3] * b[3]));
-            }
-        }
+    match decided(bounds, &w) {
+        Some(all) => out.fill(all),
+        None => out.iter_mut().zip(samples).for_each(|(o, b)| *o = sample(mask, &w, b)),
     }
 }
 

@@ -202,6 +202,12 @@ fn solid_angle([a, b, c]: [DVec3; 3], p: DVec3) -> f64 {
     2.0 * det.atan2(div)
 }
 
+/// The point of the segment `a`-`b` closest to `p` (`a` when the segment has no length).
+pub fn closest_on_segment(p: Vec3, a: Vec3, b: Vec3) -> Vec3 {
+    let d = b - a;
+    a + d * ((p - a).dot(d) / d.length_squared().max(f32::MIN_POSITIVE)).clamp(0.0, 1.0)
+}
+
 /// The point of triangle `[a, b, c]` closest to `p` (Ericson, Real-Time Collision
 /// Detection 5.1.5).
 pub fn closest_on_triangle(p: Vec3, [a, b, c]: [Vec3; 3]) -> Vec3 {

@@ -239,6 +239,13 @@ fn change_entry(
 /// slice on screen.
 const EXPORTS: [&str; 6] = ["exr", "nrrd", "vol", "vdb", "dds", "png"];
 
+/// `OUTPUT/exports/`, made if missing: where `E` writes.
+fn exports(output: &Path) -> Result<PathBuf> {
+    let folder = output.join("exports");
+    std::fs::create_dir_all(&folder).map_err(|e| Error::io(&folder, e))?;
+    Ok(folder)
+}
+
 /// What an export wrote: the folder, the files written, and the formats that cannot hold
 /// this volume with the reason.
 type Exported = (String, Vec<String>, Vec<String>);
@@ -248,9 +255,7 @@ type Exported = (String, Vec<String>, Vec<String>);
 /// `OUTPUT/exports/NAME/`, replaced as a whole (a folder there that holds files solidtex
 /// did not write is refused).
 fn export(output: &Path, name: &str, volume: &Volume, axis: Axis, index: usize) -> Result<Exported> {
-    let parent = output.join("exports");
-    std::fs::create_dir_all(&parent).map_err(|e| Error::io(&parent, e))?;
-    let folder = parent.join(name);
+    let folder = exports(output)?.join(name);
     let (mut written, mut skipped) = (Vec::new(), Vec::new());
     io::write_folder(&folder, |dir| {
         for ext in EXPORTS {
@@ -277,8 +282,7 @@ fn export(output: &Path, name: &str, volume: &Volume, axis: Axis, index: usize) 
 /// `OUTPUT/exports/`, named after the exemplar and the plane; an existing file of that name
 /// is never replaced: the first free `-2`, `-3` ... name is taken.
 fn export_cut(output: &Path, name: &str, filled: &FillPreview, axis: Axis, offset: f32) -> Result<Exported> {
-    let folder = output.join("exports");
-    std::fs::create_dir_all(&folder).map_err(|e| Error::io(&folder, e))?;
+    let folder = exports(output)?;
     let stem = format!("{name}.fill-cut-{axis}{offset:+.2}");
     let file = std::iter::once(format!("{stem}.png"))
         .chain((2..).map(|k| format!("{stem}-{k}.png")))

@@ -312,9 +312,7 @@ impl<'a> Work<'a> {
 fn nearest_on<'s>(segments: impl Iterator<Item = &'s [Vec3; 2]>, p: Vec3) -> Option<Vec3> {
     let mut best = (f32::INFINITY, None);
     for [a, b] in segments {
-        let d = *b - *a;
-        let t = ((p - *a).dot(d) / d.length_squared().max(f32::MIN_POSITIVE)).clamp(0.0, 1.0);
-        let q = *a + d * t;
+        let q = crate::mesh::closest_on_segment(p, *a, *b);
         let distance = q.distance_squared(p);
         if distance < best.0 {
             best = (distance, Some(q));
