@@ -124,6 +124,75 @@ pub fn assess(volume: &Volume, exemplars: [Option<&Image2d>; 3], layered: bool) 
     Ok(Report { axes, sharpness, histograms, layered })
 }
 
+/// The figures a designer reads at a glance (the cheap part of [`assess`]): per axis the
+/// gradient and autocorrelation-length ratios of the cuts against the exemplar, and the
+/// largest histogram distance over the exemplar's channels.
+#[derive(Debug, Clone, PartialEq, Serialize, serde::Deserialize)]
+pub struct Glance {
+    /// `[axis, gradient ratio, length ratio]` per measured axis (axis 0, 1, 2 = x, y, z).
+    pub axes: Vec<(usize, f64, f64)>,
+    /// The largest histogram distance over the channels (0 = equal, 2 = disjoint).
+    pub histogram: f64,
+}
+
+/// The largest histogram distance a synthesized volume should show (per channel).
+pub const HISTOGRAM_TARGET: f64 = 0.05;
+
+impl Glance {
+    /// Whether every ratio lies in its target range and the histograms are close.
+    pub fn in_range(&self) -> bool {
+        let inside = |v: f64, (lo, hi): (f64, f64)| v >= lo && v <= hi;
+        self.axes
+            .iter()
+            .all(|&(_, g, l)| inside(g, crate::sharpness::GRADIENT_RANGE) && inside(l, crate::sharpness::LENGTH_RANGE))
+            && self.histogram <= HISTOGRAM_TARGET
+    }
+
+    /// One word for the list: `ok`, or the first thing wrong (`blurred`, `noisy`, `coarse`
+    /// features larger than the photo's, `fine` smaller, `colours` off).
+    pub fn verdict(&self) -> &'static str {
+        let (g, l) = (crate::sharpness::GRADIENT_RANGE, crate::sharpness::LENGTH_RANGE);
+        let any = |f: &dyn Fn(&(usize, f64, f64)) -> bool| self.axes.iter().any(f);
+        if any(&|a| a.1 < g.0) {
+            "blurred"
+        } else if any(&|a| a.1 > g.1) {
+            "noisy"
+        } else if any(&|a| a.2 > l.1) {
+            "coarse"
+        } else if any(&|a| a.2 < l.0) {
+            "fine"
+        } else if self.histogram > HISTOGRAM_TARGET {
+            "colours"
+        } else {
+            "ok"
+        }
+    }
+
+    /// One line: `sharp 0.91-1.02  size 0.95-1.10  hist 0.08` (lowest-highest over the axes).
+    pub fn summary(&self) -> String {
+        let span = |f: fn(&(usize, f64, f64)) -> f64| {
+            let v: Vec<f64> = self.axes.iter().map(f).collect();
+            let (lo, hi) = v.iter().fold((f64::MAX, f64::MIN), |(a, b), x| (a.min(*x), b.max(*x)));
+            if (hi - lo) < 0.005 { format!("{lo:.2}") } else { format!("{lo:.2}-{hi:.2}") }
+        };
+        format!("sharp {}  size {}  hist {:.2}", span(|a| a.1), span(|a| a.2), self.histogram)
+    }
+}
+
+/// [`Glance`] of `volume` against its exemplars (one per axis, `None`: not measured).
+pub fn glance(volume: &Volume, exemplars: [Option<&Image2d>; 3]) -> Result<Glance> {
+    let first = exemplars.iter().flatten().next().ok_or_else(|| Error::invalid("no exemplar to measure against"))?;
+    let picks = channel_positions(volume, first.channels())?;
+    let mut axes = Vec::new();
+    for axis in Axis::ALL {
+        let Some(image) = exemplars[axis.index()] else { continue };
+        let s = crate::sharpness::measure(volume, image, &picks, axis)?;
+        axes.push((axis.index(), s.gradient_ratio, s.length_ratio));
+    }
+    let histogram = histogram_distances(volume, first, &picks).iter().map(|h| h.distance).fold(0.0, f64::max);
+    Ok(Glance { axes, histogram })
+}
+
 /// Positions in the volume of the exemplar's channels.
 fn channel_positions(volume: &Volume, channels: &[Channel]) -> Result<Vec<usize>> {
     channels

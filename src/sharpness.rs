@@ -313,6 +313,42 @@ mod tests {
         }
     }
 
+    /// The library's one-word verdict fails blurred, flat, shuffled and recoloured volumes.
+    #[test]
+    fn the_glance_names_what_is_wrong() {
+        let truth = marble();
+        let cuts: Vec<Image2d> =
+            Axis::ALL.iter().map(|&a| truth.slice(a, truth.dims()[a.index()] / 2).unwrap()).collect();
+        let glance = |v: &Volume| crate::quality::glance(v, [Some(&cuts[0]), Some(&cuts[1]), Some(&cuts[2])]).unwrap();
+        // one cut's colours differ a little from the whole volume's: the histogram is not 0
+        let good = glance(&truth);
+        let sharp_and_sized = crate::quality::Glance { histogram: 0.0, ..good.clone() };
+        assert!(good.axes.len() == 3 && good.histogram < 0.15, "{good:?}");
+        assert!(sharp_and_sized.in_range() && sharp_and_sized.verdict() == "ok", "{good:?}");
+        assert_eq!(glance(&blurred(&truth, 1.5)).verdict(), "blurred");
+        let flat = Volume::from_fn(truth.dims(), truth.channels().to_vec(), |_, _, _, o| o.fill(0.5)).unwrap();
+        assert_eq!(glance(&flat).verdict(), "blurred");
+        let dims = truth.dims();
+        let shuffled = Volume::from_fn(dims, truth.channels().to_vec(), |x, y, z, o| {
+            let i = mix64((x + dims[0] * (y + dims[1] * z)) as u64) as usize % truth.voxel_count();
+            let (sx, sy, sz) = (i % dims[0], (i / dims[0]) % dims[1], i / (dims[0] * dims[1]));
+            o.iter_mut().enumerate().for_each(|(c, v)| *v = truth.get(sx, sy, sz, c));
+        })
+        .unwrap();
+        assert_eq!(glance(&shuffled).verdict(), "noisy");
+        let shifted = Volume::from_fn(dims, truth.channels().to_vec(), |x, y, z, o| {
+            o.iter_mut().enumerate().for_each(|(c, v)| *v = truth.get(x, y, z, c) - 0.2);
+        })
+        .unwrap();
+        let recoloured = glance(&shifted);
+        assert!(recoloured.verdict() == "colours" && recoloured.histogram > 0.5, "{recoloured:?}");
+        assert!(
+            recoloured.summary().starts_with("sharp ") && recoloured.summary().contains("hist "),
+            "{}",
+            recoloured.summary()
+        );
+    }
+
     #[test]
     fn lengths_follow_the_feature_size() {
         let stripes = |period: usize| {

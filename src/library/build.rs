@@ -225,6 +225,7 @@ fn build_entry(entry: &Entry, folder: &Path, output: &Path, force: bool, observe
         classified,
         seconds: started.elapsed().as_secs_f64(),
         files: cache::written(output, entry)?,
+        quality: recipe::glance(entry, &volume),
     };
     cache::write_record(output, &record)?;
     Ok(Outcome::Built(record))

@@ -43,6 +43,10 @@ pub struct Record {
     /// blake3 hash: an entry is cached only while they are all unchanged.
     #[serde(default)]
     pub files: Vec<Written>,
+    /// For synthesized entries, the sharpness, feature-size and histogram figures against
+    /// the photos.
+    #[serde(default)]
+    pub quality: Option<crate::quality::Glance>,
 }
 
 /// One file with its size and hash.
@@ -377,6 +381,7 @@ mod tests {
             classified: "0".into(),
             seconds: 0.0,
             files: Vec::new(),
+            quality: None,
         };
         assert_eq!(changed(&keys[0], &record), "the input p.png changed");
     }

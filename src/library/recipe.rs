@@ -98,6 +98,30 @@ fn synthesized(spec: &SynthSpec, size: [usize; 3], seed: u64, none: &dyn Progres
     volume.map_err(|e| e.in_file(&spec.image))
 }
 
+/// The at-a-glance quality of a synthesized entry's volume against its photos (read again,
+/// shrunk as for the synthesis); `None` for other recipes, or when a photo cannot be read.
+pub fn glance(entry: &Entry, volume: &Volume) -> Option<crate::quality::Glance> {
+    let Source::Synth(spec) = &entry.source else { return None };
+    let [x, y, z] = photos(spec).ok()?;
+    crate::quality::glance(volume, [Some(&x), Some(&y), (!spec.layered).then_some(&z)]).ok()
+}
+
+/// The photos of a synthesis entry for the x, y and z cuts, shrunk as for the synthesis
+/// (a layered synthesis shows its one exemplar across x and y).
+pub fn photos(spec: &SynthSpec) -> Result<[crate::volume::Image2d; 3]> {
+    let read = |p: &Path| io::read_image_fit(p, spec.max_exemplar);
+    let ex = read(&spec.image)?;
+    let ey = match (&spec.ey, spec.layered) {
+        (Some(p), false) => read(p)?,
+        _ => ex.clone(),
+    };
+    let ez = match (&spec.ez, spec.layered) {
+        (Some(p), false) => read(p)?,
+        _ => ey.clone(),
+    };
+    Ok([ex, ey, ez])
+}
+
 /// Masks and extra formats beside the volume.
 pub fn extras(entry: &Entry, volume: &Volume, output: &Path) -> Result<()> {
     let name = &entry.name;

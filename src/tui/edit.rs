@@ -93,6 +93,61 @@ pub fn duplicate(text: &str, name: &str) -> Result<(String, String), String> {
     Ok((doc.to_string(), copy_name))
 }
 
+/// The manifest with a new exemplar at the end, made by `recipe` from `file` (a path as
+/// written in the manifest; kinds that read none get `None`), with the settings a first
+/// build wants; and its name: the file's stem or the recipe's name, made allowed and free.
+pub fn new_entry(text: &str, recipe: &str, file: Option<&str>) -> Result<(String, String), String> {
+    let mut doc = parse(text)?;
+    // In a manifest without entries, its comments are the document's trailer: keep them above.
+    let first = doc.get("exemplar").is_none();
+    let header = if first { doc.trailing().as_str().unwrap_or("").to_string() } else { String::new() };
+    if first {
+        doc.set_trailing("");
+    }
+    let list = doc
+        .entry("exemplar")
+        .or_insert(Item::ArrayOfTables(toml_edit::ArrayOfTables::new()))
+        .as_array_of_tables_mut()
+        .ok_or("exemplar is not a list of [[exemplar]] tables")?;
+    let stem = file.and_then(|f| std::path::Path::new(f).file_stem()).map(|s| s.to_string_lossy().to_string());
+    let hint = stem.unwrap_or_else(|| recipe.trim_start_matches("procedural:").to_string());
+    let hint: String =
+        hint.chars().map(|c| if c.is_ascii_alphanumeric() || c == '-' || c == '_' { c } else { '-' }).collect();
+    let hint = if hint.trim_matches('-').is_empty() { "exemplar".to_string() } else { hint };
+    let taken = |n: &str| list.iter().any(|t| t.get("name").and_then(Item::as_str) == Some(n));
+    let name = std::iter::once(hint.clone())
+        .chain((2..).map(|k| format!("{hint}-{k}")))
+        .find(|n| !taken(n))
+        .expect("a free name");
+    let mut t = toml_edit::Table::new();
+    t.insert("name", toml_edit::value(name.as_str()));
+    t.insert("recipe", toml_edit::value(recipe));
+    let file_key = if recipe == "load" { "volume" } else { "image" };
+    if let Some(file) = file {
+        t.insert(file_key, toml_edit::value(file));
+    }
+    match recipe {
+        "synth" | "synth-layered" => {
+            t.insert("max_exemplar", toml_edit::value(128));
+            t.insert("size", toml_edit::value(64));
+        }
+        "sweep" => {
+            t.insert("length", toml_edit::value(64));
+            t.insert("axis", toml_edit::value("x"));
+        }
+        "load" => {}
+        _ => {
+            t.insert("size", toml_edit::value(64));
+        }
+    }
+    if recipe != "load" {
+        t.insert("seed", toml_edit::value(1));
+    }
+    t.decor_mut().set_prefix(format!("{header}\n"));
+    list.push(t);
+    Ok((doc.to_string(), name))
+}
+
 /// The manifest without exemplar `name` (and the comments right above it; the first
 /// entry's lines above it, the file's header, stay).
 pub fn delete(text: &str, name: &str) -> Result<String, String> {
@@ -403,5 +458,33 @@ mod tests {
         assert!(remove_step(TEXT, "a", 0).unwrap_err().contains("no [[exemplar.steps]]"));
         assert_eq!(step_of("steps[4].count"), Some(4));
         assert_eq!(step_of("size"), None);
+    }
+
+    #[test]
+    fn a_new_entry_is_appended_valid_named_after_its_file() {
+        let folder = tempfile::tempdir().unwrap();
+        let photo = image::RgbImage::from_fn(16, 16, |x, y| image::Rgb([(x * 16) as u8, (y * 16) as u8, 9]));
+        photo.save(folder.path().join("my photo.png")).unwrap();
+        let (out, name) = new_entry(TEXT, "synth", Some("my photo.png")).unwrap();
+        assert_eq!(name, "my-photo");
+        assert!(out.starts_with(TEXT), "the rest stays as it was:\n{out}");
+        let tail = &out[TEXT.len()..];
+        assert_eq!(
+            tail,
+            "\n[[exemplar]]\nname = \"my-photo\"\nrecipe = \"synth\"\nimage = \"my photo.png\"\nmax_exemplar = 128\nsize = 64\nseed = 1\n"
+        );
+        let entry = crate::io::manifest::parse_entry(&out, folder.path(), "my-photo").unwrap();
+        assert!(matches!(entry.source, crate::io::manifest::Source::Synth(_)) && entry.dims == Some([64; 3]));
+        // a taken name gets a number; a procedural entry is named after its recipe
+        let (out, again) = new_entry(&out, "sweep", Some("my photo.png")).unwrap();
+        assert_eq!(again, "my-photo-2");
+        assert!(crate::io::manifest::parse_entry(&out, folder.path(), "my-photo-2").is_ok());
+        let (out, wood) = new_entry(&out, "procedural:wood", None).unwrap();
+        assert_eq!(wood, "wood");
+        assert!(crate::io::manifest::parse_entry(&out, folder.path(), "wood").is_ok());
+        // an empty manifest gets its first entry
+        let (out, first) = new_entry("# mine\n", "procedural:marble", None).unwrap();
+        assert!(out.starts_with("# mine\n") && first == "marble", "{out}");
+        assert!(crate::io::manifest::parse_entry(&out, folder.path(), "marble").is_ok());
     }
 }

@@ -330,7 +330,13 @@ mod tests {
         "# my library\n[[exemplar]]\nname = \"m\"\nrecipe = \"procedural:marble\"  # veins\nsize = 16\nseed = 3\n";
 
     fn editing() -> Model {
-        let item = Item { name: "m".into(), declared: None, size: None, state: crate::tui::BuildState::NotBuilt };
+        let item = Item {
+            name: "m".into(),
+            declared: None,
+            size: None,
+            state: crate::tui::BuildState::NotBuilt,
+            quality: None,
+        };
         let mut m = Model::new(PathBuf::from("lib/library.toml"), PathBuf::from("out"), vec![item], Vec::new());
         assert_eq!(update(&mut m, Message::Edit), vec![Effect::ReadManifest]);
         let effects = update(&mut m, Message::EditorReady(Ok(TEXT.into())));
@@ -421,7 +427,13 @@ mod tests {
     const TWO: &str = "[[exemplar]]\nname = \"m\"\nrecipe = \"procedural:marble\"\nsize = 16\n\n[[exemplar]]\nname = \"bad\"\nrecipe = \"weave\"\nsize = 0\n";
 
     fn editing_in(text: &str, name: &str) -> Model {
-        let item = Item { name: name.into(), declared: None, size: None, state: crate::tui::BuildState::NotBuilt };
+        let item = Item {
+            name: name.into(),
+            declared: None,
+            size: None,
+            state: crate::tui::BuildState::NotBuilt,
+            quality: None,
+        };
         let mut m = Model::new(PathBuf::from("lib/library.toml"), PathBuf::from("out"), vec![item], Vec::new());
         update(&mut m, Message::Edit);
         update(&mut m, Message::EditorReady(Ok(text.into())));

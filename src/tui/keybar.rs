@@ -58,6 +58,15 @@ pub fn hints(model: &Model) -> Vec<Hint> {
             vec![hint("enter", "keep the value"), hint("esc", "drop it"), hint("ctrl-u", "clear")]
         }
         Screen::Editor(editor) => editing(editor),
+        Screen::New(entry) if entry.picker.is_some() => {
+            vec![
+                hint("up/down", "file"),
+                hint("enter", "take it / open folder"),
+                hint("backspace", "folder above"),
+                hint("esc", "kinds"),
+            ]
+        }
+        Screen::New(_) => vec![hint("up/down", "kind"), hint("enter", "take it"), hint("esc", "back")],
         Screen::Fill(view) => {
             let filling = view.filled.is_none().then_some("filling");
             vec![unless("x/y/z", "cut axis", filling), unless("arrows", "move the cut", filling), hint("esc", "back")]
@@ -92,6 +101,7 @@ fn library(model: &Model) -> Vec<Hint> {
         unless("c", "copy", none),
         unless("d", "delete", none),
         unless("r", "rename", none),
+        hint("n", "new"),
         unless("R", "rebuild changed", (!changed).then_some("none changed")),
     ]
 }
@@ -128,7 +138,7 @@ mod tests {
         let items = states
             .into_iter()
             .enumerate()
-            .map(|(i, state)| Item { name: format!("e{i}"), declared: None, size: None, state })
+            .map(|(i, state)| Item { name: format!("e{i}"), declared: None, size: None, state, quality: None })
             .collect();
         Model::new(PathBuf::from("library.toml"), PathBuf::from("out"), items, Vec::new())
     }

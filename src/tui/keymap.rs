@@ -26,6 +26,17 @@ pub fn key(screen: &Screen, event: KeyEvent) -> Option<Message> {
         Screen::Exemplar(_) => common.or(exemplar(event.code)),
         Screen::Editor(_) => esc(common).or(editor(event.code)),
         Screen::Fill(_) => common.or(fill(event.code)),
+        Screen::New(_) => common.or(new_entry(event.code)),
+    }
+}
+
+fn new_entry(code: KeyCode) -> Option<Message> {
+    match code {
+        KeyCode::Up | KeyCode::Char('k') => Some(Message::Up),
+        KeyCode::Down | KeyCode::Char('j') => Some(Message::Down),
+        KeyCode::Enter | KeyCode::Right | KeyCode::Char('l') => Some(Message::Open),
+        KeyCode::Backspace | KeyCode::Left | KeyCode::Char('h') => Some(Message::Parent),
+        _ => None,
     }
 }
 
@@ -58,6 +69,7 @@ fn library(code: KeyCode) -> Option<Message> {
         KeyCode::Char('c') => Some(Message::Duplicate),
         KeyCode::Char('d') => Some(Message::Delete),
         KeyCode::Char('r') => Some(Message::Rename),
+        KeyCode::Char('n') => Some(Message::New),
         KeyCode::PageDown => Some(Message::ScrollErrors(3)),
         KeyCode::PageUp => Some(Message::ScrollErrors(-3)),
         _ => None,
@@ -140,6 +152,7 @@ fn exemplar(code: KeyCode) -> Option<Message> {
         KeyCode::Char('+') | KeyCode::Char('=') => Some(Message::Zoom(true)),
         KeyCode::Char('-') => Some(Message::Zoom(false)),
         KeyCode::Char('a') => Some(Message::NextLayer),
+        KeyCode::Char('p') => Some(Message::Photo),
         KeyCode::Char('E') => Some(Message::Export),
         KeyCode::Backspace => Some(Message::Back),
         _ => None,
@@ -150,7 +163,7 @@ fn exemplar(code: KeyCode) -> Option<Message> {
 pub type Section = (&'static str, &'static [(&'static str, &'static str)]);
 
 /// The keys of every screen, for the help.
-pub const SECTIONS: [Section; 6] = [
+pub const SECTIONS: [Section; 7] = [
     (
         "library",
         &[
@@ -161,6 +174,7 @@ pub const SECTIONS: [Section; 6] = [
             ("c", "copy the entry (right after it, NAME-2)"),
             ("d d", "delete the entry (built files stay)"),
             ("r", "rename the entry (enter keeps, esc drops)"),
+            ("n", "new entry: choose its recipe, then its photo or file"),
             ("e", "edit its recipe"),
             ("pgup/pgdn", "scroll the manifest's mistakes"),
         ],
@@ -173,6 +187,7 @@ pub const SECTIONS: [Section; 6] = [
             ("c", "cycle colour and single channels"),
             ("+/-", "zoom"),
             ("a", "show the masks in turn"),
+            ("p", "its photo beside the slice, same pixel scale, with quality figures"),
             ("f", "fill a shape with it"),
             ("m", "stamp mode"),
             ("E", "export: every format, contact sheet, this slice"),
@@ -212,6 +227,14 @@ pub const SECTIONS: [Section; 6] = [
         ],
     ),
     (
+        "new exemplar",
+        &[
+            ("up/down, j/k", "choose a recipe kind, or a file"),
+            ("enter, l", "take it; in the picker, open the folder"),
+            ("backspace, h", "the folder above"),
+        ],
+    ),
+    (
         "everywhere",
         &[
             ("esc", "back (asks if work is unsaved)"),
@@ -229,6 +252,7 @@ pub fn section_of(screen: &Screen) -> &'static str {
         Screen::Exemplar(_) => "slices",
         Screen::Editor(_) => "recipe editor",
         Screen::Fill(_) => "fill preview",
+        Screen::New(_) => "new exemplar",
     }
 }
 

@@ -1,6 +1,7 @@
 //! What can happen: keys turned into intents, and results coming back from workers.
 
 use crate::volume::{Axis, Volume};
+use std::path::PathBuf;
 use std::sync::Arc;
 
 /// One event for `update`.
@@ -53,6 +54,19 @@ pub enum Message {
     Delete,
     /// Start renaming the selected entry (a prompt with its name).
     Rename,
+    /// Open the new-entry screen.
+    New,
+    /// Show the photo the exemplar was made from beside its slice (or go back to three slices).
+    Photo,
+    /// The photos of exemplar `.0` arrived (or why there are none).
+    PhotosLoaded(String, Result<Arc<super::model::Photos>, String>),
+    /// In the file picker: the folder above.
+    Parent,
+    /// A folder listing for the picker arrived: the folder asked for, then (that folder as
+    /// a canonical path, its rows) or why it cannot be listed.
+    Listed(PathBuf, Result<(PathBuf, Vec<super::new_entry::FileRow>), String>),
+    /// A photo for the picker's preview arrived (or why it cannot be read).
+    Peeked(PathBuf, Result<Arc<crate::volume::Image2d>, String>),
     /// Export the exemplar on screen.
     Export,
     /// An export finished: the folder, the files written and the formats that cannot hold
@@ -161,6 +175,12 @@ pub enum Effect {
     /// Write the fill preview's cut of exemplar `name` (across the axis, at the offset) as a
     /// 512² PNG into `OUTPUT/exports/`.
     ExportCut(String, SharedFill, Axis, f32),
+    /// List a folder's folders and the files of this kind, for the picker.
+    List(PathBuf, super::new_entry::FileKind),
+    /// Read a photo (shrunk) for the picker's preview.
+    Peek(PathBuf),
+    /// Read the photos exemplar `name` was made from.
+    LoadPhotos(String),
 }
 
 /// A fill preview handed to a worker; two are equal when they are the same one.
@@ -182,4 +202,6 @@ pub enum EntryChange {
     Delete(String),
     /// Rename exemplar `name` (first) to the second name.
     Rename(String, String),
+    /// Add an entry of this recipe, reading this file (an image or a volume) if any.
+    New(String, Option<PathBuf>),
 }

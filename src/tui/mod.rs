@@ -15,10 +15,12 @@ mod keybar;
 mod keymap;
 mod message;
 mod model;
+mod new_entry;
 mod stamping;
 mod update;
 mod view;
 mod view_edit;
+mod view_new;
 
 pub use message::{Effect, EntryChange, Message};
 pub use model::{BuildState, FillPreview, Item, Model, Screen};
@@ -55,7 +57,7 @@ pub fn load_items(manifest: &Path, output: &Path) -> (Vec<Item>, Vec<String>) {
             None => {
                 let own = errors.iter().find(|e| e.contains(&format!("({name})")));
                 let reason = own.cloned().unwrap_or_else(|| "a mistake in this entry (see below)".to_string());
-                Item { name, declared: None, size: None, state: BuildState::Broken(reason) }
+                Item { name, declared: None, size: None, state: BuildState::Broken(reason), quality: None }
             }
         })
         .collect();
@@ -91,6 +93,7 @@ fn item(entry: &io::manifest::Entry, folder: &Path, output: &Path) -> Item {
             .map(|t| t.to_string())
             .or_else(|| record.as_ref().and_then(|r| r.declared.clone())),
         size: record.as_ref().map(|r| r.dims).or(entry.dims),
+        quality: record.and_then(|r| r.quality),
         state,
     }
 }
@@ -196,6 +199,17 @@ fn start(effects: Vec<Effect>, model: &Model, send: &Sender<Message>) {
                 let result = export_cut(&output, &name, &filled.0, axis, offset).map_err(|e| e.to_string());
                 let _ = send.send(Message::Exported(result));
             }
+            Effect::List(folder, kind) => {
+                let _ = send.send(Message::Listed(folder.clone(), list_folder(&folder, kind)));
+            }
+            Effect::Peek(path) => {
+                let result = io::read_image_fit(&path, Some(256)).map(Arc::new).map_err(|e| e.to_string());
+                let _ = send.send(Message::Peeked(path, result));
+            }
+            Effect::LoadPhotos(name) => {
+                let result = photos_of(&manifest, &name).map(Arc::new).map_err(|e| e.to_string());
+                let _ = send.send(Message::PhotosLoaded(name, result));
+            }
             Effect::Fill(name) => {
                 let result = library::fill::preview(&manifest, &output, &name, &crate::progress::NoProgress)
                     .map(Arc::new)
@@ -229,10 +243,67 @@ fn change_entry(
             let status = format!("renamed {name} to {new}; the files built as {name} stay (b builds {new})");
             (text, new.clone(), status)
         }
+        EntryChange::New(recipe, file) => added(manifest, &text, recipe, file.as_deref())?,
     };
     io::write_bytes(manifest, text.as_bytes()).map_err(|e| e.to_string())?;
     let (items, errors) = load_items(manifest, output);
     Ok((items, errors, select, status))
+}
+
+/// The manifest with a new entry of `recipe` reading `file` (written relative to the
+/// manifest's folder), checked like the manifest; its name and a status line.
+fn added(manifest: &Path, text: &str, recipe: &str, file: Option<&Path>) -> Result<(String, String, String), String> {
+    let folder = new_entry::manifest_folder(manifest);
+    let base = folder.canonicalize().map_err(|e| Error::io(&folder, e).to_string())?;
+    let written = file.map(|f| {
+        let absolute = f.canonicalize().unwrap_or_else(|_| f.to_path_buf());
+        new_entry::relative_to(&absolute, &base).to_string_lossy().replace('\\', "/")
+    });
+    if let Some(f) = file.filter(|_| recipe != "load") {
+        image::image_dimensions(f).map_err(|e| format!("{}: cannot decode it as an image: {e}", f.display()))?;
+    }
+    let (text, name) = edit::new_entry(text, recipe, written.as_deref())?;
+    io::manifest::parse_entry(&text, &folder, &name)
+        .map_err(|e| format!("{recipe} from {}: {e}", written.unwrap_or_default()))?;
+    let from = file.map(|f| format!(" from {}", f.display())).unwrap_or_default();
+    let status = format!("added {name} ({recipe}{from}): b builds it, e edits its settings");
+    Ok((text, name, status))
+}
+
+/// The images exemplar `name` was made from, per slice axis: a synthesis' photos (shrunk as
+/// for the synthesis), a sweep's cross-section across its axis.
+fn photos_of(manifest: &Path, name: &str) -> Result<model::Photos> {
+    let text = io::read_text(manifest, "manifest")?;
+    let folder = new_entry::manifest_folder(manifest);
+    let entry = io::manifest::parse_entry(&text, &folder, name)?;
+    match &entry.source {
+        io::manifest::Source::Synth(spec) => {
+            let [x, y, z] = library::recipe::photos(spec)?;
+            Ok([Some(x), Some(y), (!spec.layered).then_some(z)])
+        }
+        io::manifest::Source::Sweep(spec) => {
+            let mut out: model::Photos = Default::default();
+            out[spec.axis.index()] = Some(io::read_image(&spec.image)?);
+            Ok(out)
+        }
+        _ => Err(Error::invalid(format!(
+            "{name} is not made from an image (p compares synthesized and swept exemplars with theirs)"
+        ))),
+    }
+}
+
+/// A folder's rows for the picker (see [`new_entry::rows`]), and the folder as a canonical
+/// path.
+fn list_folder(
+    folder: &Path,
+    kind: new_entry::FileKind,
+) -> std::result::Result<(PathBuf, Vec<new_entry::FileRow>), String> {
+    let folder = folder.canonicalize().map_err(|e| Error::io(folder, e).to_string())?;
+    let read = std::fs::read_dir(&folder).map_err(|e| Error::io(&folder, e).to_string())?;
+    let entries =
+        read.filter_map(|e| e.ok()).map(|e| (e.file_name().to_string_lossy().to_string(), e.path().is_dir())).collect();
+    let rows = new_entry::rows(folder.parent().is_none(), entries, kind.extensions());
+    Ok((folder, rows))
 }
 
 /// The formats `E` writes an exemplar in (by extension), besides its contact sheet and the
@@ -429,7 +500,10 @@ fn load_masks(output: &Path, name: &str) -> std::result::Result<Vec<(String, Arc
 
 #[cfg(test)]
 mod tests {
-    use super::{BuildState, Effect, Message, finished, load_items, update};
+    use super::{
+        BuildState, Effect, EntryChange, Message, change_entry, finished, list_folder, load_items, new_entry,
+        photos_of, update,
+    };
 
     /// `E` on the slices writes every format, the contact sheet and the slice on screen
     /// into OUTPUT/exports/NAME/, replacing its own export; a folder there holding a file
@@ -507,8 +581,13 @@ mod tests {
     /// previous output left it, a failed one says why.
     #[test]
     fn each_outcome_becomes_its_message() {
-        let row =
-            super::Item { name: "m".into(), declared: None, size: Some([8; 3]), state: BuildState::Built("0".into()) };
+        let row = super::Item {
+            name: "m".into(),
+            declared: None,
+            size: Some([8; 3]),
+            state: BuildState::Built("0".into()),
+            quality: None,
+        };
         let cancelled = finished(&super::Outcome::Cancelled("m".into()), Some(row.clone()));
         assert!(matches!(cancelled, Message::BuildCancelled(n, r) if n == "m" && r == row));
         let failed = finished(&super::Outcome::Failed("m".into(), "no image".into()), Some(row));
@@ -527,7 +606,7 @@ mod tests {
         let run = |m: &mut super::Model, message: Message| {
             for effect in update(m, message) {
                 let Effect::ChangeEntry(change) = effect else { panic!("{effect:?}") };
-                update(m, Message::EntriesChanged(super::change_entry(&manifest, &out, &change)));
+                update(m, Message::EntriesChanged(change_entry(&manifest, &out, &change)));
             }
         };
         run(&mut m, Message::Duplicate);
@@ -566,5 +645,41 @@ mod tests {
         run(&mut m, Message::Rename);
         run(&mut m, Message::Cancel);
         assert!(m.rename.is_none() && m.status.contains("the name stays"));
+    }
+
+    /// An entry made from a photo in another folder is written with a relative path, the
+    /// manifest checks it, and `p` finds the photo again; a file that is no image is
+    /// refused and the manifest stays as it was.
+    #[test]
+    fn a_new_entry_from_a_photo_is_added_checked_and_compared() {
+        let dir = tempfile::tempdir().unwrap();
+        let (lib, photos) = (dir.path().join("lib"), dir.path().join("photos"));
+        std::fs::create_dir_all(&lib).unwrap();
+        std::fs::create_dir_all(photos.join("sub")).unwrap();
+        let manifest = lib.join("library.toml");
+        let original = "# mine\n\n[[exemplar]]\nname = \"m\"\nrecipe = \"procedural:marble\"\nsize = 8\n";
+        std::fs::write(&manifest, original).unwrap();
+        image::RgbImage::from_fn(40, 20, |x, _| image::Rgb([x as u8 * 6, 90, 30]))
+            .save(photos.join("bark.png"))
+            .unwrap();
+        std::fs::write(photos.join("notes.png"), b"not a picture").unwrap();
+        std::fs::write(photos.join("notes.txt"), b"text").unwrap();
+        let (rows_dir, rows) = list_folder(&photos, new_entry::FileKind::Image).unwrap();
+        let names: Vec<&str> = rows.iter().map(|r| r.name.as_str()).collect();
+        assert_eq!((rows_dir, names), (photos.canonicalize().unwrap(), vec!["..", "sub", "bark.png", "notes.png"]));
+        let bad = EntryChange::New("synth".into(), Some(photos.join("notes.png")));
+        let e = change_entry(&manifest, &dir.path().join("out"), &bad).unwrap_err();
+        assert!(e.contains("notes.png") && e.contains("decode"), "{e}");
+        assert_eq!(std::fs::read_to_string(&manifest).unwrap(), original);
+        let good = EntryChange::New("synth".into(), Some(photos.join("bark.png")));
+        let (items, errors, select, status) = change_entry(&manifest, &dir.path().join("out"), &good).unwrap();
+        assert!(errors.is_empty() && select == "bark" && items.len() == 2, "{errors:?} {select}");
+        assert!(status.contains("added bark (synth from"), "{status}");
+        let text = std::fs::read_to_string(&manifest).unwrap();
+        assert!(text.starts_with(original) && text.contains("image = \"../photos/bark.png\""), "{text}");
+        let [x, y, z] = photos_of(&manifest, "bark").unwrap();
+        assert_eq!([x.unwrap().width(), y.unwrap().height(), z.unwrap().width()], [40, 20, 40]);
+        let e = photos_of(&manifest, "m").unwrap_err().to_string();
+        assert!(e.contains("m is not made from an image"), "{e}");
     }
 }

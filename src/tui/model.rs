@@ -42,6 +42,8 @@ pub struct Item {
     pub size: Option<[usize; 3]>,
     /// Build state.
     pub state: BuildState,
+    /// For synthesized entries, the figures of the last build against the photos.
+    pub quality: Option<crate::quality::Glance>,
 }
 
 /// What the exemplar view shows.
@@ -65,7 +67,15 @@ pub struct ExemplarView {
     pub layers: Vec<(String, Arc<Volume>)>,
     /// Index into `layers` of the volume on screen.
     pub layer: usize,
+    /// The photos it was made from, one per slice axis (`p` loads them), or why not.
+    pub photos: Option<Result<Arc<Photos>, String>>,
+    /// Whether the photo of the slice axis is shown beside its slice.
+    pub beside_photo: bool,
 }
+
+/// The images an exemplar was made from, for the slices across x, y and z (None: no image
+/// for that axis).
+pub type Photos = [Option<crate::volume::Image2d>; 3];
 
 impl ExemplarView {
     /// The view of exemplar `name` before its volume has loaded.
@@ -80,6 +90,8 @@ impl ExemplarView {
             zoom: 1,
             layers: Vec::new(),
             layer: 0,
+            photos: None,
+            beside_photo: false,
         }
     }
 }
@@ -189,6 +201,8 @@ pub enum Screen {
     Editor(Editor),
     /// The fill preview.
     Fill(FillView),
+    /// A new entry: its kind, then its file.
+    New(super::new_entry::NewEntry),
 }
 
 /// The whole UI state.

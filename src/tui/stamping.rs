@@ -198,7 +198,8 @@ mod tests {
     use std::path::PathBuf;
 
     fn stamping() -> Model {
-        let item = Item { name: "a".into(), declared: None, size: None, state: BuildState::Built("0".into()) };
+        let item =
+            Item { name: "a".into(), declared: None, size: None, state: BuildState::Built("0".into()), quality: None };
         let mut m = Model::new(PathBuf::from("lib.toml"), PathBuf::from("out"), vec![item], Vec::new());
         update(&mut m, Message::Open);
         let grey = Volume::from_fn([32; 3], Channel::rgb(), |_, _, _, o| o.fill(0.8)).unwrap();

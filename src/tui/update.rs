@@ -2,7 +2,7 @@
 
 use super::message::{Effect, EntryChange, Message, SharedFill};
 use super::model::{BuildState, Confirm, ExemplarView, Model, Screen};
-use super::{editing, stamping};
+use super::{editing, new_entry, stamping};
 
 /// Apply `message` to `model`; returns the effects to run.
 pub fn update(model: &mut Model, message: Message) -> Vec<Effect> {
@@ -25,9 +25,21 @@ pub fn update(model: &mut Model, message: Message) -> Vec<Effect> {
             }
         }
         Message::Back => return back(model, asked),
+        Message::Up | Message::Down | Message::Open | Message::Parent if matches!(model.screen, Screen::New(_)) => {
+            return match message {
+                Message::Up => new_entry::select(model, -1),
+                Message::Down => new_entry::select(model, 1),
+                Message::Open => new_entry::open(model),
+                _ => new_entry::parent(model),
+            };
+        }
         Message::Up => select(model, -1),
         Message::Down => select(model, 1),
         Message::Open => return open(model),
+        Message::New if matches!(model.screen, Screen::Library) => new_entry::start(model),
+        Message::New | Message::Parent => {}
+        Message::Listed(folder, result) => return new_entry::listed(model, &folder, result),
+        Message::Peeked(path, result) => new_entry::peeked(model, path, result),
         Message::Build => return build(model, false),
         Message::BuildAll => return build(model, true),
         Message::BuildChanged => return build_changed(model),
@@ -103,6 +115,21 @@ pub fn update(model: &mut Model, message: Message) -> Vec<Effect> {
             with_view(model, |v| v.zoom = if closer { (v.zoom * 2).min(4) } else { (v.zoom / 2).max(1) })
         }
         Message::NextLayer => return next_layer(model),
+        Message::Photo => return photo(model),
+        Message::PhotosLoaded(name, result) => {
+            if let Screen::Exemplar(v) = &mut model.screen
+                && v.name == name
+            {
+                match &result {
+                    Err(e) => {
+                        model.status = format!("no photo to compare with: {e}");
+                        v.beside_photo = false;
+                    }
+                    Ok(_) => model.status = COMPARING.into(),
+                }
+                v.photos = Some(result);
+            }
+        }
         Message::MasksLoaded(name, result) => masks_loaded(model, &name, result),
         Message::StampMode if showing_mask(model) => {
             model.status = "stamping works on the exemplar, not on a mask: press a".into()
@@ -151,6 +178,9 @@ fn from_key(message: &Message) -> bool {
             | Message::BuildStarted(_)
             | Message::Exported(_)
             | Message::BuildWarning(..)
+            | Message::Listed(..)
+            | Message::Peeked(..)
+            | Message::PhotosLoaded(..)
     )
 }
 
@@ -247,6 +277,9 @@ fn quit(model: &mut Model, asked: Option<Confirm>) {
 /// there never quits.
 fn back(model: &mut Model, asked: Option<Confirm>) -> Vec<Effect> {
     let on_library = matches!(model.screen, Screen::Library);
+    if model.help.is_none() && new_entry::back(model) {
+        return Vec::new();
+    }
     if let Some(help) = &mut model.help {
         if help.typing || !help.query.is_empty() {
             *help = Default::default();
@@ -292,6 +325,38 @@ fn select(model: &mut Model, step: i64) {
 
 fn showing_mask(model: &Model) -> bool {
     matches!(&model.screen, Screen::Exemplar(v) if v.layer > 0)
+}
+
+const COMPARING: &str = "the photo and the slice at the same pixel scale: x/y/z and arrows choose the slice";
+
+/// `p`: the photo of the slice axis beside the slice (read the first time), or back to
+/// the three slices.
+fn photo(model: &mut Model) -> Vec<Effect> {
+    let Screen::Exemplar(v) = &mut model.screen else { return Vec::new() };
+    if v.stamp.is_some() {
+        model.status = "leave stamp mode (m) to compare with the photo".into();
+        return Vec::new();
+    }
+    v.beside_photo = !v.beside_photo;
+    if !v.beside_photo {
+        model.status = "the three slices".into();
+        return Vec::new();
+    }
+    match &v.photos {
+        None => {
+            model.status = format!("reading the photos of {}", v.name);
+            vec![Effect::LoadPhotos(v.name.clone())]
+        }
+        Some(Err(e)) => {
+            model.status = format!("no photo to compare with: {e}");
+            v.beside_photo = false;
+            Vec::new()
+        }
+        Some(Ok(_)) => {
+            model.status = COMPARING.into();
+            Vec::new()
+        }
+    }
 }
 
 /// `a`: load the masks the first time, then cycle exemplar -> masks -> exemplar.
@@ -498,9 +563,38 @@ mod tests {
     use std::sync::Arc;
 
     fn model() -> Model {
-        let item = |n: &str, state| Item { name: n.into(), declared: Some("0".into()), size: Some([8; 3]), state };
+        let item = |n: &str, state| Item {
+            name: n.into(),
+            declared: Some("0".into()),
+            size: Some([8; 3]),
+            state,
+            quality: None,
+        };
         let items = vec![item("a", BuildState::Built("0".into())), item("b", BuildState::NotBuilt)];
         Model::new(PathBuf::from("lib.toml"), PathBuf::from("out"), items, Vec::new())
+    }
+
+    /// `p` reads the photos once and toggles them beside the slice; an entry made without
+    /// one says why and stays on its three slices.
+    #[test]
+    fn p_shows_the_photo_beside_the_slice() {
+        let mut m = model();
+        update(&mut m, Message::Open);
+        assert_eq!(update(&mut m, Message::Photo), vec![Effect::LoadPhotos("a".into())]);
+        let photo = crate::volume::Image2d::from_data(1, 1, crate::volume::Channel::grey(), vec![0.5]).unwrap();
+        update(&mut m, Message::PhotosLoaded("a".into(), Ok(Arc::new([Some(photo), None, None]))));
+        let Screen::Exemplar(v) = &m.screen else { panic!("the slices") };
+        assert!(v.beside_photo && m.status.contains("same pixel scale"), "{}", m.status);
+        assert!(update(&mut m, Message::Photo).is_empty(), "read once");
+        assert!(update(&mut m, Message::Photo).is_empty());
+        let Screen::Exemplar(v) = &mut m.screen else { panic!("the slices") };
+        assert!(v.beside_photo);
+        v.photos = None;
+        update(&mut m, Message::Photo);
+        update(&mut m, Message::Photo);
+        update(&mut m, Message::PhotosLoaded("a".into(), Err("a is not made from an image".into())));
+        let Screen::Exemplar(v) = &m.screen else { panic!("the slices") };
+        assert!(!v.beside_photo && m.status.contains("not made from an image"), "{}", m.status);
     }
 
     /// The help's search: `/` starts it, keys type it (keys of the screen below do
@@ -554,6 +648,7 @@ mod tests {
             declared: Some("1-b".into()),
             size: Some([8; 3]),
             state: BuildState::Built("1-b".into()),
+            quality: None,
         };
         update(&mut m, Message::Built("b".into(), Ok(row)));
         assert_eq!(m.items[1].state, BuildState::Built("1-b".into()));
@@ -611,8 +706,13 @@ mod tests {
         assert_eq!(update(&mut m, Message::Back), vec![Effect::CancelBuilds]);
         assert!(!m.quit && m.status.contains("cancelling"));
         // b had been built before: the cancelled build keeps that output and says so.
-        let before =
-            Item { name: "b".into(), declared: None, size: Some([8; 3]), state: BuildState::Built("0".into()) };
+        let before = Item {
+            name: "b".into(),
+            declared: None,
+            size: Some([8; 3]),
+            state: BuildState::Built("0".into()),
+            quality: None,
+        };
         update(&mut m, Message::BuildCancelled("b".into(), before));
         assert!(m.progress.is_empty());
         assert_eq!(m.items[1].state, BuildState::Built("0".into()));

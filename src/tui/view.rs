@@ -42,9 +42,14 @@ pub fn draw_with(frame: &mut Frame, model: &Model, graphics: Option<&mut super::
     key_bar(frame, model, bar);
     match &model.screen {
         Screen::Library => library(frame, model, main),
+        Screen::Exemplar(view) if view.beside_photo => {
+            let quality = model.items.iter().find(|i| i.name == view.name).and_then(|i| i.quality.as_ref());
+            beside_photo(frame, view, quality, main)
+        }
         Screen::Exemplar(view) => exemplar(frame, view, main, graphics),
         Screen::Editor(editor) => super::view_edit::editor(frame, editor, main),
         Screen::Fill(view) => super::view_edit::fill(frame, view, main),
+        Screen::New(entry) => super::view_new::new_entry(frame, entry, main),
     }
     let [left, right] = Layout::horizontal([Constraint::Min(10), Constraint::Length(16)]).areas(status);
     let text = Paragraph::new(status_text).style(Style::new().fg(Color::Gray)).wrap(Wrap { trim: false });
@@ -114,16 +119,29 @@ fn library(frame: &mut Frame, model: &Model, area: Rect) {
         };
         let badge = if measured != "-" && measured != declared { format!("{measured} (differs)") } else { measured };
         let style = if i == model.selected { Style::new().add_modifier(Modifier::REVERSED) } else { Style::new() };
-        Row::new(vec![item.name.clone(), size, declared, badge, state]).style(style)
+        let quality = item.quality.as_ref().map_or("-", |q| q.verdict()).to_string();
+        Row::new(vec![item.name.clone(), size, declared, badge, quality, state]).style(style)
     });
     let widths = [
-        Constraint::Length(16),
-        Constraint::Length(12),
-        Constraint::Length(9),
-        Constraint::Length(14),
+        Constraint::Length(13),
+        Constraint::Length(10),
+        Constraint::Length(8),
+        Constraint::Length(13),
+        Constraint::Length(7),
         Constraint::Min(10),
     ];
-    let header = Row::new(vec!["exemplar", "size", "declared", "measured", "state"])
+    let block = match model.items.get(model.selected).and_then(|i| Some((i, i.quality.as_ref()?))) {
+        Some((item, q)) => {
+            let colour = if q.in_range() { Color::Green } else { Color::Red };
+            let (g, l) = (crate::sharpness::GRADIENT_RANGE, crate::sharpness::LENGTH_RANGE);
+            let targets =
+                format!("sharp {}-{}, size {}-{}, hist <= {}", g.0, g.1, l.0, l.1, crate::quality::HISTOGRAM_TARGET);
+            let line = format!(" {}: {} (targets: {targets}) ", item.name, q.summary());
+            block.title_bottom(Line::styled(line, Style::new().fg(colour)))
+        }
+        None => block,
+    };
+    let header = Row::new(vec!["exemplar", "size", "declared", "measured", "quality", "state"])
         .style(Style::new().add_modifier(Modifier::BOLD));
     let selected = model.items.get(model.selected).and_then(|i| model.previews.get(&i.name));
     let (table, side) = match selected {
@@ -139,7 +157,7 @@ fn library(frame: &mut Frame, model: &Model, area: Rect) {
         let inner = block.inner(rect);
         frame.render_widget(block, rect);
         if let Ok(image) = volume.slice(Axis::Z, volume.dims()[2] / 2) {
-            frame.render_widget(HalfBlocks { image: &image, channel: 0, overlay: None }, inner);
+            frame.render_widget(HalfBlocks { image: &image, channel: 0, overlay: None, scale: None }, inner);
         }
     }
 }
@@ -239,9 +257,58 @@ fn exemplar(frame: &mut Frame, view: &ExemplarView, area: Rect, mut graphics: Op
             };
             let overlay: Option<&dyn Fn(usize, usize) -> bool> =
                 view.stamp.as_ref().map(|_| &seed as &dyn Fn(usize, usize) -> bool);
-            frame.render_widget(HalfBlocks { image: &image, channel: view.channel, overlay }, slice_area);
+            frame.render_widget(HalfBlocks { image: &image, channel: view.channel, overlay, scale: None }, slice_area);
         }
     }
+}
+
+/// The photo of the slice axis beside the slice, both at one pixel scale (the largest at
+/// which both fit their half), with the quality figures of the last build.
+fn beside_photo(frame: &mut Frame, view: &ExemplarView, quality: Option<&crate::quality::Glance>, area: Rect) {
+    let k = view.axis.index();
+    let figures = quality.and_then(|q| q.axes.iter().find(|a| a.0 == k).map(|a| (a, q.histogram)));
+    let title = match figures {
+        Some(((_, g, l), h)) => {
+            format!(" {} across {}: sharp {g:.2}  size {l:.2}  hist {h:.2}  (p: three slices) ", view.name, view.axis)
+        }
+        None => format!(
+            " {} across {}: no figures (built before they were kept, or not synthesized)  (p: three slices) ",
+            view.name, view.axis
+        ),
+    };
+    let colour = match quality {
+        Some(q) if q.in_range() => Color::Green,
+        Some(_) => Color::Red,
+        None => Color::Reset,
+    };
+    let block = Block::default().borders(Borders::ALL).title(Line::styled(title, Style::new().fg(colour)));
+    let inner = block.inner(area);
+    frame.render_widget(block, area);
+    let (Some(volume), Some(Ok(photos))) = (&view.volume, &view.photos) else {
+        frame.render_widget(Paragraph::new("reading the photo..."), inner);
+        return;
+    };
+    let [left, right] = Layout::horizontal([Constraint::Ratio(1, 2); 2]).areas(inner);
+    let Some(photo) = &photos[k] else {
+        let text = format!("no photo for the slices across {} (x, y or z chooses another axis)", view.axis);
+        frame.render_widget(Paragraph::new(text).wrap(Wrap { trim: true }), left);
+        return;
+    };
+    let Ok(slice) = volume.slice(view.axis, view.index[k]) else { return };
+    let slice = if view.axis != Axis::Z { flipped(&slice) } else { slice };
+    let pblock = Block::default().borders(Borders::ALL).title(format!(" photo {}x{} ", photo.width(), photo.height()));
+    let d = volume.dims();
+    let sblock = Block::default()
+        .borders(Borders::ALL)
+        .title(format!(" slice {}={}/{} ", view.axis, view.index[k], d[k] - 1))
+        .border_style(Style::new().fg(Color::Yellow));
+    let (pa, sa) = (pblock.inner(left), sblock.inner(right));
+    let fit = |a: Rect, i: &Image2d| (a.width as f32 / i.width() as f32).min(2.0 * a.height as f32 / i.height() as f32);
+    let scale = fit(pa, photo).min(fit(sa, &slice));
+    frame.render_widget(pblock, left);
+    frame.render_widget(sblock, right);
+    frame.render_widget(HalfBlocks { image: photo, channel: 0, overlay: None, scale: Some(scale) }, pa);
+    frame.render_widget(HalfBlocks { image: &slice, channel: 0, overlay: None, scale: Some(scale) }, sa);
 }
 
 /// `image` upside down (row 0 last).
@@ -271,12 +338,14 @@ pub struct HalfBlocks<'a> {
     pub channel: usize,
     /// Pixels to tint yellow (the seed in stamp mode).
     pub overlay: Option<&'a dyn Fn(usize, usize) -> bool>,
+    /// Terminal columns per pixel (None: as large as fits).
+    pub scale: Option<f32>,
 }
 
 impl Widget for HalfBlocks<'_> {
     fn render(self, area: Rect, buf: &mut Buffer) {
         let (w, h) = (self.image.width() as f32, self.image.height() as f32);
-        let scale = (area.width as f32 / w).min(2.0 * area.height as f32 / h);
+        let scale = self.scale.unwrap_or((area.width as f32 / w).min(2.0 * area.height as f32 / h));
         if scale <= 0.0 {
             return;
         }
@@ -405,12 +474,14 @@ mod tests {
                 declared: Some("2-b".into()),
                 size: Some([64; 3]),
                 state: BuildState::Built("1-b".into()),
+                quality: None,
             },
             Item {
                 name: "marble".into(),
                 declared: Some("0".into()),
                 size: Some([64; 3]),
                 state: BuildState::NotBuilt,
+                quality: None,
             },
         ];
         Model::new(PathBuf::from("lib.toml"), PathBuf::from("out"), items, Vec::new())
@@ -622,6 +693,75 @@ mod tests {
         // Half-blocks at the rim draw their inside half; the default colour never fills a half.
         let rim = cells.iter().filter(|p| matches!(buffer[**p].symbol(), "▀" | "▄") && buffer[**p].fg == Color::Reset);
         assert_eq!(rim.count(), 0, "a half-block whose coloured half is the terminal's default");
+    }
+
+    /// A synthesized entry's figures show as a word in the list and in full under it; its
+    /// photo is drawn beside the slice at the same pixel scale.
+    #[test]
+    fn quality_figures_show_at_a_glance_and_the_photo_beside_the_slice() {
+        let mut m = model();
+        let glance =
+            crate::quality::Glance { axes: vec![(0, 0.5, 1.0), (1, 0.9, 1.0), (2, 0.95, 1.1)], histogram: 0.01 };
+        m.items[1].quality = Some(glance.clone());
+        m.selected = 1;
+        let (text, buffer) = screen(&m, 100, 24);
+        assert!(text.contains("quality") && text.contains("blurred"), "{text}");
+        assert!(text.contains("marble: sharp 0.50-0.95  size 1.00-1.10  hist 0.01"), "{text}");
+        let red = buffer.content().iter().filter(|c| c.fg == Color::Red).count();
+        assert!(red > 20, "figures out of range are red: {red}");
+        // the photo (16 px) is drawn twice as wide as the slice (8 px): one pixel scale
+        let volume =
+            Volume::from_fn([8, 8, 8], Channel::rgb(), |_, _, _, o| o.copy_from_slice(&[1.0, 0.0, 0.0])).unwrap();
+        let photo = Image2d::from_data(16, 16, Channel::rgb(), [0.0, 0.0, 1.0].repeat(256)).unwrap();
+        let mut m = viewing(volume);
+        m.items[0].name = "kiwi".into();
+        m.items[0].quality = Some(glance);
+        let Screen::Exemplar(v) = &mut m.screen else { panic!("the slices") };
+        (v.beside_photo, v.axis) = (true, Axis::X);
+        v.photos = Some(Ok(Arc::new([Some(photo), None, None])));
+        let (text, buffer) = screen(&m, 100, 30);
+        assert!(text.contains("kiwi across x: sharp 0.50  size 1.00  hist 0.01"), "{text}");
+        assert!(text.contains("photo 16x16") && text.contains("slice x=4/7"), "{text}");
+        let count = |colour: Color| buffer.content().iter().filter(|c| c.fg == colour && c.symbol() == "▀").count();
+        let (blue, red) = (count(Color::Rgb(0, 0, 255)), count(Color::Rgb(255, 0, 0)));
+        let ratio = blue as f32 / red as f32;
+        assert!(red > 10 && (3.6..4.4).contains(&ratio), "photo {blue} cells, slice {red} cells");
+        let Screen::Exemplar(v) = &mut m.screen else { panic!("the slices") };
+        v.axis = Axis::Y;
+        let (text, _) = screen(&m, 100, 30);
+        assert!(text.contains("no photo for the slices across y"), "{text}");
+    }
+
+    #[test]
+    fn the_new_entry_screen_lists_kinds_then_files_with_the_photo() {
+        use crate::tui::new_entry::{FileRow, NewEntry, Picker};
+        let mut m = model();
+        m.screen = Screen::New(NewEntry { kind: 2, picker: None });
+        let (text, buffer) = screen(&m, 100, 24);
+        assert!(text.contains("new exemplar: what makes it?") && text.contains("procedural:chocolate"), "{text}");
+        let chosen = (0..100u16).map(|x| buffer[(x, 3)].symbol().to_string()).collect::<String>();
+        assert!(chosen.contains("sweep") && buffer[(2, 3)].modifier.contains(Modifier::REVERSED), "{chosen}");
+        let photo = Image2d::from_data(4, 4, Channel::rgb(), [0.0, 1.0, 0.0].repeat(16)).unwrap();
+        let rows =
+            ["..", "photos", "a.png"].iter().map(|n| FileRow { name: n.to_string(), folder: !n.ends_with(".png") });
+        m.screen = Screen::New(NewEntry {
+            kind: 0,
+            picker: Some(Picker {
+                folder: PathBuf::from("/w/lib"),
+                rows: Some(Ok(rows.collect())),
+                selected: 2,
+                peek: Some((PathBuf::from("/w/lib/a.png"), Ok(Arc::new(photo)))),
+            }),
+        });
+        let (text, buffer) = screen(&m, 100, 24);
+        assert!(
+            text.contains("new synth exemplar: /w/lib")
+                && text.contains("photos/")
+                && text.contains("a.png (shown 4x4)"),
+            "{text}"
+        );
+        let green = buffer.content().iter().filter(|c| c.fg == Color::Rgb(0, 255, 0)).count();
+        assert!(green > 50, "{green} cells of the photo");
     }
 
     #[test]

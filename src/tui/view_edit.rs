@@ -100,7 +100,7 @@ fn preview(frame: &mut Frame, editor: &Editor, area: Rect) {
     let d = volume.dims();
     for (panel, axis) in [top[0], top[1], panels[1]].iter().zip([Axis::Z, Axis::Y, Axis::X]) {
         if let Ok(image) = volume.slice(axis, d[axis.index()] / 2) {
-            frame.render_widget(HalfBlocks { image: &image, channel: 0, overlay: None }, *panel);
+            frame.render_widget(HalfBlocks { image: &image, channel: 0, overlay: None, scale: None }, *panel);
         }
     }
 }

@@ -1,0 +1,349 @@
+//! The new-entry screen: choose what makes the volume (a recipe kind), then, for kinds that
+//! read a file, the file, in a picker that browses folders and previews photos. Pure: the
+//! folder listing and the photo arrive as messages from workers.
+
+use super::message::{Effect, EntryChange};
+use super::model::{Model, Screen};
+use crate::volume::Image2d;
+use std::path::{Component, Path, PathBuf};
+use std::sync::Arc;
+
+/// What a recipe kind reads.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FileKind {
+    /// A 2D image (PNG, JPEG, EXR, TIFF, HDR).
+    Image,
+    /// A volume file.
+    Volume,
+}
+
+impl FileKind {
+    /// The file extensions (lower case) the picker lists.
+    pub fn extensions(self) -> &'static [&'static str] {
+        match self {
+            FileKind::Image => &["png", "jpg", "jpeg", "exr", "tif", "tiff", "hdr"],
+            FileKind::Volume => &["exr", "nrrd", "vol", "png", "vdb", "dds"],
+        }
+    }
+}
+
+/// One kind of entry the screen makes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Kind {
+    /// The manifest's `recipe` value.
+    pub recipe: &'static str,
+    /// What it makes.
+    pub what: &'static str,
+    /// The file it reads, if any.
+    pub file: Option<FileKind>,
+}
+
+const fn kind(recipe: &'static str, what: &'static str, file: Option<FileKind>) -> Kind {
+    Kind { recipe, what, file }
+}
+
+/// The kinds offered, in order.
+pub const KINDS: [Kind; 10] = [
+    kind("synth", "a solid synthesized from a photo (Kopf 2007)", Some(FileKind::Image)),
+    kind("synth-layered", "layers along z synthesized from a photo (type 1-b)", Some(FileKind::Image)),
+    kind("sweep", "a cross-section image swept along x", Some(FileKind::Image)),
+    kind("load", "a volume file (exr, nrrd, vol, vdb, dds, png atlas)", Some(FileKind::Volume)),
+    kind("procedural:marble", "veined marble from noise (type 0)", None),
+    kind("procedural:strata", "rock strata (type 1-b)", None),
+    kind("procedural:wood", "wood rings (type 2-a)", None),
+    kind("procedural:sponge", "sponge cake crumb (type 0)", None),
+    kind("procedural:cream", "whipped cream (type 0)", None),
+    kind("procedural:chocolate", "chocolate glaze (type 0)", None),
+];
+
+/// One row of the file picker.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct FileRow {
+    /// File or folder name (`..` for the folder above).
+    pub name: String,
+    /// Whether it is a folder.
+    pub folder: bool,
+}
+
+/// The file picker of a kind that reads a file.
+#[derive(Debug, Clone)]
+pub struct Picker {
+    /// The folder shown.
+    pub folder: PathBuf,
+    /// Its folders and the files the kind reads (None while listing), or why not.
+    pub rows: Option<Result<Vec<FileRow>, String>>,
+    /// Selected row.
+    pub selected: usize,
+    /// The selected photo, once read (or why it cannot be).
+    pub peek: Option<(PathBuf, Result<Arc<Image2d>, String>)>,
+}
+
+/// The new-entry screen.
+#[derive(Debug, Clone)]
+pub struct NewEntry {
+    /// Index into [`KINDS`].
+    pub kind: usize,
+    /// The file picker, once the kind is chosen (kinds that read a file).
+    pub picker: Option<Picker>,
+}
+
+/// `n` on the library: the list of kinds.
+pub fn start(model: &mut Model) {
+    model.screen = Screen::New(NewEntry { kind: 0, picker: None });
+    model.status = "new exemplar: choose what makes it (enter), esc goes back".into();
+}
+
+fn screen(model: &mut Model) -> Option<&mut NewEntry> {
+    match &mut model.screen {
+        Screen::New(entry) => Some(entry),
+        _ => None,
+    }
+}
+
+/// Up/down: the next kind, or the next file (its photo is read).
+pub fn select(model: &mut Model, step: i64) -> Vec<Effect> {
+    let Some(entry) = screen(model) else { return Vec::new() };
+    let kind = KINDS[entry.kind];
+    let Some(picker) = &mut entry.picker else {
+        entry.kind = (entry.kind as i64 + step).clamp(0, KINDS.len() as i64 - 1) as usize;
+        return Vec::new();
+    };
+    let count = picker.rows.as_ref().and_then(|r| r.as_ref().ok()).map_or(0, Vec::len);
+    picker.selected = (picker.selected as i64 + step).clamp(0, count.saturating_sub(1) as i64) as usize;
+    peek(picker, kind)
+}
+
+/// The photo under the cursor is read, when it is one and not read yet.
+fn peek(picker: &mut Picker, kind: Kind) -> Vec<Effect> {
+    let Some(row) = selected_row(picker) else { return Vec::new() };
+    let path = picker.folder.join(&row.name);
+    let image = kind.file == Some(FileKind::Image) || has_extension(&path, &["png", "jpg", "jpeg", "tif", "tiff"]);
+    if row.folder || !image || picker.peek.as_ref().is_some_and(|(p, _)| *p == path) {
+        return Vec::new();
+    }
+    picker.peek = None;
+    vec![Effect::Peek(path)]
+}
+
+fn selected_row(picker: &Picker) -> Option<FileRow> {
+    picker.rows.as_ref()?.as_ref().ok()?.get(picker.selected).cloned()
+}
+
+fn has_extension(path: &Path, extensions: &[&str]) -> bool {
+    path.extension().is_some_and(|e| extensions.contains(&e.to_string_lossy().to_ascii_lowercase().as_str()))
+}
+
+/// Enter: choose the kind (a procedural entry is added at once; the others open the file
+/// picker in the manifest's folder); in the picker, enter a folder or choose the file.
+pub fn open(model: &mut Model) -> Vec<Effect> {
+    let folder = manifest_folder(&model.manifest);
+    let Some(entry) = screen(model) else { return Vec::new() };
+    let kind = KINDS[entry.kind];
+    let Some(picker) = &mut entry.picker else {
+        let Some(file) = kind.file else { return add(model, kind, None) };
+        entry.picker = Some(Picker { folder: folder.clone(), rows: None, selected: 0, peek: None });
+        let what = if file == FileKind::Image { "an image" } else { "a volume file" };
+        model.status = format!("{}: choose {what} (enter), backspace goes up a folder", kind.recipe);
+        return vec![Effect::List(folder, file)];
+    };
+    let Some(row) = selected_row(picker) else { return Vec::new() };
+    if row.folder {
+        let target = if row.name == ".." {
+            picker.folder.parent().map_or_else(|| picker.folder.clone(), Path::to_path_buf)
+        } else {
+            picker.folder.join(&row.name)
+        };
+        return go_to(picker, target, kind);
+    }
+    let path = picker.folder.join(&row.name);
+    add(model, kind, Some(path))
+}
+
+/// Backspace or left in the picker: the folder above.
+pub fn parent(model: &mut Model) -> Vec<Effect> {
+    let Some(entry) = screen(model) else { return Vec::new() };
+    let kind = KINDS[entry.kind];
+    let Some(picker) = &mut entry.picker else { return Vec::new() };
+    let Some(up) = picker.folder.parent().map(Path::to_path_buf) else { return Vec::new() };
+    go_to(picker, up, kind)
+}
+
+fn go_to(picker: &mut Picker, folder: PathBuf, kind: Kind) -> Vec<Effect> {
+    *picker = Picker { folder: folder.clone(), rows: None, selected: 0, peek: None };
+    kind.file.map(|file| vec![Effect::List(folder, file)]).unwrap_or_default()
+}
+
+fn add(model: &mut Model, kind: Kind, file: Option<PathBuf>) -> Vec<Effect> {
+    model.screen = Screen::Library;
+    model.status = format!("adding a {} entry", kind.recipe);
+    vec![Effect::ChangeEntry(EntryChange::New(kind.recipe.to_string(), file))]
+}
+
+/// Esc: the picker goes back to the kinds; the kinds to the library. False when the
+/// screen is not this one.
+pub fn back(model: &mut Model) -> bool {
+    let Some(entry) = screen(model) else { return false };
+    if entry.picker.take().is_none() {
+        model.screen = Screen::Library;
+        model.status = "no entry added".into();
+    } else {
+        model.status = "new exemplar: choose what makes it (enter)".into();
+    }
+    true
+}
+
+/// A folder listing arrived: `asked` is the folder asked for, then (the folder as a
+/// canonical path, its rows).
+pub fn listed(model: &mut Model, asked: &Path, result: Result<(PathBuf, Vec<FileRow>), String>) -> Vec<Effect> {
+    let Some(entry) = screen(model) else { return Vec::new() };
+    let kind = KINDS[entry.kind];
+    let Some(picker) = entry.picker.as_mut().filter(|p| p.folder == asked) else { return Vec::new() };
+    match result {
+        Ok((folder, rows)) => {
+            picker.folder = folder;
+            picker.rows = Some(Ok(rows));
+            peek(picker, kind)
+        }
+        Err(e) => {
+            picker.rows = Some(Err(e));
+            Vec::new()
+        }
+    }
+}
+
+/// A photo arrived; kept when it is still the one under the cursor.
+pub fn peeked(model: &mut Model, path: PathBuf, result: Result<Arc<Image2d>, String>) {
+    let Some(picker) = screen(model).and_then(|e| e.picker.as_mut()) else { return };
+    if selected_row(picker).is_some_and(|row| picker.folder.join(row.name) == path) {
+        picker.peek = Some((path, result));
+    }
+}
+
+/// The folder relative paths in the manifest start from.
+pub fn manifest_folder(manifest: &Path) -> PathBuf {
+    match manifest.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    }
+}
+
+/// `path` written relative to `base` (both absolute, or both relative to one folder), with
+/// `..` where it lies outside; `path` itself when they share no root.
+pub fn relative_to(path: &Path, base: &Path) -> PathBuf {
+    let (p, b): (Vec<Component>, Vec<Component>) = (path.components().collect(), base.components().collect());
+    let shared = p.iter().zip(&b).take_while(|(x, y)| x == y).count();
+    if shared == 0 && (path.has_root() || base.has_root()) {
+        return path.to_path_buf();
+    }
+    let mut out: PathBuf = b[shared..].iter().map(|_| Component::ParentDir).collect();
+    out.extend(&p[shared..]);
+    out
+}
+
+/// The rows of a folder listing: `..` (unless at the root), its folders, then the files
+/// with one of `extensions`, each group by name; hidden entries left out.
+pub fn rows(at_root: bool, entries: Vec<(String, bool)>, extensions: &[&str]) -> Vec<FileRow> {
+    let mut kept: Vec<FileRow> = entries
+        .into_iter()
+        .filter(|(name, folder)| !name.starts_with('.') && (*folder || has_extension(Path::new(name), extensions)))
+        .map(|(name, folder)| FileRow { name, folder })
+        .collect();
+    kept.sort_by(|a, b| b.folder.cmp(&a.folder).then_with(|| a.name.to_lowercase().cmp(&b.name.to_lowercase())));
+    let up = (!at_root).then(|| FileRow { name: "..".into(), folder: true });
+    up.into_iter().chain(kept).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::tui::{Message, update};
+
+    fn model() -> Model {
+        Model::new(PathBuf::from("lib/library.toml"), PathBuf::from("out"), Vec::new(), Vec::new())
+    }
+
+    fn rows_of(names: &[(&str, bool)]) -> Vec<FileRow> {
+        names.iter().map(|(n, f)| FileRow { name: n.to_string(), folder: *f }).collect()
+    }
+
+    #[test]
+    fn a_procedural_kind_is_added_at_once_and_a_photo_kind_opens_the_picker() {
+        let mut m = model();
+        update(&mut m, Message::New);
+        assert!(matches!(m.screen, Screen::New(_)));
+        for _ in 0..4 {
+            update(&mut m, Message::Down);
+        }
+        let effects = update(&mut m, Message::Open);
+        assert_eq!(effects, vec![Effect::ChangeEntry(EntryChange::New("procedural:marble".into(), None))]);
+        assert!(matches!(m.screen, Screen::Library));
+        update(&mut m, Message::New);
+        let effects = update(&mut m, Message::Open);
+        assert_eq!(effects, vec![Effect::List(PathBuf::from("lib"), FileKind::Image)]);
+        // esc closes the picker first, then the screen
+        assert!(matches!(update(&mut m, Message::Back)[..], []) && matches!(m.screen, Screen::New(_)));
+        update(&mut m, Message::Back);
+        assert!(matches!(m.screen, Screen::Library) && m.status == "no entry added", "{}", m.status);
+    }
+
+    #[test]
+    fn the_picker_walks_folders_previews_photos_and_adds_the_chosen_one() {
+        let mut m = model();
+        update(&mut m, Message::New);
+        update(&mut m, Message::Open);
+        let listing = rows_of(&[("..", true), ("photos", true), ("a.png", false), ("b.jpg", false)]);
+        // a listing of another folder (an older request) is dropped
+        let late = update(&mut m, Message::Listed(PathBuf::from("elsewhere"), Ok((PathBuf::from("/x"), vec![]))));
+        assert!(late.is_empty());
+        let effects = update(&mut m, Message::Listed(PathBuf::from("lib"), Ok((PathBuf::from("/w/lib"), listing))));
+        assert!(effects.is_empty(), "`..` is not a photo: {effects:?}");
+        assert_eq!(update(&mut m, Message::Down), vec![]);
+        assert_eq!(update(&mut m, Message::Down), vec![Effect::Peek(PathBuf::from("/w/lib/a.png"))]);
+        let photo = Arc::new(Image2d::from_data(2, 1, crate::volume::Channel::rgb(), vec![0.5; 6]).unwrap());
+        update(&mut m, Message::Peeked(PathBuf::from("/w/lib/b.jpg"), Ok(photo.clone())));
+        let Screen::New(NewEntry { picker: Some(p), .. }) = &m.screen else { panic!("the picker") };
+        assert!(p.peek.is_none(), "a photo no longer under the cursor is dropped");
+        update(&mut m, Message::Peeked(PathBuf::from("/w/lib/a.png"), Ok(photo)));
+        let Screen::New(NewEntry { picker: Some(p), .. }) = &m.screen else { panic!("the picker") };
+        assert!(p.peek.as_ref().is_some_and(|(_, r)| r.is_ok()));
+        // up goes to the folder above, enter on a folder goes into it
+        assert_eq!(update(&mut m, Message::Parent), vec![Effect::List(PathBuf::from("/w"), FileKind::Image)]);
+        let listing = rows_of(&[("..", true), ("lib", true)]);
+        update(&mut m, Message::Listed(PathBuf::from("/w"), Ok((PathBuf::from("/w"), listing))));
+        update(&mut m, Message::Down);
+        assert_eq!(update(&mut m, Message::Open), vec![Effect::List(PathBuf::from("/w/lib"), FileKind::Image)]);
+        let listing = rows_of(&[("..", true), ("a.png", false)]);
+        update(&mut m, Message::Listed(PathBuf::from("/w/lib"), Ok((PathBuf::from("/w/lib"), listing))));
+        update(&mut m, Message::Down);
+        let effects = update(&mut m, Message::Open);
+        let chosen = EntryChange::New("synth".into(), Some(PathBuf::from("/w/lib/a.png")));
+        assert_eq!(effects, vec![Effect::ChangeEntry(chosen)]);
+        assert!(matches!(m.screen, Screen::Library));
+    }
+
+    #[test]
+    fn listings_keep_folders_and_the_files_a_kind_reads() {
+        let entries = vec![
+            ("Zebra.PNG".to_string(), false),
+            ("notes.txt".to_string(), false),
+            (".hidden.png".to_string(), false),
+            ("meshes".to_string(), true),
+            ("a.jpg".to_string(), false),
+            ("scan.nrrd".to_string(), false),
+        ];
+        let names = |rows: Vec<FileRow>| rows.into_iter().map(|r| r.name).collect::<Vec<_>>();
+        assert_eq!(
+            names(rows(false, entries.clone(), FileKind::Image.extensions())),
+            ["..", "meshes", "a.jpg", "Zebra.PNG"]
+        );
+        assert_eq!(names(rows(true, entries, FileKind::Volume.extensions())), ["meshes", "scan.nrrd", "Zebra.PNG"]);
+    }
+
+    #[test]
+    fn paths_are_written_relative_to_the_manifest() {
+        let rel = |p: &str, b: &str| relative_to(Path::new(p), Path::new(b));
+        assert_eq!(rel("/w/lib/photos/a.png", "/w/lib"), PathBuf::from("photos/a.png"));
+        assert_eq!(rel("/w/data/a.png", "/w/lib"), PathBuf::from("../data/a.png"));
+        assert_eq!(rel("/w/lib/a.png", "/w/lib"), PathBuf::from("a.png"));
+    }
+}
