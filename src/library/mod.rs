@@ -12,6 +12,7 @@ pub mod build;
 pub mod cache;
 pub mod files;
 pub mod fill;
+pub mod previous;
 pub mod recipe;
 
 pub use build::{Observer, Outcome, Request};

@@ -336,6 +336,7 @@ mod tests {
             size: None,
             state: crate::tui::BuildState::NotBuilt,
             quality: None,
+            previous: false,
         };
         let mut m = Model::new(PathBuf::from("lib/library.toml"), PathBuf::from("out"), vec![item], Vec::new());
         assert_eq!(update(&mut m, Message::Edit), vec![Effect::ReadManifest]);
@@ -433,6 +434,7 @@ mod tests {
             size: None,
             state: crate::tui::BuildState::NotBuilt,
             quality: None,
+            previous: false,
         };
         let mut m = Model::new(PathBuf::from("lib/library.toml"), PathBuf::from("out"), vec![item], Vec::new());
         update(&mut m, Message::Edit);

@@ -67,6 +67,16 @@ pub fn hints(model: &Model) -> Vec<Hint> {
             ]
         }
         Screen::New(_) => vec![hint("up/down", "kind"), hint("enter", "take it"), hint("esc", "back")],
+        Screen::Compare(view) => {
+            let settle = view.before_after.is_none().then_some("two exemplars");
+            vec![
+                hint("x/y/z", "axis"),
+                hint("arrows", "both slices"),
+                unless("a", "keep new", settle),
+                unless("d", "discard new", settle),
+                hint("esc", "back"),
+            ]
+        }
         Screen::Fill(view) => {
             let filling = view.filled.is_none().then_some("filling");
             vec![unless("x/y/z", "cut axis", filling), unless("arrows", "move the cut", filling), hint("esc", "back")]
@@ -102,6 +112,8 @@ fn library(model: &Model) -> Vec<Hint> {
         unless("d", "delete", none),
         unless("r", "rename", none),
         hint("n", "new"),
+        unless("v", "compare", open.map(|_| "not built")),
+        unless("V", "before/after", (!item.is_some_and(|i| i.previous)).then_some("no previous build")),
         unless("R", "rebuild changed", (!changed).then_some("none changed")),
     ]
 }
@@ -138,7 +150,14 @@ mod tests {
         let items = states
             .into_iter()
             .enumerate()
-            .map(|(i, state)| Item { name: format!("e{i}"), declared: None, size: None, state, quality: None })
+            .map(|(i, state)| Item {
+                name: format!("e{i}"),
+                declared: None,
+                size: None,
+                state,
+                quality: None,
+                previous: false,
+            })
             .collect();
         Model::new(PathBuf::from("library.toml"), PathBuf::from("out"), items, Vec::new())
     }

@@ -27,6 +27,23 @@ pub fn key(screen: &Screen, event: KeyEvent) -> Option<Message> {
         Screen::Editor(_) => esc(common).or(editor(event.code)),
         Screen::Fill(_) => common.or(fill(event.code)),
         Screen::New(_) => common.or(new_entry(event.code)),
+        Screen::Compare(_) => common.or(comparing(event.code)),
+    }
+}
+
+fn comparing(code: KeyCode) -> Option<Message> {
+    match code {
+        KeyCode::Char('x') => Some(Message::SelectAxis(Axis::X)),
+        KeyCode::Char('y') => Some(Message::SelectAxis(Axis::Y)),
+        KeyCode::Char('z') => Some(Message::SelectAxis(Axis::Z)),
+        KeyCode::Right | KeyCode::Up | KeyCode::Char('l') | KeyCode::Char('k') => Some(Message::MoveSlice(1)),
+        KeyCode::Left | KeyCode::Down | KeyCode::Char('h') | KeyCode::Char('j') => Some(Message::MoveSlice(-1)),
+        KeyCode::PageUp => Some(Message::MoveSlice(8)),
+        KeyCode::PageDown => Some(Message::MoveSlice(-8)),
+        KeyCode::Char('a') => Some(Message::Accept),
+        KeyCode::Char('d') => Some(Message::Discard),
+        KeyCode::Backspace => Some(Message::Back),
+        _ => None,
     }
 }
 
@@ -70,6 +87,8 @@ fn library(code: KeyCode) -> Option<Message> {
         KeyCode::Char('d') => Some(Message::Delete),
         KeyCode::Char('r') => Some(Message::Rename),
         KeyCode::Char('n') => Some(Message::New),
+        KeyCode::Char('v') => Some(Message::Compare),
+        KeyCode::Char('V') => Some(Message::BeforeAfter),
         KeyCode::PageDown => Some(Message::ScrollErrors(3)),
         KeyCode::PageUp => Some(Message::ScrollErrors(-3)),
         _ => None,
@@ -163,7 +182,7 @@ fn exemplar(code: KeyCode) -> Option<Message> {
 pub type Section = (&'static str, &'static [(&'static str, &'static str)]);
 
 /// The keys of every screen, for the help.
-pub const SECTIONS: [Section; 7] = [
+pub const SECTIONS: [Section; 8] = [
     (
         "library",
         &[
@@ -175,6 +194,8 @@ pub const SECTIONS: [Section; 7] = [
             ("d d", "delete the entry (built files stay)"),
             ("r", "rename the entry (enter keeps, esc drops)"),
             ("n", "new entry: choose its recipe, then its photo or file"),
+            ("v", "mark for comparing; v on another shows both"),
+            ("V", "its previous build beside the new one"),
             ("e", "edit its recipe"),
             ("pgup/pgdn", "scroll the manifest's mistakes"),
         ],
@@ -235,6 +256,15 @@ pub const SECTIONS: [Section; 7] = [
         ],
     ),
     (
+        "compare",
+        &[
+            ("x, y, z", "choose the axis of both slices"),
+            ("arrows, hjkl", "move both slices (pgup/pgdn: 8)"),
+            ("a", "keep the new build (before/after)"),
+            ("d", "discard it: the previous build comes back"),
+        ],
+    ),
+    (
         "everywhere",
         &[
             ("esc", "back (asks if work is unsaved)"),
@@ -253,6 +283,7 @@ pub fn section_of(screen: &Screen) -> &'static str {
         Screen::Editor(_) => "recipe editor",
         Screen::Fill(_) => "fill preview",
         Screen::New(_) => "new exemplar",
+        Screen::Compare(_) => "compare",
     }
 }
 

@@ -4,6 +4,13 @@ use crate::volume::{Axis, Volume};
 use std::path::PathBuf;
 use std::sync::Arc;
 
+/// The manifest's entries after a change: the reloaded list, its errors, the entry to
+/// select and what happened; or why nothing changed.
+pub type Changed = Result<(Vec<super::model::Item>, Vec<String>, String, String), String>;
+
+/// A volume to compare and its quality figures, or why it cannot be read.
+pub type SideResult = Result<(Arc<Volume>, Option<crate::quality::Glance>), String>;
+
 /// One event for `update`.
 #[derive(Debug, Clone)]
 pub enum Message {
@@ -56,6 +63,16 @@ pub enum Message {
     Rename,
     /// Open the new-entry screen.
     New,
+    /// On the library: mark the selected entry, or compare it with the marked one.
+    Compare,
+    /// On the library: the selected entry's previous build beside its new one.
+    BeforeAfter,
+    /// A side of the comparison arrived: side, its label, the volume and its figures.
+    SideLoaded(usize, String, SideResult),
+    /// Keep the new build being compared with the previous one.
+    Accept,
+    /// Discard the new build being compared: the previous one comes back.
+    Discard,
     /// Show the photo the exemplar was made from beside its slice (or go back to three slices).
     Photo,
     /// The photos of exemplar `.0` arrived (or why there are none).
@@ -74,7 +91,7 @@ pub enum Message {
     Exported(Result<(String, Vec<String>, Vec<String>), String>),
     /// The manifest's entries changed: the reloaded list, its errors, the entry to select
     /// and what happened; or why nothing changed.
-    EntriesChanged(Result<(Vec<super::model::Item>, Vec<String>, String, String), String>),
+    EntriesChanged(Changed),
     /// The manifest text for the editor arrived.
     EditorReady(Result<String, String>),
     /// Start editing the selected field, or commit the value being typed.
@@ -181,6 +198,11 @@ pub enum Effect {
     Peek(PathBuf),
     /// Read the photos exemplar `name` was made from.
     LoadPhotos(String),
+    /// Read a volume to compare: side, its label, the exemplar, and whether it is the
+    /// previous build kept beside it.
+    LoadSide(usize, String, String, bool),
+    /// Accept (true) or discard exemplar `name`'s new build.
+    Settle(String, bool),
 }
 
 /// A fill preview handed to a worker; two are equal when they are the same one.

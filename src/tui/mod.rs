@@ -8,6 +8,7 @@
 //! edits validated in place, undo/redo, live low-resolution preview, save); and the fill
 //! preview (a shape filled with the exemplar, a cut plane moved with keys).
 
+mod compare;
 mod edit;
 mod editing;
 mod graphics;
@@ -19,10 +20,11 @@ mod new_entry;
 mod stamping;
 mod update;
 mod view;
+mod view_compare;
 mod view_edit;
 mod view_new;
 
-pub use message::{Effect, EntryChange, Message};
+pub use message::{Changed, Effect, EntryChange, Message};
 pub use model::{BuildState, FillPreview, Item, Model, Screen};
 pub use update::update;
 pub use view::draw;
@@ -57,7 +59,14 @@ pub fn load_items(manifest: &Path, output: &Path) -> (Vec<Item>, Vec<String>) {
             None => {
                 let own = errors.iter().find(|e| e.contains(&format!("({name})")));
                 let reason = own.cloned().unwrap_or_else(|| "a mistake in this entry (see below)".to_string());
-                Item { name, declared: None, size: None, state: BuildState::Broken(reason), quality: None }
+                Item {
+                    name,
+                    declared: None,
+                    size: None,
+                    state: BuildState::Broken(reason),
+                    quality: None,
+                    previous: false,
+                }
             }
         })
         .collect();
@@ -94,6 +103,7 @@ fn item(entry: &io::manifest::Entry, folder: &Path, output: &Path) -> Item {
             .or_else(|| record.as_ref().and_then(|r| r.declared.clone())),
         size: record.as_ref().map(|r| r.dims).or(entry.dims),
         quality: record.and_then(|r| r.quality),
+        previous: library::previous::record(output, &entry.name).is_some(),
         state,
     }
 }
@@ -206,6 +216,13 @@ fn start(effects: Vec<Effect>, model: &Model, send: &Sender<Message>) {
                 let result = io::read_image_fit(&path, Some(256)).map(Arc::new).map_err(|e| e.to_string());
                 let _ = send.send(Message::Peeked(path, result));
             }
+            Effect::LoadSide(side, label, name, previous) => {
+                let result = side_of(&output, &name, previous).map_err(|e| e.to_string());
+                let _ = send.send(Message::SideLoaded(side, label, result));
+            }
+            Effect::Settle(name, accept) => {
+                let _ = send.send(Message::EntriesChanged(settle(&manifest, &output, &name, accept)));
+            }
             Effect::LoadPhotos(name) => {
                 let result = photos_of(&manifest, &name).map(Arc::new).map_err(|e| e.to_string());
                 let _ = send.send(Message::PhotosLoaded(name, result));
@@ -222,11 +239,7 @@ fn start(effects: Vec<Effect>, model: &Model, send: &Sender<Message>) {
 
 /// Copies, deletes or renames an entry of the manifest, saves it and reloads the list: the
 /// list, its errors, the entry to select and a status line.
-fn change_entry(
-    manifest: &Path,
-    output: &Path,
-    change: &EntryChange,
-) -> Result<(Vec<Item>, Vec<String>, String, String), String> {
+fn change_entry(manifest: &Path, output: &Path, change: &EntryChange) -> Changed {
     let text = io::read_text(manifest, "manifest").map_err(|e| e.to_string())?;
     let (text, select, status) = match change {
         EntryChange::Duplicate(name) => {
@@ -268,6 +281,35 @@ fn added(manifest: &Path, text: &str, recipe: &str, file: Option<&Path>) -> Resu
     let from = file.map(|f| format!(" from {}", f.display())).unwrap_or_default();
     let status = format!("added {name} ({recipe}{from}): b builds it, e edits its settings");
     Ok((text, name, status))
+}
+
+/// A volume to compare and its quality figures: exemplar `name`'s build, or the previous
+/// build kept beside it.
+fn side_of(output: &Path, name: &str, previous: bool) -> Result<(Arc<Volume>, Option<crate::quality::Glance>)> {
+    let (path, record) = if previous {
+        let path = library::previous::volume(output, name)
+            .ok_or_else(|| Error::invalid(format!("no previous build of {name} is kept")))?;
+        (path, library::previous::record(output, name))
+    } else {
+        (library::files::volume(output, name), library::cache::read_record(output, name))
+    };
+    let volume = io::read_volume(&path, io::budget_from_env().unwrap_or(u64::MAX))?;
+    Ok((Arc::new(volume), record.and_then(|r| r.quality)))
+}
+
+/// Accept exemplar `name`'s new build (its kept previous build goes) or discard it (the
+/// previous comes back); the reloaded list.
+fn settle(manifest: &Path, output: &Path, name: &str, accept: bool) -> Changed {
+    let done = if accept {
+        library::previous::drop_kept(output, name).map(|_| format!("kept the new build of {name}"))
+    } else {
+        library::previous::restore(output, name).map(|_| {
+            format!("{name} is its previous build again (the recipe in the manifest is unchanged: b builds it anew)")
+        })
+    };
+    let status = done.map_err(|e| e.to_string())?;
+    let (items, errors) = load_items(manifest, output);
+    Ok((items, errors, name.to_string(), status))
 }
 
 /// The images exemplar `name` was made from, per slice axis: a synthesis' photos (shrunk as
@@ -377,6 +419,9 @@ fn build(manifest: &Path, output: &Path, names: Vec<String>, send: &Sender<Messa
     let cancels = CANCELS.load(Ordering::SeqCst);
     let _turn = BUILDING.lock().unwrap_or_else(|e| e.into_inner());
     let _ = send.send(Message::BuildStarted(names.clone()));
+    // The build before this one stays beside it until the designer accepts or discards it.
+    let kept: Vec<String> =
+        names.iter().filter(|n| library::previous::keep(output, n).unwrap_or(false)).cloned().collect();
     let request = library::Request {
         manifest: manifest.to_path_buf(),
         output: output.to_path_buf(),
@@ -387,6 +432,11 @@ fn build(manifest: &Path, output: &Path, names: Vec<String>, send: &Sender<Messa
     let observer = Messages { send: send.clone(), cancels, percent: Mutex::new(HashMap::new()) };
     let outcomes =
         library::build::select(&request).and_then(|entries| library::build::build(&request, &entries, &observer));
+    let rebuilt =
+        |n: &str| outcomes.as_ref().is_ok_and(|o| o.iter().any(|o| o.name() == n && matches!(o, Outcome::Built(_))));
+    for name in kept.iter().filter(|n| !rebuilt(n)) {
+        let _ = library::previous::drop_kept(output, name);
+    }
     let (items, _) = load_items(manifest, output);
     let row = |name: &str| items.iter().find(|i| i.name == name).cloned();
     let messages: Vec<Message> = match outcomes {
@@ -502,7 +552,7 @@ fn load_masks(output: &Path, name: &str) -> std::result::Result<Vec<(String, Arc
 mod tests {
     use super::{
         BuildState, Effect, EntryChange, Message, change_entry, finished, list_folder, load_items, new_entry,
-        photos_of, update,
+        photos_of, settle, side_of, update,
     };
 
     /// `E` on the slices writes every format, the contact sheet and the slice on screen
@@ -587,6 +637,7 @@ mod tests {
             size: Some([8; 3]),
             state: BuildState::Built("0".into()),
             quality: None,
+            previous: false,
         };
         let cancelled = finished(&super::Outcome::Cancelled("m".into()), Some(row.clone()));
         assert!(matches!(cancelled, Message::BuildCancelled(n, r) if n == "m" && r == row));
@@ -681,5 +732,39 @@ mod tests {
         assert_eq!([x.unwrap().width(), y.unwrap().height(), z.unwrap().width()], [40, 20, 40]);
         let e = photos_of(&manifest, "m").unwrap_err().to_string();
         assert!(e.contains("m is not made from an image"), "{e}");
+    }
+
+    /// A rebuild in the UI keeps the build before it: both can be read for comparing;
+    /// discarding gives the previous build back (and the entry reads as changed, since its
+    /// recipe is the new one), accepting drops the copy; an unchanged rebuild keeps none.
+    #[test]
+    fn a_rebuild_keeps_the_previous_build_until_it_is_settled() {
+        let dir = tempfile::tempdir().unwrap();
+        let (manifest, out) = (dir.path().join("lib.toml"), dir.path().join("out"));
+        let text = "[[exemplar]]\nname = \"m\"\nrecipe = \"procedural:marble\"\nsize = 8\nseed = 1\n";
+        std::fs::write(&manifest, text).unwrap();
+        let (send, receive) = std::sync::mpsc::channel();
+        super::build(&manifest, &out, vec!["m".into()], &send);
+        super::build(&manifest, &out, vec!["m".into()], &send);
+        assert!(!load_items(&manifest, &out).0[0].previous, "an up-to-date entry keeps no copy");
+        std::fs::write(&manifest, text.replace("seed = 1", "seed = 2")).unwrap();
+        super::build(&manifest, &out, vec!["m".into()], &send);
+        drop(send);
+        let built: Vec<Message> = receive.iter().filter(|m| matches!(m, Message::Built(..))).collect();
+        assert_eq!(built.len(), 3);
+        let (items, _) = load_items(&manifest, &out);
+        assert!(items[0].previous && matches!(items[0].state, BuildState::Built(_)));
+        let (before, _) = side_of(&out, "m", true).unwrap();
+        let (after, _) = side_of(&out, "m", false).unwrap();
+        assert_ne!(before.data(), after.data(), "seed 1 beside seed 2");
+        let (items, _, select, status) = settle(&manifest, &out, "m", false).unwrap();
+        assert!(select == "m" && status.contains("previous build again"), "{status}");
+        assert!(!items[0].previous && matches!(items[0].state, BuildState::Changed(..)), "{:?}", items[0]);
+        assert_eq!(side_of(&out, "m", false).unwrap().0.data(), before.data());
+        assert!(side_of(&out, "m", true).unwrap_err().to_string().contains("no previous build of m"));
+        super::build(&manifest, &out, vec!["m".into()], &std::sync::mpsc::channel().0);
+        let (items, _, _, status) = settle(&manifest, &out, "m", true).unwrap();
+        assert!(!items[0].previous && status.contains("kept the new build"), "{status}");
+        assert_eq!(side_of(&out, "m", false).unwrap().0.data(), after.data());
     }
 }

@@ -44,6 +44,8 @@ pub struct Item {
     pub state: BuildState,
     /// For synthesized entries, the figures of the last build against the photos.
     pub quality: Option<crate::quality::Glance>,
+    /// Whether the build before the last one is kept for comparing (accept or discard).
+    pub previous: bool,
 }
 
 /// What the exemplar view shows.
@@ -203,6 +205,33 @@ pub enum Screen {
     Fill(FillView),
     /// A new entry: its kind, then its file.
     New(super::new_entry::NewEntry),
+    /// Two volumes side by side.
+    Compare(CompareView),
+}
+
+/// One side of a comparison.
+#[derive(Debug, Clone)]
+pub struct Side {
+    /// What it is: an exemplar's name, `NAME before` or `NAME after`.
+    pub label: String,
+    /// The volume (None while loading), or why it cannot be read.
+    pub volume: Option<Result<Arc<Volume>, String>>,
+    /// Its quality figures, when it is synthesized.
+    pub quality: Option<crate::quality::Glance>,
+}
+
+/// Two exemplars side by side, or an entry's previous build beside its new one.
+#[derive(Debug, Clone)]
+pub struct CompareView {
+    /// Left and right.
+    pub sides: [Side; 2],
+    /// The axis both slices are across.
+    pub axis: Axis,
+    /// Where both slices sit along the axis, 0 to 1 (each volume's own voxels).
+    pub position: f32,
+    /// The entry whose previous (left) and new (right) builds are compared, which `a`
+    /// accepts and `d` discards.
+    pub before_after: Option<String>,
 }
 
 /// The whole UI state.
@@ -226,6 +255,8 @@ pub struct Model {
     pub help: Option<Help>,
     /// The new name being typed for the selected library entry.
     pub rename: Option<tui_input::Input>,
+    /// The entry `v` marked to compare with the next one `v` is pressed on.
+    pub mark: Option<String>,
     /// One line of status at the bottom.
     pub status: String,
     /// Leave the program.
@@ -262,6 +293,7 @@ impl Model {
             errors,
             error_scroll: 0,
             selected: 0,
+            mark: None,
             screen: Screen::Library,
             help: None,
             rename: None,

@@ -198,8 +198,14 @@ mod tests {
     use std::path::PathBuf;
 
     fn stamping() -> Model {
-        let item =
-            Item { name: "a".into(), declared: None, size: None, state: BuildState::Built("0".into()), quality: None };
+        let item = Item {
+            name: "a".into(),
+            declared: None,
+            size: None,
+            state: BuildState::Built("0".into()),
+            quality: None,
+            previous: false,
+        };
         let mut m = Model::new(PathBuf::from("lib.toml"), PathBuf::from("out"), vec![item], Vec::new());
         update(&mut m, Message::Open);
         let grey = Volume::from_fn([32; 3], Channel::rgb(), |_, _, _, o| o.fill(0.8)).unwrap();

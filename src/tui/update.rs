@@ -2,7 +2,7 @@
 
 use super::message::{Effect, EntryChange, Message, SharedFill};
 use super::model::{BuildState, Confirm, ExemplarView, Model, Screen};
-use super::{editing, new_entry, stamping};
+use super::{compare, editing, new_entry, stamping};
 
 /// Apply `message` to `model`; returns the effects to run.
 pub fn update(model: &mut Model, message: Message) -> Vec<Effect> {
@@ -56,6 +56,14 @@ pub fn update(model: &mut Model, message: Message) -> Vec<Effect> {
             let most = model.errors.iter().map(|e| e.len()).sum::<usize>();
             model.error_scroll = model.error_scroll.saturating_add_signed(lines as isize).min(most);
         }
+        Message::SelectAxis(axis) if compare::axis(model, axis) => {}
+        Message::MoveSlice(step) if compare::move_slice(model, step) => {}
+        Message::Compare if matches!(model.screen, Screen::Library) => return compare::compare(model),
+        Message::BeforeAfter if matches!(model.screen, Screen::Library) => return compare::before_after(model),
+        Message::Compare | Message::BeforeAfter => {}
+        Message::SideLoaded(side, label, result) => compare::loaded(model, side, &label, result),
+        Message::Accept => return compare::settle(model, true),
+        Message::Discard => return compare::settle(model, false),
         Message::SelectAxis(axis) => {
             with_view(model, |v| v.axis = axis);
             editing::plane(model, Some(axis), 0.0);
@@ -181,6 +189,7 @@ fn from_key(message: &Message) -> bool {
             | Message::Listed(..)
             | Message::Peeked(..)
             | Message::PhotosLoaded(..)
+            | Message::SideLoaded(..)
     )
 }
 
@@ -250,7 +259,7 @@ fn finish_rename(model: &mut Model) -> Vec<Effect> {
 }
 
 /// The manifest's entries changed: the new list, the row of `select` chosen.
-fn entries_changed(model: &mut Model, result: Result<(Vec<super::model::Item>, Vec<String>, String, String), String>) {
+fn entries_changed(model: &mut Model, result: super::message::Changed) {
     match result {
         Ok((items, errors, select, status)) => {
             let row = items.iter().position(|i| i.name == select).unwrap_or(model.selected);
@@ -569,6 +578,7 @@ mod tests {
             size: Some([8; 3]),
             state,
             quality: None,
+            previous: false,
         };
         let items = vec![item("a", BuildState::Built("0".into())), item("b", BuildState::NotBuilt)];
         Model::new(PathBuf::from("lib.toml"), PathBuf::from("out"), items, Vec::new())
@@ -649,6 +659,7 @@ mod tests {
             size: Some([8; 3]),
             state: BuildState::Built("1-b".into()),
             quality: None,
+            previous: false,
         };
         update(&mut m, Message::Built("b".into(), Ok(row)));
         assert_eq!(m.items[1].state, BuildState::Built("1-b".into()));
@@ -712,6 +723,7 @@ mod tests {
             size: Some([8; 3]),
             state: BuildState::Built("0".into()),
             quality: None,
+            previous: false,
         };
         update(&mut m, Message::BuildCancelled("b".into(), before));
         assert!(m.progress.is_empty());

@@ -37,9 +37,13 @@ pub fn draw_with(frame: &mut Frame, model: &Model, graphics: Option<&mut super::
         None => model.status.clone(),
     };
     let status_lines = wrapped_lines(&status_text, area.width.saturating_sub(16)).clamp(1, 4);
+    let hints = key_bar(model);
+    let hint_width: usize = hints.iter().map(|s| s.content.chars().count()).sum();
+    let bar_lines = hint_width.div_ceil(usize::from(area.width).max(1)).clamp(1, 2) as u16;
     let [main, bar, status] =
-        Layout::vertical([Constraint::Min(3), Constraint::Length(1), Constraint::Length(status_lines)]).areas(area);
-    key_bar(frame, model, bar);
+        Layout::vertical([Constraint::Min(3), Constraint::Length(bar_lines), Constraint::Length(status_lines)])
+            .areas(area);
+    frame.render_widget(Paragraph::new(Line::from(hints)).wrap(Wrap { trim: true }), bar);
     match &model.screen {
         Screen::Library => library(frame, model, main),
         Screen::Exemplar(view) if view.beside_photo => {
@@ -50,6 +54,7 @@ pub fn draw_with(frame: &mut Frame, model: &Model, graphics: Option<&mut super::
         Screen::Editor(editor) => super::view_edit::editor(frame, editor, main),
         Screen::Fill(view) => super::view_edit::fill(frame, view, main),
         Screen::New(entry) => super::view_new::new_entry(frame, entry, main),
+        Screen::Compare(view) => super::view_compare::compare(frame, view, main),
     }
     let [left, right] = Layout::horizontal([Constraint::Min(10), Constraint::Length(16)]).areas(status);
     let text = Paragraph::new(status_text).style(Style::new().fg(Color::Gray)).wrap(Wrap { trim: false });
@@ -60,9 +65,9 @@ pub fn draw_with(frame: &mut Frame, model: &Model, graphics: Option<&mut super::
     }
 }
 
-/// The screen's keys on one line: key, what it does; a key that cannot act now dimmed,
-/// with the reason.
-fn key_bar(frame: &mut Frame, model: &Model, area: Rect) {
+/// The screen's keys (one line, two when they do not fit): key, what it does; a key that
+/// cannot act now dimmed, with the reason.
+fn key_bar(model: &Model) -> Vec<Span<'static>> {
     let mut spans: Vec<Span> = Vec::new();
     for h in super::keybar::hints(model) {
         spans.push(Span::raw(" "));
@@ -77,7 +82,7 @@ fn key_bar(frame: &mut Frame, model: &Model, area: Rect) {
             }
         }
     }
-    frame.render_widget(Paragraph::new(Line::from(spans)), area);
+    spans
 }
 
 fn library(frame: &mut Frame, model: &Model, area: Rect) {
@@ -112,6 +117,7 @@ fn library(frame: &mut Frame, model: &Model, area: Rect) {
             BuildState::NotBuilt => ("not built".to_string(), "-".to_string()),
             BuildState::Building => (gauge(model.progress.get(&item.name)), "-".to_string()),
             BuildState::Queued => ("waiting (queued)".to_string(), "-".to_string()),
+            BuildState::Built(t) if item.previous => ("built; previous kept (V)".to_string(), t.clone()),
             BuildState::Built(t) => ("built".to_string(), t.clone()),
             BuildState::Changed(t, _) => ("changed since built".to_string(), t.clone()),
             BuildState::Failed(e) => (format!("failed: {e}"), "-".to_string()),
@@ -120,7 +126,9 @@ fn library(frame: &mut Frame, model: &Model, area: Rect) {
         let badge = if measured != "-" && measured != declared { format!("{measured} (differs)") } else { measured };
         let style = if i == model.selected { Style::new().add_modifier(Modifier::REVERSED) } else { Style::new() };
         let quality = item.quality.as_ref().map_or("-", |q| q.verdict()).to_string();
-        Row::new(vec![item.name.clone(), size, declared, badge, quality, state]).style(style)
+        let marked = model.mark.as_deref() == Some(item.name.as_str());
+        let name = if marked { format!("{} (v)", item.name) } else { item.name.clone() };
+        Row::new(vec![name, size, declared, badge, quality, state]).style(style)
     });
     let widths = [
         Constraint::Length(13),
@@ -312,7 +320,7 @@ fn beside_photo(frame: &mut Frame, view: &ExemplarView, quality: Option<&crate::
 }
 
 /// `image` upside down (row 0 last).
-fn flipped(image: &Image2d) -> Image2d {
+pub fn flipped(image: &Image2d) -> Image2d {
     let data = (0..image.height()).rev().flat_map(|y| (0..image.width()).flat_map(move |x| image.pixel(x, y).to_vec()));
     Image2d::from_data(image.width(), image.height(), image.channels().to_vec(), data.collect())
         .unwrap_or_else(|_| image.clone())
@@ -475,6 +483,7 @@ mod tests {
                 size: Some([64; 3]),
                 state: BuildState::Built("1-b".into()),
                 quality: None,
+                previous: false,
             },
             Item {
                 name: "marble".into(),
@@ -482,6 +491,7 @@ mod tests {
                 size: Some([64; 3]),
                 state: BuildState::NotBuilt,
                 quality: None,
+                previous: false,
             },
         ];
         Model::new(PathBuf::from("lib.toml"), PathBuf::from("out"), items, Vec::new())
@@ -762,6 +772,41 @@ mod tests {
         );
         let green = buffer.content().iter().filter(|c| c.fg == Color::Rgb(0, 255, 0)).count();
         assert!(green > 50, "{green} cells of the photo");
+    }
+
+    /// Two volumes side by side at one pixel scale, each with its figures; a before/after
+    /// comparison says what a and d do.
+    #[test]
+    fn a_comparison_draws_both_slices_at_one_scale() {
+        use crate::tui::model::{CompareView, Side};
+        let solid = |dims, rgb: [f32; 3]| {
+            Some(Ok(Arc::new(Volume::from_fn(dims, Channel::rgb(), |_, _, _, o| o.copy_from_slice(&rgb)).unwrap())))
+        };
+        let glance = crate::quality::Glance { axes: vec![(2, 1.0, 1.0)], histogram: 0.0 };
+        let mut m = model();
+        m.screen = Screen::Compare(CompareView {
+            sides: [
+                Side { label: "kiwi before".into(), volume: solid([8, 8, 8], [1.0, 0.0, 0.0]), quality: Some(glance) },
+                Side { label: "kiwi after".into(), volume: solid([16, 16, 16], [0.0, 0.0, 1.0]), quality: None },
+            ],
+            axis: Axis::Z,
+            position: 0.5,
+            before_after: Some("kiwi".into()),
+        });
+        let (text, buffer) = screen(&m, 100, 30);
+        assert!(
+            text.contains("kiwi before | kiwi after  across z") && text.contains("kiwi before z=4/7 8x8"),
+            "{text}"
+        );
+        assert!(
+            text.contains("kiwi after z=8/15 16x16") && text.contains("sharp 1.00  size 1.00  hist 0.00"),
+            "{text}"
+        );
+        assert!(text.contains("a keeps the new build, d discards it"), "{text}");
+        let count = |colour: Color| buffer.content().iter().filter(|c| c.fg == colour && c.symbol() == "▀").count();
+        let (red, blue) = (count(Color::Rgb(255, 0, 0)), count(Color::Rgb(0, 0, 255)));
+        let ratio = blue as f32 / red as f32;
+        assert!(red > 10 && (3.5..4.5).contains(&ratio), "8x8 in {red} cells, 16x16 in {blue}");
     }
 
     #[test]
