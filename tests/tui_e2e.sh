@@ -166,6 +166,34 @@ grep -q '^name = "bark"' "$out/lib/broken.toml" || { echo "tui e2e: the new name
 press "new name: bark_" 5 r
 press "renamed bark to b" 10 C-u b Enter
 cmp -s "$out/lib/broken.toml" tests/manifests/two-broken.toml || { echo "tui e2e: renaming back changed the manifest"; diff "$out/lib/broken.toml" tests/manifests/two-broken.toml; exit 1; }
+# j. n makes an entry from a photo chosen in the picker: appended, the rest byte for byte
+press "new exemplar: what makes it" 5 n
+press "brick_photo.png" 10 Enter
+press "gravel_photo.png (shown" 10 Down Down Down Down
+press "added gravel_photo (synth from" 10 Enter
+size=$(wc -c < tests/manifests/two-broken.toml)
+head -c "$size" "$out/lib/broken.toml" | cmp -s - tests/manifests/two-broken.toml || { echo "tui e2e: adding an entry changed the others"; diff "$out/lib/broken.toml" tests/manifests/two-broken.toml; exit 1; }
+tail -c +"$((size + 1))" "$out/lib/broken.toml" | grep -q '^image = "gravel_photo.png"$' || { echo "tui e2e: the new entry is not at the end"; cat "$out/lib/broken.toml"; exit 1; }
+# built small (the debug binary synthesizes slowly), its figures at a glance, its photo beside a slice
+sed -i '/^name = "gravel_photo"/,/^seed/{s/^max_exemplar = 128/max_exemplar = 32/;s/^size = 64/size = 16\nlevels = 2/}' "$out/lib/broken.toml"
+press "built gravel_photo" 120 b
+wait_for "gravel_photo: sharp" 5
+press "XY z=" 10 Enter
+press "gravel_photo across z: sharp" 10 p
+press "photo 32x32" 10 y
+press "solidtex library" 5 Escape
+# v marks it, v on another built entry shows both side by side
+press "gravel_photo marked" 5 v
+press "gravel_photo | b  across z" 10 Up Up v
+press "solidtex library" 5 Escape
+# a rebuild keeps the previous build; V compares them, d brings the previous back
+before=$(md5sum < "$out/broken/gravel_photo.exr")
+sed -i '/^name = "gravel_photo"/,/^seed/{s/^seed = 1/seed = 2/}' "$out/lib/broken.toml"
+press "built; previous kept" 120 Down Down b
+press "gravel_photo before | gravel_photo after" 10 V
+press "previous build again" 10 d
+[ "$(md5sum < "$out/broken/gravel_photo.exr")" = "$before" ] || { echo "tui e2e: d did not bring the previous build back"; exit 1; }
+[ ! -e "$out/broken/.cache/previous/gravel_photo" ] || { echo "tui e2e: the kept copy stayed after d"; exit 1; }
 tmux send-keys -t "$session" q
 sleep 0.5
 if tmux has-session -t "$session" 2>/dev/null; then echo "tui e2e: q did not quit"; exit 1; fi

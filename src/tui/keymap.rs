@@ -182,7 +182,7 @@ fn exemplar(code: KeyCode) -> Option<Message> {
 pub type Section = (&'static str, &'static [(&'static str, &'static str)]);
 
 /// The keys of every screen, for the help.
-pub const SECTIONS: [Section; 8] = [
+pub const SECTIONS: [Section; 9] = [
     (
         "library",
         &[
@@ -262,6 +262,14 @@ pub const SECTIONS: [Section; 8] = [
             ("arrows, hjkl", "move both slices (pgup/pgdn: 8)"),
             ("a", "keep the new build (before/after)"),
             ("d", "discard it: the previous build comes back"),
+        ],
+    ),
+    (
+        "mouse",
+        &[
+            ("click", "select a row, field, kind or file; again opens or edits it"),
+            ("click/drag a slice", "the other two slices go through that voxel"),
+            ("wheel", "scroll lists; move the slice under it; move the cut"),
         ],
     ),
     (

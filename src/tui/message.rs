@@ -20,6 +20,13 @@ pub enum Message {
     Down,
     /// Open the selected exemplar.
     Open,
+    /// A click on row `.0` of the list on screen (a second click on the selected row opens it).
+    Select(usize),
+    /// A click or drag on the slice across `.0`: the other slices go through the voxel at
+    /// these coordinates along its two axes.
+    PointAt(Axis, usize, usize),
+    /// The wheel over the slice across `.0`: move it by this many voxels.
+    MoveSliceOf(Axis, i64),
     /// Back to the library (or quit from it).
     Back,
     /// Build the selected exemplar.

@@ -16,6 +16,7 @@ mod keybar;
 mod keymap;
 mod message;
 mod model;
+mod mouse;
 mod new_entry;
 mod stamping;
 mod update;
@@ -125,7 +126,21 @@ pub fn run(manifest: &Path, output: &Path) -> Result<()> {
     if let Some(g) = &graphics {
         model.status = format!("{} (pictures: {})", model.status, g.name());
     }
+    // SOLIDTEX_MOUSE=0 leaves the mouse to the terminal (its own selection and copy).
+    let mouse = std::env::var("SOLIDTEX_MOUSE").map_or(true, |v| v != "0");
+    if mouse {
+        let _ = crossterm::execute!(std::io::stdout(), crossterm::event::EnableMouseCapture);
+        // A panic leaves the terminal as it found it: mouse reports off, then ratatui's restore.
+        let restore = std::panic::take_hook();
+        std::panic::set_hook(Box::new(move |info| {
+            let _ = crossterm::execute!(std::io::stdout(), crossterm::event::DisableMouseCapture);
+            restore(info);
+        }));
+    }
     let result = event_loop(&mut terminal, &mut model, &send, &receive, graphics.as_mut());
+    if mouse {
+        let _ = crossterm::execute!(std::io::stdout(), crossterm::event::DisableMouseCapture);
+    }
     ratatui::restore();
     result
 }
@@ -138,17 +153,25 @@ fn event_loop(
     mut graphics: Option<&mut graphics::Graphics>,
 ) -> Result<()> {
     let fail = |e: std::io::Error| Error::io("terminal", e);
+    let mut regions = mouse::Regions::default();
     while !model.quit {
-        terminal.draw(|f| view::draw_with(f, model, graphics.as_deref_mut())).map_err(fail)?;
-        if event::poll(Duration::from_millis(100)).map_err(fail)?
-            && let Event::Key(key) = event::read().map_err(fail)?
-            && key.kind == KeyEventKind::Press
-            && let Some(message) = match (&model.help, &model.rename) {
-                (Some(help), _) => keymap::help_key(help, key),
-                (None, Some(_)) => keymap::typing(key),
-                (None, None) => keymap::key(&model.screen, key),
+        terminal.draw(|f| view::draw_with(f, model, graphics.as_deref_mut(), &mut regions)).map_err(fail)?;
+        let message = if event::poll(Duration::from_millis(100)).map_err(fail)? {
+            match event::read().map_err(fail)? {
+                Event::Key(key) if key.kind == KeyEventKind::Press => match (&model.help, &model.rename) {
+                    (Some(help), _) => keymap::help_key(help, key),
+                    (None, Some(_)) => keymap::typing(key),
+                    (None, None) => keymap::key(&model.screen, key),
+                },
+                Event::Mouse(m) if model.help.is_none() && model.rename.is_none() => {
+                    mouse::message(&model.screen, &regions, m)
+                }
+                _ => None,
             }
-        {
+        } else {
+            None
+        };
+        if let Some(message) = message {
             start(update(model, message), model, send);
         }
         while let Ok(message) = receive.try_recv() {

@@ -113,6 +113,16 @@ pub fn select(model: &mut Model, step: i64) -> Vec<Effect> {
     peek(picker, kind)
 }
 
+/// A click on row `row` (a kind or a file): select it; a click on the selected row takes it.
+pub fn pick(model: &mut Model, row: usize) -> Vec<Effect> {
+    let Some(entry) = screen(model) else { return Vec::new() };
+    let current = entry.picker.as_ref().map_or(entry.kind, |p| p.selected);
+    if row == current {
+        return open(model);
+    }
+    select(model, row as i64 - current as i64)
+}
+
 /// The photo under the cursor is read, when it is one and not read yet.
 fn peek(picker: &mut Picker, kind: Kind) -> Vec<Effect> {
     let Some(row) = selected_row(picker) else { return Vec::new() };

@@ -3,6 +3,7 @@
 use super::message::{Effect, EntryChange, Message, SharedFill};
 use super::model::{BuildState, Confirm, ExemplarView, Model, Screen};
 use super::{compare, editing, new_entry, stamping};
+use crate::volume::Axis;
 
 /// Apply `message` to `model`; returns the effects to run.
 pub fn update(model: &mut Model, message: Message) -> Vec<Effect> {
@@ -33,6 +34,13 @@ pub fn update(model: &mut Model, message: Message) -> Vec<Effect> {
                 _ => new_entry::parent(model),
             };
         }
+        Message::Select(row) if matches!(model.screen, Screen::New(_)) => return new_entry::pick(model, row),
+        Message::Select(row) => return click(model, row),
+        Message::PointAt(axis, a, b) => with_view(model, |v| point_at(v, axis, a, b)),
+        Message::MoveSliceOf(axis, step) => with_view(model, |v| {
+            v.axis = axis;
+            move_slice(v, step)
+        }),
         Message::Up => select(model, -1),
         Message::Down => select(model, 1),
         Message::Open => return open(model),
@@ -427,6 +435,31 @@ fn with_view(model: &mut Model, f: impl FnOnce(&mut ExemplarView)) {
     if let Screen::Exemplar(view) = &mut model.screen {
         f(view);
     }
+}
+
+/// A click on row `row` of the library or the editor's fields: select it; a click on the
+/// selected row opens it (the library) or edits it (the editor).
+fn click(model: &mut Model, row: usize) -> Vec<Effect> {
+    let current = match &model.screen {
+        Screen::Library if row < model.items.len() => model.selected,
+        Screen::Editor(e) if e.input.is_none() => e.selected,
+        _ => return Vec::new(),
+    };
+    if row == current {
+        let again = if matches!(model.screen, Screen::Library) { Message::Open } else { Message::Commit };
+        return update(model, again);
+    }
+    select(model, row as i64 - current as i64);
+    Vec::new()
+}
+
+/// The other two slices through the voxel at (`a`, `b`) of the slice across `axis`.
+fn point_at(view: &mut ExemplarView, axis: Axis, a: usize, b: usize) {
+    let Some(volume) = &view.volume else { return };
+    let d = volume.dims();
+    let (pa, pb) = axis.plane_axes();
+    view.index[pa] = a.min(d[pa] - 1);
+    view.index[pb] = b.min(d[pb] - 1);
 }
 
 fn move_slice(view: &mut ExemplarView, step: i64) {

@@ -2,6 +2,7 @@
 //! cell shows two voxels, the upper as the foreground of '▀' and the lower as its background.
 
 use super::model::{BuildState, ExemplarView, Help, Model, Screen};
+use super::mouse::{List, Panel, Regions};
 use crate::render::ColourMap;
 use crate::volume::{Axis, Image2d};
 use ratatui::Frame;
@@ -16,11 +17,18 @@ pub const MIN_SIZE: (u16, u16) = (60, 16);
 
 /// Draw the whole screen with half-block pictures.
 pub fn draw(frame: &mut Frame, model: &Model) {
-    draw_with(frame, model, None);
+    draw_with(frame, model, None, &mut Regions::default());
 }
 
-/// Draw the whole screen; slices use `graphics` (sixel, kitty, iTerm2) when given.
-pub fn draw_with(frame: &mut Frame, model: &Model, graphics: Option<&mut super::graphics::Graphics>) {
+/// Draw the whole screen; slices use `graphics` (sixel, kitty, iTerm2) when given; where
+/// the lists and slices went is kept in `regions` for the mouse.
+pub fn draw_with(
+    frame: &mut Frame,
+    model: &Model,
+    graphics: Option<&mut super::graphics::Graphics>,
+    regions: &mut Regions,
+) {
+    *regions = Regions::default();
     let area = frame.area();
     if area.width < MIN_SIZE.0 || area.height < MIN_SIZE.1 {
         let text = format!(
@@ -45,15 +53,15 @@ pub fn draw_with(frame: &mut Frame, model: &Model, graphics: Option<&mut super::
             .areas(area);
     frame.render_widget(Paragraph::new(Line::from(hints)).wrap(Wrap { trim: true }), bar);
     match &model.screen {
-        Screen::Library => library(frame, model, main),
+        Screen::Library => library(frame, model, main, regions),
         Screen::Exemplar(view) if view.beside_photo => {
             let quality = model.items.iter().find(|i| i.name == view.name).and_then(|i| i.quality.as_ref());
             beside_photo(frame, view, quality, main)
         }
-        Screen::Exemplar(view) => exemplar(frame, view, main, graphics),
-        Screen::Editor(editor) => super::view_edit::editor(frame, editor, main),
+        Screen::Exemplar(view) => exemplar(frame, view, main, graphics, regions),
+        Screen::Editor(editor) => super::view_edit::editor(frame, editor, main, regions),
         Screen::Fill(view) => super::view_edit::fill(frame, view, main),
-        Screen::New(entry) => super::view_new::new_entry(frame, entry, main),
+        Screen::New(entry) => super::view_new::new_entry(frame, entry, main, regions),
         Screen::Compare(view) => super::view_compare::compare(frame, view, main),
     }
     let [left, right] = Layout::horizontal([Constraint::Min(10), Constraint::Length(16)]).areas(status);
@@ -85,7 +93,7 @@ fn key_bar(model: &Model) -> Vec<Span<'static>> {
     spans
 }
 
-fn library(frame: &mut Frame, model: &Model, area: Rect) {
+fn library(frame: &mut Frame, model: &Model, area: Rect, regions: &mut Regions) {
     let block =
         Block::default().borders(Borders::ALL).title(format!(" solidtex library: {} ", model.manifest.display()));
     let area = if model.errors.is_empty() {
@@ -117,7 +125,7 @@ fn library(frame: &mut Frame, model: &Model, area: Rect) {
             BuildState::NotBuilt => ("not built".to_string(), "-".to_string()),
             BuildState::Building => (gauge(model.progress.get(&item.name)), "-".to_string()),
             BuildState::Queued => ("waiting (queued)".to_string(), "-".to_string()),
-            BuildState::Built(t) if item.previous => ("built; previous kept (V)".to_string(), t.clone()),
+            BuildState::Built(t) if item.previous => ("built; previous kept".to_string(), t.clone()),
             BuildState::Built(t) => ("built".to_string(), t.clone()),
             BuildState::Changed(t, _) => ("changed since built".to_string(), t.clone()),
             BuildState::Failed(e) => (format!("failed: {e}"), "-".to_string()),
@@ -159,6 +167,9 @@ fn library(frame: &mut Frame, model: &Model, area: Rect) {
         }
         _ => (area, None),
     };
+    let inner = block.inner(table);
+    let rows_area = Rect { y: inner.y + 1, height: inner.height.saturating_sub(1), ..inner };
+    regions.list = Some(List { area: rows_area, first: 0 });
     frame.render_widget(Table::new(rows, widths).header(header).block(block), table);
     if let Some((rect, (level, volume))) = side {
         let block = Block::default().borders(Borders::ALL).title(format!(" level {level} (z middle) "));
@@ -194,7 +205,13 @@ fn readout(p: &crate::stamp::Placement) -> String {
     format!("at {:.0},{:.0},{:.0}, {turned}, scale {scale}", p.at.x, p.at.y, p.at.z)
 }
 
-fn exemplar(frame: &mut Frame, view: &ExemplarView, area: Rect, mut graphics: Option<&mut super::graphics::Graphics>) {
+fn exemplar(
+    frame: &mut Frame,
+    view: &ExemplarView,
+    area: Rect,
+    mut graphics: Option<&mut super::graphics::Graphics>,
+    regions: &mut Regions,
+) {
     let title = match &view.stamp {
         Some(s) => format!(
             " {}  STAMP MODE: {}; {} step(s) unsaved; m leaves ",
@@ -242,6 +259,16 @@ fn exemplar(frame: &mut Frame, view: &ExemplarView, area: Rect, mut graphics: Op
         let full = if up { flipped(&full) } else { full };
         let rows = full.height();
         let (image, ox, oy) = crop(&full, view.zoom);
+        let (w, h) = (image.width(), image.height());
+        regions.panels.push(Panel {
+            area: slice_area,
+            axis,
+            scale: (slice_area.width as f32 / w as f32).min(2.0 * slice_area.height as f32 / h as f32),
+            size: (w, h),
+            origin: (ox, oy),
+            rows,
+            up,
+        });
         if let (Some(g), None) = (graphics.as_deref_mut(), &view.stamp) {
             let key = format!(
                 "{}:{axis}:{}:{}:{}:{:p}",
@@ -807,6 +834,51 @@ mod tests {
         let (red, blue) = (count(Color::Rgb(255, 0, 0)), count(Color::Rgb(0, 0, 255)));
         let ratio = blue as f32 / red as f32;
         assert!(red > 10 && (3.5..4.5).contains(&ratio), "8x8 in {red} cells, 16x16 in {blue}");
+    }
+
+    /// A click on a library row selects it (a second click opens it); a click on a slice
+    /// moves the other slices through the voxel drawn under the mouse.
+    #[test]
+    fn the_mouse_points_at_what_was_drawn() {
+        use crate::tui::mouse::{Regions, message};
+        use crossterm::event::{KeyModifiers, MouseButton, MouseEvent, MouseEventKind};
+        let draw_at = |m: &Model, regions: &mut Regions| {
+            let mut terminal = Terminal::new(TestBackend::new(100, 30)).unwrap();
+            terminal.draw(|f| draw_with(f, m, None, regions)).unwrap();
+            terminal.backend().buffer().clone()
+        };
+        let click = |column, row| MouseEvent {
+            kind: MouseEventKind::Down(MouseButton::Left),
+            column,
+            row,
+            modifiers: KeyModifiers::NONE,
+        };
+        let mut m = model();
+        let mut regions = Regions::default();
+        let buffer = draw_at(&m, &mut regions);
+        let marble_line = (0..30u16).find(|&y| buffer[(1, y)].symbol() == "m").unwrap();
+        let row = message(&m.screen, &regions, click(3, marble_line)).unwrap();
+        crate::tui::update(&mut m, row);
+        assert_eq!(m.selected, 1);
+        // x, y, z in red, green, blue: the colour under the mouse names the voxel
+        let volume = Volume::from_fn([16, 12, 10], Channel::rgb(), |x, y, z, o| {
+            o.copy_from_slice(&[x as f32 / 15.0, y as f32 / 11.0, z as f32 / 9.0])
+        })
+        .unwrap();
+        let mut m = viewing(volume);
+        let mut pointed = 0;
+        for (column, line) in [(5u16, 4u16), (20, 9), (38, 20), (45, 6), (80, 12)] {
+            let buffer = draw_at(&m, &mut regions);
+            let Some(message) = message(&m.screen, &regions, click(column, line)) else { continue };
+            pointed += 1;
+            let Color::Rgb(r, g, b) = buffer[(column, line)].fg else { panic!("no pixel at {column},{line}") };
+            crate::tui::update(&mut m, message);
+            let Screen::Exemplar(v) = &m.screen else { panic!("the slices") };
+            let voxel = [r as f32 / 255.0 * 15.0, g as f32 / 255.0 * 11.0, b as f32 / 255.0 * 9.0].map(|c| c.round() as usize);
+            let moved: Vec<usize> = (0..3).filter(|&k| v.index[k] == voxel[k]).collect();
+            assert!(moved.len() >= 2, "at {column},{line} the voxel {voxel:?} is drawn; the slices are at {:?}", v.index);
+        }
+        assert!(pointed >= 4, "{pointed} clicks landed on slices");
     }
 
     #[test]

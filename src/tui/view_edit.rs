@@ -15,7 +15,7 @@ use ratatui::text::{Line, Span};
 use ratatui::widgets::{Block, Borders, Paragraph, Widget, Wrap};
 
 /// The editor: the entry's fields on the left, the live preview on the right.
-pub fn editor(frame: &mut Frame, editor: &Editor, area: Rect) {
+pub fn editor(frame: &mut Frame, editor: &Editor, area: Rect, regions: &mut super::mouse::Regions) {
     let modified = editor.text.as_ref().is_some_and(|t| *t != editor.saved);
     let title = format!(" recipe: {}{} ", editor.name, if modified { " [modified]" } else { "" });
     let hint = " enter edit  s save  u undo  r redo  esc back ";
@@ -40,6 +40,7 @@ pub fn editor(frame: &mut Frame, editor: &Editor, area: Rect) {
     };
     // keep the selected field in view
     let offset = (editor.selected + 2).saturating_sub(fields.height as usize) as u16;
+    regions.list = Some(super::mouse::List { area: fields, first: usize::from(offset) });
     frame.render_widget(Paragraph::new(field_lines(editor, text)).scroll((offset, 0)), fields);
     if let Some((area, message)) = error {
         frame.render_widget(message.block(Block::default().borders(Borders::TOP)), area);

@@ -1,6 +1,7 @@
 //! Drawing the new-entry screen: the recipe kinds, then the file picker with the photo
 //! under the cursor beside it.
 
+use super::mouse::{List, Regions};
 use super::new_entry::{KINDS, NewEntry, Picker};
 use super::view::HalfBlocks;
 use ratatui::Frame;
@@ -10,10 +11,10 @@ use ratatui::text::Line;
 use ratatui::widgets::{Block, Borders, Paragraph, Wrap};
 
 /// The kinds, or the picker of the chosen kind.
-pub fn new_entry(frame: &mut Frame, entry: &NewEntry, area: Rect) {
+pub fn new_entry(frame: &mut Frame, entry: &NewEntry, area: Rect, regions: &mut Regions) {
     match &entry.picker {
-        None => kinds(frame, entry.kind, area),
-        Some(picker) => files(frame, KINDS[entry.kind].recipe, picker, area),
+        None => kinds(frame, entry.kind, area, regions),
+        Some(picker) => files(frame, KINDS[entry.kind].recipe, picker, area, regions),
     }
 }
 
@@ -21,8 +22,9 @@ fn row_style(selected: bool) -> Style {
     if selected { Style::new().add_modifier(Modifier::REVERSED) } else { Style::new() }
 }
 
-fn kinds(frame: &mut Frame, chosen: usize, area: Rect) {
+fn kinds(frame: &mut Frame, chosen: usize, area: Rect, regions: &mut Regions) {
     let block = Block::default().borders(Borders::ALL).title(" new exemplar: what makes it? ");
+    regions.list = Some(List { area: block.inner(area), first: 0 });
     let lines: Vec<Line> = KINDS
         .iter()
         .enumerate()
@@ -31,7 +33,7 @@ fn kinds(frame: &mut Frame, chosen: usize, area: Rect) {
     frame.render_widget(Paragraph::new(lines).block(block), area);
 }
 
-fn files(frame: &mut Frame, recipe: &str, picker: &Picker, area: Rect) {
+fn files(frame: &mut Frame, recipe: &str, picker: &Picker, area: Rect, regions: &mut Regions) {
     let title = format!(" new {recipe} exemplar: {} ", picker.folder.display());
     let block = Block::default().borders(Borders::ALL).title(title);
     let inner = block.inner(area);
@@ -51,6 +53,7 @@ fn files(frame: &mut Frame, recipe: &str, picker: &Picker, area: Rect) {
     };
     // keep the selected row in view
     let offset = (picker.selected + 1).saturating_sub(list.height as usize) as u16;
+    regions.list = Some(List { area: list, first: usize::from(offset) });
     let lines: Vec<Line> = rows
         .iter()
         .enumerate()
