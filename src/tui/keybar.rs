@@ -37,6 +37,7 @@ pub fn hints(model: &Model) -> Vec<Hint> {
             hint("+/-", "scale"),
             hint("enter", "stamp"),
             hint("n", "scatter"),
+            hint("o", "seed mesh"),
             hint("u", "undo"),
             hint("s", "save"),
             hint("m", "leave"),

@@ -109,6 +109,7 @@ fn stamping(code: KeyCode) -> Option<Message> {
         KeyCode::Char('-') => Some(Message::ScaleSeed(1.0 / 1.15)),
         KeyCode::Enter => Some(Message::Stamp),
         KeyCode::Char('n') => Some(Message::Scatter),
+        KeyCode::Char('o') => Some(Message::PickSeed),
         KeyCode::Char('u') => Some(Message::Undo),
         KeyCode::Char('s') => Some(Message::SaveSteps),
         _ => None,
@@ -222,6 +223,7 @@ pub const SECTIONS: [Section; 9] = [
             ("+/-", "scale it"),
             ("enter", "stamp it"),
             ("n", "scatter copies of it"),
+            ("o", "another seed mesh, from a file picker"),
             ("u", "undo the last stamp"),
             ("s", "save the steps into the manifest"),
             ("m", "leave stamp mode"),
@@ -250,7 +252,7 @@ pub const SECTIONS: [Section; 9] = [
     (
         "new exemplar",
         &[
-            ("up/down, j/k", "choose a recipe kind, or a file"),
+            ("up/down, j/k", "choose a recipe kind, or a file (or a seed mesh)"),
             ("enter, l", "take it; in the picker, open the folder"),
             ("backspace, h", "the folder above"),
         ],

@@ -153,6 +153,8 @@ pub enum Message {
     Scatter,
     /// Save the stamps as manifest steps.
     SaveSteps,
+    /// In stamp mode: choose another seed mesh in a file picker.
+    PickSeed,
     /// A running synthesis finished a pyramid level: exemplar, `level/levels`, the level.
     BuildPreview(String, String, Arc<Volume>),
     /// A running build reported progress: exemplar, stage, fraction.
@@ -205,6 +207,8 @@ pub enum Effect {
     Peek(PathBuf),
     /// Read the photos exemplar `name` was made from.
     LoadPhotos(String),
+    /// Read this mesh as the seed of stamp mode.
+    LoadSeedFile(PathBuf),
     /// Read a volume to compare: side, its label, the exemplar, and whether it is the
     /// previous build kept beside it.
     LoadSide(usize, String, String, bool),

@@ -246,6 +246,9 @@ fn start(effects: Vec<Effect>, model: &Model, send: &Sender<Message>) {
             Effect::Settle(name, accept) => {
                 let _ = send.send(Message::EntriesChanged(settle(&manifest, &output, &name, accept)));
             }
+            Effect::LoadSeedFile(path) => {
+                let _ = send.send(Message::SeedLoaded(seed_file(&manifest, &path).map_err(|e| e.to_string())));
+            }
             Effect::LoadPhotos(name) => {
                 let result = photos_of(&manifest, &name).map(Arc::new).map_err(|e| e.to_string());
                 let _ = send.send(Message::PhotosLoaded(name, result));
@@ -540,6 +543,16 @@ fn find_seed(manifest: &Path, name: &str) -> Result<(Arc<crate::mesh::Mesh>, Opt
         }
         None => Ok((Arc::new(crate::sections::seed_mesh(32, 32)?), None)),
     }
+}
+
+/// The seed mesh in `path`, and its path as the manifest's steps write it (relative to
+/// the manifest's folder).
+fn seed_file(manifest: &Path, path: &Path) -> Result<(Arc<crate::mesh::Mesh>, Option<String>)> {
+    let mesh = io::mesh_file::read_mesh(path)?;
+    let base = new_entry::manifest_folder(manifest).canonicalize().map_err(|e| Error::io(manifest, e))?;
+    let absolute = path.canonicalize().map_err(|e| Error::io(path, e))?;
+    let written = new_entry::relative_to(&absolute, &base).to_string_lossy().replace('\\', "/");
+    Ok((Arc::new(mesh), Some(written)))
 }
 
 /// Appends stamp steps to the manifest, checks it and writes it atomically.

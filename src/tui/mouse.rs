@@ -64,7 +64,7 @@ pub fn message(screen: &Screen, regions: &Regions, event: MouseEvent) -> Option<
             }
         }
         Screen::Fill(_) => wheel.map(|s| Message::MovePlane(0.05 * s as f32)),
-        Screen::Compare(_) => wheel.map(|s| Message::MoveSlice(s)),
+        Screen::Compare(_) => wheel.map(Message::MoveSlice),
         _ => {
             if let Some(step) = wheel {
                 return Some(if step > 0 { Message::Up } else { Message::Down });

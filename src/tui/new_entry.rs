@@ -3,7 +3,7 @@
 //! folder listing and the photo arrive as messages from workers.
 
 use super::message::{Effect, EntryChange};
-use super::model::{Model, Screen};
+use super::model::{ExemplarView, Model, Screen};
 use crate::volume::Image2d;
 use std::path::{Component, Path, PathBuf};
 use std::sync::Arc;
@@ -15,6 +15,8 @@ pub enum FileKind {
     Image,
     /// A volume file.
     Volume,
+    /// A mesh (a seed for stamp mode).
+    Mesh,
 }
 
 impl FileKind {
@@ -23,6 +25,7 @@ impl FileKind {
         match self {
             FileKind::Image => &["png", "jpg", "jpeg", "exr", "tif", "tiff", "hdr"],
             FileKind::Volume => &["exr", "nrrd", "vol", "png", "vdb", "dds"],
+            FileKind::Mesh => &["obj", "stl", "ply"],
         }
     }
 }
@@ -68,6 +71,8 @@ pub struct FileRow {
 /// The file picker of a kind that reads a file.
 #[derive(Debug, Clone)]
 pub struct Picker {
+    /// What it lists.
+    pub file: FileKind,
     /// The folder shown.
     pub folder: PathBuf,
     /// Its folders and the files the kind reads (None while listing), or why not.
@@ -85,11 +90,13 @@ pub struct NewEntry {
     pub kind: usize,
     /// The file picker, once the kind is chosen (kinds that read a file).
     pub picker: Option<Picker>,
+    /// When it picks a seed mesh for stamp mode instead: the view to go back to.
+    pub seed_for: Option<Box<ExemplarView>>,
 }
 
 /// `n` on the library: the list of kinds.
 pub fn start(model: &mut Model) {
-    model.screen = Screen::New(NewEntry { kind: 0, picker: None });
+    model.screen = Screen::New(NewEntry { kind: 0, picker: None, seed_for: None });
     model.status = "new exemplar: choose what makes it (enter), esc goes back".into();
 }
 
@@ -103,14 +110,13 @@ fn screen(model: &mut Model) -> Option<&mut NewEntry> {
 /// Up/down: the next kind, or the next file (its photo is read).
 pub fn select(model: &mut Model, step: i64) -> Vec<Effect> {
     let Some(entry) = screen(model) else { return Vec::new() };
-    let kind = KINDS[entry.kind];
     let Some(picker) = &mut entry.picker else {
         entry.kind = (entry.kind as i64 + step).clamp(0, KINDS.len() as i64 - 1) as usize;
         return Vec::new();
     };
     let count = picker.rows.as_ref().and_then(|r| r.as_ref().ok()).map_or(0, Vec::len);
     picker.selected = (picker.selected as i64 + step).clamp(0, count.saturating_sub(1) as i64) as usize;
-    peek(picker, kind)
+    peek(picker)
 }
 
 /// A click on row `row` (a kind or a file): select it; a click on the selected row takes it.
@@ -124,10 +130,10 @@ pub fn pick(model: &mut Model, row: usize) -> Vec<Effect> {
 }
 
 /// The photo under the cursor is read, when it is one and not read yet.
-fn peek(picker: &mut Picker, kind: Kind) -> Vec<Effect> {
+fn peek(picker: &mut Picker) -> Vec<Effect> {
     let Some(row) = selected_row(picker) else { return Vec::new() };
     let path = picker.folder.join(&row.name);
-    let image = kind.file == Some(FileKind::Image) || has_extension(&path, &["png", "jpg", "jpeg", "tif", "tiff"]);
+    let image = picker.file == FileKind::Image || has_extension(&path, &["png", "jpg", "jpeg", "tif", "tiff"]);
     if row.folder || !image || picker.peek.as_ref().is_some_and(|(p, _)| *p == path) {
         return Vec::new();
     }
@@ -151,7 +157,7 @@ pub fn open(model: &mut Model) -> Vec<Effect> {
     let kind = KINDS[entry.kind];
     let Some(picker) = &mut entry.picker else {
         let Some(file) = kind.file else { return add(model, kind, None) };
-        entry.picker = Some(Picker { folder: folder.clone(), rows: None, selected: 0, peek: None });
+        entry.picker = Some(Picker { file, folder: folder.clone(), rows: None, selected: 0, peek: None });
         let what = if file == FileKind::Image { "an image" } else { "a volume file" };
         model.status = format!("{}: choose {what} (enter), backspace goes up a folder", kind.recipe);
         return vec![Effect::List(folder, file)];
@@ -163,24 +169,44 @@ pub fn open(model: &mut Model) -> Vec<Effect> {
         } else {
             picker.folder.join(&row.name)
         };
-        return go_to(picker, target, kind);
+        return go_to(picker, target);
     }
     let path = picker.folder.join(&row.name);
+    if let Some(view) = entry.seed_for.take() {
+        model.screen = Screen::Exemplar(*view);
+        model.status = format!("loading the seed {}", path.display());
+        return vec![Effect::LoadSeedFile(path)];
+    }
     add(model, kind, Some(path))
+}
+
+/// `o` in stamp mode: a picker for another seed mesh (in the manifest's folder), unless
+/// stamps are unsaved (saved steps name the mesh they used).
+pub fn pick_seed(model: &mut Model) -> Vec<Effect> {
+    let folder = manifest_folder(&model.manifest);
+    let Screen::Exemplar(view) = &model.screen else { return Vec::new() };
+    let Some(stamp) = &view.stamp else { return Vec::new() };
+    if !stamp.steps.is_empty() {
+        model.status = "save (s) or undo (u) the stamps first: each saved step names the mesh it used".into();
+        return Vec::new();
+    }
+    let view = Box::new(view.clone());
+    let picker = Picker { file: FileKind::Mesh, folder: folder.clone(), rows: None, selected: 0, peek: None };
+    model.screen = Screen::New(NewEntry { kind: 0, picker: Some(picker), seed_for: Some(view) });
+    model.status = "choose a seed mesh (obj, stl, ply): enter takes it, esc keeps the one in use".into();
+    vec![Effect::List(folder, FileKind::Mesh)]
 }
 
 /// Backspace or left in the picker: the folder above.
 pub fn parent(model: &mut Model) -> Vec<Effect> {
-    let Some(entry) = screen(model) else { return Vec::new() };
-    let kind = KINDS[entry.kind];
-    let Some(picker) = &mut entry.picker else { return Vec::new() };
+    let Some(picker) = screen(model).and_then(|e| e.picker.as_mut()) else { return Vec::new() };
     let Some(up) = picker.folder.parent().map(Path::to_path_buf) else { return Vec::new() };
-    go_to(picker, up, kind)
+    go_to(picker, up)
 }
 
-fn go_to(picker: &mut Picker, folder: PathBuf, kind: Kind) -> Vec<Effect> {
-    *picker = Picker { folder: folder.clone(), rows: None, selected: 0, peek: None };
-    kind.file.map(|file| vec![Effect::List(folder, file)]).unwrap_or_default()
+fn go_to(picker: &mut Picker, folder: PathBuf) -> Vec<Effect> {
+    *picker = Picker { file: picker.file, folder: folder.clone(), rows: None, selected: 0, peek: None };
+    vec![Effect::List(folder, picker.file)]
 }
 
 fn add(model: &mut Model, kind: Kind, file: Option<PathBuf>) -> Vec<Effect> {
@@ -193,7 +219,10 @@ fn add(model: &mut Model, kind: Kind, file: Option<PathBuf>) -> Vec<Effect> {
 /// screen is not this one.
 pub fn back(model: &mut Model) -> bool {
     let Some(entry) = screen(model) else { return false };
-    if entry.picker.take().is_none() {
+    if let Some(view) = entry.seed_for.take() {
+        model.screen = Screen::Exemplar(*view);
+        model.status = "the seed mesh stays".into();
+    } else if entry.picker.take().is_none() {
         model.screen = Screen::Library;
         model.status = "no entry added".into();
     } else {
@@ -206,13 +235,12 @@ pub fn back(model: &mut Model) -> bool {
 /// canonical path, its rows).
 pub fn listed(model: &mut Model, asked: &Path, result: Result<(PathBuf, Vec<FileRow>), String>) -> Vec<Effect> {
     let Some(entry) = screen(model) else { return Vec::new() };
-    let kind = KINDS[entry.kind];
     let Some(picker) = entry.picker.as_mut().filter(|p| p.folder == asked) else { return Vec::new() };
     match result {
         Ok((folder, rows)) => {
             picker.folder = folder;
             picker.rows = Some(Ok(rows));
-            peek(picker, kind)
+            peek(picker)
         }
         Err(e) => {
             picker.rows = Some(Err(e));
@@ -290,6 +318,7 @@ mod tests {
         update(&mut m, Message::New);
         let effects = update(&mut m, Message::Open);
         assert_eq!(effects, vec![Effect::List(PathBuf::from("lib"), FileKind::Image)]);
+        assert!(matches!(&m.screen, Screen::New(NewEntry { picker: Some(p), .. }) if p.file == FileKind::Image));
         // esc closes the picker first, then the screen
         assert!(matches!(update(&mut m, Message::Back)[..], []) && matches!(m.screen, Screen::New(_)));
         update(&mut m, Message::Back);

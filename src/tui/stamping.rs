@@ -221,6 +221,25 @@ mod tests {
         v
     }
 
+    /// `o` opens a picker of meshes in the manifest's folder; a chosen mesh is read as the
+    /// seed and the view comes back; esc keeps the seed; unsaved stamps refuse the picker.
+    #[test]
+    fn o_picks_another_seed_mesh() {
+        use crate::tui::new_entry::{FileKind, FileRow};
+        let mut m = stamping();
+        assert_eq!(update(&mut m, Message::PickSeed), vec![Effect::List(PathBuf::from("."), FileKind::Mesh)]);
+        update(&mut m, Message::Back);
+        assert!(view_of(&m).stamp.is_some() && m.status == "the seed mesh stays", "{}", m.status);
+        update(&mut m, Message::PickSeed);
+        let rows = vec![FileRow { name: "..".into(), folder: true }, FileRow { name: "pip.stl".into(), folder: false }];
+        update(&mut m, Message::Listed(PathBuf::from("."), Ok((PathBuf::from("/w"), rows))));
+        update(&mut m, Message::Down);
+        assert_eq!(update(&mut m, Message::Open), vec![Effect::LoadSeedFile(PathBuf::from("/w/pip.stl"))]);
+        assert!(view_of(&m).stamp.is_some(), "back on the slices, still stamping");
+        update(&mut m, Message::Stamp);
+        assert!(update(&mut m, Message::PickSeed).is_empty() && m.status.contains("save (s) or undo (u)"));
+    }
+
     #[test]
     fn the_seed_moves_with_the_slices_stamps_and_undoes() {
         let mut m = stamping();

@@ -162,6 +162,7 @@ pub fn update(model: &mut Model, message: Message) -> Vec<Effect> {
         Message::Stamp => stamping::stamp_seed(model),
         Message::Scatter => stamping::scatter(model),
         Message::SaveSteps => return stamping::save(model),
+        Message::PickSeed => return new_entry::pick_seed(model),
         Message::BuildPreview(name, level, volume) => {
             model.previews.insert(name, (level, volume));
         }

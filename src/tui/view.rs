@@ -61,7 +61,7 @@ pub fn draw_with(
         Screen::Exemplar(view) => exemplar(frame, view, main, graphics, regions),
         Screen::Editor(editor) => super::view_edit::editor(frame, editor, main, regions),
         Screen::Fill(view) => super::view_edit::fill(frame, view, main),
-        Screen::New(entry) => super::view_new::new_entry(frame, entry, main, regions),
+        Screen::New(entry) => super::view_new::new_entry(frame, entry, main, regions, graphics),
         Screen::Compare(view) => super::view_compare::compare(frame, view, main),
     }
     let [left, right] = Layout::horizontal([Constraint::Min(10), Constraint::Length(16)]).areas(status);
@@ -773,7 +773,7 @@ mod tests {
     fn the_new_entry_screen_lists_kinds_then_files_with_the_photo() {
         use crate::tui::new_entry::{FileRow, NewEntry, Picker};
         let mut m = model();
-        m.screen = Screen::New(NewEntry { kind: 2, picker: None });
+        m.screen = Screen::New(NewEntry { kind: 2, picker: None, seed_for: None });
         let (text, buffer) = screen(&m, 100, 24);
         assert!(text.contains("new exemplar: what makes it?") && text.contains("procedural:chocolate"), "{text}");
         let chosen = (0..100u16).map(|x| buffer[(x, 3)].symbol().to_string()).collect::<String>();
@@ -783,7 +783,9 @@ mod tests {
             ["..", "photos", "a.png"].iter().map(|n| FileRow { name: n.to_string(), folder: !n.ends_with(".png") });
         m.screen = Screen::New(NewEntry {
             kind: 0,
+            seed_for: None,
             picker: Some(Picker {
+                file: crate::tui::new_entry::FileKind::Image,
                 folder: PathBuf::from("/w/lib"),
                 rows: Some(Ok(rows.collect())),
                 selected: 2,
@@ -874,9 +876,14 @@ mod tests {
             let Color::Rgb(r, g, b) = buffer[(column, line)].fg else { panic!("no pixel at {column},{line}") };
             crate::tui::update(&mut m, message);
             let Screen::Exemplar(v) = &m.screen else { panic!("the slices") };
-            let voxel = [r as f32 / 255.0 * 15.0, g as f32 / 255.0 * 11.0, b as f32 / 255.0 * 9.0].map(|c| c.round() as usize);
+            let voxel =
+                [r as f32 / 255.0 * 15.0, g as f32 / 255.0 * 11.0, b as f32 / 255.0 * 9.0].map(|c| c.round() as usize);
             let moved: Vec<usize> = (0..3).filter(|&k| v.index[k] == voxel[k]).collect();
-            assert!(moved.len() >= 2, "at {column},{line} the voxel {voxel:?} is drawn; the slices are at {:?}", v.index);
+            assert!(
+                moved.len() >= 2,
+                "at {column},{line} the voxel {voxel:?} is drawn; the slices are at {:?}",
+                v.index
+            );
         }
         assert!(pointed >= 4, "{pointed} clicks landed on slices");
     }

@@ -1,6 +1,7 @@
 //! Drawing the new-entry screen: the recipe kinds, then the file picker with the photo
 //! under the cursor beside it.
 
+use super::graphics::Graphics;
 use super::mouse::{List, Regions};
 use super::new_entry::{KINDS, NewEntry, Picker};
 use super::view::HalfBlocks;
@@ -11,10 +12,20 @@ use ratatui::text::Line;
 use ratatui::widgets::{Block, Borders, Paragraph, Wrap};
 
 /// The kinds, or the picker of the chosen kind.
-pub fn new_entry(frame: &mut Frame, entry: &NewEntry, area: Rect, regions: &mut Regions) {
+pub fn new_entry(
+    frame: &mut Frame,
+    entry: &NewEntry,
+    area: Rect,
+    regions: &mut Regions,
+    graphics: Option<&mut Graphics>,
+) {
+    let what = match &entry.seed_for {
+        Some(view) => format!("seed mesh for {}", view.name),
+        None => format!("new {} exemplar", KINDS[entry.kind].recipe),
+    };
     match &entry.picker {
         None => kinds(frame, entry.kind, area, regions),
-        Some(picker) => files(frame, KINDS[entry.kind].recipe, picker, area, regions),
+        Some(picker) => files(frame, &what, picker, area, regions, graphics),
     }
 }
 
@@ -33,8 +44,15 @@ fn kinds(frame: &mut Frame, chosen: usize, area: Rect, regions: &mut Regions) {
     frame.render_widget(Paragraph::new(lines).block(block), area);
 }
 
-fn files(frame: &mut Frame, recipe: &str, picker: &Picker, area: Rect, regions: &mut Regions) {
-    let title = format!(" new {recipe} exemplar: {} ", picker.folder.display());
+fn files(
+    frame: &mut Frame,
+    what: &str,
+    picker: &Picker,
+    area: Rect,
+    regions: &mut Regions,
+    graphics: Option<&mut Graphics>,
+) {
+    let title = format!(" {what}: {} ", picker.folder.display());
     let block = Block::default().borders(Borders::ALL).title(title);
     let inner = block.inner(area);
     frame.render_widget(block, area);
@@ -73,7 +91,10 @@ fn files(frame: &mut Frame, recipe: &str, picker: &Picker, area: Rect, regions: 
             let block = Block::default().borders(Borders::LEFT).title(label);
             let inside = block.inner(photo);
             frame.render_widget(block, photo);
-            frame.render_widget(HalfBlocks { image, channel: 0, overlay: None, scale: None }, inside);
+            match graphics {
+                Some(g) => g.draw(frame, inside, format!("peek:{}", path.display()), image, 0),
+                None => frame.render_widget(HalfBlocks { image, channel: 0, overlay: None, scale: None }, inside),
+            }
         }
         Err(e) => {
             let text = Paragraph::new(format!("{name}: {e}")).style(Style::new().fg(Color::Red));
