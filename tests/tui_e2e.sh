@@ -116,6 +116,18 @@ press "built marble" 60 R
 screen | grep -q "changed since built" && { echo "tui e2e: R left a changed entry"; screen; exit 1; }
 press "built kiwi" 60 Down Down Down b
 press "XY z=32/63" 10 Enter
+# k. constraints on the fill preview's cut: a depth point, the depth map, a refill, the spec
+# written and run by `solidtex fill`
+press "fill preview: kiwi" 5 f
+wait_for "tets, [0-9]* patches" 120
+press "depth 0.50 at" 5 L L L L '[' '[' d
+press "the depth field" 5 c
+press "filling again with 1 stroke" 5 r
+wait_for "tets, [0-9]* patches" 120
+press "kiwi.fill.toml, kiwi.fill-fruit.obj" 10 w
+grep -q '^points = \[\[' "$out/built/exports/kiwi.fill.toml" || { echo "tui e2e: the depth point is not in the spec"; cat "$out/built/exports/kiwi.fill.toml"; exit 1; }
+(cd "$out/built/exports" && "$bin" fill kiwi.fill-fruit.obj --spec kiwi.fill.toml -o kiwi.lst >/dev/null 2>&1) || { echo "tui e2e: solidtex fill refused the written spec"; exit 1; }
+press "back to kiwi" 5 Escape
 press "stamp mode" 10 m
 press "stamped" 5 Right Right Right Enter
 press "unsaved stamps" 5 Escape

@@ -41,6 +41,12 @@ pub struct FillPreview {
     pub textures: render::Textures,
     /// One line about the fill (shape, tets, patches, time).
     pub summary: String,
+    /// The depth field at the mesh's vertices (depth-varying types).
+    pub depth: Option<Vec<f32>>,
+    /// The spec it was filled by.
+    pub spec: spec::FillSpec,
+    /// The drawn shape it fills (`fruit`, `block`).
+    pub shape: String,
 }
 
 impl std::fmt::Debug for FillPreview {
@@ -96,6 +102,7 @@ pub fn fill(job: &Job, mesh: TetMesh, progress: &dyn Progress) -> Result<(LstMod
         raised_scale: raised,
         ignored: spec::ignored(job.spec, job.kind, &job.sources),
         paste: pasted.stats.clone(),
+        depth: field.depth.clone(),
     };
     let model =
         LstModel { mesh, sources: job.sources.clone(), patches: pasted.patches, tet_patches: pasted.tet_patches };

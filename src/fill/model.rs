@@ -156,6 +156,9 @@ pub struct FillReport {
     pub ignored: Vec<String>,
     /// The paste loop's figures.
     pub paste: Stats,
+    /// The depth field at the tet mesh's vertices (depth-varying types), for showing it.
+    #[serde(skip)]
+    pub depth: Option<Vec<f32>>,
 }
 
 #[cfg(test)]

@@ -86,8 +86,43 @@ pub fn write_file(path: &Path, body: impl FnOnce(&mut BufWriter<File>) -> Result
     body(&mut writer)?;
     writer.flush().map_err(|e| Error::io(path, e))?;
     temp.as_file().sync_all().map_err(|e| Error::io(path, e))?;
+    set_mode(temp.path(), path)?;
     temp.persist(path).map_err(|e| Error::io(path, e.error))?;
     Ok(())
+}
+
+/// The temporary file gets the permissions of the file it replaces, or those a new file
+/// gets from the process's umask (a temporary file is created private, 0600).
+#[cfg(unix)]
+fn set_mode(temp: &Path, path: &Path) -> Result<()> {
+    use std::os::unix::fs::PermissionsExt;
+    let mode = match fs::symlink_metadata(path) {
+        Ok(meta) if meta.is_file() => meta.permissions().mode() & 0o7777,
+        _ => 0o666 & !umask(),
+    };
+    fs::set_permissions(temp, fs::Permissions::from_mode(mode)).map_err(|e| Error::io(path, e))
+}
+
+#[cfg(not(unix))]
+fn set_mode(_temp: &Path, _path: &Path) -> Result<()> {
+    Ok(())
+}
+
+/// The process's umask, read without changing it (Linux: /proc/self/status); 022 when
+/// it cannot be read.
+#[cfg(unix)]
+fn umask() -> u32 {
+    let status = fs::read_to_string("/proc/self/status").unwrap_or_default();
+    let line = status.lines().find_map(|l| l.strip_prefix("Umask:"));
+    line.and_then(|v| u32::from_str_radix(v.trim(), 8).ok()).unwrap_or(0o022)
+}
+
+/// Write a document the user edits in place (a manifest) atomically: through a symbolic
+/// link to the file it names, keeping that file's permissions.
+pub fn write_document(path: &Path, bytes: &[u8]) -> Result<()> {
+    let linked = fs::symlink_metadata(path).is_ok_and(|m| m.file_type().is_symlink());
+    let target = if linked { fs::canonicalize(path).map_err(|e| Error::io(path, e))? } else { path.to_path_buf() };
+    write_bytes(&target, bytes)
 }
 
 /// Write `bytes` to `path` atomically.
@@ -349,5 +384,26 @@ mod tests {
         {
             assert!(!is_temporary_name(user), "{user}");
         }
+    }
+
+    /// A replaced file keeps its permissions, a new one gets the umask's; a document behind
+    /// a link is written where the link points, the link kept.
+    #[cfg(unix)]
+    #[test]
+    fn writes_keep_permissions_and_documents_follow_links() {
+        use std::os::unix::fs::PermissionsExt;
+        let dir = tempfile::tempdir().unwrap();
+        let mode = |p: &Path| fs::metadata(p).unwrap().permissions().mode() & 0o777;
+        let new = dir.path().join("new.txt");
+        write_bytes(&new, b"a").unwrap();
+        assert_eq!(mode(&new), 0o666 & !umask());
+        fs::set_permissions(&new, fs::Permissions::from_mode(0o640)).unwrap();
+        write_bytes(&new, b"b").unwrap();
+        assert_eq!((mode(&new), fs::read(&new).unwrap()), (0o640, b"b".to_vec()));
+        let link = dir.path().join("link.toml");
+        std::os::unix::fs::symlink(&new, &link).unwrap();
+        write_document(&link, b"c").unwrap();
+        assert!(fs::symlink_metadata(&link).unwrap().file_type().is_symlink(), "the link stays");
+        assert_eq!((fs::read(&new).unwrap(), mode(&new)), (b"c".to_vec(), 0o640));
     }
 }

@@ -235,9 +235,92 @@ fn paste(i: usize, raw: RawPaste) -> Result<PasteSpec> {
     Ok(PasteSpec { exemplar: raw.exemplar, at: point(&format!("paste[{i}].at"), raw.at)?, rotation, scale: raw.scale })
 }
 
+/// `spec` as the TOML [`parse_fill_spec`] reads back (the library and build folder as
+/// given, relative to where the text is written); a header comment says what wrote it.
+pub fn spec_text(spec: &FillSpec, library: &str, built: &str, header: &str) -> String {
+    let v = |p: Vec3| format!("[{}, {}, {}]", p.x, p.y, p.z);
+    let line = |ps: &[Vec3]| format!("[{}]", ps.iter().map(|p| v(*p)).collect::<Vec<_>>().join(", "));
+    let mut t = header.lines().map(|l| format!("# {l}\n")).collect::<String>();
+    t += &format!("exemplar = {:?}\nlibrary = {library:?}\nbuilt = {built:?}\n", spec.exemplar);
+    if let Some(kind) = spec.texture_type {
+        t += &format!("type = \"{kind}\"\n");
+    }
+    t += &format!("seed = {}\ntets = {}\n", spec.seed, spec.tets);
+    if let Some(scale) = spec.scale {
+        t += &format!("scale = {scale}\n");
+    }
+    if let Some([a, b]) = spec.axes {
+        t += &format!("axes = \"{a},{b}\"\n");
+    }
+    if let Some(falloff) = spec.mask_falloff {
+        t += &format!("mask_falloff = {falloff}\n");
+    }
+    for stroke in &spec.directions {
+        t += &format!("\n[[direction]]\npoints = {}\n", line(stroke));
+    }
+    let d = &spec.depth;
+    t += &format!("\n[depth]\nsurface = {}\n", d.surface);
+    if !d.axes.is_empty() {
+        t += &format!("axis = [{}]\n", d.axes.iter().map(|a| line(a)).collect::<Vec<_>>().join(", "));
+    }
+    if d.taper > 0.0 {
+        t += &format!("taper = {}\n", d.taper);
+    }
+    if !d.points.is_empty() {
+        let points: Vec<String> = d.points.iter().map(|(p, x)| format!("[{}, {}, {}, {x}]", p.x, p.y, p.z)).collect();
+        t += &format!("points = [{}]\n", points.join(", "));
+    }
+    for f in &d.faces {
+        t += &format!("\n[[depth.faces]]\nat = {}\ncrease = {}\nvalue = {}\n", v(f.at), f.crease, f.value);
+    }
+    for (p, scale) in &spec.scales {
+        t += &format!("\n[[scale_at]]\npoint = {}\nscale = {scale}\n", v(*p));
+    }
+    for p in &spec.pastes {
+        let (axis, angle) = p.rotation.to_axis_angle();
+        let axis = if axis.is_finite() && axis.length() > 0.5 { axis } else { Vec3::Z };
+        t += &format!(
+            "\n[[paste]]\nexemplar = {:?}\nat = {}\nrotate = \"{},{},{},{}\"\nscale = {}\n",
+            p.exemplar,
+            v(p.at),
+            axis.x,
+            axis.y,
+            axis.z,
+            angle.to_degrees(),
+            p.scale
+        );
+    }
+    t
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Every part of a spec survives writing and reading back.
+    #[test]
+    fn a_written_spec_reads_back_the_same() {
+        let mut spec = FillSpec::new("kiwi");
+        spec.texture_type = Some(TextureType::T2b);
+        (spec.seed, spec.tets, spec.scale, spec.mask_falloff) = (7, 3000, Some(0.4), Some(0.1));
+        spec.axes = Some([Axis::Z, Axis::X]);
+        spec.directions = vec![vec![Vec3::new(-0.8, 0.0, 0.1), Vec3::new(0.8, 0.25, 0.0)]];
+        spec.depth.axes = vec![vec![Vec3::new(-0.5, 0.0, 0.0), Vec3::new(0.5, 0.0, 0.0)]];
+        spec.depth.taper = 0.5;
+        spec.depth.points = vec![(Vec3::new(0.1, 0.2, 0.3), 0.75)];
+        spec.depth.faces = vec![FaceGroup { at: Vec3::new(0.0, 0.5, 0.0), crease: 25.0, value: 1.0 }];
+        spec.scales = vec![(Vec3::new(0.5, 0.0, 0.0), 0.2)];
+        let rotation = Quat::from_axis_angle(Vec3::Y, 30f32.to_radians());
+        spec.pastes = vec![PasteSpec { exemplar: "marble".into(), at: Vec3::new(0.1, 0.0, 0.0), rotation, scale: 0.3 }];
+        let folder = Path::new("/specs");
+        (spec.library, spec.built) = (folder.join("lib.toml"), folder.join("../out"));
+        let text = spec_text(&spec, "lib.toml", "../out", "written by a test\nsecond line");
+        assert!(text.starts_with("# written by a test\n# second line\n"), "{text}");
+        let back = parse_fill_spec(&text, folder).unwrap();
+        let paste = (back.pastes[0].rotation.dot(rotation).abs() - 1.0).abs();
+        assert!(paste < 1e-5, "{text}");
+        assert_eq!(FillSpec { pastes: spec.pastes.clone(), ..back }, spec, "{text}");
+    }
 
     #[test]
     fn a_full_spec_parses() {

@@ -140,16 +140,10 @@ fn relative(target: &Path, base: &Path) -> String {
     out.to_string_lossy().into_owned()
 }
 
-/// A small fill of a drawn shape with built exemplar `name` of the library `manifest`
-/// (built into `output`): a block for type 1-a, a fruit otherwise, 2500 tets. Nothing is
-/// written; `progress` may cancel it.
-pub fn preview(
-    manifest: &Path,
-    output: &Path,
-    name: &str,
-    progress: &dyn crate::progress::Progress,
-) -> Result<FillPreview> {
-    let started = Instant::now();
+/// The spec and drawn shape of the fill preview of built exemplar `name` of the library
+/// `manifest` (built into `output`): a block for type 1-a, a fruit otherwise, with its axis
+/// as the core (tapered toward the ends) and the stroke; 2500 tets.
+pub fn preview_spec(manifest: &Path, output: &Path, name: &str) -> Result<(FillSpec, &'static str)> {
     let mut spec = FillSpec::new(name);
     spec.library = manifest.to_path_buf();
     spec.built = output.to_path_buf();
@@ -165,25 +159,47 @@ pub fn preview(
         spec.depth.taper = if shape == "fruit" { 0.5 } else { 0.0 };
     }
     spec.directions = vec![axis];
-    let surface = crate::mesh::shapes::named(shape).expect("a drawn shape").canonical();
-    let (tets, _) = fill::tetrahedralize(&surface, &spec)?;
+    Ok((spec, shape))
+}
+
+/// A small fill of a drawn shape with the default spec of [`preview_spec`]. Nothing is
+/// written; `progress` may cancel it.
+pub fn preview(
+    manifest: &Path,
+    output: &Path,
+    name: &str,
+    progress: &dyn crate::progress::Progress,
+) -> Result<FillPreview> {
+    let (spec, shape) = preview_spec(manifest, output, name)?;
+    preview_with(&spec, shape, progress)
+}
+
+/// A fill of the drawn shape `shape` by `spec` (its exemplars built). Nothing is written.
+pub fn preview_with(spec: &FillSpec, shape: &str, progress: &dyn crate::progress::Progress) -> Result<FillPreview> {
+    let started = Instant::now();
+    let probe = resolve(spec, &spec.built.join("preview.lst"))?;
+    let surface = crate::mesh::shapes::named(shape)
+        .ok_or_else(|| Error::invalid(format!("no drawn shape named {shape}")))?
+        .canonical();
+    let (tets, _) = fill::tetrahedralize(&surface, spec)?;
     let job = Job {
         surface: &surface,
-        spec: &spec,
+        spec,
         kind: probe.kind,
         axes: probe.axes,
         sources: probe.sources.clone(),
         masks: probe.masks.clone(),
     };
     let (model, report) = fill::fill(&job, tets, progress)?;
-    let colour = probe.sources.iter().map(|s| load_built(&spec, &s.exemplar)).collect::<Result<Vec<_>>>()?;
+    let colour = probe.sources.iter().map(|s| load_built(spec, &s.exemplar)).collect::<Result<Vec<_>>>()?;
     let textures = Textures::new(&colour, &probe.masks);
     let summary = format!(
-        "{name} (type {}) in a {shape}: {} tets, {} patches, {:.2} s",
+        "{} (type {}) in a {shape}: {} tets, {} patches, {:.2} s",
+        spec.exemplar,
         probe.kind,
         report.tets,
         report.paste.patches,
         started.elapsed().as_secs_f64()
     );
-    Ok(FillPreview { model, textures, summary })
+    Ok(FillPreview { model, textures, summary, depth: report.depth, spec: spec.clone(), shape: shape.to_string() })
 }

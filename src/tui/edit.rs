@@ -111,9 +111,7 @@ pub fn new_entry(text: &str, recipe: &str, file: Option<&str>) -> Result<(String
         .ok_or("exemplar is not a list of [[exemplar]] tables")?;
     let stem = file.and_then(|f| std::path::Path::new(f).file_stem()).map(|s| s.to_string_lossy().to_string());
     let hint = stem.unwrap_or_else(|| recipe.trim_start_matches("procedural:").to_string());
-    let hint: String =
-        hint.chars().map(|c| if c.is_ascii_alphanumeric() || c == '-' || c == '_' { c } else { '-' }).collect();
-    let hint = if hint.trim_matches('-').is_empty() { "exemplar".to_string() } else { hint };
+    let hint = allowed_name(&hint);
     let taken = |n: &str| list.iter().any(|t| t.get("name").and_then(Item::as_str) == Some(n));
     let name = std::iter::once(hint.clone())
         .chain((2..).map(|k| format!("{hint}-{k}")))
@@ -146,6 +144,22 @@ pub fn new_entry(text: &str, recipe: &str, file: Option<&str>) -> Result<(String
     t.decor_mut().set_prefix(format!("{header}\n"));
     list.push(t);
     Ok((doc.to_string(), name))
+}
+
+/// `text` as a name the manifest allows: ASCII letters, digits and `_` kept, each run of
+/// anything else one `-`, no `-` at either end (a name starting with one would read as an
+/// option on the command line); `exemplar` when nothing is left.
+fn allowed_name(text: &str) -> String {
+    let mut out = String::new();
+    for c in text.chars() {
+        if c.is_ascii_alphanumeric() || c == '_' {
+            out.push(c);
+        } else if !out.ends_with('-') {
+            out.push('-');
+        }
+    }
+    let out = out.trim_matches('-');
+    if out.chars().any(|c| c.is_ascii_alphanumeric()) { out.to_string() } else { "exemplar".to_string() }
 }
 
 /// The manifest without exemplar `name` (and the comments right above it; the first
@@ -467,6 +481,11 @@ mod tests {
         photo.save(folder.path().join("my photo.png")).unwrap();
         let (out, name) = new_entry(TEXT, "synth", Some("my photo.png")).unwrap();
         assert_eq!(name, "my-photo");
+        for (file, expected) in
+            [("my bark (copy) é.png", "my-bark-copy"), ("-dash.png", "dash"), ("日本語.png", "exemplar")]
+        {
+            assert_eq!(new_entry(TEXT, "synth", Some(file)).unwrap().1, expected);
+        }
         assert!(out.starts_with(TEXT), "the rest stays as it was:\n{out}");
         let tail = &out[TEXT.len()..];
         assert_eq!(

@@ -283,7 +283,8 @@ pub fn open_fill(model: &mut Model) -> Vec<Effect> {
     let Screen::Exemplar(view) = &model.screen else { return Vec::new() };
     let name = view.name.clone();
     let from = Some(Box::new(view.clone()));
-    model.screen = Screen::Fill(FillView { name: name.clone(), filled: None, axis: Axis::X, offset: 0.0, from });
+    model.screen =
+        Screen::Fill(FillView { name: name.clone(), filled: None, axis: Axis::X, offset: 0.0, from, edit: None });
     model.status = format!("filling a shape with {name}...");
     vec![Effect::Fill(name)]
 }
@@ -297,6 +298,18 @@ pub fn filled(model: &mut Model, name: &str, result: Result<std::sync::Arc<super
     match result {
         Ok(preview) => {
             model.status = format!("{}; x/y/z choose the cut, arrows move it", preview.summary);
+            if view.edit.is_none() {
+                view.edit = Some(super::model::FillEdit {
+                    spec: preview.spec.clone(),
+                    shape: preview.shape.clone(),
+                    cursor: [0.5, 0.5],
+                    stroke: Vec::new(),
+                    depth: 1.0,
+                    show_depth: false,
+                    undo: Vec::new(),
+                    dragging: false,
+                });
+            }
             view.filled = Some(preview);
         }
         Err(e) => {

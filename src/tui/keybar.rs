@@ -52,6 +52,8 @@ pub fn hints(model: &Model) -> Vec<Hint> {
                 unless("a", "masks", view.layers.is_empty().then_some("no masks built")),
                 unless("f", "fill", loading),
                 unless("m", "stamp", loading),
+                unless("p", "photo", loading),
+                unless("E", "export", loading),
                 hint("esc", "back"),
             ]
         }
@@ -64,7 +66,7 @@ pub fn hints(model: &Model) -> Vec<Hint> {
                 hint("up/down", "file"),
                 hint("enter", "take it / open folder"),
                 hint("backspace", "folder above"),
-                hint("esc", "kinds"),
+                hint("esc", "back"),
             ]
         }
         Screen::New(_) => vec![hint("up/down", "kind"), hint("enter", "take it"), hint("esc", "back")],

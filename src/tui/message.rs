@@ -131,6 +131,34 @@ pub enum Message {
     Filled(String, Result<Arc<super::model::FillPreview>, String>),
     /// Move the cut plane by this share of the model.
     MovePlane(f32),
+    /// Fill preview: move the cursor on the cut by (right, down) steps.
+    MoveCursor(f32, f32),
+    /// Fill preview: put the cursor at (across, down) of the cut, 0 to 1 (a click).
+    CursorAt(f32, f32),
+    /// Fill preview: add the cursor's point to the stroke being drawn.
+    StrokePoint,
+    /// Fill preview: a drag on the cut draws a stroke through (across, down), 0 to 1.
+    DragStroke(f32, f32),
+    /// Fill preview: the mouse button went up: a stroke dragged ends.
+    EndDrag,
+    /// Fill preview: the stroke drawn becomes a direction stroke.
+    FinishStroke,
+    /// Fill preview: a depth point at the cursor.
+    DepthPoint,
+    /// Fill preview: change the depth new points get by this much.
+    DepthValue(f32),
+    /// Fill preview: the faces nearest the cursor get the current depth.
+    FaceGroup,
+    /// Fill preview: a manual paste at the cursor.
+    Paste,
+    /// Fill preview: turn the last paste by degrees and scale it by a factor.
+    WarpPaste(f32, f32),
+    /// Fill preview: show the depth field, or the texture again.
+    ShowDepth,
+    /// Fill preview: fill again with the constraints placed.
+    Refill,
+    /// Fill preview: write the fill spec and the shape.
+    WriteSpec,
     /// Zoom the slices in (true) or out.
     Zoom(bool),
     /// Show the next of the exemplar and its masks.
@@ -209,6 +237,10 @@ pub enum Effect {
     LoadPhotos(String),
     /// Read this mesh as the seed of stamp mode.
     LoadSeedFile(PathBuf),
+    /// Fill the drawn shape (third) with exemplar `name`'s spec (second).
+    Refill(String, Box<crate::fill::spec::FillSpec>, String),
+    /// Write exemplar `name`'s fill spec and the drawn shape into `OUTPUT/exports/`.
+    WriteSpec(String, Box<crate::fill::spec::FillSpec>, String),
     /// Read a volume to compare: side, its label, the exemplar, and whether it is the
     /// previous build kept beside it.
     LoadSide(usize, String, String, bool),

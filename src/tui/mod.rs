@@ -11,6 +11,7 @@
 mod compare;
 mod edit;
 mod editing;
+mod fill_edit;
 mod graphics;
 mod keybar;
 mod keymap;
@@ -199,7 +200,8 @@ fn start(effects: Vec<Effect>, model: &Model, send: &Sender<Message>) {
                 let _ = send.send(Message::EditorReady(text));
             }
             Effect::Save(text) => {
-                let result = io::write_bytes(&manifest, text.as_bytes()).map(|_| text).map_err(|e| e.to_string());
+                let result =
+                    io::atomic::write_document(&manifest, text.as_bytes()).map(|_| text).map_err(|e| e.to_string());
                 let _ = send.send(Message::Saved(result));
             }
             Effect::Preview { name, text, generation } => {
@@ -246,6 +248,16 @@ fn start(effects: Vec<Effect>, model: &Model, send: &Sender<Message>) {
             Effect::Settle(name, accept) => {
                 let _ = send.send(Message::EntriesChanged(settle(&manifest, &output, &name, accept)));
             }
+            Effect::Refill(name, spec, shape) => {
+                let result = library::fill::preview_with(&spec, &shape, &crate::progress::NoProgress)
+                    .map(Arc::new)
+                    .map_err(|e| e.to_string());
+                let _ = send.send(Message::Filled(name, result));
+            }
+            Effect::WriteSpec(name, spec, shape) => {
+                let _ =
+                    send.send(Message::Exported(write_spec(&output, &name, &spec, &shape).map_err(|e| e.to_string())));
+            }
             Effect::LoadSeedFile(path) => {
                 let _ = send.send(Message::SeedLoaded(seed_file(&manifest, &path).map_err(|e| e.to_string())));
             }
@@ -284,7 +296,11 @@ fn change_entry(manifest: &Path, output: &Path, change: &EntryChange) -> Changed
         }
         EntryChange::New(recipe, file) => added(manifest, &text, recipe, file.as_deref())?,
     };
-    io::write_bytes(manifest, text.as_bytes()).map_err(|e| e.to_string())?;
+    io::atomic::write_document(manifest, text.as_bytes()).map_err(|e| e.to_string())?;
+    // A kept previous build belongs to the name it was built under: it goes with the entry.
+    if let EntryChange::Delete(name) | EntryChange::Rename(name, _) = change {
+        let _ = library::previous::drop_kept(output, name);
+    }
     let (items, errors) = load_items(manifest, output);
     Ok((items, errors, select, status))
 }
@@ -298,12 +314,19 @@ fn added(manifest: &Path, text: &str, recipe: &str, file: Option<&Path>) -> Resu
         let absolute = f.canonicalize().unwrap_or_else(|_| f.to_path_buf());
         new_entry::relative_to(&absolute, &base).to_string_lossy().replace('\\', "/")
     });
-    if let Some(f) = file.filter(|_| recipe != "load") {
-        image::image_dimensions(f).map_err(|e| format!("{}: cannot decode it as an image: {e}", f.display()))?;
+    match file {
+        Some(f) if recipe == "load" => {
+            io::read_volume(f, io::budget_from_env().unwrap_or(u64::MAX))
+                .map_err(|e| format!("cannot load it as a volume: {e}"))?;
+        }
+        Some(f) => {
+            image::image_dimensions(f).map_err(|e| format!("{}: cannot decode it as an image: {e}", f.display()))?;
+        }
+        None => {}
     }
     let (text, name) = edit::new_entry(text, recipe, written.as_deref())?;
     io::manifest::parse_entry(&text, &folder, &name)
-        .map_err(|e| format!("{recipe} from {}: {e}", written.unwrap_or_default()))?;
+        .map_err(|e| format!("a new {recipe} entry does not fit this manifest: {e}"))?;
     let from = file.map(|f| format!(" from {}", f.display())).unwrap_or_default();
     let status = format!("added {name} ({recipe}{from}): b builds it, e edits its settings");
     Ok((text, name, status))
@@ -330,7 +353,7 @@ fn settle(manifest: &Path, output: &Path, name: &str, accept: bool) -> Changed {
         library::previous::drop_kept(output, name).map(|_| format!("kept the new build of {name}"))
     } else {
         library::previous::restore(output, name).map(|_| {
-            format!("{name} is its previous build again (the recipe in the manifest is unchanged: b builds it anew)")
+            format!("{name} is its previous build again; the manifest keeps the new recipe (b builds it again)")
         })
     };
     let status = done.map_err(|e| e.to_string())?;
@@ -430,6 +453,36 @@ fn export_cut(output: &Path, name: &str, filled: &FillPreview, axis: Axis, offse
     let cut = view_edit::cut_of(filled, axis, offset, 512)?;
     io::write_rgb8(&folder.join(&file), &cut.picture())?;
     Ok((folder.display().to_string(), vec![file], Vec::new()))
+}
+
+/// Writes the fill spec placed in the fill preview and the drawn shape it fills into
+/// `OUTPUT/exports/` as `NAME.fill.toml` and `NAME.fill-SHAPE.obj` (taking `-2`, `-3` ...
+/// rather than replacing a file), the spec naming the shape's file in its header so
+/// `solidtex fill` runs it from that folder.
+fn write_spec(output: &Path, name: &str, spec: &crate::fill::spec::FillSpec, shape: &str) -> Result<Exported> {
+    let folder = exports(output)?;
+    let free = |stem: &str, ext: &str| {
+        (1..)
+            .map(|k| if k == 1 { format!("{stem}.{ext}") } else { format!("{stem}-{k}.{ext}") })
+            .find(|f| !folder.join(f).exists())
+            .expect("a free name")
+    };
+    let (spec_file, mesh_file) = (free(&format!("{name}.fill"), "toml"), free(&format!("{name}.fill-{shape}"), "obj"));
+    let surface = crate::mesh::shapes::named(shape)
+        .ok_or_else(|| Error::invalid(format!("no drawn shape named {shape}")))?
+        .canonical();
+    io::mesh_file::write_mesh(&folder.join(&mesh_file), &surface)?;
+    let base = folder.canonicalize().map_err(|e| Error::io(&folder, e))?;
+    let rel = |p: &Path| {
+        let absolute = p.canonicalize().unwrap_or_else(|_| p.to_path_buf());
+        new_entry::relative_to(&absolute, &base).to_string_lossy().replace('\\', "/")
+    };
+    let header = format!(
+        "Placed in the solidtex terminal UI's fill preview of {name}. Run it from this folder:\n  solidtex fill {mesh_file} --spec {spec_file} -o {name}.lst"
+    );
+    let text = io::fill_spec::spec_text(spec, &rel(&spec.library), &rel(&spec.built), &header);
+    io::write_bytes(&folder.join(&spec_file), text.as_bytes())?;
+    Ok((folder.display().to_string(), vec![spec_file, mesh_file], Vec::new()))
 }
 
 /// Counts cancellations: a build stops when the count moves past the one it started with,
@@ -566,7 +619,7 @@ fn save_steps(
     let text = edit::append_steps(&text, name, steps, file)?;
     let folder = manifest.parent().unwrap_or(Path::new("."));
     io::manifest::parse_entry(&text, folder, name).map_err(|e| e.to_string())?;
-    io::write_bytes(manifest, text.as_bytes()).map_err(|e| e.to_string())?;
+    io::atomic::write_document(manifest, text.as_bytes()).map_err(|e| e.to_string())?;
     Ok(text)
 }
 
@@ -758,6 +811,10 @@ mod tests {
         let e = change_entry(&manifest, &dir.path().join("out"), &bad).unwrap_err();
         assert!(e.contains("notes.png") && e.contains("decode"), "{e}");
         assert_eq!(std::fs::read_to_string(&manifest).unwrap(), original);
+        let plain = EntryChange::New("load".into(), Some(photos.join("bark.png")));
+        let e = change_entry(&manifest, &dir.path().join("out"), &plain).unwrap_err();
+        assert!(e.contains("cannot load it as a volume"), "{e}");
+        assert_eq!(std::fs::read_to_string(&manifest).unwrap(), original);
         let good = EntryChange::New("synth".into(), Some(photos.join("bark.png")));
         let (items, errors, select, status) = change_entry(&manifest, &dir.path().join("out"), &good).unwrap();
         assert!(errors.is_empty() && select == "bark" && items.len() == 2, "{errors:?} {select}");
@@ -802,5 +859,36 @@ mod tests {
         let (items, _, _, status) = settle(&manifest, &out, "m", true).unwrap();
         assert!(!items[0].previous && status.contains("kept the new build"), "{status}");
         assert_eq!(side_of(&out, "m", false).unwrap().0.data(), after.data());
+        // a kept copy goes with its entry when the entry is renamed
+        std::fs::write(&manifest, text.replace("seed = 1", "seed = 3")).unwrap();
+        super::build(&manifest, &out, vec!["m".into()], &std::sync::mpsc::channel().0);
+        assert!(load_items(&manifest, &out).0[0].previous);
+        let (items, ..) = change_entry(&manifest, &out, &EntryChange::Rename("m".into(), "n".into())).unwrap();
+        assert!(!items[0].previous && !crate::library::previous::folder(&out, "m").exists());
+    }
+
+    /// `w` in the fill preview writes a spec `solidtex fill` reads back (its library and
+    /// build folder found from the exports folder) beside the shape; a second write never
+    /// replaces the first.
+    #[test]
+    fn the_fill_spec_placed_in_the_preview_is_written_beside_its_shape() {
+        let dir = tempfile::tempdir().unwrap();
+        let (manifest, out) = (dir.path().join("lib").join("library.toml"), dir.path().join("out"));
+        std::fs::create_dir_all(manifest.parent().unwrap()).unwrap();
+        std::fs::write(&manifest, "").unwrap();
+        let mut spec = crate::fill::spec::FillSpec::new("kiwi");
+        (spec.library, spec.built) = (manifest.clone(), out.clone());
+        spec.depth.points = vec![(glam::Vec3::new(0.1, 0.2, 0.0), 0.5)];
+        let (folder, files, _) = super::write_spec(&out, "kiwi", &spec, "fruit").unwrap();
+        assert_eq!(files, ["kiwi.fill.toml", "kiwi.fill-fruit.obj"]);
+        let exports = std::path::PathBuf::from(folder);
+        let back = crate::io::fill_spec::read_fill_spec(&exports.join("kiwi.fill.toml")).unwrap();
+        assert_eq!(back.depth.points, spec.depth.points);
+        assert_eq!(back.library.canonicalize().unwrap(), manifest.canonicalize().unwrap());
+        assert_eq!(back.built.canonicalize().unwrap(), out.canonicalize().unwrap());
+        let shape = crate::io::mesh_file::read_mesh(&exports.join("kiwi.fill-fruit.obj")).unwrap();
+        assert!(shape.triangles.len() > 100);
+        let (_, again, _) = super::write_spec(&out, "kiwi", &spec, "fruit").unwrap();
+        assert_eq!(again, ["kiwi.fill-2.toml", "kiwi.fill-fruit-2.obj"]);
     }
 }

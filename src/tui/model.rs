@@ -177,6 +177,30 @@ pub struct FillView {
     pub offset: f32,
     /// The exemplar view the preview was opened from, where Esc goes back to.
     pub from: Option<Box<ExemplarView>>,
+    /// The constraints being placed on the cut (the fill spec), once the first fill arrives.
+    pub edit: Option<FillEdit>,
+}
+
+/// Constraints placed on the fill preview's cut (thesis ch. 5): direction strokes, depth
+/// points, face groups and manual pastes, kept as the fill spec they make.
+#[derive(Debug, Clone)]
+pub struct FillEdit {
+    /// The spec with every constraint placed so far.
+    pub spec: crate::fill::spec::FillSpec,
+    /// The drawn shape filled (`fruit`, `block`).
+    pub shape: String,
+    /// Where the cursor is on the cut: 0 to 1 across and down.
+    pub cursor: [f32; 2],
+    /// The points of the stroke being drawn.
+    pub stroke: Vec<glam::Vec3>,
+    /// The depth new points and face groups get, 0 (surface) to 1 (innermost).
+    pub depth: f32,
+    /// Whether the cut shows the depth field as a colour map instead of the texture.
+    pub show_depth: bool,
+    /// Earlier specs, newest last (`u`).
+    pub undo: Vec<crate::fill::spec::FillSpec>,
+    /// Whether a stroke is being dragged with the mouse.
+    pub dragging: bool,
 }
 
 /// An action that loses unsaved work, asked for once and done on the second press.

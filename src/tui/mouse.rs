@@ -43,6 +43,8 @@ pub struct Regions {
     pub list: Option<List>,
     /// The slices of the exemplar view.
     pub panels: Vec<Panel>,
+    /// The fill preview's cut (one pixel per column, two per line).
+    pub cut: Option<Rect>,
 }
 
 /// The message a mouse event means on `screen`, given where things were drawn.
@@ -63,7 +65,22 @@ pub fn message(screen: &Screen, regions: &Regions, event: MouseEvent) -> Option<
                 _ => None,
             }
         }
-        Screen::Fill(_) => wheel.map(|s| Message::MovePlane(0.05 * s as f32)),
+        Screen::Fill(_) => {
+            if let Some(s) = wheel {
+                return Some(Message::MovePlane(0.05 * s as f32));
+            }
+            if matches!(event.kind, MouseEventKind::Up(MouseButton::Left)) {
+                return Some(Message::EndDrag);
+            }
+            let cut = regions.cut.filter(|c| c.contains(at))?;
+            let across = (f32::from(at.x - cut.x) + 0.5) / f32::from(cut.width.max(1));
+            let down = (f32::from(at.y - cut.y) + 0.5) / f32::from(cut.height.max(1));
+            match event.kind {
+                MouseEventKind::Down(MouseButton::Left) => Some(Message::CursorAt(across, down)),
+                MouseEventKind::Drag(MouseButton::Left) => Some(Message::DragStroke(across, down)),
+                _ => None,
+            }
+        }
         Screen::Compare(_) => wheel.map(Message::MoveSlice),
         _ => {
             if let Some(step) = wheel {
@@ -103,7 +120,7 @@ mod tests {
 
     #[test]
     fn clicks_pick_rows_and_the_wheel_scrolls() {
-        let regions = Regions { list: Some(List { area: Rect::new(1, 2, 40, 10), first: 3 }), panels: Vec::new() };
+        let regions = Regions { list: Some(List { area: Rect::new(1, 2, 40, 10), first: 3 }), ..Default::default() };
         let click = |x, y| message(&Screen::Library, &regions, event(MouseEventKind::Down(MouseButton::Left), x, y));
         assert!(matches!(click(5, 4), Some(Message::Select(5))));
         assert!(click(5, 1).is_none() && click(50, 4).is_none(), "outside the rows");
@@ -123,7 +140,7 @@ mod tests {
             rows: 16,
             up: true,
         };
-        let regions = Regions { list: None, panels: vec![panel] };
+        let regions = Regions { panels: vec![panel], ..Default::default() };
         let screen = Screen::Exemplar(ExemplarView::new("a"));
         let at = |kind, x, y| message(&screen, &regions, event(kind, x, y));
         // column 14 = pixel 2; line 5 = pixel rows 0..1 from the top, so z = 15
@@ -133,7 +150,7 @@ mod tests {
         assert!(at(MouseEventKind::Down(MouseButton::Left), 9, 8).is_none(), "outside the panel");
         // zoomed in: the picture starts at (4, 4) of the full slice
         let zoomed = Panel { origin: (4, 4), size: (8, 8), scale: 4.0, ..panel };
-        let regions = Regions { list: None, panels: vec![zoomed] };
+        let regions = Regions { panels: vec![zoomed], ..Default::default() };
         let at = message(&screen, &regions, event(MouseEventKind::Down(MouseButton::Left), 10, 5));
         assert!(matches!(at, Some(Message::PointAt(Axis::Y, 4, 11))), "{at:?}");
     }

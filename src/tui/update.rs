@@ -2,7 +2,7 @@
 
 use super::message::{Effect, EntryChange, Message, SharedFill};
 use super::model::{BuildState, Confirm, ExemplarView, Model, Screen};
-use super::{compare, editing, new_entry, stamping};
+use super::{compare, editing, fill_edit, new_entry, stamping};
 use crate::volume::Axis;
 
 /// Apply `message` to `model`; returns the effects to run.
@@ -116,6 +116,7 @@ pub fn update(model: &mut Model, message: Message) -> Vec<Effect> {
             }
         }
         Message::Undo if matches!(model.screen, Screen::Exemplar(_)) => stamping::undo(model),
+        Message::Undo if matches!(model.screen, Screen::Fill(_)) => fill_edit::undo(model),
         Message::Undo => return editing::undo(model, false),
         Message::Redo => return editing::undo(model, true),
         Message::Save => return editing::save(model),
@@ -127,6 +128,23 @@ pub fn update(model: &mut Model, message: Message) -> Vec<Effect> {
         Message::FillPreview => return editing::open_fill(model),
         Message::Filled(name, result) => editing::filled(model, &name, result),
         Message::MovePlane(step) => editing::plane(model, None, step),
+        Message::MoveCursor(right, down) => fill_edit::move_cursor(model, right, down),
+        Message::CursorAt(across, down) => fill_edit::cursor_at(model, across, down),
+        Message::StrokePoint => fill_edit::stroke_point(model),
+        Message::DragStroke(across, down) => fill_edit::drag(model, across, down),
+        Message::EndDrag => fill_edit::end_drag(model),
+        Message::FinishStroke => fill_edit::finish_stroke(model),
+        Message::DepthPoint => fill_edit::depth_point(model),
+        Message::DepthValue(step) => fill_edit::depth_value(model, step),
+        Message::FaceGroup => fill_edit::face_group(model),
+        Message::Paste => {
+            let size = if let Screen::Fill(v) = &model.screen { fill_edit::model_size(v) } else { 1.0 };
+            fill_edit::paste(model, size)
+        }
+        Message::WarpPaste(degrees, factor) => fill_edit::warp_paste(model, degrees, factor),
+        Message::ShowDepth => fill_edit::toggle_depth(model),
+        Message::Refill => return fill_edit::refill(model),
+        Message::WriteSpec => return fill_edit::write(model),
         Message::Zoom(closer) => {
             with_view(model, |v| v.zoom = if closer { (v.zoom * 2).min(4) } else { (v.zoom / 2).max(1) })
         }

@@ -60,7 +60,7 @@ pub fn draw_with(
         }
         Screen::Exemplar(view) => exemplar(frame, view, main, graphics, regions),
         Screen::Editor(editor) => super::view_edit::editor(frame, editor, main, regions),
-        Screen::Fill(view) => super::view_edit::fill(frame, view, main),
+        Screen::Fill(view) => super::view_edit::fill(frame, view, main, regions),
         Screen::New(entry) => super::view_new::new_entry(frame, entry, main, regions, graphics),
         Screen::Compare(view) => super::view_compare::compare(frame, view, main),
     }
@@ -138,9 +138,12 @@ fn library(frame: &mut Frame, model: &Model, area: Rect, regions: &mut Regions) 
         let name = if marked { format!("{} (v)", item.name) } else { item.name.clone() };
         Row::new(vec![name, size, declared, badge, quality, state]).style(style)
     });
+    // names as wide as the longest (with room for the compare mark), up to 28 columns
+    let mark = |i: &super::model::Item| if model.mark.as_deref() == Some(i.name.as_str()) { 4 } else { 0 };
+    let longest = model.items.iter().map(|i| i.name.chars().count() + mark(i)).max().unwrap_or(8);
     let widths = [
-        Constraint::Length(13),
-        Constraint::Length(10),
+        Constraint::Length(longest.clamp(10, 28) as u16),
+        Constraint::Length(11),
         Constraint::Length(8),
         Constraint::Length(13),
         Constraint::Length(7),
@@ -149,10 +152,8 @@ fn library(frame: &mut Frame, model: &Model, area: Rect, regions: &mut Regions) 
     let block = match model.items.get(model.selected).and_then(|i| Some((i, i.quality.as_ref()?))) {
         Some((item, q)) => {
             let colour = if q.in_range() { Color::Green } else { Color::Red };
-            let (g, l) = (crate::sharpness::GRADIENT_RANGE, crate::sharpness::LENGTH_RANGE);
-            let targets =
-                format!("sharp {}-{}, size {}-{}, hist <= {}", g.0, g.1, l.0, l.1, crate::quality::HISTOGRAM_TARGET);
-            let line = format!(" {}: {} (targets: {targets}) ", item.name, q.summary());
+            let verdict = if q.in_range() { "in range".to_string() } else { format!("out of range: {}", q.verdict()) };
+            let line = format!(" {}: {} ({verdict}) ", item.name, q.summary());
             block.title_bottom(Line::styled(line, Style::new().fg(colour)))
         }
         None => block,
@@ -169,8 +170,10 @@ fn library(frame: &mut Frame, model: &Model, area: Rect, regions: &mut Regions) 
     };
     let inner = block.inner(table);
     let rows_area = Rect { y: inner.y + 1, height: inner.height.saturating_sub(1), ..inner };
-    regions.list = Some(List { area: rows_area, first: 0 });
-    frame.render_widget(Table::new(rows, widths).header(header).block(block), table);
+    // the table scrolls to keep the selected row in view
+    let mut state = ratatui::widgets::TableState::default().with_selected(Some(model.selected));
+    frame.render_stateful_widget(Table::new(rows, widths).header(header).block(block), table, &mut state);
+    regions.list = Some(List { area: rows_area, first: state.offset() });
     if let Some((rect, (level, volume))) = side {
         let block = Block::default().borders(Borders::ALL).title(format!(" level {level} (z middle) "));
         let inner = block.inner(rect);
@@ -452,7 +455,8 @@ fn help(frame: &mut Frame, area: Rect, screen: &Screen, state: &Help) {
         (false, false) => format!("/{}  (/ changes it, esc clears)", state.query),
         (false, true) => "/ search  esc close".to_string(),
     };
-    let (w, h) = (60u16.min(area.width), (text.len() as u16 + 3).min(area.height));
+    let widest = sections.iter().flat_map(|(_, rows)| rows.iter()).map(|(_, a)| a.chars().count() + 20).max();
+    let (w, h) = ((widest.unwrap_or(40).max(60) as u16).min(area.width), (text.len() as u16 + 3).min(area.height));
     let rect = Rect::new(area.x + (area.width - w) / 2, area.y + (area.height - h) / 2, w, h);
     let [body, bottom] = Layout::vertical([Constraint::Min(1), Constraint::Length(1)]).areas(Rect::new(
         rect.x + 1,
@@ -713,6 +717,9 @@ mod tests {
             model: model_3d,
             textures: Textures::new(&[marble], &[mask]),
             summary: "s".into(),
+            depth: None,
+            spec: crate::fill::spec::FillSpec::new("marble"),
+            shape: "block".into(),
         };
         let mut m = model();
         m.screen = Screen::Fill(crate::tui::model::FillView {
@@ -721,6 +728,7 @@ mod tests {
             axis: Axis::Z,
             offset: 0.0,
             from: None,
+            edit: None,
         });
         let (text, buffer) = screen(&m, 80, 24);
         assert!(text.contains("fill preview: marble  cut across z at +0.00"), "{text}");
@@ -886,6 +894,27 @@ mod tests {
             );
         }
         assert!(pointed >= 4, "{pointed} clicks landed on slices");
+    }
+
+    /// The depth field shows as a colour map, dark blue at depth 0 to yellow at 1; the
+    /// constraints placed show as marks on the cut, the cursor as a cross.
+    #[test]
+    fn the_fill_preview_shows_the_depth_field_and_the_constraints() {
+        use crate::tui::fill_edit::tests::{filled_cube, filling};
+        let mut m = filling(filled_cube(Some(Vec::new())));
+        crate::tui::update(&mut m, crate::tui::Message::DepthPoint);
+        crate::tui::update(&mut m, crate::tui::Message::MoveCursor(4.0, 0.0));
+        crate::tui::update(&mut m, crate::tui::Message::ShowDepth);
+        let (text, buffer) = screen(&m, 80, 24);
+        assert!(text.contains("1 depth pt(s)") && text.contains("◆") && text.contains("+"), "{text}");
+        // depth = x: the left of the cut is blue, the right yellow
+        let rgb = |x: u16, y: u16| match buffer[(x, y)].fg {
+            Color::Rgb(r, g, b) => Some((r, g, b)),
+            _ => None,
+        };
+        let row: Vec<(u16, (u8, u8, u8))> = (0..80u16).filter_map(|x| rgb(x, 6).map(|c| (x, c))).collect();
+        let (left, right) = (row[1].1, row[row.len() - 2].1);
+        assert!(left.2 > left.0 && right.0 > right.2 && right.1 > 150, "left {left:?} right {right:?}");
     }
 
     #[test]

@@ -3,7 +3,7 @@
 use super::edit;
 use super::model::{Editor, FillView};
 use super::view::HalfBlocks;
-use crate::fill::render::{self, View};
+use crate::fill::render;
 use crate::render::to_u8;
 use crate::volume::Axis;
 use glam::Vec3;
@@ -106,22 +106,35 @@ fn preview(frame: &mut Frame, editor: &Editor, area: Rect) {
     }
 }
 
-/// The fill preview: a cut through the filled shape.
-pub fn fill(frame: &mut Frame, view: &FillView, area: Rect) {
-    let title = format!(
-        " fill preview: {}  cut across {} at {:+.2} (-1 to 1 across the model) ",
-        view.name, view.axis, view.offset
-    );
+/// The fill preview: a cut through the filled shape, with the constraints placed on it.
+pub fn fill(frame: &mut Frame, view: &FillView, area: Rect, regions: &mut super::mouse::Regions) {
+    let placed = view.edit.as_ref().map_or(String::new(), |e| {
+        let changed = view.filled.as_ref().is_some_and(|f| f.spec != e.spec);
+        format!(
+            "  {} stroke(s) {} depth pt(s) {} face group(s) {} paste(s), depth {:.2}{}",
+            e.spec.directions.len(),
+            e.spec.depth.points.len(),
+            e.spec.depth.faces.len(),
+            e.spec.pastes.len(),
+            e.depth,
+            if changed { " [r refills]" } else { "" }
+        )
+    });
+    let title = format!(" fill preview: {}  cut across {} at {:+.2}{placed} ", view.name, view.axis, view.offset);
     let block = Block::default()
         .borders(Borders::ALL)
         .title(title)
-        .title_bottom(" x/y/z cut axis  arrows move  E export  esc back ");
+        .title_bottom(" x/y/z cut axis  arrows move  HJKL cursor  s/S stroke  d depth  g faces  p paste  c depth map  r refill  w write ");
     let inner = block.inner(area);
     frame.render_widget(block, area);
-    match &view.filled {
-        None => frame.render_widget(Paragraph::new("filling (tet mesh, field, patches)..."), inner),
-        Some(filled) => frame.render_widget(CutWidget { view, filled }, inner),
-    }
+    let Some(filled) = &view.filled else {
+        frame.render_widget(Paragraph::new("filling (tet mesh, field, patches)..."), inner);
+        return;
+    };
+    let size = (inner.width as usize).min(2 * inner.height as usize).max(8);
+    let x0 = inner.x + (inner.width.saturating_sub(size as u16)) / 2;
+    regions.cut = Some(Rect::new(x0, inner.y, size as u16, (size / 2) as u16));
+    frame.render_widget(CutWidget { view, filled, size }, Rect::new(x0, inner.y, size as u16, inner.height));
 }
 
 /// The cut of a fill preview across `axis` at `offset` (-1 to 1 across the model), `size`
@@ -133,30 +146,43 @@ pub fn cut_of(
     size: usize,
 ) -> crate::error::Result<render::Cut> {
     let models = [(&filled.model, &filled.textures)];
-    let (lo, hi) = render::bounds(&models);
-    let mut normal = Vec3::ZERO;
-    normal[axis.index()] = 1.0;
-    let point = (lo + hi) / 2.0 + normal * (hi - lo) / 2.0 * offset;
-    Ok(render::cut_many(&models, &View::framing((lo, hi), point, normal, size)?))
+    Ok(render::cut_many(&models, &super::fill_edit::plane_view(filled, axis, offset, size)))
 }
 
 struct CutWidget<'a> {
     view: &'a FillView,
     filled: &'a super::model::FillPreview,
+    size: usize,
+}
+
+/// The colour of depth `d`: dark blue at 0 (the surface) to yellow at 1 (innermost).
+fn depth_colour(d: f32) -> Color {
+    let t = d.clamp(0.0, 1.0);
+    let mix = |a: f32, b: f32| to_u8(a + (b - a) * t);
+    Color::Rgb(mix(0.08, 1.0), mix(0.1, 0.88), mix(0.45, 0.15))
 }
 
 impl Widget for CutWidget<'_> {
     fn render(self, area: Rect, buf: &mut Buffer) {
-        let size = (area.width as usize).min(2 * area.height as usize);
-        let Ok(cut) = cut_of(self.filled, self.view.axis, self.view.offset, size.max(8)) else { return };
-        let px = |x: usize, y: usize| {
-            let p = cut.pixels[y * cut.width + x];
-            (p[3] > 0.0).then(|| Color::Rgb(to_u8(p[0]), to_u8(p[1]), to_u8(p[2])))
+        let size = self.size;
+        let edit = self.view.edit.as_ref();
+        let plane = super::fill_edit::plane_view(self.filled, self.view.axis, self.view.offset, size);
+        let depth = match (edit.is_some_and(|e| e.show_depth), &self.filled.depth) {
+            (true, Some(values)) => Some(render::field_cut(&self.filled.model.mesh, values, &plane)),
+            _ => None,
         };
-        let x0 = area.x + (area.width.saturating_sub(cut.width as u16)) / 2;
-        for cy in 0..(cut.height / 2).min(area.height as usize) {
-            for cx in 0..cut.width.min(area.width as usize) {
-                let Some(cell) = buf.cell_mut((x0 + cx as u16, area.y + cy as u16)) else { continue };
+        let cut = (depth.is_none()).then(|| render::cut_many(&[(&self.filled.model, &self.filled.textures)], &plane));
+        let px = |x: usize, y: usize| match (&depth, &cut) {
+            (Some(d), _) => d[y * size + x].map(depth_colour),
+            (None, Some(cut)) => {
+                let p = cut.pixels[y * size + x];
+                (p[3] > 0.0).then(|| Color::Rgb(to_u8(p[0]), to_u8(p[1]), to_u8(p[2])))
+            }
+            _ => None,
+        };
+        for cy in 0..(size / 2).min(area.height as usize) {
+            for cx in 0..size.min(area.width as usize) {
+                let Some(cell) = buf.cell_mut((area.x + cx as u16, area.y + cy as u16)) else { continue };
                 // A half outside the shape is the background: drawn with the other half's
                 // block, so the terminal's default foreground never shows at the rim.
                 match (px(cx, 2 * cy), px(cx, 2 * cy + 1)) {
@@ -166,6 +192,34 @@ impl Widget for CutWidget<'_> {
                     (None, None) => continue,
                 };
             }
+        }
+        let Some(edit) = edit else { return };
+        let mut mark = |p: Vec3, symbol: &str, colour: Color| {
+            let (normal, rel) = (plane.right.cross(plane.down).normalize(), p - plane.origin);
+            // only what lies near the plane: within 8 pixels of it
+            if normal.dot(rel).abs() > 8.0 * plane.right.length() {
+                return;
+            }
+            let x = plane.right.dot(rel) / plane.right.length_squared();
+            let y = plane.down.dot(rel) / plane.down.length_squared() / 2.0;
+            if x >= 0.0
+                && y >= 0.0
+                && (x as usize) < size
+                && (y as usize) < size / 2
+                && let Some(cell) = buf.cell_mut((area.x + x as u16, area.y + y as u16))
+            {
+                cell.set_symbol(symbol).set_fg(colour).set_bg(Color::Black);
+            }
+        };
+        let spec = &edit.spec;
+        spec.directions.iter().flatten().for_each(|p| mark(*p, "•", Color::Yellow));
+        edit.stroke.iter().for_each(|p| mark(*p, "•", Color::LightRed));
+        spec.depth.points.iter().for_each(|(p, _)| mark(*p, "◆", Color::Cyan));
+        spec.depth.faces.iter().for_each(|f| mark(f.at, "■", Color::Green));
+        spec.pastes.iter().for_each(|p| mark(p.at, "✚", Color::Magenta));
+        let (cx, cy) = ((edit.cursor[0] * size as f32) as u16, (edit.cursor[1] * size as f32 / 2.0) as u16);
+        if let Some(cell) = buf.cell_mut((area.x + cx.min(size as u16 - 1), area.y + cy.min((size / 2) as u16 - 1))) {
+            cell.set_symbol("+").set_fg(Color::White).set_bg(Color::Black);
         }
     }
 }

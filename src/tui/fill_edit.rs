@@ -1,0 +1,376 @@
+//! Placing the constraints of thesis ch. 5 on the fill preview's cut: a cursor on the cut
+//! (keys or mouse), direction strokes, depth points, face groups given a depth, manual
+//! pastes turned and scaled, the depth field as a colour map, a refill with them, and the
+//! fill spec they make written out. Pure: the refill and the writing are effects.
+
+use super::message::Effect;
+use super::model::{FillEdit, FillView, Model, Screen};
+use crate::fill::render::{self, View};
+use crate::fill::spec::{FaceGroup, PasteSpec};
+use glam::{Quat, Vec3};
+
+/// How far the cursor keys move it: a share of the cut.
+pub const CURSOR_STEP: f32 = 1.0 / 32.0;
+/// How much `[` and `]` change the depth of new points.
+pub const DEPTH_STEP: f32 = 0.25;
+
+/// The plane of the cut on screen as a `size`-pixel square view of the model.
+pub fn plane_view(filled: &super::model::FillPreview, axis: crate::volume::Axis, offset: f32, size: usize) -> View {
+    let models = [(&filled.model, &filled.textures)];
+    let (lo, hi) = render::bounds(&models);
+    let mut normal = Vec3::ZERO;
+    normal[axis.index()] = 1.0;
+    let point = (lo + hi) / 2.0 + normal * (hi - lo) / 2.0 * offset;
+    View::framing((lo, hi), point, normal, size).expect("a finite plane and a size in range")
+}
+
+/// The model point under the cursor.
+pub fn cursor_point(view: &FillView) -> Option<Vec3> {
+    let (filled, edit) = (view.filled.as_ref()?, view.edit.as_ref()?);
+    let plane = plane_view(filled, view.axis, view.offset, 512);
+    Some(plane.origin + plane.right * (edit.cursor[0] * 512.0) + plane.down * (edit.cursor[1] * 512.0))
+}
+
+fn editing(model: &mut Model) -> Option<(&mut FillView, Vec3)> {
+    let Screen::Fill(view) = &mut model.screen else { return None };
+    let at = cursor_point(view)?;
+    Some((view, at))
+}
+
+/// Move the cursor by (right, down) steps.
+pub fn move_cursor(model: &mut Model, right: f32, down: f32) {
+    if let Screen::Fill(FillView { edit: Some(e), .. }) = &mut model.screen {
+        e.cursor =
+            [(e.cursor[0] + right * CURSOR_STEP).clamp(0.0, 1.0), (e.cursor[1] + down * CURSOR_STEP).clamp(0.0, 1.0)];
+    }
+}
+
+/// Put the cursor at (across, down), 0 to 1 (a click).
+pub fn cursor_at(model: &mut Model, across: f32, down: f32) {
+    if let Screen::Fill(FillView { edit: Some(e), .. }) = &mut model.screen {
+        e.cursor = [across.clamp(0.0, 1.0), down.clamp(0.0, 1.0)];
+    }
+}
+
+/// Change the spec (kept for undo) and say what changed.
+fn change(model: &mut Model, what: impl FnOnce(&mut FillEdit, Vec3) -> Result<String, String>) {
+    let Some((view, at)) = editing(model) else {
+        model.status = "the fill is still running".into();
+        return;
+    };
+    let edit = view.edit.as_mut().expect("editing has an edit");
+    let before = edit.spec.clone();
+    model.status = match what(edit, at) {
+        Ok(done) => {
+            if edit.spec != before {
+                edit.undo.push(before);
+            }
+            format!("{done}; r refills with it, w writes the fill spec")
+        }
+        Err(why) => why,
+    };
+}
+
+fn show(p: Vec3) -> String {
+    format!("{:.2},{:.2},{:.2}", p.x, p.y, p.z)
+}
+
+/// `s`: the cursor's point joins the stroke being drawn.
+pub fn stroke_point(model: &mut Model) {
+    change(model, |e, at| {
+        e.stroke.push(at);
+        Ok(format!("stroke point {} at {}; S ends the stroke", e.stroke.len(), show(at)))
+    });
+}
+
+/// A drag on the cut: the cursor follows, and every step of the cursor's size adds a
+/// point to the stroke being drawn (the first where the drag started).
+pub fn drag(model: &mut Model, across: f32, down: f32) {
+    let Screen::Fill(FillView { edit: Some(e), .. }) = &mut model.screen else { return };
+    let moved = (e.cursor[0] - across).abs().max((e.cursor[1] - down).abs());
+    if e.stroke.is_empty() {
+        stroke_point(model);
+    }
+    if moved < CURSOR_STEP {
+        return;
+    }
+    cursor_at(model, across, down);
+    stroke_point(model);
+    if let Screen::Fill(FillView { edit: Some(e), .. }) = &mut model.screen {
+        e.dragging = true;
+    }
+}
+
+/// The button went up: a dragged stroke of two points or more becomes a direction stroke.
+pub fn end_drag(model: &mut Model) {
+    let Screen::Fill(FillView { edit: Some(e), .. }) = &mut model.screen else { return };
+    if std::mem::take(&mut e.dragging) && e.stroke.len() >= 2 {
+        finish_stroke(model);
+    }
+}
+
+/// `S`: the stroke drawn becomes a direction stroke of the spec.
+pub fn finish_stroke(model: &mut Model) {
+    change(model, |e, _| {
+        let length: f32 = e.stroke.windows(2).map(|w| w[0].distance(w[1])).sum();
+        if e.stroke.len() < 2 || length <= 0.0 {
+            return Err("a stroke needs two different points: s adds the cursor's point".into());
+        }
+        e.spec.directions.push(std::mem::take(&mut e.stroke));
+        Ok(format!("direction stroke {} added", e.spec.directions.len()))
+    });
+}
+
+/// `d`: a depth point at the cursor with the current depth.
+pub fn depth_point(model: &mut Model) {
+    change(model, |e, at| {
+        e.spec.depth.points.push((at, e.depth));
+        Ok(format!("depth {:.2} at {}", e.depth, show(at)))
+    });
+}
+
+/// `[` / `]`: the depth new points and face groups get.
+pub fn depth_value(model: &mut Model, step: f32) {
+    if let Screen::Fill(FillView { edit: Some(e), .. }) = &mut model.screen {
+        e.depth = (e.depth + step).clamp(0.0, 1.0);
+        model.status = format!("new depth points and face groups get depth {:.2} (0 surface, 1 innermost)", e.depth);
+    }
+}
+
+/// `g`: the surface faces around the face nearest the cursor (up to a 30° crease) get the
+/// current depth (the thesis' single-face fill).
+pub fn face_group(model: &mut Model) {
+    change(model, |e, at| {
+        e.spec.depth.faces.push(FaceGroup { at, crease: 30.0, value: e.depth });
+        Ok(format!("the faces nearest {} get depth {:.2}", show(at), e.depth))
+    });
+}
+
+/// `p`: a manual paste of the exemplar at the cursor, a quarter of the model across.
+pub fn paste(model: &mut Model, size: f32) {
+    change(model, |e, at| {
+        let scale = e.spec.scale.unwrap_or(size / 4.0);
+        e.spec.pastes.push(PasteSpec { exemplar: e.spec.exemplar.clone(), at, rotation: Quat::IDENTITY, scale });
+        Ok(format!("paste {} at {}; t turns it, +/- scale it", e.spec.pastes.len(), show(at)))
+    });
+}
+
+/// `t` and `+`/`-`: turn the last paste 15° about the cut's normal, or scale it.
+pub fn warp_paste(model: &mut Model, degrees: f32, factor: f32) {
+    let normal = match &model.screen {
+        Screen::Fill(v) => {
+            let mut n = Vec3::ZERO;
+            n[v.axis.index()] = 1.0;
+            n
+        }
+        _ => return,
+    };
+    change(model, |e, _| {
+        let count = e.spec.pastes.len();
+        let Some(p) = e.spec.pastes.last_mut() else { return Err("no paste to warp: p places one".into()) };
+        p.rotation = (Quat::from_axis_angle(normal, degrees.to_radians()) * p.rotation).normalize();
+        p.scale *= factor;
+        let (_, angle) = p.rotation.to_axis_angle();
+        Ok(format!("paste {count} turned {:.0}°, {:.3} across", angle.to_degrees(), p.scale))
+    });
+}
+
+/// `u`: the last constraint goes (a stroke being drawn first).
+pub fn undo(model: &mut Model) {
+    let Screen::Fill(FillView { edit: Some(e), .. }) = &mut model.screen else { return };
+    model.status = if e.stroke.pop().is_some() {
+        "stroke point removed".into()
+    } else if let Some(spec) = e.undo.pop() {
+        e.spec = spec;
+        "undone".into()
+    } else {
+        "nothing to undo".into()
+    };
+}
+
+/// `c`: the depth field as a colour map, or the texture again.
+pub fn toggle_depth(model: &mut Model) {
+    let Screen::Fill(view) = &mut model.screen else { return };
+    let has_depth = view.filled.as_ref().is_some_and(|f| f.depth.is_some());
+    let Some(e) = &mut view.edit else { return };
+    if !has_depth {
+        model.status = "this fill has no depth field (its type does not vary with depth)".into();
+        return;
+    }
+    e.show_depth = !e.show_depth;
+    model.status =
+        if e.show_depth { "the depth field: dark blue 0 (surface) to yellow 1 (innermost)" } else { "the texture" }
+            .into();
+}
+
+/// `r`: fill again with the constraints placed.
+pub fn refill(model: &mut Model) -> Vec<Effect> {
+    let Screen::Fill(view) = &mut model.screen else { return Vec::new() };
+    let Some(e) = &view.edit else { return Vec::new() };
+    if view.filled.is_none() {
+        model.status = "the fill is still running".into();
+        return Vec::new();
+    }
+    view.filled = None;
+    model.status = format!(
+        "filling again with {} stroke(s), {} depth point(s), {} face group(s), {} paste(s)",
+        e.spec.directions.len(),
+        e.spec.depth.points.len(),
+        e.spec.depth.faces.len(),
+        e.spec.pastes.len()
+    );
+    vec![Effect::Refill(view.name.clone(), Box::new(e.spec.clone()), e.shape.clone())]
+}
+
+/// `w`: write the fill spec (and the shape it fills) for `solidtex fill`.
+pub fn write(model: &mut Model) -> Vec<Effect> {
+    let Screen::Fill(view) = &model.screen else { return Vec::new() };
+    let Some(e) = &view.edit else { return Vec::new() };
+    model.status = format!("writing the fill spec of {}", view.name);
+    vec![Effect::WriteSpec(view.name.clone(), Box::new(e.spec.clone()), e.shape.clone())]
+}
+
+/// The model's size (the diagonal of its bounds), for the size of a new paste.
+pub fn model_size(view: &FillView) -> f32 {
+    view.filled.as_ref().map_or(1.0, |f| {
+        let (lo, hi) = render::bounds(&[(&f.model, &f.textures)]);
+        (hi - lo).length()
+    })
+}
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::*;
+    use crate::tui::model::{FillPreview, Item};
+    use crate::tui::{Message, update};
+    use std::path::PathBuf;
+    use std::sync::Arc;
+
+    /// A unit cube of marble, filled, its depth field x, on the fill preview's screen.
+    pub fn filled_cube(depth: Option<Vec<f32>>) -> FillPreview {
+        use crate::fill::render::Textures;
+        let marble = crate::procedural::generate(crate::procedural::Recipe::Marble, [16; 3], 1).unwrap();
+        let mask = crate::mask::splotch(16, 0.1, 1).unwrap();
+        let mesh = crate::fill::tets::cube_lattice([4, 4, 4], 0.25);
+        let patch = crate::fill::paste::Patch {
+            source: 0,
+            vertices: (0..mesh.vertices.len() as u32).collect(),
+            coords: mesh.vertices.iter().map(|v| *v * 0.5 + 0.25).collect(),
+        };
+        let tet_patches = vec![vec![0]; mesh.tets.len()];
+        let sources = vec![crate::fill::Source {
+            exemplar: "marble".into(),
+            volume: "marble.exr".into(),
+            mask: crate::fill::MaskRef::Splotch { size: 16, falloff: 0.1, seed: 1 },
+        }];
+        let depth = depth.map(|_| mesh.vertices.iter().map(|v| v.x).collect());
+        let model = crate::fill::LstModel { mesh, sources, patches: vec![patch], tet_patches };
+        FillPreview {
+            model,
+            textures: Textures::new(&[marble], &[mask]),
+            summary: "marble in a cube".into(),
+            depth,
+            spec: crate::fill::spec::FillSpec::new("marble"),
+            shape: "block".into(),
+        }
+    }
+
+    pub fn filling(preview: FillPreview) -> Model {
+        let item = Item {
+            name: "marble".into(),
+            declared: None,
+            size: None,
+            state: crate::tui::BuildState::Built("0".into()),
+            quality: None,
+            previous: false,
+        };
+        let mut m = Model::new(PathBuf::from("lib.toml"), PathBuf::from("out"), vec![item], Vec::new());
+        m.screen = Screen::Fill(FillView {
+            name: "marble".into(),
+            filled: None,
+            axis: crate::volume::Axis::Z,
+            offset: 0.0,
+            from: None,
+            edit: None,
+        });
+        update(&mut m, Message::Filled("marble".into(), Ok(Arc::new(preview))));
+        m
+    }
+
+    fn edit(m: &Model) -> &FillEdit {
+        let Screen::Fill(FillView { edit: Some(e), .. }) = &m.screen else { panic!("the fill preview") };
+        e
+    }
+
+    #[test]
+    fn constraints_placed_on_the_cut_make_the_fill_spec() {
+        let mut m = filling(filled_cube(None));
+        let Screen::Fill(view) = &m.screen else { panic!("the fill preview") };
+        let centre = cursor_point(view).unwrap();
+        assert!((centre - Vec3::new(0.5, 0.5, 0.5)).length() < 0.02, "{centre}");
+        // a stroke: two points, the second 8 cursor steps to the right
+        assert!(update(&mut m, Message::FinishStroke).is_empty() && m.status.contains("needs two different points"));
+        update(&mut m, Message::StrokePoint);
+        (0..8).for_each(|_| _ = update(&mut m, Message::MoveCursor(1.0, 0.0)));
+        update(&mut m, Message::StrokePoint);
+        update(&mut m, Message::FinishStroke);
+        let stroke = &edit(&m).spec.directions[0];
+        assert!(
+            stroke.len() == 2 && (stroke[1] - stroke[0]).x > 0.2 && (stroke[1] - stroke[0]).y.abs() < 1e-5,
+            "{stroke:?}"
+        );
+        // depth points at the current depth, lowered with [
+        update(&mut m, Message::DepthPoint);
+        update(&mut m, Message::DepthValue(-DEPTH_STEP));
+        update(&mut m, Message::FaceGroup);
+        let depth = &edit(&m).spec.depth;
+        assert_eq!((depth.points[0].1, depth.faces[0].value), (1.0, 0.75));
+        // a paste at the cursor, turned about the cut's normal and scaled
+        update(&mut m, Message::Paste);
+        update(&mut m, Message::WarpPaste(15.0, 1.0));
+        update(&mut m, Message::WarpPaste(0.0, 1.25));
+        let paste = &edit(&m).spec.pastes[0];
+        let (axis, angle) = paste.rotation.to_axis_angle();
+        assert!((angle.to_degrees() - 15.0).abs() < 0.01 && axis.z > 0.99, "{axis} {angle}");
+        let first = model_size_of(&m) / 4.0;
+        assert!((paste.scale - first * 1.25).abs() < 1e-5, "{} {first}", paste.scale);
+        update(&mut m, Message::Undo);
+        assert!((edit(&m).spec.pastes[0].scale - first).abs() < 1e-5, "undo takes the last change back");
+        // r refills with the spec, w writes it
+        let spec = edit(&m).spec.clone();
+        assert_eq!(
+            update(&mut m, Message::Refill),
+            vec![Effect::Refill("marble".into(), Box::new(spec.clone()), "block".into())]
+        );
+        assert!(update(&mut m, Message::Refill).is_empty(), "one refill at a time");
+        assert_eq!(
+            update(&mut m, Message::WriteSpec),
+            vec![Effect::WriteSpec("marble".into(), Box::new(spec), "block".into())]
+        );
+        // no depth field: c says so
+        update(&mut m, Message::Filled("marble".into(), Ok(Arc::new(filled_cube(None)))));
+        update(&mut m, Message::ShowDepth);
+        assert!(m.status.contains("no depth field") && !edit(&m).show_depth, "{}", m.status);
+    }
+
+    fn model_size_of(m: &Model) -> f32 {
+        let Screen::Fill(view) = &m.screen else { panic!("the fill preview") };
+        model_size(view)
+    }
+
+    /// A drag on the cut draws a stroke through the points it passes; letting go ends it.
+    #[test]
+    fn a_drag_draws_a_stroke() {
+        let mut m = filling(filled_cube(None));
+        update(&mut m, Message::CursorAt(0.2, 0.5));
+        for x in [0.21, 0.3, 0.4, 0.5] {
+            update(&mut m, Message::DragStroke(x, 0.5));
+        }
+        assert_eq!(edit(&m).stroke.len(), 4, "the start, then every cursor step: 0.21 is too close");
+        update(&mut m, Message::EndDrag);
+        let e = edit(&m);
+        assert!(e.stroke.is_empty() && e.spec.directions.len() == 1 && e.spec.directions[0].len() == 4);
+        update(&mut m, Message::EndDrag);
+        assert_eq!(edit(&m).spec.directions.len(), 1, "a lone button release adds nothing");
+    }
+}
