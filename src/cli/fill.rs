@@ -85,6 +85,10 @@ pub struct CutArgs {
     /// A point on the side of every stroke to keep, X,Y,Z (default: the model's centre).
     #[arg(long, allow_hyphen_values = true, requires = "stroke")]
     pub keep: Option<String>,
+    /// With --stroke: move the cut faces along their normal by SCALE x (Displacement -
+    /// 0.5), the exemplars' Displacement channel sampled inside (-1000 to 1000 model units).
+    #[arg(long, allow_hyphen_values = true, requires = "stroke")]
+    pub displacement: Option<f32>,
     /// With --stroke: where the 3D view looks from.
     #[command(flatten)]
     pub camera: CameraArgs,
@@ -436,6 +440,9 @@ fn vector(option: &str, text: &str) -> Result<glam::Vec3> {
 fn stroke_values(args: &CutArgs) -> Result<(Vec<fill::carve::Stroke>, Option<glam::Vec3>)> {
     io::values::within("--size", args.size, 8, MAX_PICTURE)?;
     args.camera.checked()?;
+    if let Some(scale) = args.displacement {
+        io::values::within("--displacement", scale, -1000.0, 1000.0)?;
+    }
     let polylines = args
         .stroke
         .iter()
@@ -473,15 +480,21 @@ fn run_stroke_cut(args: &CutArgs) -> Result<()> {
     let keep = keep.unwrap_or((bounds.0 + bounds.1) / 2.0);
     let started = Instant::now();
     let camera = (args.camera.yaw, args.camera.pitch);
-    let carving = fill::carve::carve(&loaded.model, &loaded.textures, &strokes, keep, camera, args.size)
+    let relief = match args.displacement {
+        None => None,
+        Some(scale) => Some((channel_textures(std::slice::from_ref(&loaded), &Channel::Displacement)?, scale)),
+    };
+    let relief = relief.as_ref().map(|(t, scale)| fill::view::Displacement { textures: t, scale: *scale });
+    let carving = fill::carve::carve(&loaded.model, &loaded.textures, &strokes, keep, camera, args.size, relief)
         .map_err(|e| e.in_file(&args.models[0]))?;
     let ms = started.elapsed().as_secs_f64() * 1000.0;
     io::write_rgb8(&args.output, &carving.picture)?;
     eprintln!(
-        "wrote {} ({size}x{size}, {} stroke cut(s), cut faces on {:.0} % of the picture) in {ms:.0} ms",
+        "wrote {} ({size}x{size}, {} stroke cut(s), cut faces on {:.0} % of the picture{}) in {ms:.0} ms",
         args.output.display(),
         strokes.len(),
         carving.cut_share * 100.0,
+        args.displacement.map(|s| format!(", displaced by {s} x (Displacement - 0.5)")).unwrap_or_default(),
         size = args.size
     );
     Ok(())

@@ -14,8 +14,9 @@
 
 use super::model::LstModel;
 use super::render::Textures;
+use super::render::shade_point;
 use super::tets::TetMesh;
-use super::view::{Frame, Hit, Shading, draw_triangle, facets, rasterize};
+use super::view::{Displacement, Frame, Hit, MIDLEVEL, Shading, draw_triangle, facets, rasterize};
 use crate::error::{Error, Result};
 use crate::render::Rgb8;
 use glam::{Vec2, Vec3};
@@ -114,7 +115,9 @@ pub struct Carving {
 }
 
 /// Draws `model` cut by `strokes`, keeping the side of each that holds `keep`, seen from
-/// `camera` (yaw, pitch degrees) at `size` pixels.
+/// `camera` (yaw, pitch degrees) at `size` pixels; with a `relief`, the cut faces are split
+/// into triangles about two pixels across whose corners move along the face's normal (out
+/// of the material) by `scale x (d - 0.5)`, `d` the Displacement channel inside.
 pub fn carve(
     model: &LstModel,
     textures: &Textures,
@@ -122,11 +125,16 @@ pub fn carve(
     keep: Vec3,
     camera: (f32, f32),
     size: usize,
+    relief: Option<Displacement>,
 ) -> Result<Carving> {
     if strokes.is_empty() {
         return Err(Error::invalid("no stroke to cut by"));
     }
     let sides = strokes.iter().map(|s| Side::new(s, keep)).collect::<Result<Vec<_>>>()?;
+    let relief = match relief {
+        Some(d) => Some((d.textures.first().ok_or_else(|| Error::invalid("no displacement texture given"))?, d.scale)),
+        None => None,
+    };
     let frame = Frame::new(&[model], camera, size);
     let shading = Shading::Smooth { crease: super::view::DEFAULT_CREASE };
     let mut hits = rasterize(&facets(model, 0, shading), &frame, |p| sides.iter().all(|s| s.keeps(p)));
@@ -138,17 +146,81 @@ pub fn carve(
         for quad in surface(side, reach) {
             let normal = (quad[1] - quad[0]).cross(quad[2] - quad[0]).normalize_or_zero();
             let facing = if normal.dot(frame.forward) > 0.0 { -normal } else { normal };
-            for tri in [[quad[0], quad[1], quad[2]], [quad[0], quad[2], quad[3]]] {
-                draw_triangle(&mut hits, size, tri.map(|p| frame.to_pixel(p)), |b| {
-                    let p = tri[0] * b[0] + tri[1] * b[1] + tri[2] * b[2];
+            let triangles = match &relief {
+                None => vec![
+                    [(quad[0], quad[0]), (quad[1], quad[1]), (quad[2], quad[2])],
+                    [(quad[0], quad[0]), (quad[2], quad[2]), (quad[3], quad[3])],
+                ],
+                Some((textures, scale)) => {
+                    relief_triangles(&quad, facing, model, &grid, (textures, *scale), frame.pixel())
+                }
+            };
+            for tri in triangles {
+                let shown = tri.map(|c| c.1);
+                let lit = (shown[1] - shown[0]).cross(shown[2] - shown[0]).normalize_or(facing);
+                let lit = if lit.dot(facing) < 0.0 { -lit } else { lit };
+                draw_triangle(&mut hits, size, shown.map(|p| frame.to_pixel(p)), |b| {
+                    let p = tri[0].0 * b[0] + tri[1].0 * b[1] + tri[2].0 * b[2];
+                    let q = shown[0] * b[0] + shown[1] * b[1] + shown[2] * b[2];
                     let tet = grid.locate(&model.mesh, p)?;
-                    others(p).then_some(Hit { depth: frame.forward.dot(p), model: 0, tet, point: p, normal: facing })
+                    others(p).then_some(Hit { depth: frame.forward.dot(q), model: 0, tet, point: p, normal: lit })
                 });
             }
         }
     }
     let cut = hits.iter().zip(&boundary).filter(|(h, b)| h.is_some_and(|h| **b != Some(h.depth))).count();
     Ok(Carving { picture: frame.shade(&[(model, textures)], &hits), cut_share: cut as f64 / (size * size) as f64 })
+}
+
+/// The most triangles one displaced cut face is split into.
+const MAX_RELIEF_TRIANGLES: usize = 2_000_000;
+
+/// The part of a stroke's quad inside the model's bounds as a grid of triangles about two
+/// pixels across, each corner (point on the face, point shown) moved along `facing` by
+/// `scale x (d - 0.5)`, `d` sampled in the tet holding it (0.5, no move, outside).
+fn relief_triangles(
+    quad: &[Vec3; 4],
+    facing: Vec3,
+    model: &LstModel,
+    grid: &TetGrid,
+    (textures, scale): (&Textures, f32),
+    pixel: f32,
+) -> Vec<[(Vec3, Vec3); 3]> {
+    let (origin, along, across) = (quad[0], quad[1] - quad[0], quad[3] - quad[0]);
+    let (lo, hi) =
+        model.mesh.vertices.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(a, b), p| (a.min(*p), b.max(*p)));
+    // the quad's parameters (0 to 1 along each side) that reach the model's bounds
+    let span = |axis: Vec3| {
+        let corners = (0..8).map(|i| Vec3::new([lo.x, hi.x][i & 1], [lo.y, hi.y][(i >> 1) & 1], [lo.z, hi.z][i >> 2]));
+        let t: Vec<f32> = corners.map(|c| (c - origin).dot(axis) / axis.length_squared()).collect();
+        let (a, b) = t.iter().fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), x| (a.min(*x), b.max(*x)));
+        (a.clamp(0.0, 1.0), b.clamp(0.0, 1.0))
+    };
+    let ((s0, s1), (t0, t1)) = (span(along), span(across));
+    let step = 2.0 * pixel.max(1e-9);
+    let cells = |length: f32| ((length / step).ceil() as usize).max(1);
+    let (mut ns, mut nt) = (cells(along.length() * (s1 - s0)), cells(across.length() * (t1 - t0)));
+    let over = ((2 * ns * nt) as f32 / MAX_RELIEF_TRIANGLES as f32).sqrt();
+    if over > 1.0 {
+        (ns, nt) = (((ns as f32 / over) as usize).max(1), ((nt as f32 / over) as usize).max(1));
+    }
+    let corner = |i: usize, j: usize| {
+        let (s, t) = (s0 + (s1 - s0) * i as f32 / ns as f32, t0 + (t1 - t0) * j as f32 / nt as f32);
+        let p = origin + along * s + across * t;
+        let d = grid.locate(&model.mesh, p).map_or(MIDLEVEL, |tet| shade_point(model, textures, tet as usize, p)[0]);
+        (p, p + facing * scale * (d - MIDLEVEL))
+    };
+    let corners: Vec<(Vec3, Vec3)> =
+        (0..=nt).flat_map(|j| (0..=ns).map(move |i| (i, j))).map(|(i, j)| corner(i, j)).collect();
+    let at = |i: usize, j: usize| corners[j * (ns + 1) + i];
+    let mut out = Vec::with_capacity(2 * ns * nt);
+    for j in 0..nt {
+        for i in 0..ns {
+            out.push([at(i, j), at(i + 1, j), at(i + 1, j + 1)]);
+            out.push([at(i, j), at(i + 1, j + 1), at(i, j + 1)]);
+        }
+    }
+    out
 }
 
 /// A length that carries a stroke's surface past the model on every side.
@@ -317,7 +389,7 @@ mod tests {
         // the stroke runs along x at z = 0.5 and is swept along y: the plane z = 0.5
         let stroke = Stroke { points: vec![Vec3::new(-1.0, 0.3, 0.5), Vec3::new(2.0, 0.3, 0.5)], extrude: Vec3::Y };
         let below = Vec3::new(0.5, 0.5, 0.2);
-        let carved = carve(&model, &textures, std::slice::from_ref(&stroke), below, (0.0, 0.0), size).unwrap();
+        let carved = carve(&model, &textures, std::slice::from_ref(&stroke), below, (0.0, 0.0), size, None).unwrap();
         let plane = View::framing((Vec3::ZERO, Vec3::ONE), Vec3::splat(0.5), Vec3::Z, size).unwrap();
         let planar = cut(&model, &textures, &plane);
         // looking down -z from +z at the face z = 0.5, lit at 0.35 + 0.65 (n . light)
@@ -347,7 +419,48 @@ mod tests {
         assert!(compared > 2500, "{compared}");
         assert!(carved.cut_share > 0.6, "the face fills most of the picture: {}", carved.cut_share);
         // keeping the other side, the camera sees the cube's own top (z = 1): no cut face
-        let above = carve(&model, &textures, &[stroke], Vec3::new(0.5, 0.5, 0.8), (0.0, 0.0), size).unwrap();
+        // a relief of scale 0 draws the same face through its grid of small triangles
+        let flat = Displacement { textures: std::slice::from_ref(&textures), scale: 0.0 };
+        let gridded =
+            carve(&model, &textures, std::slice::from_ref(&stroke), below, (0.0, 0.0), size, Some(flat)).unwrap();
+        let differ = carved.picture.data.iter().zip(&gridded.picture.data).filter(|(a, b)| a.abs_diff(**b) > 2).count();
+        assert!(differ < size * 4, "{differ} samples differ");
+        let above = carve(&model, &textures, &[stroke], Vec3::new(0.5, 0.5, 0.8), (0.0, 0.0), size, None).unwrap();
         assert_eq!(above.cut_share, 0.0);
+    }
+
+    /// Displaced cut faces: on the unit cube whose Displacement is x, the face z = 0.5 seen
+    /// from +z moves up by s (x - 0.5) at every corner inside; outside the model nothing moves.
+    #[test]
+    fn a_displaced_cut_face_follows_the_channel() {
+        let (model, _) = cube();
+        let relief =
+            Volume::from_fn([16; 3], vec![Channel::Displacement], |x, _, _, o| o[0] = (x as f32 + 0.5) / 16.0).unwrap();
+        let full = Volume::from_fn([2; 3], vec![Channel::A], |_, _, _, o| o.fill(1.0)).unwrap();
+        let textures = Textures::channel(&[relief], &[full], &[Channel::Displacement]).unwrap();
+        let grid = TetGrid::new(&model.mesh).unwrap();
+        let quad = [
+            Vec3::new(-1.0, -1.0, 0.5),
+            Vec3::new(2.0, -1.0, 0.5),
+            Vec3::new(2.0, 2.0, 0.5),
+            Vec3::new(-1.0, 2.0, 0.5),
+        ];
+        let scale = 0.2;
+        let triangles = relief_triangles(&quad, Vec3::Z, &model, &grid, (&textures, scale), 0.01);
+        let mut checked = 0;
+        for (p, q) in triangles.iter().flatten() {
+            assert!((q.x, q.y) == (p.x, p.y), "corners move along the normal only");
+            if (0.1..0.9).contains(&p.x) && (0.05..0.95).contains(&p.y) {
+                let want = 0.5 + scale * (p.x - 0.5);
+                assert!((q.z - want).abs() < 0.002, "at {p}: {} against {want}", q.z);
+                checked += 1;
+            }
+            if p.x < -0.01 || p.x > 1.01 {
+                assert_eq!(q.z, 0.5, "outside the model at {p}");
+            }
+        }
+        assert!(checked > 1000, "{checked}");
+        // the grid covers the model's part of the quad only, about two pixels a cell
+        assert!(triangles.len() < 2 * 120 * 120, "{}", triangles.len());
     }
 }

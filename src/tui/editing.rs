@@ -116,6 +116,44 @@ pub fn add_blur(model: &mut Model) -> Vec<Effect> {
     effects
 }
 
+/// The mesh of a new stamp or scatter step arrived (as the manifest names it): the step is
+/// appended, a stamp at the volume's centre, a scatter of ten seeds, checked and previewed.
+pub fn add_mesh_step(model: &mut Model, mesh: Result<String, String>, stamp: bool) -> Vec<Effect> {
+    let folder = model.manifest.parent().unwrap_or(Path::new(".")).to_path_buf();
+    let Screen::Editor(editor) = &mut model.screen else { return Vec::new() };
+    let Some(text) = editor.text.clone() else { return Vec::new() };
+    let mesh = match mesh {
+        Ok(mesh) => mesh,
+        Err(e) => {
+            model.status = format!("no step added: {e}");
+            return Vec::new();
+        }
+    };
+    let fields = edit::fields(&text, &editor.name).unwrap_or_default();
+    let Some(size) = fields.iter().find(|f| f.key == "size").and_then(|f| sides(&f.value)) else {
+        model.status = "the entry has no size to place the step in: add the step in the file".into();
+        return Vec::new();
+    };
+    let smallest = size.iter().copied().fold(f32::INFINITY, f32::min);
+    let step = if stamp {
+        let at = glam::Vec3::from(size.map(|s| (s / 2.0).floor()));
+        let scale = glam::Vec3::splat((smallest / 10.0).max(1.0));
+        super::model::StampStep::Stamp(crate::stamp::Placement { at, rotation: glam::Quat::IDENTITY, scale })
+    } else {
+        super::model::StampStep::Scatter {
+            count: 10,
+            scale: ((smallest / 20.0).max(1.0), (smallest / 12.0).max(1.5)),
+            seed: 1,
+        }
+    };
+    let name = editor.name.clone();
+    let what = if stamp { "a stamp" } else { "a scatter of 10" };
+    let status = format!("added {what} of {mesh}; previewing");
+    let effects = keep(model, &folder, edit::append_steps(&text, &name, &[step], &mesh), status);
+    reselect(model, |fields, _| fields.len().saturating_sub(1));
+    effects
+}
+
 /// After a kept edit, selects the field `pick` chooses from the new fields and the old
 /// selection (clamped to the list).
 fn reselect(model: &mut Model, pick: impl FnOnce(&[edit::Field], usize) -> usize) {
@@ -435,6 +473,38 @@ mod tests {
         assert!(check(&text, Path::new("lib"), "m").is_ok());
         assert_eq!(sides("[16, 24, 40]"), Some([16.0, 24.0, 40.0]));
         assert_eq!(sides("\"big\""), None);
+    }
+
+    /// `t` and `n` pick a mesh in the file picker and append a stamp at the centre or a
+    /// scatter of ten, checked by the manifest's rules; esc in the picker adds nothing.
+    #[test]
+    fn t_and_n_append_stamp_and_scatter_steps_of_a_picked_mesh() {
+        use crate::tui::new_entry::{FileKind, FileRow};
+        let dir = tempfile::tempdir().unwrap();
+        let ball = crate::mesh::shapes::ellipsoid(glam::Vec3::ONE, 6, 8);
+        crate::io::mesh_file::write_mesh(&dir.path().join("seed.obj"), &ball).unwrap();
+        let mut m = editing_in(TEXT, "m");
+        m.manifest = dir.path().join("library.toml");
+        let folder = dir.path().to_path_buf();
+        assert_eq!(update(&mut m, Message::AddMeshStep(true)), vec![Effect::List(folder.clone(), FileKind::Mesh)]);
+        update(&mut m, Message::Back);
+        assert!(matches!(m.screen, Screen::Editor(_)) && m.status == "no step added", "{}", m.status);
+        for stamp in [true, false] {
+            update(&mut m, Message::AddMeshStep(stamp));
+            let rows =
+                vec![FileRow { name: "..".into(), folder: true }, FileRow { name: "seed.obj".into(), folder: false }];
+            update(&mut m, Message::Listed(folder.clone(), Ok((folder.clone(), rows))));
+            update(&mut m, Message::Down);
+            assert_eq!(update(&mut m, Message::Open), vec![Effect::StepMesh(folder.join("seed.obj"), stamp)]);
+            let effects = update(&mut m, Message::StepMeshChosen(Ok("seed.obj".into()), stamp));
+            assert!(matches!(effects.as_slice(), [Effect::Preview { .. }]), "{effects:?} {:?}", editor(&m).error);
+        }
+        let text = editor(&m).text.clone().unwrap();
+        assert!(text.contains("stamp = \"seed.obj\"") && text.contains("at = \"8.0,8.0,8.0\""), "{text}");
+        assert!(text.contains("scatter = \"seed.obj\"") && text.contains("count = 10"), "{text}");
+        assert!(check(&text, dir.path(), "m").is_ok());
+        update(&mut m, Message::StepMeshChosen(Err("no such mesh".into()), true));
+        assert!(m.status.contains("no step added: no such mesh"), "{}", m.status);
     }
 
     /// A manifest whose entry "bad" has two mistakes (size 0, an unknown recipe).

@@ -137,6 +137,7 @@ fn editing(editor: &Editor) -> Vec<Hint> {
         unless("u", "undo", editor.undo.is_empty().then_some("nothing to undo")),
         unless("r", "redo", editor.redo.is_empty().then_some("nothing to redo")),
         unless("a", "add blur", loading),
+        unless("t/n", "add stamp/scatter", loading),
         unless("x", "remove step", not_step),
         unless("K/J", "move step", not_step),
         hint("esc", "back"),

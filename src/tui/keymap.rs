@@ -135,6 +135,8 @@ fn editor(code: KeyCode) -> Option<Message> {
         KeyCode::Char('r') => Some(Message::Redo),
         KeyCode::Char('s') => Some(Message::Save),
         KeyCode::Char('a') => Some(Message::AddBlur),
+        KeyCode::Char('t') => Some(Message::AddMeshStep(true)),
+        KeyCode::Char('n') => Some(Message::AddMeshStep(false)),
         KeyCode::Char('x') => Some(Message::RemoveStep),
         KeyCode::Char('K') => Some(Message::MoveStep(true)),
         KeyCode::Char('J') => Some(Message::MoveStep(false)),
@@ -255,6 +257,7 @@ pub const SECTIONS: [Section; 9] = [
             ("s", "save the manifest"),
             ("u / r", "undo / redo"),
             ("a", "add a blur step"),
+            ("t / n", "add a stamp / scatter step: pick its mesh"),
             ("x", "remove the step under the cursor"),
             ("K / J", "move that step up / down"),
         ],
@@ -371,7 +374,7 @@ mod tests {
         assert_eq!(titles(&editor, "")[0], "recipe editor");
         assert_eq!(titles(&Screen::Library, "").last(), Some(&"everywhere"));
         assert_eq!(titles(&Screen::Library, "").len(), SECTIONS.len());
-        assert_eq!(titles(&Screen::Library, "STAMP"), ["slices", "stamp mode"]);
+        assert_eq!(titles(&Screen::Library, "STAMP"), ["slices", "stamp mode", "recipe editor"]);
         let stamp_rows = &help_rows(&Screen::Library, "stamp")[1].1;
         assert!(stamp_rows.iter().all(|(k, a)| k.contains("stamp") || a.contains("stamp")), "{stamp_rows:?}");
         assert!(help_rows(&editor, "no such key").is_empty());

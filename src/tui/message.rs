@@ -116,6 +116,10 @@ pub enum Message {
     Save,
     /// Append a blur step to the entry being edited.
     AddBlur,
+    /// Append a stamp (true) or scatter step to the entry being edited: pick its mesh.
+    AddMeshStep(bool),
+    /// The mesh of a new stamp (true) or scatter step, as the manifest names it (or why not).
+    StepMeshChosen(Result<String, String>, bool),
     /// Remove the step of the selected field (editor).
     RemoveStep,
     /// Move the step of the selected field before the previous one (true) or after the next.
@@ -237,6 +241,8 @@ pub enum Effect {
     LoadPhotos(String),
     /// Read this mesh as the seed of stamp mode.
     LoadSeedFile(PathBuf),
+    /// Find how the manifest names this mesh, for a new stamp (true) or scatter step.
+    StepMesh(PathBuf, bool),
     /// Fill the drawn shape (third) with exemplar `name`'s spec (second).
     Refill(String, Box<crate::fill::spec::FillSpec>, String),
     /// Write exemplar `name`'s fill spec and the drawn shape into `OUTPUT/exports/`.

@@ -258,6 +258,10 @@ fn start(effects: Vec<Effect>, model: &Model, send: &Sender<Message>) {
                 let _ =
                     send.send(Message::Exported(write_spec(&output, &name, &spec, &shape).map_err(|e| e.to_string())));
             }
+            Effect::StepMesh(path, stamp) => {
+                let named = seed_file(&manifest, &path).map(|(_, name)| name.unwrap_or_default());
+                let _ = send.send(Message::StepMeshChosen(named.map_err(|e| e.to_string()), stamp));
+            }
             Effect::LoadSeedFile(path) => {
                 let _ = send.send(Message::SeedLoaded(seed_file(&manifest, &path).map_err(|e| e.to_string())));
             }

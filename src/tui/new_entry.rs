@@ -3,7 +3,7 @@
 //! folder listing and the photo arrive as messages from workers.
 
 use super::message::{Effect, EntryChange};
-use super::model::{ExemplarView, Model, Screen};
+use super::model::{Editor, ExemplarView, Model, Screen};
 use crate::volume::Image2d;
 use std::path::{Component, Path, PathBuf};
 use std::sync::Arc;
@@ -90,13 +90,23 @@ pub struct NewEntry {
     pub kind: usize,
     /// The file picker, once the kind is chosen (kinds that read a file).
     pub picker: Option<Picker>,
-    /// When it picks a seed mesh for stamp mode instead: the view to go back to.
-    pub seed_for: Option<Box<ExemplarView>>,
+    /// When it picks a mesh instead of making an entry: for what, and the screen to go
+    /// back to.
+    pub mesh_for: Option<MeshFor>,
+}
+
+/// What a mesh is picked for.
+#[derive(Debug, Clone)]
+pub enum MeshFor {
+    /// The seed of stamp mode in this exemplar view.
+    Seed(Box<ExemplarView>),
+    /// A stamp (true) or scatter step appended in this recipe editor.
+    Step(Box<Editor>, bool),
 }
 
 /// `n` on the library: the list of kinds.
 pub fn start(model: &mut Model) {
-    model.screen = Screen::New(NewEntry { kind: 0, picker: None, seed_for: None });
+    model.screen = Screen::New(NewEntry { kind: 0, picker: None, mesh_for: None });
     model.status = "new exemplar: choose what makes it (enter), esc goes back".into();
 }
 
@@ -172,10 +182,17 @@ pub fn open(model: &mut Model) -> Vec<Effect> {
         return go_to(picker, target);
     }
     let path = picker.folder.join(&row.name);
-    if let Some(view) = entry.seed_for.take() {
-        model.screen = Screen::Exemplar(*view);
-        model.status = format!("loading the seed {}", path.display());
-        return vec![Effect::LoadSeedFile(path)];
+    match entry.mesh_for.take() {
+        Some(MeshFor::Seed(view)) => {
+            model.screen = Screen::Exemplar(*view);
+            model.status = format!("loading the seed {}", path.display());
+            return vec![Effect::LoadSeedFile(path)];
+        }
+        Some(MeshFor::Step(editor, stamp)) => {
+            model.screen = Screen::Editor(*editor);
+            return vec![Effect::StepMesh(path, stamp)];
+        }
+        None => {}
     }
     add(model, kind, Some(path))
 }
@@ -192,8 +209,25 @@ pub fn pick_seed(model: &mut Model) -> Vec<Effect> {
     }
     let view = Box::new(view.clone());
     let picker = Picker { file: FileKind::Mesh, folder: folder.clone(), rows: None, selected: 0, peek: None };
-    model.screen = Screen::New(NewEntry { kind: 0, picker: Some(picker), seed_for: Some(view) });
+    model.screen = Screen::New(NewEntry { kind: 0, picker: Some(picker), mesh_for: Some(MeshFor::Seed(view)) });
     model.status = "choose a seed mesh (obj, stl, ply): enter takes it, esc keeps the one in use".into();
+    vec![Effect::List(folder, FileKind::Mesh)]
+}
+
+/// `t` / `n` in the recipe editor: a picker for the mesh of a new stamp (true) or scatter
+/// step, starting in the manifest's folder.
+pub fn pick_step_mesh(model: &mut Model, stamp: bool) -> Vec<Effect> {
+    let folder = manifest_folder(&model.manifest);
+    let Screen::Editor(editor) = &model.screen else { return Vec::new() };
+    if editor.text.is_none() {
+        return Vec::new();
+    }
+    let editor = Box::new(editor.clone());
+    let picker = Picker { file: FileKind::Mesh, folder: folder.clone(), rows: None, selected: 0, peek: None };
+    model.screen =
+        Screen::New(NewEntry { kind: 0, picker: Some(picker), mesh_for: Some(MeshFor::Step(editor, stamp)) });
+    let what = if stamp { "stamp" } else { "scatter" };
+    model.status = format!("choose the mesh to {what} (obj, stl, ply): enter takes it, esc goes back");
     vec![Effect::List(folder, FileKind::Mesh)]
 }
 
@@ -219,9 +253,11 @@ fn add(model: &mut Model, kind: Kind, file: Option<PathBuf>) -> Vec<Effect> {
 /// screen is not this one.
 pub fn back(model: &mut Model) -> bool {
     let Some(entry) = screen(model) else { return false };
-    if let Some(view) = entry.seed_for.take() {
-        model.screen = Screen::Exemplar(*view);
-        model.status = "the seed mesh stays".into();
+    if let Some(back) = entry.mesh_for.take() {
+        (model.screen, model.status) = match back {
+            MeshFor::Seed(view) => (Screen::Exemplar(*view), "the seed mesh stays".into()),
+            MeshFor::Step(editor, _) => (Screen::Editor(*editor), "no step added".into()),
+        };
     } else if entry.picker.take().is_none() {
         model.screen = Screen::Library;
         model.status = "no entry added".into();

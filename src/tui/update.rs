@@ -121,6 +121,8 @@ pub fn update(model: &mut Model, message: Message) -> Vec<Effect> {
         Message::Redo => return editing::undo(model, true),
         Message::Save => return editing::save(model),
         Message::AddBlur => return editing::add_blur(model),
+        Message::AddMeshStep(stamp) => return new_entry::pick_step_mesh(model, stamp),
+        Message::StepMeshChosen(result, stamp) => return editing::add_mesh_step(model, result, stamp),
         Message::RemoveStep => return editing::step(model, true, false),
         Message::MoveStep(earlier) => return editing::step(model, false, earlier),
         Message::Saved(result) => editing::saved(model, result),
@@ -217,6 +219,7 @@ fn from_key(message: &Message) -> bool {
             | Message::Peeked(..)
             | Message::PhotosLoaded(..)
             | Message::SideLoaded(..)
+            | Message::StepMeshChosen(..)
     )
 }
 

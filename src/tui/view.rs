@@ -781,7 +781,7 @@ mod tests {
     fn the_new_entry_screen_lists_kinds_then_files_with_the_photo() {
         use crate::tui::new_entry::{FileRow, NewEntry, Picker};
         let mut m = model();
-        m.screen = Screen::New(NewEntry { kind: 2, picker: None, seed_for: None });
+        m.screen = Screen::New(NewEntry { kind: 2, picker: None, mesh_for: None });
         let (text, buffer) = screen(&m, 100, 24);
         assert!(text.contains("new exemplar: what makes it?") && text.contains("procedural:chocolate"), "{text}");
         let chosen = (0..100u16).map(|x| buffer[(x, 3)].symbol().to_string()).collect::<String>();
@@ -791,7 +791,7 @@ mod tests {
             ["..", "photos", "a.png"].iter().map(|n| FileRow { name: n.to_string(), folder: !n.ends_with(".png") });
         m.screen = Screen::New(NewEntry {
             kind: 0,
-            seed_for: None,
+            mesh_for: None,
             picker: Some(Picker {
                 file: crate::tui::new_entry::FileKind::Image,
                 folder: PathBuf::from("/w/lib"),

@@ -446,6 +446,24 @@ fn displacement_mapping_raises_the_bark_into_furrows() {
     let run = solidtex(&["view", &at(d, "kiwi.lst"), "--displacement", "0.1", "-o", &bad]);
     assert_fails(&run, &["kiwi.exr", "Displacement"]);
     assert_usage(&solidtex(&["view", &model, "--displacement", "5000", "-o", &bad]), &["--displacement"]);
+    // a stroke cut across the log: its face shows the relief at the rim, only when displaced
+    let across = ["cut", &model, "--stroke", "0,-1,1.5;0,1,1.5", "--extrude", "1,0,0", "--keep", "0,0,0.5"];
+    let view = ["--yaw", "40", "--pitch", "30", "--size", "160"];
+    let (flat_cut, relief_cut) = (at(d, "flat_cut.png"), at(d, "relief_cut.png"));
+    assert!(solidtex(&[&across[..], &view, &["-o", &flat_cut]].concat()).status.success());
+    let run = solidtex(&[&across[..], &view, &["--displacement", "0.1", "-o", &relief_cut]].concat());
+    assert!(run.status.success() && stderr(&run).contains("displaced by 0.1"), "{}", stderr(&run));
+    let changed = |a: &str, b: &str| {
+        let (a, b) = (image::open(a).unwrap().to_rgb8(), image::open(b).unwrap().to_rgb8());
+        a.pixels().zip(b.pixels()).filter(|(p, q)| p.0.iter().zip(q.0).any(|(x, y)| x.abs_diff(y) > 24)).count()
+    };
+    assert!(changed(&flat_cut, &relief_cut) > 200, "{} pixels changed", changed(&flat_cut, &relief_cut));
+    let kiwi_cut = ["cut", &at(d, "kiwi.lst"), "--stroke", "0,-1,0;0,1,0", "--extrude", "0,0,1"];
+    assert_fails(
+        &solidtex(&[&kiwi_cut[..], &["--displacement", "0.1", "-o", &bad]].concat()),
+        &["kiwi.exr", "Displacement"],
+    );
+    assert_usage(&solidtex(&[&across[..], &["--displacement", "5000", "-o", &bad]].concat()), &["--displacement"]);
     assert!(!Path::new(&bad).exists());
 }
 
