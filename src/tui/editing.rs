@@ -346,14 +346,25 @@ pub fn filled(model: &mut Model, name: &str, result: Result<std::sync::Arc<super
                     show_depth: false,
                     undo: Vec::new(),
                     dragging: false,
+                    refilling: false,
                 });
+            }
+            if let Some(edit) = &mut view.edit {
+                edit.refilling = false;
             }
             view.filled = Some(preview);
         }
-        Err(e) => {
-            model.status = format!("cannot fill with {name}: {e}");
-            model.screen = Screen::Library;
-        }
+        Err(e) => match &mut view.edit {
+            // a refill with the constraints failed: the fill and the constraints stay
+            Some(edit) if view.filled.is_some() => {
+                edit.refilling = false;
+                model.status = format!("the refill failed: {e}; u undoes the last constraint");
+            }
+            _ => {
+                model.status = format!("cannot fill with {name}: {e}");
+                model.screen = Screen::Library;
+            }
+        },
     }
 }
 

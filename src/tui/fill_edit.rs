@@ -206,12 +206,13 @@ pub fn toggle_depth(model: &mut Model) {
 /// `r`: fill again with the constraints placed.
 pub fn refill(model: &mut Model) -> Vec<Effect> {
     let Screen::Fill(view) = &mut model.screen else { return Vec::new() };
-    let Some(e) = &view.edit else { return Vec::new() };
-    if view.filled.is_none() {
+    let Some(e) = &mut view.edit else { return Vec::new() };
+    if view.filled.is_none() || e.refilling {
         model.status = "the fill is still running".into();
         return Vec::new();
     }
-    view.filled = None;
+    // the fill on screen stays until the new one arrives (or fails: then it is kept)
+    e.refilling = true;
     model.status = format!(
         "filling again with {} stroke(s), {} depth point(s), {} face group(s), {} paste(s)",
         e.spec.directions.len(),
@@ -343,6 +344,13 @@ pub(crate) mod tests {
             vec![Effect::Refill("marble".into(), Box::new(spec.clone()), "block".into())]
         );
         assert!(update(&mut m, Message::Refill).is_empty(), "one refill at a time");
+        // a refill that fails (a point outside the shape) keeps the fill and the constraints
+        update(&mut m, Message::Filled("marble".into(), Err("depth.points[0] lies outside the mesh".into())));
+        assert!(matches!(m.screen, Screen::Fill(FillView { filled: Some(_), .. })), "{}", m.status);
+        assert!(m.status.contains("outside the mesh") && m.status.contains("u undoes"), "{}", m.status);
+        assert_eq!(edit(&m).spec.pastes.len(), 1);
+        assert!(!update(&mut m, Message::Refill).is_empty(), "a new refill may start");
+        update(&mut m, Message::Filled("marble".into(), Ok(Arc::new(filled_cube(None)))));
         assert_eq!(
             update(&mut m, Message::WriteSpec),
             vec![Effect::WriteSpec("marble".into(), Box::new(spec), "block".into())]

@@ -201,6 +201,8 @@ pub struct FillEdit {
     pub undo: Vec<crate::fill::spec::FillSpec>,
     /// Whether a stroke is being dragged with the mouse.
     pub dragging: bool,
+    /// Whether a refill with the spec runs (the fill shown stays until it ends).
+    pub refilling: bool,
 }
 
 /// An action that loses unsaved work, asked for once and done on the second press.

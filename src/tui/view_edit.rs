@@ -117,7 +117,13 @@ pub fn fill(frame: &mut Frame, view: &FillView, area: Rect, regions: &mut super:
             e.spec.depth.faces.len(),
             e.spec.pastes.len(),
             e.depth,
-            if changed { " [r refills]" } else { "" }
+            if e.refilling {
+                " [filling again...]"
+            } else if changed {
+                " [r refills]"
+            } else {
+                ""
+            }
         )
     });
     let title = format!(" fill preview: {}  cut across {} at {:+.2}{placed} ", view.name, view.axis, view.offset);
@@ -131,7 +137,7 @@ pub fn fill(frame: &mut Frame, view: &FillView, area: Rect, regions: &mut super:
         frame.render_widget(Paragraph::new("filling (tet mesh, field, patches)..."), inner);
         return;
     };
-    let size = (inner.width as usize).min(2 * inner.height as usize).max(8);
+    let size = (inner.width as usize).min(2 * inner.height as usize).clamp(8, 4096);
     let x0 = inner.x + (inner.width.saturating_sub(size as u16)) / 2;
     regions.cut = Some(Rect::new(x0, inner.y, size as u16, (size / 2) as u16));
     frame.render_widget(CutWidget { view, filled, size }, Rect::new(x0, inner.y, size as u16, inner.height));
