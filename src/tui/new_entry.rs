@@ -81,6 +81,15 @@ pub struct Picker {
     pub selected: usize,
     /// The selected photo, once read (or why it cannot be).
     pub peek: Option<(PathBuf, Result<Arc<Image2d>, String>)>,
+    /// The folder just left by going up, selected once the listing arrives.
+    pub came_from: Option<String>,
+}
+
+impl Picker {
+    /// A picker of `file`s in `folder`, nothing listed yet.
+    pub fn new(file: FileKind, folder: PathBuf) -> Picker {
+        Picker { file, folder, rows: None, selected: 0, peek: None, came_from: None }
+    }
 }
 
 /// The new-entry screen.
@@ -167,7 +176,7 @@ pub fn open(model: &mut Model) -> Vec<Effect> {
     let kind = KINDS[entry.kind];
     let Some(picker) = &mut entry.picker else {
         let Some(file) = kind.file else { return add(model, kind, None) };
-        entry.picker = Some(Picker { file, folder: folder.clone(), rows: None, selected: 0, peek: None });
+        entry.picker = Some(Picker::new(file, folder.clone()));
         let what = if file == FileKind::Image { "an image" } else { "a volume file" };
         model.status = format!("{}: choose {what} (enter), backspace goes up a folder", kind.recipe);
         return vec![Effect::List(folder, file)];
@@ -208,7 +217,7 @@ pub fn pick_seed(model: &mut Model) -> Vec<Effect> {
         return Vec::new();
     }
     let view = Box::new(view.clone());
-    let picker = Picker { file: FileKind::Mesh, folder: folder.clone(), rows: None, selected: 0, peek: None };
+    let picker = Picker::new(FileKind::Mesh, folder.clone());
     model.screen = Screen::New(NewEntry { kind: 0, picker: Some(picker), mesh_for: Some(MeshFor::Seed(view)) });
     model.status = "choose a seed mesh (obj, stl, ply): enter takes it, esc keeps the one in use".into();
     vec![Effect::List(folder, FileKind::Mesh)]
@@ -223,7 +232,7 @@ pub fn pick_step_mesh(model: &mut Model, stamp: bool) -> Vec<Effect> {
         return Vec::new();
     }
     let editor = Box::new(editor.clone());
-    let picker = Picker { file: FileKind::Mesh, folder: folder.clone(), rows: None, selected: 0, peek: None };
+    let picker = Picker::new(FileKind::Mesh, folder.clone());
     model.screen =
         Screen::New(NewEntry { kind: 0, picker: Some(picker), mesh_for: Some(MeshFor::Step(editor, stamp)) });
     let what = if stamp { "stamp" } else { "scatter" };
@@ -238,15 +247,30 @@ pub fn parent(model: &mut Model) -> Vec<Effect> {
     go_to(picker, up)
 }
 
+/// List `folder`; when it is the one above, the folder left is selected once listed.
 fn go_to(picker: &mut Picker, folder: PathBuf) -> Vec<Effect> {
-    *picker = Picker { file: picker.file, folder: folder.clone(), rows: None, selected: 0, peek: None };
+    let left = picker.folder.file_name().filter(|_| picker.folder.parent() == Some(folder.as_path()));
+    let came_from = left.map(|n| n.to_string_lossy().into_owned());
+    *picker = Picker { came_from, ..Picker::new(picker.file, folder.clone()) };
     vec![Effect::List(folder, picker.file)]
 }
 
+/// The entry is asked for; the screen goes to the library once it is added (a refused file
+/// leaves the picker open, see [`added`]).
 fn add(model: &mut Model, kind: Kind, file: Option<PathBuf>) -> Vec<Effect> {
-    model.screen = Screen::Library;
+    if file.is_none() {
+        model.screen = Screen::Library;
+    }
     model.status = format!("adding a {} entry", kind.recipe);
     vec![Effect::ChangeEntry(EntryChange::New(kind.recipe.to_string(), file))]
+}
+
+/// The manifest changed (or not) after a new entry was asked for: on success the library
+/// shows it; a refusal leaves the picker open with the reason.
+pub fn added(model: &mut Model, ok: bool) {
+    if ok && matches!(model.screen, Screen::New(NewEntry { mesh_for: None, .. })) {
+        model.screen = Screen::Library;
+    }
 }
 
 /// Esc: the picker goes back to the kinds; the kinds to the library. False when the
@@ -274,6 +298,7 @@ pub fn listed(model: &mut Model, asked: &Path, result: Result<(PathBuf, Vec<File
     let Some(picker) = entry.picker.as_mut().filter(|p| p.folder == asked) else { return Vec::new() };
     match result {
         Ok((folder, rows)) => {
+            picker.selected = picker.came_from.take().and_then(|n| rows.iter().position(|r| r.name == n)).unwrap_or(0);
             picker.folder = folder;
             picker.rows = Some(Ok(rows));
             peek(picker)
@@ -381,11 +406,10 @@ mod tests {
         update(&mut m, Message::Peeked(PathBuf::from("/w/lib/a.png"), Ok(photo)));
         let Screen::New(NewEntry { picker: Some(p), .. }) = &m.screen else { panic!("the picker") };
         assert!(p.peek.as_ref().is_some_and(|(_, r)| r.is_ok()));
-        // up goes to the folder above, enter on a folder goes into it
+        // up goes to the folder above, the folder left selected; enter on a folder goes into it
         assert_eq!(update(&mut m, Message::Parent), vec![Effect::List(PathBuf::from("/w"), FileKind::Image)]);
-        let listing = rows_of(&[("..", true), ("lib", true)]);
+        let listing = rows_of(&[("..", true), ("a", true), ("lib", true)]);
         update(&mut m, Message::Listed(PathBuf::from("/w"), Ok((PathBuf::from("/w"), listing))));
-        update(&mut m, Message::Down);
         assert_eq!(update(&mut m, Message::Open), vec![Effect::List(PathBuf::from("/w/lib"), FileKind::Image)]);
         let listing = rows_of(&[("..", true), ("a.png", false)]);
         update(&mut m, Message::Listed(PathBuf::from("/w/lib"), Ok((PathBuf::from("/w/lib"), listing))));
@@ -393,6 +417,10 @@ mod tests {
         let effects = update(&mut m, Message::Open);
         let chosen = EntryChange::New("synth".into(), Some(PathBuf::from("/w/lib/a.png")));
         assert_eq!(effects, vec![Effect::ChangeEntry(chosen)]);
+        // a refused file leaves the picker open; an added entry shows on the library
+        update(&mut m, Message::EntriesChanged(Err("a.png: cannot decode it as an image".into())));
+        assert!(matches!(m.screen, Screen::New(_)) && m.status.contains("cannot decode"), "{}", m.status);
+        update(&mut m, Message::EntriesChanged(Ok((Vec::new(), Vec::new(), "a".into(), "added a".into()))));
         assert!(matches!(m.screen, Screen::Library));
     }
 

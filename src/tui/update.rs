@@ -58,7 +58,10 @@ pub fn update(model: &mut Model, message: Message) -> Vec<Effect> {
         }
         Message::Duplicate => return change_entry(model, false, asked),
         Message::Delete => return change_entry(model, true, asked),
-        Message::EntriesChanged(result) => entries_changed(model, result),
+        Message::EntriesChanged(result) => {
+            new_entry::added(model, result.is_ok());
+            entries_changed(model, result)
+        }
         Message::ScrollErrors(lines) => {
             // The view stops at the last line; here only a bound that never overflows.
             let most = model.errors.iter().map(|e| e.len()).sum::<usize>();

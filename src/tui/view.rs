@@ -798,6 +798,7 @@ mod tests {
                 rows: Some(Ok(rows.collect())),
                 selected: 2,
                 peek: Some((PathBuf::from("/w/lib/a.png"), Ok(Arc::new(photo)))),
+                came_from: None,
             }),
         });
         let (text, buffer) = screen(&m, 100, 24);

@@ -83,7 +83,10 @@ fn files(
             Line::styled(format!(" {name}"), row_style(i == picker.selected).fg(colour))
         })
         .collect();
-    let text = if lines.is_empty() { vec![Line::from(" (no folder or file it reads here)")] } else { lines };
+    let mut text = lines;
+    if rows.iter().all(|r| r.folder) {
+        text.push(Line::styled(" (no file of this kind here)", Style::new().fg(Color::DarkGray)));
+    }
     frame.render_widget(Paragraph::new(text).scroll((offset, 0)), list);
     let Some((path, peek)) = &picker.peek else { return };
     let name = path.file_name().map(|n| n.to_string_lossy().to_string()).unwrap_or_default();
