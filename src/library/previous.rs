@@ -8,11 +8,14 @@ use super::cache::{self, Record};
 use super::files::CACHE;
 use crate::error::{Error, Result};
 use crate::io;
-use std::path::{Path, PathBuf};
+use std::path::{Component, Path, PathBuf};
 
-/// The folder holding exemplar `name`'s previous build.
+/// The folder holding exemplar `name`'s previous build. A name the manifest does not
+/// allow (a broken entry's, say `../x`) gets a folder no build ever fills.
 pub fn folder(output: &Path, name: &str) -> PathBuf {
-    output.join(CACHE).join("previous").join(name)
+    let allowed = !name.is_empty() && name.chars().all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_');
+    let previous = output.join(CACHE).join("previous");
+    if allowed { previous.join(name) } else { previous.join("-") }
 }
 
 const RECORD: &str = "record.json";
@@ -38,8 +41,7 @@ pub fn keep(output: &Path, name: &str) -> Result<bool> {
         return Ok(false);
     }
     let kept = folder(output, name);
-    drop_kept(output, name)?;
-    for file in &current.files {
+    for file in current.files.iter().filter(|f| listed(&f.path)) {
         copy(&output.join(&file.path), &kept.join(&file.path))?;
     }
     let json = serde_json::to_string_pretty(&current).expect("a record always serializes");
@@ -47,11 +49,34 @@ pub fn keep(output: &Path, name: &str) -> Result<bool> {
     Ok(true)
 }
 
-/// Accept the new build: the kept copy goes.
+/// Accept the new build: the kept copy goes — only the files its record lists and the
+/// record, then the folders they leave empty; anything else in the folder stays.
 pub fn drop_kept(output: &Path, name: &str) -> Result<()> {
+    let Some(old) = record(output, name) else { return Ok(()) };
     let kept = folder(output, name);
-    match std::fs::remove_dir_all(&kept) {
-        Err(e) if e.kind() != std::io::ErrorKind::NotFound => Err(Error::io(&kept, e)),
+    for file in old.files.iter().filter(|f| listed(&f.path)) {
+        remove_written(&kept.join(&file.path))?;
+        // the folders the file was in, if it leaves them empty (a mask folder)
+        for parent in Path::new(&file.path).ancestors().skip(1).filter(|p| !p.as_os_str().is_empty()) {
+            let _ = std::fs::remove_dir(kept.join(parent));
+        }
+    }
+    remove_written(&kept.join(RECORD))?;
+    let _ = std::fs::remove_dir(&kept);
+    Ok(())
+}
+
+/// Whether `path` (from a record) names a file below the folder it is relative to: no
+/// root, no `..`.
+fn listed(path: &str) -> bool {
+    Path::new(path).components().all(|c| matches!(c, Component::Normal(_)))
+}
+
+/// Removes the regular file at `path` (a link or a folder there is left alone); a file
+/// already gone is fine.
+fn remove_written(path: &Path) -> Result<()> {
+    match std::fs::symlink_metadata(path) {
+        Ok(meta) if meta.is_file() => std::fs::remove_file(path).map_err(|e| Error::io(path, e)),
         _ => Ok(()),
     }
 }
@@ -62,15 +87,13 @@ pub fn restore(output: &Path, name: &str) -> Result<()> {
     let old = record(output, name)
         .ok_or_else(|| Error::invalid(format!("no previous build of {name} is kept in {}", output.display())))?;
     let kept = folder(output, name);
-    for file in &old.files {
+    for file in old.files.iter().filter(|f| listed(&f.path)) {
         copy(&kept.join(&file.path), &output.join(&file.path))?;
     }
     if let Some(new) = cache::read_record(output, name) {
-        for file in new.files.iter().filter(|f| !old.files.iter().any(|o| o.path == f.path)) {
-            let path = output.join(&file.path);
-            std::fs::remove_file(&path)
-                .or_else(|e| if e.kind() == std::io::ErrorKind::NotFound { Ok(()) } else { Err(e) })
-                .map_err(|e| Error::io(&path, e))?;
+        let only_new = new.files.iter().filter(|f| listed(&f.path) && !old.files.iter().any(|o| o.path == f.path));
+        for file in only_new {
+            remove_written(&output.join(&file.path))?;
         }
     }
     cache::write_record(output, &old)?;
@@ -125,8 +148,15 @@ mod tests {
         assert!(!out.join("m.mask.exr").exists() && !folder(&out, "m").exists());
         assert!(restore(&out, "m").unwrap_err().to_string().contains("no previous build of m"));
         keep(&out, "m").unwrap();
+        std::fs::write(folder(&out, "m").join("notes.txt"), b"mine").unwrap();
         drop_kept(&out, "m").unwrap();
         assert!(record(&out, "m").is_none() && std::fs::read(out.join("m.exr")).unwrap() == volume);
+        assert!(folder(&out, "m").join("notes.txt").exists() && !folder(&out, "m").join("m.exr").exists());
+        // a name no entry may have never reaches outside the cache
+        let outside = dir.path().join("x");
+        std::fs::create_dir(&outside).unwrap();
+        drop_kept(&out, "../../x").unwrap();
+        assert!(!keep(&out, "../../x").unwrap() && outside.exists());
     }
 
     fn volume_is_kept(out: &Path) -> bool {
