@@ -37,7 +37,7 @@ pub use png_file::{write_image, write_rgb8};
 
 use crate::error::{Error, Result};
 use crate::volume::{Channel, Image2d, Volume};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// A volume file format.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -163,6 +163,27 @@ pub fn write_volume(path: &Path, volume: &Volume) -> Result<()> {
     }
 }
 
+/// `path` relative to the folder `base` (both absolute, or both relative to one folder),
+/// with `..` where it lies outside; `path` itself when they share no root.
+pub fn relative_to(path: &Path, base: &Path) -> PathBuf {
+    use std::path::Component;
+    let (p, b): (Vec<Component>, Vec<Component>) = (path.components().collect(), base.components().collect());
+    let shared = p.iter().zip(&b).take_while(|(x, y)| x == y).count();
+    if shared == 0 && (path.has_root() || base.has_root()) {
+        return path.to_path_buf();
+    }
+    let mut out: PathBuf = b[shared..].iter().map(|_| Component::ParentDir).collect();
+    out.extend(&p[shared..]);
+    out
+}
+
+/// How a file in the folder `base` names `path`: both resolved (through links where they
+/// exist), then [`relative_to`], with `/` between the parts.
+pub fn written_relative(path: &Path, base: &Path) -> String {
+    let resolve = |p: &Path| p.canonicalize().or_else(|_| std::path::absolute(p)).unwrap_or_else(|_| p.to_path_buf());
+    relative_to(&resolve(path), &resolve(base)).to_string_lossy().replace('\\', "/")
+}
+
 /// Load a 2D image (PNG, JPEG, EXR, TIFF, HDR) as f32 samples in its own channels:
 /// grey -> `[R]`, grey+alpha -> `[R, A]`, RGB, RGBA.
 pub fn read_image(path: &Path) -> Result<Image2d> {
@@ -213,4 +234,18 @@ pub fn read_image_fit(path: &Path, max_side: Option<usize>) -> Result<Image2d> {
         ));
     }
     Ok(image)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn paths_are_written_relative_to_a_folder() {
+        let rel = |p: &str, b: &str| relative_to(Path::new(p), Path::new(b));
+        assert_eq!(rel("/w/lib/photos/a.png", "/w/lib"), PathBuf::from("photos/a.png"));
+        assert_eq!(rel("/w/data/a.png", "/w/lib"), PathBuf::from("../data/a.png"));
+        assert_eq!(rel("/w/lib/a.png", "/w/lib"), PathBuf::from("a.png"));
+        assert_eq!(rel("lib/a.png", "/w"), PathBuf::from("lib/a.png"), "no shared root: as given");
+    }
 }

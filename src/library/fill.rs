@@ -12,7 +12,7 @@ use crate::fill::{self, FillPreview, Job, MaskRef, Source};
 use crate::io::{self, manifest};
 use crate::mask::Layer;
 use crate::volume::{Axis, Volume};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::Instant;
 
 /// The spec's exemplars turned into a type, texture axes, sources and masks.
@@ -126,18 +126,12 @@ pub fn load_mask(mask: &MaskRef, base: &Path) -> Result<Volume> {
     }
 }
 
-/// `target` relative to the folder `base` (both resolved), or absolute if that fails.
+/// `target` relative to the folder `base` (both made absolute), or as given if that fails.
 fn relative(target: &Path, base: &Path) -> String {
-    let absolute = |p: &Path| std::path::absolute(p).ok();
-    let (Some(t), Some(b)) = (absolute(target), absolute(base)) else {
-        return target.to_string_lossy().into_owned();
-    };
-    let (t, b): (Vec<_>, Vec<_>) = (t.components().collect(), b.components().collect());
-    let common = t.iter().zip(&b).take_while(|(x, y)| x == y).count();
-    let mut out = PathBuf::new();
-    (common..b.len()).for_each(|_| out.push(".."));
-    t[common..].iter().for_each(|c| out.push(c));
-    out.to_string_lossy().into_owned()
+    match (std::path::absolute(target), std::path::absolute(base)) {
+        (Ok(t), Ok(b)) => io::relative_to(&t, &b).to_string_lossy().into_owned(),
+        _ => target.to_string_lossy().into_owned(),
+    }
 }
 
 /// The spec and drawn shape of the fill preview of built exemplar `name` of the library

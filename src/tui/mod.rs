@@ -313,11 +313,7 @@ fn change_entry(manifest: &Path, output: &Path, change: &EntryChange) -> Changed
 /// manifest's folder), checked like the manifest; its name and a status line.
 fn added(manifest: &Path, text: &str, recipe: &str, file: Option<&Path>) -> Result<(String, String, String), String> {
     let folder = new_entry::manifest_folder(manifest);
-    let base = folder.canonicalize().map_err(|e| Error::io(&folder, e).to_string())?;
-    let written = file.map(|f| {
-        let absolute = f.canonicalize().unwrap_or_else(|_| f.to_path_buf());
-        new_entry::relative_to(&absolute, &base).to_string_lossy().replace('\\', "/")
-    });
+    let written = file.map(|f| io::written_relative(f, &folder));
     match file {
         Some(f) if recipe == "load" => {
             io::read_volume(f, io::budget_from_env().unwrap_or(u64::MAX))
@@ -476,11 +472,7 @@ fn write_spec(output: &Path, name: &str, spec: &crate::fill::spec::FillSpec, sha
         .ok_or_else(|| Error::invalid(format!("no drawn shape named {shape}")))?
         .canonical();
     io::mesh_file::write_mesh(&folder.join(&mesh_file), &surface)?;
-    let base = folder.canonicalize().map_err(|e| Error::io(&folder, e))?;
-    let rel = |p: &Path| {
-        let absolute = p.canonicalize().unwrap_or_else(|_| p.to_path_buf());
-        new_entry::relative_to(&absolute, &base).to_string_lossy().replace('\\', "/")
-    };
+    let rel = |p: &Path| io::written_relative(p, &folder);
     let header = format!(
         "Placed in the solidtex terminal UI's fill preview of {name}. Run it from this folder:\n  solidtex fill {mesh_file} --spec {spec_file} -o {name}.lst"
     );
@@ -606,10 +598,7 @@ fn find_seed(manifest: &Path, name: &str) -> Result<(Arc<crate::mesh::Mesh>, Opt
 /// the manifest's folder).
 fn seed_file(manifest: &Path, path: &Path) -> Result<(Arc<crate::mesh::Mesh>, Option<String>)> {
     let mesh = io::mesh_file::read_mesh(path)?;
-    let base = new_entry::manifest_folder(manifest).canonicalize().map_err(|e| Error::io(manifest, e))?;
-    let absolute = path.canonicalize().map_err(|e| Error::io(path, e))?;
-    let written = new_entry::relative_to(&absolute, &base).to_string_lossy().replace('\\', "/");
-    Ok((Arc::new(mesh), Some(written)))
+    Ok((Arc::new(mesh), Some(io::written_relative(path, &new_entry::manifest_folder(manifest)))))
 }
 
 /// Appends stamp steps to the manifest, checks it and writes it atomically.

@@ -5,7 +5,7 @@
 use super::message::{Effect, EntryChange};
 use super::model::{Editor, ExemplarView, Model, Screen};
 use crate::volume::Image2d;
-use std::path::{Component, Path, PathBuf};
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 /// What a recipe kind reads.
@@ -326,19 +326,6 @@ pub fn manifest_folder(manifest: &Path) -> PathBuf {
     }
 }
 
-/// `path` written relative to `base` (both absolute, or both relative to one folder), with
-/// `..` where it lies outside; `path` itself when they share no root.
-pub fn relative_to(path: &Path, base: &Path) -> PathBuf {
-    let (p, b): (Vec<Component>, Vec<Component>) = (path.components().collect(), base.components().collect());
-    let shared = p.iter().zip(&b).take_while(|(x, y)| x == y).count();
-    if shared == 0 && (path.has_root() || base.has_root()) {
-        return path.to_path_buf();
-    }
-    let mut out: PathBuf = b[shared..].iter().map(|_| Component::ParentDir).collect();
-    out.extend(&p[shared..]);
-    out
-}
-
 /// The rows of a folder listing: `..` (unless at the root), its folders, then the files
 /// with one of `extensions`, each group by name; hidden entries left out.
 pub fn rows(at_root: bool, entries: Vec<(String, bool)>, extensions: &[&str]) -> Vec<FileRow> {
@@ -440,13 +427,5 @@ mod tests {
             ["..", "meshes", "a.jpg", "Zebra.PNG"]
         );
         assert_eq!(names(rows(true, entries, FileKind::Volume.extensions())), ["meshes", "scan.nrrd", "Zebra.PNG"]);
-    }
-
-    #[test]
-    fn paths_are_written_relative_to_the_manifest() {
-        let rel = |p: &str, b: &str| relative_to(Path::new(p), Path::new(b));
-        assert_eq!(rel("/w/lib/photos/a.png", "/w/lib"), PathBuf::from("photos/a.png"));
-        assert_eq!(rel("/w/data/a.png", "/w/lib"), PathBuf::from("../data/a.png"));
-        assert_eq!(rel("/w/lib/a.png", "/w/lib"), PathBuf::from("a.png"));
     }
 }
