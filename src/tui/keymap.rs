@@ -31,7 +31,8 @@ pub fn key(screen: &Screen, event: KeyEvent) -> Option<Message> {
     }
 }
 
-fn comparing(code: KeyCode) -> Option<Message> {
+/// The keys that choose the slice axis and move the slice (slices, comparisons).
+fn slice_keys(code: KeyCode) -> Option<Message> {
     match code {
         KeyCode::Char('x') => Some(Message::SelectAxis(Axis::X)),
         KeyCode::Char('y') => Some(Message::SelectAxis(Axis::Y)),
@@ -40,11 +41,17 @@ fn comparing(code: KeyCode) -> Option<Message> {
         KeyCode::Left | KeyCode::Down | KeyCode::Char('h') | KeyCode::Char('j') => Some(Message::MoveSlice(-1)),
         KeyCode::PageUp => Some(Message::MoveSlice(8)),
         KeyCode::PageDown => Some(Message::MoveSlice(-8)),
+        _ => None,
+    }
+}
+
+fn comparing(code: KeyCode) -> Option<Message> {
+    slice_keys(code).or(match code {
         KeyCode::Char('a') => Some(Message::Accept),
         KeyCode::Char('d') => Some(Message::Discard),
         KeyCode::Backspace => Some(Message::Back),
         _ => None,
-    }
+    })
 }
 
 fn new_entry(code: KeyCode) -> Option<Message> {
@@ -178,14 +185,7 @@ fn fill(code: KeyCode) -> Option<Message> {
 }
 
 fn exemplar(code: KeyCode) -> Option<Message> {
-    match code {
-        KeyCode::Char('x') => Some(Message::SelectAxis(Axis::X)),
-        KeyCode::Char('y') => Some(Message::SelectAxis(Axis::Y)),
-        KeyCode::Char('z') => Some(Message::SelectAxis(Axis::Z)),
-        KeyCode::Right | KeyCode::Up | KeyCode::Char('l') | KeyCode::Char('k') => Some(Message::MoveSlice(1)),
-        KeyCode::Left | KeyCode::Down | KeyCode::Char('h') | KeyCode::Char('j') => Some(Message::MoveSlice(-1)),
-        KeyCode::PageUp => Some(Message::MoveSlice(8)),
-        KeyCode::PageDown => Some(Message::MoveSlice(-8)),
+    slice_keys(code).or(match code {
         KeyCode::Char('c') => Some(Message::NextChannel),
         KeyCode::Char('f') => Some(Message::FillPreview),
         KeyCode::Char('m') => Some(Message::StampMode),
@@ -196,7 +196,7 @@ fn exemplar(code: KeyCode) -> Option<Message> {
         KeyCode::Char('E') => Some(Message::Export),
         KeyCode::Backspace => Some(Message::Back),
         _ => None,
-    }
+    })
 }
 
 /// One screen's keys for the help: its title and (keys, what they do) rows.

@@ -445,14 +445,19 @@ fn export(output: &Path, name: &str, volume: &Volume, axis: Axis, index: usize) 
 /// is never replaced: the first free `-2`, `-3` ... name is taken.
 fn export_cut(output: &Path, name: &str, filled: &FillPreview, axis: Axis, offset: f32) -> Result<Exported> {
     let folder = exports(output)?;
-    let stem = format!("{name}.fill-cut-{axis}{offset:+.2}");
-    let file = std::iter::once(format!("{stem}.png"))
-        .chain((2..).map(|k| format!("{stem}-{k}.png")))
-        .find(|f| !folder.join(f).exists())
-        .expect("a free name");
+    let file = free_name(&folder, &format!("{name}.fill-cut-{axis}{offset:+.2}"), "png");
     let cut = view_edit::cut_of(filled, axis, offset, 512)?;
     io::write_rgb8(&folder.join(&file), &cut.picture())?;
     Ok((folder.display().to_string(), vec![file], Vec::new()))
+}
+
+/// `STEM.EXT` in `folder`, or the first of `STEM-2.EXT`, `STEM-3.EXT` ... that is free: an
+/// export never replaces a file.
+fn free_name(folder: &Path, stem: &str, ext: &str) -> String {
+    std::iter::once(format!("{stem}.{ext}"))
+        .chain((2..).map(|k| format!("{stem}-{k}.{ext}")))
+        .find(|f| !folder.join(f).exists())
+        .expect("a free name")
 }
 
 /// Writes the fill spec placed in the fill preview and the drawn shape it fills into
@@ -461,13 +466,8 @@ fn export_cut(output: &Path, name: &str, filled: &FillPreview, axis: Axis, offse
 /// `solidtex fill` runs it from that folder.
 fn write_spec(output: &Path, name: &str, spec: &crate::fill::spec::FillSpec, shape: &str) -> Result<Exported> {
     let folder = exports(output)?;
-    let free = |stem: &str, ext: &str| {
-        (1..)
-            .map(|k| if k == 1 { format!("{stem}.{ext}") } else { format!("{stem}-{k}.{ext}") })
-            .find(|f| !folder.join(f).exists())
-            .expect("a free name")
-    };
-    let (spec_file, mesh_file) = (free(&format!("{name}.fill"), "toml"), free(&format!("{name}.fill-{shape}"), "obj"));
+    let spec_file = free_name(&folder, &format!("{name}.fill"), "toml");
+    let mesh_file = free_name(&folder, &format!("{name}.fill-{shape}"), "obj");
     let surface = crate::mesh::shapes::named(shape)
         .ok_or_else(|| Error::invalid(format!("no drawn shape named {shape}")))?
         .canonical();

@@ -697,30 +697,7 @@ mod tests {
 
     #[test]
     fn the_fill_preview_draws_a_cut_of_the_model() {
-        use crate::fill::render::Textures;
-        let marble = crate::procedural::generate(crate::procedural::Recipe::Marble, [16; 3], 1).unwrap();
-        let mask = crate::mask::splotch(16, 0.1, 1).unwrap();
-        let mesh = crate::fill::tets::cube_lattice([4, 4, 4], 0.25);
-        let patch = crate::fill::paste::Patch {
-            source: 0,
-            vertices: (0..mesh.vertices.len() as u32).collect(),
-            coords: mesh.vertices.iter().map(|v| *v * 0.5 + 0.25).collect(),
-        };
-        let tet_patches = vec![vec![0]; mesh.tets.len()];
-        let sources = vec![crate::fill::Source {
-            exemplar: "marble".into(),
-            volume: "marble.exr".into(),
-            mask: crate::fill::MaskRef::Splotch { size: 16, falloff: 0.1, seed: 1 },
-        }];
-        let model_3d = crate::fill::LstModel { mesh, sources, patches: vec![patch], tet_patches };
-        let filled = crate::tui::FillPreview {
-            model: model_3d,
-            textures: Textures::new(&[marble], &[mask]),
-            summary: "s".into(),
-            depth: None,
-            spec: crate::fill::spec::FillSpec::new("marble"),
-            shape: "block".into(),
-        };
+        let filled = crate::tui::fill_edit::tests::filled_cube(None);
         let mut m = model();
         m.screen = Screen::Fill(crate::tui::model::FillView {
             name: "marble".into(),
