@@ -57,6 +57,7 @@ pub mod sections;
 pub mod sharpness;
 pub mod snapshot;
 pub mod stamp;
+pub mod surface;
 pub mod sweep;
 pub mod synth;
 pub mod texture_type;

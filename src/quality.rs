@@ -401,7 +401,8 @@ fn histogram_distances(volume: &Volume, exemplar: &Image2d, picks: &[usize]) -> 
         .collect()
 }
 
-fn histogram<'a>(values: impl Iterator<Item = &'a f32>) -> Vec<f64> {
+/// The normalized [`BINS`]-bin histogram of values in [0, 1] (outside values clamped).
+pub(crate) fn histogram<'a>(values: impl Iterator<Item = &'a f32>) -> Vec<f64> {
     let mut h = vec![0.0; BINS];
     let mut total = 0.0;
     for v in values {

@@ -57,6 +57,19 @@ impl AxisSharpness {
 /// Measure the cuts of `volume` across `axis` against `exemplar`; `picks[c]` is the volume
 /// channel that holds exemplar channel `c`.
 pub fn measure(volume: &Volume, exemplar: &Image2d, picks: &[usize], axis: Axis) -> Result<AxisSharpness> {
+    let side = volume.dims()[axis.index()];
+    let cuts = (1..=3)
+        .map(|quarter| volume.slice(axis, (side * quarter / 4).min(side - 1)))
+        .collect::<Result<Vec<Image2d>>>()?;
+    let mut figures = compare(&cuts, exemplar, picks)?;
+    figures.axis = axis.to_string();
+    Ok(figures)
+}
+
+/// The same figures for plain images against `exemplar` (e.g. a surface texture resampled
+/// to an image); `picks[c]` is the image channel that holds exemplar channel `c`. The
+/// returned `axis` is empty.
+pub fn compare(images: &[Image2d], exemplar: &Image2d, picks: &[usize]) -> Result<AxisSharpness> {
     if exemplar.width() < 3 || exemplar.height() < 3 {
         return Err(Error::invalid("measuring sharpness needs an exemplar of at least 3x3 pixels"));
     }
@@ -67,13 +80,11 @@ pub fn measure(volume: &Volume, exemplar: &Image2d, picks: &[usize], axis: Axis)
     let ex_mean = mean(&ex_gradient.values);
     let ex_length = length(&ex);
     let top = SPAN * if ex_mean > 0.0 { ex_mean } else { 1.0 };
-    let side = volume.dims()[axis.index()];
     let mut cut_means = Vec::new();
     let mut cut_lengths = Vec::new();
     let mut histogram = [0.0; BINS];
-    for quarter in 1..=3 {
-        let index = (side * quarter / 4).min(side - 1);
-        let cut = scale.grey(&volume.slice(axis, index)?, picks);
+    for image in images {
+        let cut = scale.grey(image, picks);
         let g = gradients(&cut);
         cut_means.push(mean(&g.values));
         cut_lengths.push(length(&cut));
@@ -82,7 +93,7 @@ pub fn measure(volume: &Volume, exemplar: &Image2d, picks: &[usize], axis: Axis)
     let mut ex_histogram = [0.0; BINS];
     add_histogram(&mut ex_histogram, &ex_gradient.values, top);
     Ok(AxisSharpness {
-        axis: axis.to_string(),
+        axis: String::new(),
         gradient_ratio: ratio(mean(&cut_means), ex_mean),
         length_ratio: ratio(mean(&cut_lengths), ex_length),
         gradient_histogram_distance: l1(&normalized(&histogram), &normalized(&ex_histogram)),

@@ -328,10 +328,11 @@ fn lst_check(path: &Path) -> Result<()> {
     io::check_folder(path)
 }
 
-struct Bar(ProgressBar);
+/// A progress bar on stderr.
+pub(super) struct Bar(pub(super) ProgressBar);
 
 impl Bar {
-    fn new() -> Bar {
+    pub(super) fn new() -> Bar {
         let bar = ProgressBar::new(1000);
         bar.set_style(
             ProgressStyle::with_template("{elapsed:>4} [{bar:40}] {percent:>3}% {msg}").expect("valid template"),

@@ -17,6 +17,7 @@ mod info;
 mod masks;
 mod quality;
 mod snapshot;
+mod surface;
 mod synth;
 mod types;
 
@@ -182,6 +183,8 @@ pub enum Command {
     View(fill::ViewArgs),
     /// Render one or more filled models as translucent material (volume rendering) as a PNG.
     Render(fill::RenderArgs),
+    /// Grow a 2D exemplar over a mesh's surface (Turk 2001): a .ply with vertex colours.
+    Surface(surface::SurfaceArgs),
 }
 
 /// Run one command of the command line. The terminal UI (`tui`, or no command) is the
@@ -220,6 +223,7 @@ pub fn run(command: Command) -> crate::Result<()> {
         Command::Bake(args) => fill::run_bake(&args),
         Command::View(args) => fill::run_view(&args),
         Command::Render(args) => fill::run_render(&args),
+        Command::Surface(args) => surface::run(&args),
     }
 }
 

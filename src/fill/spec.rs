@@ -193,7 +193,7 @@ fn check_inside(surface: &Mesh, points: &[Vec3], field: &str) -> Result<()> {
 }
 
 /// A stroke as (point, unit tangent) samples, evenly spaced.
-fn stroke_samples(stroke: &[Vec3], size: f32) -> Vec<(Vec3, Vec3)> {
+pub fn stroke_samples(stroke: &[Vec3], size: f32) -> Vec<(Vec3, Vec3)> {
     if stroke.len() == 1 {
         return Vec::new();
     }

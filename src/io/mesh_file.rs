@@ -22,6 +22,8 @@ use std::path::Path;
 struct Soup {
     vertices: Vec<Vec3>,
     triangles: Vec<[u32; 3]>,
+    /// Per-vertex colours in [0, 1] (PLY `red`, `green`, `blue`), when the file has them.
+    colours: Option<Vec<[f32; 3]>>,
 }
 
 impl Soup {
@@ -63,6 +65,59 @@ pub fn read_mesh(path: &Path) -> Result<Mesh> {
     }
     .map_err(|e| e.in_file(path))?;
     Mesh::new(soup.vertices, soup.triangles).map_err(|e| e.in_file(path))
+}
+
+/// A mesh with one colour per vertex (in [0, 1]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ColouredMesh {
+    /// The mesh.
+    pub mesh: Mesh,
+    /// One RGB colour per vertex of `mesh`.
+    pub colours: Vec<[f32; 3]>,
+}
+
+/// Read a `.ply` whose vertices carry `red`, `green` and `blue`.
+pub fn read_coloured_ply(path: &Path) -> Result<ColouredMesh> {
+    if !matches!(kind_of(path)?, Kind::Ply) {
+        return Err(Error::file(path, "a mesh with vertex colours must be a .ply file"));
+    }
+    let soup = parse_ply(&read_bytes(path)?).map_err(|e| e.in_file(path))?;
+    let colours = soup.colours.ok_or_else(|| {
+        Error::file(
+            path,
+            "the PLY vertices have no colours (properties red, green and blue); solidtex surface writes them",
+        )
+    })?;
+    let mesh = Mesh::new(soup.vertices, soup.triangles).map_err(|e| e.in_file(path))?;
+    Ok(ColouredMesh { mesh, colours })
+}
+
+/// Write a binary little-endian PLY with vertex colours (`uchar red, green, blue`),
+/// atomically.
+pub fn write_coloured_ply(path: &Path, coloured: &ColouredMesh) -> Result<()> {
+    let ColouredMesh { mesh, colours } = coloured;
+    let mut bytes = format!(
+        "ply\nformat binary_little_endian 1.0\ncomment written by solidtex {}\nelement vertex {}\n\
+         property float x\nproperty float y\nproperty float z\nproperty uchar red\nproperty uchar green\n\
+         property uchar blue\nelement face {}\nproperty list uchar int vertex_indices\nend_header\n",
+        env!("CARGO_PKG_VERSION"),
+        mesh.vertices.len(),
+        mesh.triangles.len()
+    )
+    .into_bytes();
+    for (v, c) in mesh.vertices.iter().zip(colours) {
+        for x in v.to_array() {
+            bytes.extend_from_slice(&x.to_le_bytes());
+        }
+        bytes.extend(c.map(crate::render::to_u8));
+    }
+    for t in &mesh.triangles {
+        bytes.push(3);
+        for i in t {
+            bytes.extend_from_slice(&(*i as i32).to_le_bytes());
+        }
+    }
+    write_bytes(path, &bytes)
 }
 
 /// Write a triangle mesh in the format the extension names: `.obj`, binary `.stl` or
@@ -372,7 +427,7 @@ fn parse_ply(bytes: &[u8]) -> Result<Soup> {
     let mut soup = Soup::default();
     for element in &header.elements {
         match element.name.as_str() {
-            "vertex" => soup.vertices = ply_vertices(element, &mut body, bytes.len())?,
+            "vertex" => (soup.vertices, soup.colours) = ply_vertices(element, &mut body, bytes.len())?,
             "face" => ply_faces(element, &mut body, bytes.len(), &mut soup)?,
             _ => skip_element(element, &mut body)?,
         }
@@ -499,19 +554,34 @@ impl Body<'_> {
     }
 }
 
-fn ply_vertices(element: &Element, body: &mut Body, file_len: usize) -> Result<Vec<Vec3>> {
+/// The vertices and, when the element has `red`, `green` and `blue`, their colours (integer
+/// types read as 0-255, floating-point ones as 0-1).
+fn ply_vertices(element: &Element, body: &mut Body, file_len: usize) -> Result<(Vec<Vec3>, Option<Vec<[f32; 3]>>)> {
     let find = |axis: &str| {
         element.scalar(axis).ok_or_else(|| {
             Error::invalid(format!("PLY header line {}: element vertex has no property {axis}", element.line))
         })
     };
     let (x, y, z) = (find("x")?, find("y")?, find("z")?);
+    let rgb = ["red", "green", "blue"].map(|c| element.scalar(c));
+    let rgb = match rgb {
+        [Some(r), Some(g), Some(b)] => Some([r, g, b].map(|k| {
+            let whole =
+                matches!(&element.properties[k], Property::Scalar(t, _) if !matches!(t, Scalar::F32 | Scalar::F64));
+            (k, if whole { 1.0 / 255.0 } else { 1.0 })
+        })),
+        _ => None,
+    };
     let mut vertices = Vec::with_capacity(element.count.min(file_len));
+    let mut colours = rgb.map(|_| Vec::with_capacity(element.count.min(file_len)));
     for i in 0..element.count {
         let values = body.item(element, i)?;
         vertices.push(Vec3::new(values[x][0] as f32, values[y][0] as f32, values[z][0] as f32));
+        if let (Some(rgb), Some(out)) = (rgb, colours.as_mut()) {
+            out.push(rgb.map(|(k, unit)| (values[k][0] * unit) as f32));
+        }
     }
-    Ok(vertices)
+    Ok((vertices, colours))
 }
 
 fn ply_faces(element: &Element, body: &mut Body, file_len: usize, soup: &mut Soup) -> Result<()> {

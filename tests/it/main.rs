@@ -14,5 +14,6 @@ mod ranges;
 mod safety;
 mod snapshots;
 mod support;
+mod surface;
 mod synth;
 mod tour;

@@ -1,0 +1,112 @@
+//! `solidtex surface`: grow a 2D exemplar over a mesh's surface (a skin).
+
+use crate::error::{Error, Result};
+use crate::fill::spec::{size_of, stroke_samples};
+use crate::io::{self, fill_spec, mesh_file};
+use crate::surface::{self, Guide, Options};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// The arguments of `solidtex surface`.
+#[derive(Debug, clap::Args)]
+pub struct SurfaceArgs {
+    /// The mesh (.obj, .stl, .ply); closed or open, any genus.
+    pub mesh: PathBuf,
+    /// The exemplar photo (PNG, JPEG, TIFF, EXR, HDR), at least 16x16 pixels.
+    #[arg(long)]
+    pub exemplar: PathBuf,
+    /// About how many points (vertices) the skin gets, 100 to 1000000.
+    #[arg(long, default_value_t = 20_000)]
+    pub points: usize,
+    /// Take the texture's "up" from a fill spec's direction strokes (docs/fill.md).
+    #[arg(long, conflicts_with = "direction")]
+    pub spec: Option<PathBuf>,
+    /// The texture's "up" as X,Y,Z, projected onto the surface (default 0,1,0).
+    #[arg(long, allow_hyphen_values = true)]
+    pub direction: Option<String>,
+    /// Model units one exemplar pixel covers (default: two point spacings, four points per
+    /// pixel); larger makes the texture's features larger on the model.
+    #[arg(long, allow_hyphen_values = true)]
+    pub texel: Option<f32>,
+    /// Seed of the random start (any 64-bit whole number).
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// The skin to write: a .ply with per-vertex red, green, blue.
+    #[arg(short, long)]
+    pub output: PathBuf,
+}
+
+/// Run `solidtex surface`.
+pub fn run(args: &SurfaceArgs) -> Result<()> {
+    check_output(&args.output, &[&args.mesh, &args.exemplar])?;
+    let mesh = mesh_file::read_mesh(&args.mesh)?;
+    let guide = guide(args, &mesh)?;
+    let exemplar = io::read_image(&args.exemplar)?;
+    let options = Options { points: args.points, seed: args.seed, texel: args.texel, guide };
+    let started = Instant::now();
+    let bar = super::fill::Bar::new();
+    let skin = surface::synthesize(&mesh, &exemplar, &options, &bar).map_err(|e| e.in_file(&args.mesh));
+    bar.0.finish_and_clear();
+    let skin = skin?;
+    let seconds = started.elapsed().as_secs_f64();
+    let coloured = mesh_file::ColouredMesh { mesh: skin.mesh.clone(), colours: skin.colours.clone() };
+    mesh_file::write_coloured_ply(&args.output, &coloured)?;
+    let hist = surface::histogram_distances(&skin.colours, &exemplar)?;
+    let mesh_note = if mesh.boundary_edges() > 0 { " (open: its borders stay)" } else { "" };
+    eprintln!(
+        "wrote {}: {} points, {} triangles{mesh_note}, spacing {:.4}, {:.4} units per exemplar pixel, {} levels, in {seconds:.2} s",
+        args.output.display(),
+        skin.mesh.vertices.len(),
+        skin.mesh.triangles.len(),
+        skin.spacing,
+        skin.texel,
+        skin.levels
+    );
+    eprintln!(
+        "histogram distance to the exemplar: R {:.3}  G {:.3}  B {:.3} (0 = equal, 2 = disjoint)",
+        hist[0], hist[1], hist[2]
+    );
+    Ok(())
+}
+
+/// The direction guide the options ask for, checked.
+fn guide(args: &SurfaceArgs, mesh: &crate::mesh::Mesh) -> Result<Guide> {
+    if let Some(path) = &args.spec {
+        let spec = fill_spec::read_fill_spec(path)?;
+        let size = size_of(mesh);
+        let samples: Vec<_> = spec.directions.iter().flat_map(|s| stroke_samples(s, size)).collect();
+        if samples.is_empty() {
+            return Err(Error::file(
+                path,
+                "has no direction strokes ([[direction]] with two or more points) to orient the texture",
+            ));
+        }
+        return Ok(Guide::Strokes(samples));
+    }
+    match &args.direction {
+        Some(text) => Ok(Guide::Along(io::values::point("--direction", text).map_err(super::commands::usage)?)),
+        None => Ok(Guide::Along(glam::Vec3::Y)),
+    }
+}
+
+/// The output must be a `.ply` in a folder solidtex may write, and none of the inputs.
+fn check_output(output: &Path, inputs: &[&Path]) -> Result<()> {
+    if !output.extension().is_some_and(|e| e.eq_ignore_ascii_case("ply")) {
+        return Err(Error::usage(format!(
+            "{}: the skin is written as a .ply; name a file ending in .ply",
+            output.display()
+        )));
+    }
+    io::check_folder(output)?;
+    if output.is_dir() {
+        return Err(Error::file(output, "is a folder; name a file to write"));
+    }
+    for input in inputs {
+        if let (Ok(a), Ok(b)) = (output.canonicalize(), input.canonicalize())
+            && a == b
+        {
+            return Err(Error::file(output, "is one of the inputs; write the skin to another file"));
+        }
+    }
+    Ok(())
+}
