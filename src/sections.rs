@@ -14,7 +14,7 @@ use crate::volume::{Channel, Image2d};
 use glam::Vec3;
 
 /// Names of the drawable cross-sections.
-pub const NAMES: [&str; 4] = ["kiwi", "carrot", "trunk", "bark"];
+pub const NAMES: [&str; 6] = ["kiwi", "carrot", "trunk", "bark", "fuzz", "bark-skin"];
 
 /// Draw the cross-section `name` at `width` x `height` pixels.
 pub fn draw(name: &str, width: usize, height: usize, seed: u64) -> Result<Image2d> {
@@ -23,6 +23,8 @@ pub fn draw(name: &str, width: usize, height: usize, seed: u64) -> Result<Image2
         "carrot" => carrot,
         "trunk" => trunk,
         "bark" => bark,
+        "fuzz" => fuzz,
+        "bark-skin" => bark_skin,
         other => {
             return Err(Error::invalid(format!("unknown cross-section {other:?}; allowed: {}", NAMES.join(", "))));
         }
@@ -97,6 +99,27 @@ fn bark(u: f32, depth: f32, seed: u64, _aspect: f32) -> [f32; 3] {
     let ridge = 0.1 + 0.85 * plateau * (0.85 + 0.3 * n(seed ^ 3, u, depth, 2.0));
     let v = ridge + (0.5 - ridge) * smooth(0.06, 0.2, depth);
     [v; 3]
+}
+
+/// A kiwi's skin seen from outside (an exemplar for `solidtex surface`): brown, with fine
+/// hairs along the rows' direction (`depth`) over soft blotches.
+fn fuzz(u: f32, depth: f32, seed: u64, _aspect: f32) -> [f32; 3] {
+    let hairs = n(seed, u, depth * 0.2, 6.0);
+    let fine = n(seed ^ 11, u, depth * 0.5, 12.0);
+    let blotch = n(seed ^ 5, u, depth, 1.0);
+    let t = 0.5 + 0.8 * hairs + 0.4 * fine + 0.3 * blotch;
+    mix([0.24, 0.15, 0.07], [0.66, 0.51, 0.32], t)
+}
+
+/// Bark seen from outside (an exemplar for `solidtex surface`): grey-brown plates split by
+/// dark furrows running along `depth`, the plates cracked across.
+fn bark_skin(u: f32, depth: f32, seed: u64, _aspect: f32) -> [f32; 3] {
+    let phase = (u * 6.0 + 0.6 * n(seed, u, depth * 0.5, 0.5)).fract();
+    let plate = smooth(0.05, 0.3, phase) * (1.0 - smooth(0.7, 0.95, phase));
+    let crack = 1.0 - smooth(0.0, 0.05, n(seed ^ 7, u, depth * 4.0, 0.5).abs());
+    let grain = n(seed ^ 3, u, depth * 0.3, 8.0);
+    let lit = plate * (1.0 - 0.7 * crack) * (0.85 + 0.3 * grain);
+    mix([0.10, 0.07, 0.05], [0.50, 0.41, 0.32], lit)
 }
 
 /// A kiwi-like seed: a slightly flattened teardrop 2 units long along z, with

@@ -134,6 +134,11 @@ pub struct ViewArgs {
     /// Displacement channel - 0.5), in model units, -1000 to 1000.
     #[arg(long, allow_hyphen_values = true)]
     pub displacement: Option<f32>,
+    /// A synthesized surface texture (`solidtex surface` on the mesh the model was filled
+    /// from, a .ply with vertex colours) drawn on the surface instead of the solid's
+    /// depth-0 colour.
+    #[arg(long)]
+    pub skin: Option<PathBuf>,
     /// The PNG to write.
     #[arg(short, long)]
     pub output: PathBuf,
@@ -654,6 +659,26 @@ pub fn run_bake(args: &BakeArgs) -> Result<()> {
     Ok(())
 }
 
+/// How far from the skin a surface point may lie and take its colour: 3 % of the models'
+/// box (the tet mesh's faces are chords of the surface the skin was grown on), plus half the
+/// displacement. A skin whose box differs from the models' by more than that was grown on
+/// another mesh and is refused.
+fn skin_reach(path: &Path, skin: &crate::mesh::Mesh, models: &[(&LstModel, &Textures)], displacement: Option<f32>) -> Result<f32> {
+    let (lo, hi) = render::bounds(models);
+    let within = 0.03 * lo.distance(hi) + displacement.map_or(0.0, |d| d.abs() * crate::fill::view::MIDLEVEL);
+    let (slo, shi) = skin.bounds();
+    let apart = (slo - lo).abs().max((shi - hi).abs()).max_element();
+    if apart > within {
+        return Err(Error::file(
+            path,
+            format!(
+                "the skin spans {slo} to {shi} but the models {lo} to {hi}: grow it on the mesh the model was filled from"
+            ),
+        ));
+    }
+    Ok(within)
+}
+
 /// Run `solidtex view`.
 pub fn run_view(args: &ViewArgs) -> Result<()> {
     let checks = || -> Result<()> {
@@ -677,7 +702,15 @@ pub fn run_view(args: &ViewArgs) -> Result<()> {
     };
     let displacement =
         relief.as_ref().map(|(textures, scale)| crate::fill::view::Displacement { textures, scale: *scale });
-    let (picture, triangles) = crate::fill::view::surfaces(&pairs(&loaded), displacement, camera, args.size, shading);
+    let skin = args.skin.as_deref().map(io::mesh_file::read_coloured_ply).transpose()?;
+    let lookup = skin.as_ref().map(|s| crate::surface::SkinLookup::new(&s.mesh, &s.colours));
+    let within = match (&skin, &args.skin) {
+        (Some(s), Some(path)) => skin_reach(path, &s.mesh, &pairs(&loaded), args.displacement)?,
+        _ => 0.0,
+    };
+    let skin = lookup.as_ref().map(|lookup| crate::fill::view::Skin { lookup, within });
+    let (picture, triangles) =
+        crate::fill::view::surfaces(&pairs(&loaded), displacement, skin, camera, args.size, shading);
     let note = args
         .displacement
         .map(|scale| format!("  displaced by {scale} x (Displacement - 0.5) along the normal, {triangles} triangles"));

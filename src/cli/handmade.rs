@@ -280,7 +280,8 @@ fn blur_values(args: &BlurArgs) -> Result<glam::Vec3> {
 /// `solidtex draw`.
 #[derive(Debug, clap::Args)]
 pub struct DrawArgs {
-    /// kiwi, carrot, trunk or bark (a cross-section or relief image), seed or bubble (a mesh
+    /// kiwi, carrot, trunk or bark (a cross-section or relief image), fuzz or bark-skin (a
+    /// skin for `solidtex surface`), seed or bubble (a mesh
     /// to stamp), a closed shape to fill (fruit, pipe, log or block), or cake (a folder of
     /// layer meshes and their fill specs).
     pub what: String,

@@ -12,6 +12,7 @@ use super::model::LstModel;
 use super::render::{BACKGROUND, Textures, shade_point};
 use super::tets::FACES;
 use crate::render::{Rgb8, to_u8};
+use crate::surface::SkinLookup;
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
@@ -70,6 +71,17 @@ impl Frame {
     /// The picture of `hits`: each point's composited colour, lit by a light over the
     /// viewer's shoulder.
     pub fn shade(&self, models: &[(&LstModel, &Textures)], hits: &[Option<Hit>]) -> Rgb8 {
+        self.shade_with_skin(models, hits, None)
+    }
+
+    /// [`Frame::shade`], with the colour of the points within `skin.1` of the skin taken
+    /// from the skin instead of the solid texture.
+    pub fn shade_with_skin(
+        &self,
+        models: &[(&LstModel, &Textures)],
+        hits: &[Option<Hit>],
+        skin: Option<(&SkinLookup, f32)>,
+    ) -> Rgb8 {
         let light = (self.up * 0.6 - self.forward + self.right * 0.3).normalize();
         let colours: Vec<[u8; 3]> = hits
             .par_iter()
@@ -77,7 +89,11 @@ impl Frame {
                 None => BACKGROUND,
                 Some(h) => {
                     let (model, textures) = models[h.model as usize];
-                    let c = shade_point(model, textures, h.tet as usize, h.point);
+                    let on_skin = skin.and_then(|(lookup, within)| Some(lookup.at(h.point)).filter(|(d, _)| *d <= within));
+                    let c = match on_skin {
+                        Some((_, [r, g, b])) => [r, g, b, 1.0],
+                        None => shade_point(model, textures, h.tet as usize, h.point),
+                    };
                     let lit = 0.35 + 0.65 * h.normal.dot(light).max(0.0);
                     [c[0], c[1], c[2]].map(|v| to_u8(v * lit))
                 }
@@ -123,7 +139,7 @@ pub fn surface_shaded(
     size: usize,
     shading: Shading,
 ) -> Rgb8 {
-    surfaces(&[(model, textures)], None, (yaw, pitch), size, shading).0
+    surfaces(&[(model, textures)], None, None, (yaw, pitch), size, shading).0
 }
 
 /// Displacement mapping (thesis §7, Figs. 5.1d and 7.1c): the surface moved along its
@@ -145,13 +161,24 @@ const MAX_LEVEL: usize = 32;
 /// The most triangles a displaced surface is split into (about 120 bytes each).
 const MAX_TRIANGLES: usize = 2_000_000;
 
+/// A synthesized surface texture drawn where the model's surface lies within `within`
+/// model units of it (see [`crate::surface`]).
+#[derive(Clone, Copy)]
+pub struct Skin<'a> {
+    /// The skin's colours near the surface.
+    pub lookup: &'a SkinLookup<'a>,
+    /// How far from the skin a surface point may be and still take its colour.
+    pub within: f32,
+}
+
 /// The surfaces of several models (each pixel shows the nearest), seen from `camera`
 /// (yaw, pitch degrees); with a displacement, the boundary is subdivided into triangles
-/// about two pixels across and displaced, lit by the displaced triangles' normals. Also
-/// the triangles drawn.
+/// about two pixels across and displaced, lit by the displaced triangles' normals; with a
+/// skin, the surface near it shows the skin's colours. Also the triangles drawn.
 pub fn surfaces(
     models: &[(&LstModel, &Textures)],
     displacement: Option<Displacement>,
+    skin: Option<Skin>,
     camera: (f32, f32),
     size: usize,
     shading: Shading,
@@ -172,7 +199,7 @@ pub fn surfaces(
         all.extend(facets);
     }
     let hits = rasterize(&all, &frame, |_| true);
-    (frame.shade(models, &hits), all.len())
+    (frame.shade_with_skin(models, &hits, skin.map(|s| (s.lookup, s.within))), all.len())
 }
 
 /// The axes of an orthographic camera `yaw` degrees around y and `pitch` degrees up from

@@ -9,20 +9,20 @@ fn library() -> String {
 }
 
 /// Writes a spec into `dir` (library = the default one, built into `dir/built`).
-fn spec(dir: &Path, name: &str, body: &str) -> String {
+pub fn spec(dir: &Path, name: &str, body: &str) -> String {
     let text = format!("library = {:?}\nbuilt = \"built\"\n{body}", library());
     let path = dir.join(name);
     std::fs::write(&path, text).unwrap();
     path.to_string_lossy().into_owned()
 }
 
-fn draw(dir: &Path, what: &str) -> String {
+pub fn draw(dir: &Path, what: &str) -> String {
     let path = at(dir, &format!("{what}.obj"));
     assert!(solidtex(&["draw", what, "-o", &path]).status.success());
     path
 }
 
-const KIWI: &str = r#"
+pub const KIWI: &str = r#"
 exemplar = "kiwi"
 seed = 3
 tets = 3000
@@ -32,7 +32,7 @@ axis = [[[-0.75, 0, 0], [0.75, 0, 0]]]
 points = [[-0.75, 0, 0], [0.75, 0, 0]]
 "#;
 
-fn fill(dir: &Path, mesh: &str, spec: &str, out: &str) -> serde_json::Value {
+pub fn fill(dir: &Path, mesh: &str, spec: &str, out: &str) -> serde_json::Value {
     let json = at(dir, &format!("{out}.json"));
     let run = solidtex(&["fill", mesh, "--spec", spec, "-o", &at(dir, out), "--json", &json]);
     assert!(run.status.success(), "{}", stderr(&run));

@@ -3,7 +3,7 @@
 
 use crate::support::{at, solidtex, stderr};
 use glam::Vec3;
-use solidtex::io::mesh_file::{read_coloured_ply, write_mesh};
+use solidtex::io::mesh_file::{ColouredMesh, read_coloured_ply, read_mesh, write_coloured_ply, write_mesh};
 use solidtex::mesh::{Mesh, shapes};
 use solidtex::progress::NoProgress;
 use solidtex::surface::{self, Guide, Options, Yardstick};
@@ -139,4 +139,46 @@ fn the_surface_command_writes_a_coloured_ply_and_refuses_bad_input() {
     let spec = at(dir.path(), "spec.toml");
     std::fs::write(&spec, "exemplar = \"kiwi\"\n").unwrap();
     bad(&["surface", &mesh, "--exemplar", photo, "--spec", &spec, "-o", &out], "has no direction strokes");
+}
+
+/// `view --skin` draws the skin's colours on the filled model's surface (here red where
+/// x > 0 and blue where x < 0, lit), and refuses a skin grown on another mesh.
+#[test]
+fn a_filled_model_is_viewed_with_its_skin() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let fruit = crate::fill::draw(d, "fruit");
+    let spec = crate::fill::spec(d, "kiwi.toml", crate::fill::KIWI);
+    crate::fill::fill(d, &fruit, &spec, "kiwi.lst");
+    let mesh = read_mesh(Path::new(&fruit)).unwrap();
+    let colours = mesh.vertices.iter().map(|p| if p.x > 0.0 { [1.0, 0.0, 0.0] } else { [0.0, 0.0, 1.0] }).collect();
+    let skin = at(d, "skin.ply");
+    write_coloured_ply(Path::new(&skin), &ColouredMesh { mesh: mesh.clone(), colours }).unwrap();
+    let (plain, skinned) = (at(d, "plain.png"), at(d, "skinned.png"));
+    let model = at(d, "kiwi.lst");
+    let view = |extra: &[&str], out: &str| {
+        let mut args = vec!["view", model.as_str(), "--yaw", "0", "--pitch", "0", "--size", "96"];
+        args.extend_from_slice(extra);
+        args.extend_from_slice(&["-o", out]);
+        solidtex(&args)
+    };
+    assert!(view(&[], &plain).status.success());
+    let run = view(&["--skin", &skin], &skinned);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let px = |png: &str, x: u32| image::open(png).unwrap().to_rgb8().get_pixel(x, 48).0;
+    // Seen from +z with yaw 0, +x is to the right of the picture.
+    let (right, left) = (px(&skinned, 64), px(&skinned, 32));
+    assert!(right[0] > 60 && right[1] < 10 && right[2] < 10, "right {right:?}");
+    assert!(left[2] > 60 && left[0] < 10 && left[1] < 10, "left {left:?}");
+    let brown = px(&plain, 64);
+    assert!(brown[0] > brown[2] && brown[1] > 10, "the kiwi's own skin is brown: {brown:?}");
+
+    let far = at(d, "far.ply");
+    let moved = ColouredMesh { mesh: mesh.transformed(glam::Affine3A::from_scale(Vec3::splat(3.0))), colours: vec![[1.0; 3]; mesh.vertices.len()] };
+    write_coloured_ply(Path::new(&far), &moved).unwrap();
+    let run = view(&["--skin", &far], &at(d, "far.png"));
+    assert!(!run.status.success() && stderr(&run).contains("grow it on the mesh the model was filled from"), "{}", stderr(&run));
+    assert!(!d.join("far.png").exists());
+    let run = view(&["--skin", &fruit], &at(d, "obj.png"));
+    assert!(!run.status.success() && stderr(&run).contains(".ply"), "{}", stderr(&run));
 }
