@@ -125,7 +125,7 @@ fn render_workloads(args: &BenchArgs, name: &str, model: &LstModel, textures: &T
             levels: (0.0, 1.0),
             background: render::BACKGROUND,
         };
-        let rendering = translucent::render(&[(model, textures)], translucent::Density::Uniform, &settings)?;
+        let rendering = translucent::render(&[(model, textures)], translucent::Density::Uniform, &settings, None)?;
         Ok(format!("{} slices", rendering.slices))
     })
 }

@@ -191,6 +191,13 @@ pub struct RenderArgs {
     /// Picture size in pixels, 8 to 4096.
     #[arg(long, default_value_t = 512)]
     pub size: usize,
+    /// A synthesized surface texture (`solidtex surface` on the mesh the model was filled
+    /// from) laid over the material where the rays enter it.
+    #[arg(long)]
+    pub skin: Option<PathBuf>,
+    /// How much light the skin stops, 0 to 1 (1: only the skin shows where it is).
+    #[arg(long, default_value_t = 0.85, requires = "skin")]
+    pub skin_opacity: f32,
     /// The PNG to write.
     #[arg(short, long)]
     pub output: PathBuf,
@@ -610,8 +617,19 @@ pub fn run_render(args: &RenderArgs) -> Result<()> {
         DensityFrom::Light => translucent::Density::Light,
         DensityFrom::Alpha => translucent::Density::Channel(&channel),
     };
+    io::values::within("--skin-opacity", args.skin_opacity, 0.0, 1.0).map_err(usage)?;
+    let skin = args.skin.as_deref().map(io::mesh_file::read_coloured_ply).transpose()?;
+    let lookup = skin.as_ref().map(|s| crate::surface::SkinLookup::new(&s.mesh, &s.colours));
+    let within = match (&skin, &args.skin) {
+        (Some(s), Some(path)) => skin_reach(path, &s.mesh, &pairs(&loaded), None)?,
+        _ => 0.0,
+    };
+    let layer = lookup.as_ref().map(|lookup| translucent::SkinLayer {
+        skin: crate::fill::view::Skin { lookup, within },
+        opacity: args.skin_opacity,
+    });
     let started = Instant::now();
-    let rendering = translucent::render(&pairs(&loaded), density, &settings)?;
+    let rendering = translucent::render(&pairs(&loaded), density, &settings, layer)?;
     let seconds = started.elapsed().as_secs_f64();
     io::write_rgb8(&args.output, &rendering.picture)?;
     let name = format!("{from:?}").to_lowercase();
@@ -663,7 +681,12 @@ pub fn run_bake(args: &BakeArgs) -> Result<()> {
 /// box (the tet mesh's faces are chords of the surface the skin was grown on), plus half the
 /// displacement. A skin whose box differs from the models' by more than that was grown on
 /// another mesh and is refused.
-fn skin_reach(path: &Path, skin: &crate::mesh::Mesh, models: &[(&LstModel, &Textures)], displacement: Option<f32>) -> Result<f32> {
+fn skin_reach(
+    path: &Path,
+    skin: &crate::mesh::Mesh,
+    models: &[(&LstModel, &Textures)],
+    displacement: Option<f32>,
+) -> Result<f32> {
     let (lo, hi) = render::bounds(models);
     let within = 0.03 * lo.distance(hi) + displacement.map_or(0.0, |d| d.abs() * crate::fill::view::MIDLEVEL);
     let (slo, shi) = skin.bounds();

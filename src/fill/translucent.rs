@@ -81,7 +81,12 @@ const OPAQUE: f32 = 1.0 / 1024.0;
 
 /// Renders `models` (the first listed wins where they overlap, as in a cut) as translucent
 /// material.
-pub fn render(models: &[(&LstModel, &Textures)], density: Density, settings: &Settings) -> Result<Rendering> {
+pub fn render(
+    models: &[(&LstModel, &Textures)],
+    density: Density,
+    settings: &Settings,
+    skin: Option<SkinLayer>,
+) -> Result<Rendering> {
     check(models, density, settings)?;
     let (forward, frame) = frames(models, settings);
     let depth = (frame.far - frame.near) / settings.slices as f32;
@@ -91,7 +96,11 @@ pub fn render(models: &[(&LstModel, &Textures)], density: Density, settings: &Se
     let pixels = settings.size * settings.size;
     let mut colour = vec![Vec3::ZERO; pixels];
     let mut through = vec![1.0f32; pixels];
-    let entry = entries(models, &frame, forward);
+    let entry_points = entries(models, &frame, forward);
+    let entry: Vec<f32> = entry_points.iter().map(|p| p.map_or(f32::INFINITY, |p| forward.dot(p))).collect();
+    if let Some(layer) = skin {
+        layer.cover(&entry_points, settings.cutaway, &mut colour, &mut through)?;
+    }
     let mut started = vec![false; pixels];
     let mut done = 0;
     for k in 0..settings.slices {
@@ -202,7 +211,7 @@ fn frames(models: &[(&LstModel, &Textures)], s: &Settings) -> (Vec3, Frame) {
 
 /// Per pixel, the depth along `forward` where its ray first enters a model (the nearest
 /// front-facing boundary face; infinity where it enters none).
-fn entries(models: &[(&LstModel, &Textures)], frame: &Frame, forward: Vec3) -> Vec<f32> {
+fn entries(models: &[(&LstModel, &Textures)], frame: &Frame, forward: Vec3) -> Vec<Option<Vec3>> {
     let size = frame.size;
     let mut hits: Vec<Option<Hit>> = vec![None; size * size];
     let (right, down) = (frame.right / frame.right.length_squared(), frame.down / frame.down.length_squared());
@@ -219,7 +228,41 @@ fn entries(models: &[(&LstModel, &Textures)], frame: &Frame, forward: Vec3) -> V
             });
         }
     }
-    hits.iter().map(|h| h.map_or(f32::INFINITY, |h| h.depth)).collect()
+    hits.iter().map(|h| h.map(|h| h.point)).collect()
+}
+
+/// A synthesized surface texture drawn where the rays enter the models, over the material.
+#[derive(Clone, Copy)]
+pub struct SkinLayer<'a> {
+    /// The skin and how far from it an entry point may lie.
+    pub skin: super::view::Skin<'a>,
+    /// How much light the skin stops, 0 to 1 (1: only the skin shows).
+    pub opacity: f32,
+}
+
+impl SkinLayer<'_> {
+    /// Composites the skin at each ray's entry point that the cutaway keeps.
+    fn cover(
+        &self,
+        entries: &[Option<Vec3>],
+        cutaway: Option<(Vec3, Vec3)>,
+        colour: &mut [Vec3],
+        through: &mut [f32],
+    ) -> Result<()> {
+        if !(0.0..=1.0).contains(&self.opacity) {
+            return Err(Error::invalid(format!("skin opacity {} is out of range; allowed 0 to 1", self.opacity)));
+        }
+        let kept = |p: Vec3| cutaway.is_none_or(|(at, normal)| (p - at).dot(normal) <= 0.0);
+        colour.par_iter_mut().zip(through.par_iter_mut()).zip(entries).for_each(|((c, t), entry)| {
+            let Some(p) = entry.filter(|p| kept(*p)) else { return };
+            let (distance, rgb) = self.skin.lookup.at(p);
+            if distance <= self.skin.within {
+                *c += Vec3::from_array(rgb) * (*t * self.opacity);
+                *t *= 1.0 - self.opacity;
+            }
+        });
+        Ok(())
+    }
 }
 
 /// The density of every pixel of a slice, 0 to 1.
@@ -319,11 +362,11 @@ mod tests {
         let models = [(&model, &textures)];
         for opacity in [0.03, 0.15] {
             // face on: every ray crosses one side
-            let face = render(&models, Density::Uniform, &settings(0.0, opacity)).unwrap();
+            let face = render(&models, Density::Uniform, &settings(0.0, opacity), None).unwrap();
             let (got, want) = (face.opacity[32 * 64 + 32], through(opacity, 1.0));
             assert!((got - want).abs() < 1e-3, "face on, opacity {opacity}: {got} against {want}");
             // turned 45°: the central ray crosses the diagonal, sqrt 2 sides
-            let turned = render(&models, Density::Uniform, &settings(45.0, opacity)).unwrap();
+            let turned = render(&models, Density::Uniform, &settings(45.0, opacity), None).unwrap();
             let (got, want) = (turned.opacity[32 * 64 + 32], through(opacity, 2f32.sqrt()));
             assert!((got - want).abs() < 0.01, "diagonal, opacity {opacity}: {got} against {want}");
             // off the cube there is nothing
@@ -332,12 +375,38 @@ mod tests {
     }
 
     #[test]
+    fn a_skin_covers_where_the_rays_enter_and_not_where_the_cutaway_opened_the_model() {
+        let (model, textures) = cube(flat([1.0, 1.0, 1.0]));
+        let models = [(&model, &textures)];
+        let skin = crate::mesh::shapes::cuboid(Vec3::ZERO, Vec3::ONE);
+        let red = vec![[1.0, 0.0, 0.0]; skin.vertices.len()];
+        let lookup = crate::surface::SkinLookup::new(&skin, &red);
+        let layer = |opacity: f32| {
+            Some(SkinLayer { skin: super::super::view::Skin { lookup: &lookup, within: 0.01 }, opacity })
+        };
+        let s = settings(0.0, 0.15);
+        let opaque = render(&models, Density::Uniform, &s, layer(1.0)).unwrap();
+        assert_eq!(opaque.picture.at(32, 32), [255, 0, 0]);
+        assert_eq!(opaque.picture.at(0, 0), BACKGROUND, "no skin off the model");
+        let plain = render(&models, Density::Uniform, &s, None).unwrap().picture.at(32, 32);
+        let half = render(&models, Density::Uniform, &s, layer(0.5)).unwrap().picture.at(32, 32);
+        assert!(half[0].abs_diff(((255.0 + plain[0] as f32) / 2.0) as u8) <= 1, "{half:?} over {plain:?}");
+        assert!(half[1].abs_diff(plain[1] / 2) <= 1, "{half:?} over {plain:?}");
+        let opened = Settings { cutaway: Some((Vec3::splat(0.5), Vec3::Z)), ..s };
+        let cut = render(&models, Density::Uniform, &opened, layer(1.0)).unwrap();
+        let without = render(&models, Density::Uniform, &opened, None).unwrap();
+        assert_eq!(cut.picture.at(32, 32), without.picture.at(32, 32), "the cut face shows the material");
+        let far = SkinLayer { skin: super::super::view::Skin { lookup: &lookup, within: 0.01 }, opacity: 1.5 };
+        assert!(render(&models, Density::Uniform, &s, Some(far)).is_err());
+    }
+
+    #[test]
     fn a_slanted_view_follows_the_chord_not_the_slices() {
         // a uniform cube seen at a slant with few slices: each pixel's opacity must follow
         // its ray's chord through the cube, not jump with the slices its ray meets
         let (model, textures) = cube(flat([1.0, 1.0, 1.0]));
         let s = Settings { yaw: 30.0, pitch: 20.0, slices: 40, ..settings(0.0, 0.05) };
-        let rendering = render(&[(&model, &textures)], Density::Uniform, &s).unwrap();
+        let rendering = render(&[(&model, &textures)], Density::Uniform, &s, None).unwrap();
         let (forward, frame) = frames(&[(&model, &textures)], &s);
         let (mut worst, mut n) = (0.0f32, 0);
         for y in 0..64 {
@@ -368,14 +437,14 @@ mod tests {
             Volume::from_fn([8, 4, 4], Channel::rgb(), |x, _, _, o| o.fill(if x < 4 { 0.0 } else { 1.0 })).unwrap();
         let (model, textures) = cube(halves);
         let models = [(&model, &textures)];
-        let dark = render(&models, Density::Dark, &settings(0.0, 0.1)).unwrap();
+        let dark = render(&models, Density::Dark, &settings(0.0, 0.1), None).unwrap();
         let (left, right) = (dark.opacity[32 * 64 + 16], dark.opacity[32 * 64 + 48]);
         let want = through(0.1, 1.0);
         assert!((left - want).abs() < 1e-3 && right < 1e-3, "dark density: left {left}, right {right}");
-        let light = render(&models, Density::Light, &settings(0.0, 0.1)).unwrap();
+        let light = render(&models, Density::Light, &settings(0.0, 0.1), None).unwrap();
         assert!(light.opacity[32 * 64 + 16] < 1e-3 && (light.opacity[32 * 64 + 48] - want).abs() < 1e-3);
         // a white cube, almost opaque, shows white; the light it lets through is the background's
-        let white = render(&models, Density::Uniform, &settings(0.0, 0.369)).unwrap();
+        let white = render(&models, Density::Uniform, &settings(0.0, 0.369), None).unwrap();
         let left = 1.0 - through(0.369, 1.0);
         let want = (1.0 - left) * 255.0 + left * BACKGROUND[0] as f32;
         assert!((white.picture.at(48, 32)[0] as f32 - want).abs() <= 1.0, "{:?}", white.picture.at(48, 32));
@@ -388,24 +457,25 @@ mod tests {
         let half = Volume::from_fn([4, 4, 4], Channel::rgb(), |_, _, _, o| o.fill(0.5)).unwrap();
         let (_, density) = cube(half);
         let models = [(&model, &textures)];
-        let channel = render(&models, Density::Channel(std::slice::from_ref(&density)), &settings(0.0, 0.1)).unwrap();
+        let channel =
+            render(&models, Density::Channel(std::slice::from_ref(&density)), &settings(0.0, 0.1), None).unwrap();
         let (got, want) = (channel.opacity[32 * 64 + 32], through(0.1, 0.5));
         assert!((got - want).abs() < 1e-3, "half density through one side: {got} against {want}");
         // cutting away the front half (z > 0.5, toward the camera) leaves half the thickness
         let cut = Settings { cutaway: Some((Vec3::splat(0.5), Vec3::Z)), ..settings(0.0, 0.1) };
-        let got = render(&models, Density::Uniform, &cut).unwrap().opacity[32 * 64 + 32];
+        let got = render(&models, Density::Uniform, &cut, None).unwrap().opacity[32 * 64 + 32];
         assert!((got - want).abs() < 1e-3, "half the cube: {got} against {want}");
         // levels: density 0.5 ramped over 0.25..0.75 stays 0.5, over 0.5..1 becomes 0
         let ramped = Settings { levels: (0.25, 0.75), ..settings(0.0, 0.1) };
-        let got =
-            render(&models, Density::Channel(std::slice::from_ref(&density)), &ramped).unwrap().opacity[32 * 64 + 32];
+        let got = render(&models, Density::Channel(std::slice::from_ref(&density)), &ramped, None).unwrap().opacity
+            [32 * 64 + 32];
         assert!((got - want).abs() < 1e-3, "{got}");
         let high = Settings { levels: (0.5, 1.0), ..settings(0.0, 0.1) };
-        let got =
-            render(&models, Density::Channel(std::slice::from_ref(&density)), &high).unwrap().opacity[32 * 64 + 32];
+        let got = render(&models, Density::Channel(std::slice::from_ref(&density)), &high, None).unwrap().opacity
+            [32 * 64 + 32];
         assert_eq!(got, 0.0);
-        assert!(render(&models, Density::Uniform, &settings(0.0, 1.0)).is_err());
-        assert!(render(&models, Density::Channel(&[]), &settings(0.0, 0.5)).is_err());
+        assert!(render(&models, Density::Uniform, &settings(0.0, 1.0), None).is_err());
+        assert!(render(&models, Density::Channel(&[]), &settings(0.0, 0.5), None).is_err());
     }
 
     #[test]
@@ -418,7 +488,7 @@ mod tests {
         let run = |threads: usize| {
             let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
             let s = Settings { pitch: 30.0, cutaway: Some((Vec3::splat(0.4), Vec3::ONE)), ..settings(20.0, 0.9) };
-            pool.install(|| render(&[(&model, &textures)], Density::Dark, &s).unwrap().picture.data)
+            pool.install(|| render(&[(&model, &textures)], Density::Dark, &s, None).unwrap().picture.data)
         };
         assert_eq!(run(1), run(3));
     }

@@ -89,7 +89,8 @@ impl Frame {
                 None => BACKGROUND,
                 Some(h) => {
                     let (model, textures) = models[h.model as usize];
-                    let on_skin = skin.and_then(|(lookup, within)| Some(lookup.at(h.point)).filter(|(d, _)| *d <= within));
+                    let on_skin =
+                        skin.and_then(|(lookup, within)| Some(lookup.at(h.point)).filter(|(d, _)| *d <= within));
                     let c = match on_skin {
                         Some((_, [r, g, b])) => [r, g, b, 1.0],
                         None => shade_point(model, textures, h.tet as usize, h.point),

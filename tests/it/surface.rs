@@ -174,10 +174,17 @@ fn a_filled_model_is_viewed_with_its_skin() {
     assert!(brown[0] > brown[2] && brown[1] > 10, "the kiwi's own skin is brown: {brown:?}");
 
     let far = at(d, "far.ply");
-    let moved = ColouredMesh { mesh: mesh.transformed(glam::Affine3A::from_scale(Vec3::splat(3.0))), colours: vec![[1.0; 3]; mesh.vertices.len()] };
+    let moved = ColouredMesh {
+        mesh: mesh.transformed(glam::Affine3A::from_scale(Vec3::splat(3.0))),
+        colours: vec![[1.0; 3]; mesh.vertices.len()],
+    };
     write_coloured_ply(Path::new(&far), &moved).unwrap();
     let run = view(&["--skin", &far], &at(d, "far.png"));
-    assert!(!run.status.success() && stderr(&run).contains("grow it on the mesh the model was filled from"), "{}", stderr(&run));
+    assert!(
+        !run.status.success() && stderr(&run).contains("grow it on the mesh the model was filled from"),
+        "{}",
+        stderr(&run)
+    );
     assert!(!d.join("far.png").exists());
     let run = view(&["--skin", &fruit], &at(d, "obj.png"));
     assert!(!run.status.success() && stderr(&run).contains(".ply"), "{}", stderr(&run));
