@@ -21,6 +21,10 @@ pub struct BenchArgs {
     /// stepped cylinder and pipe of ../shared/data/meshes).
     #[arg(long)]
     pub meshes: Option<std::path::PathBuf>,
+    /// Also grow each PNG of this folder on a flat square (surface synthesis) and report the
+    /// yardstick: gradient and length ratios against the photo, histogram distance.
+    #[arg(long)]
+    pub photos: Option<std::path::PathBuf>,
 }
 
 struct Workload {
@@ -42,6 +46,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         let mut names: Vec<String> =
             HAND_MADE.iter().chain(WORKLOADS.iter().map(|w| &w.name)).map(|n| n.to_string()).collect();
         names.extend(super::bench_fill::names());
+        names.extend(super::bench_surface::names());
         if !names.iter().any(|n| n.contains(only.as_str())) {
             return Err(Error::usage(format!(
                 "--only {only:?} matches no workload; the workloads: {}",
@@ -65,6 +70,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         say!("{:<30} {:>5} {:>9.3} {:>9.3}", name, times.len(), times[times.len() / 2], times[0]);
     }
     super::bench_fill::run(args)?;
+    super::bench_surface::run(args)?;
     synthesis(args)
 }
 

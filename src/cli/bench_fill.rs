@@ -131,11 +131,11 @@ fn render_workloads(args: &BenchArgs, name: &str, model: &LstModel, textures: &T
 }
 
 /// Whether `--only` lets the workload `name` run.
-fn wanted(args: &BenchArgs, name: &str) -> bool {
+pub(super) fn wanted(args: &BenchArgs, name: &str) -> bool {
     args.only.as_ref().is_none_or(|o| name.contains(o.as_str()))
 }
 
-fn timed(args: &BenchArgs, name: &str, mut work: impl FnMut() -> Result<String>) -> Result<()> {
+pub(super) fn timed(args: &BenchArgs, name: &str, mut work: impl FnMut() -> Result<String>) -> Result<()> {
     if !wanted(args, name) {
         return Ok(());
     }

@@ -115,7 +115,8 @@ pub struct BakeArgs {
 /// The arguments of `solidtex view`.
 #[derive(Debug, clap::Args)]
 pub struct ViewArgs {
-    /// One or more models (.lst); each pixel shows the nearest surface.
+    /// One or more models (.lst); each pixel shows the nearest surface. Or one skin (.ply
+    /// with vertex colours, as `solidtex surface` writes it).
     #[arg(required = true)]
     pub models: Vec<PathBuf>,
     /// Where the picture looks from.
@@ -677,6 +678,23 @@ pub fn run_bake(args: &BakeArgs) -> Result<()> {
     Ok(())
 }
 
+/// `solidtex view SKIN.ply`: the skin alone, as `solidtex surface` wrote it.
+fn view_skin(args: &ViewArgs, path: &Path) -> Result<()> {
+    if args.skin.is_some() || args.displacement.is_some() || args.flat {
+        return Err(Error::usage(format!(
+            "{}: a skin is drawn as it is; --skin, --displacement and --flat apply to filled models (.lst)",
+            path.display()
+        )));
+    }
+    let skin = io::mesh_file::read_coloured_ply(path)?;
+    let started = Instant::now();
+    let camera = (args.camera.yaw, args.camera.pitch);
+    let picture = crate::fill::view::skin_picture(&skin.mesh, &skin.colours, camera, args.size);
+    io::write_rgb8(&args.output, &picture)?;
+    eprintln!("wrote {} in {:.0} ms", args.output.display(), started.elapsed().as_secs_f64() * 1000.0);
+    Ok(())
+}
+
 /// How far from the skin a surface point may lie and take its colour: 3 % of the models'
 /// box (the tet mesh's faces are chords of the surface the skin was grown on), plus half the
 /// displacement. A skin whose box differs from the models' by more than that was grown on
@@ -715,6 +733,11 @@ pub fn run_view(args: &ViewArgs) -> Result<()> {
     };
     checks().map_err(usage)?;
     io::check_folder(&args.output)?;
+    if let [one] = args.models.as_slice()
+        && one.extension().is_some_and(|e| e.eq_ignore_ascii_case("ply"))
+    {
+        return view_skin(args, one);
+    }
     let loaded = load_models(&args.models)?;
     let started = Instant::now();
     let shading = if args.flat { Shading::Flat } else { Shading::Smooth { crease: args.crease } };

@@ -11,6 +11,7 @@
 use super::model::LstModel;
 use super::render::{BACKGROUND, Textures, shade_point};
 use super::tets::FACES;
+use crate::mesh::Mesh;
 use crate::render::{Rgb8, to_u8};
 use crate::surface::SkinLookup;
 use glam::{Vec2, Vec3};
@@ -46,13 +47,16 @@ pub(super) struct Frame {
 impl Frame {
     /// The camera `yaw`/`pitch` degrees around the models, their vertices filling the
     /// picture with a margin.
-    pub fn new(models: &[&LstModel], (yaw, pitch): (f32, f32), size: usize) -> Frame {
+    pub fn new(models: &[&LstModel], camera: (f32, f32), size: usize) -> Frame {
+        Frame::around(models.iter().flat_map(|m| m.mesh.vertices.iter().copied()), camera, size)
+    }
+
+    /// The camera `yaw`/`pitch` degrees around `points`, which fill the picture with a margin.
+    pub fn around(points: impl Iterator<Item = Vec3>, (yaw, pitch): (f32, f32), size: usize) -> Frame {
         let (forward, right, up) = camera(yaw, pitch);
         let project = |p: Vec3| Vec2::new(right.dot(p), up.dot(p));
-        let (lo, hi) = models
-            .iter()
-            .flat_map(|m| m.mesh.vertices.iter())
-            .fold((Vec2::INFINITY, Vec2::NEG_INFINITY), |(a, b), p| (a.min(project(*p)), b.max(project(*p))));
+        let (lo, hi) =
+            points.fold((Vec2::INFINITY, Vec2::NEG_INFINITY), |(a, b), p| (a.min(project(p)), b.max(project(p))));
         let side = (hi - lo).max_element().max(1e-6) * 1.08;
         Frame { forward, right, up, centre: (lo + hi) / 2.0, scale: size as f32 / side, size }
     }
@@ -61,6 +65,11 @@ impl Frame {
     pub fn to_pixel(&self, p: Vec3) -> Vec2 {
         let q = (Vec2::new(self.right.dot(p), self.up.dot(p)) - self.centre) * self.scale;
         Vec2::new(q.x + self.size as f32 / 2.0, self.size as f32 / 2.0 - q.y)
+    }
+
+    /// The direction towards the light, over the viewer's shoulder.
+    fn light(&self) -> Vec3 {
+        (self.up * 0.6 - self.forward + self.right * 0.3).normalize()
     }
 
     /// Model units per pixel.
@@ -82,7 +91,7 @@ impl Frame {
         hits: &[Option<Hit>],
         skin: Option<(&SkinLookup, f32)>,
     ) -> Rgb8 {
-        let light = (self.up * 0.6 - self.forward + self.right * 0.3).normalize();
+        let light = self.light();
         let colours: Vec<[u8; 3]> = hits
             .par_iter()
             .map(|hit| match hit {
@@ -201,6 +210,36 @@ pub fn surfaces(
     }
     let hits = rasterize(&all, &frame, |_| true);
     (frame.shade_with_skin(models, &hits, skin.map(|s| (s.lookup, s.within))), all.len())
+}
+
+/// A skin (a mesh with an RGB colour per vertex, see [`crate::surface`]) seen from
+/// `camera` (yaw, pitch degrees), its colours blended across each triangle, smooth-shaded
+/// by its vertex normals and lit as [`surfaces`] lights a model.
+pub fn skin_picture(mesh: &Mesh, colours: &[[f32; 3]], camera: (f32, f32), size: usize) -> Rgb8 {
+    let frame = Frame::around(mesh.vertices.iter().copied(), camera, size);
+    let normals = crate::surface::retile::vertex_normals(&mesh.vertices, &mesh.triangles);
+    let mut hits: Vec<Option<Hit>> = vec![None; size * size];
+    for (i, t) in mesh.triangles.iter().enumerate() {
+        let corners = t.map(|v| mesh.vertices[v as usize]);
+        let flat = (corners[1] - corners[0]).cross(corners[2] - corners[0]).normalize_or_zero();
+        draw_triangle(&mut hits, size, corners.map(|p| frame.to_pixel(p)), |b| {
+            let point = at(corners, b);
+            let normal = at(t.map(|v| normals[v as usize]), b).normalize_or(flat);
+            // the model field holds nothing; `point` the barycentric weights, for the colour
+            Some(Hit { depth: frame.forward.dot(point), model: 0, tet: i as u32, point: Vec3::from(b), normal })
+        });
+    }
+    let light = frame.light();
+    let mut out = Rgb8::new(size, size, BACKGROUND);
+    for (i, hit) in hits.iter().enumerate() {
+        let Some(h) = hit else { continue };
+        let t = mesh.triangles[h.tet as usize];
+        let [a, b, c] = t.map(|v| colours[v as usize]);
+        let w = h.point;
+        let lit = 0.35 + 0.65 * h.normal.dot(light).max(0.0);
+        out.put(i % size, i / size, [0, 1, 2].map(|k| to_u8((w.x * a[k] + w.y * b[k] + w.z * c[k]) * lit)));
+    }
+    out
 }
 
 /// The axes of an orthographic camera `yaw` degrees around y and `pitch` degrees up from

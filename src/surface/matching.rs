@@ -114,13 +114,13 @@ pub fn coordinates(
 }
 
 /// How many point levels lie below the exemplar's full resolution: with pixels `texel`
-/// long and points `spacing` apart, about log2(texel / spacing), so matching runs where
-/// points and pixels are about as dense; the denser points below take their coordinates
-/// from the nearest matched one (each point still shows one exemplar pixel, so the colours
-/// blended across a triangle stay as sharp as the photo).
+/// long and points `spacing` apart, log2(texel / spacing) rounded down, so matching runs
+/// on the sparsest points still at least as dense as the pixels; the denser points below
+/// take their coordinates from the nearest matched one (each point still shows one
+/// exemplar pixel, so the colours blended across a triangle stay as sharp as the photo).
 fn below_exemplar(texel: f32, spacing: f32) -> usize {
-    let ratio = (texel / spacing).log2();
-    if ratio.is_finite() && ratio > 0.0 { (ratio.round() as usize).min(4) } else { 0 }
+    let ratio = (texel / spacing).log2() + 1e-3;
+    if ratio.is_finite() && ratio > 0.0 { (ratio.floor() as usize).min(4) } else { 0 }
 }
 
 /// The exemplar and its 2x reductions, as many as keep [`COARSEST_SIDE`] pixels and leave
@@ -431,7 +431,9 @@ impl Penalty {
         for &u in coords {
             counts[Penalty::block_of(block, u)] += 1.0;
         }
-        let share = coords.len() as f32 / (BLOCKS * BLOCKS) as f32;
+        // a block is over-used past its share of the points, or past one point per pixel
+        // when the points are fewer than the pixels (a patch copied whole is no over-use)
+        let share = (coords.len() as f32 / (BLOCKS * BLOCKS) as f32).max((block[0] * block[1]) as f32);
         let places = counts.iter().map(|&c| PLACE_USE * (c / share.max(1e-6) - 1.0).max(0.0)).collect();
         Penalty { colour, places, block }
     }

@@ -1,0 +1,76 @@
+//! The surface-synthesis workloads of `solidtex bench`: the project's own skins grown on a
+//! flat square (time and the yardstick's figures), with `--meshes` 100,000 points on the
+//! bunny, with `--photos` the yardstick on every PNG of a folder.
+
+use super::bench::BenchArgs;
+use super::bench_fill::{timed, wanted};
+use crate::error::Result;
+use crate::io;
+use crate::progress::NoProgress;
+use crate::surface::{self, Guide, Options};
+use crate::volume::Image2d;
+
+/// The skins the project draws itself.
+const SKINS: [&str; 2] = ["fuzz", "bark-skin"];
+/// Points on the square: 128 exemplar pixels across at four points per pixel.
+const SQUARE_POINTS: usize = 65_536;
+/// Points on the bunny.
+const BUNNY_POINTS: usize = 100_000;
+
+/// The workload names.
+pub fn names() -> Vec<String> {
+    let mut names: Vec<String> = SKINS.iter().map(|s| format!("surface/square/{s}")).collect();
+    names.push("surface/bunny/100k".into());
+    names.push("surface/photo/".into());
+    names
+}
+
+/// Run the surface workloads.
+pub fn run(args: &BenchArgs) -> Result<()> {
+    if !names().iter().any(|n| wanted(args, n)) {
+        return Ok(());
+    }
+    say!("{:<30} {:>5} {:>9} {:>9}  {}", "workload", "runs", "median s", "min s", "figures");
+    for skin in SKINS {
+        let image = crate::sections::draw(skin, 128, 128, 1)?;
+        square(args, &format!("surface/square/{skin}"), &image)?;
+    }
+    if let Some(path) = args.meshes.as_deref().map(|d| d.join("libigl_bunny.obj")).filter(|p| p.exists()) {
+        let bunny = io::mesh_file::read_mesh(&path)?;
+        let image = crate::sections::draw("bark-skin", 128, 128, 1)?;
+        let options = Options { points: BUNNY_POINTS, seed: 1, texel: None, guide: Guide::Along(glam::Vec3::Y) };
+        timed(args, "surface/bunny/100k", || {
+            let skin = surface::synthesize(&bunny, &image, &options, &NoProgress)?;
+            let h = surface::histogram_distances(&skin.colours, &image)?;
+            Ok(format!("{} points, histogram {:.3} {:.3} {:.3}", skin.mesh.vertices.len(), h[0], h[1], h[2]))
+        })?;
+    }
+    if let Some(folder) = &args.photos {
+        let mut photos: Vec<_> = std::fs::read_dir(folder)
+            .map_err(|e| crate::Error::file(folder, e.to_string()))?
+            .filter_map(|e| e.ok().map(|e| e.path()))
+            .filter(|p| p.extension().is_some_and(|e| e.eq_ignore_ascii_case("png")))
+            .collect();
+        photos.sort();
+        for photo in photos {
+            let name = photo.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+            let image = io::read_image_fit(&photo, Some(128))?;
+            square(args, &format!("surface/photo/{name}"), &image)?;
+        }
+    }
+    Ok(())
+}
+
+/// Grows `image` on the unit square and reports the yardstick.
+fn square(args: &BenchArgs, name: &str, image: &Image2d) -> Result<()> {
+    timed(args, name, || {
+        let y = surface::on_a_square(image, SQUARE_POINTS, 1, &NoProgress)?;
+        let (s, h) = (&y.sharpness, y.histogram);
+        Ok(format!(
+            "gradient {:.2} length {:.2} histogram {:.3}",
+            s.gradient_ratio,
+            s.length_ratio,
+            h.iter().fold(0.0f64, |a, b| a.max(*b))
+        ))
+    })
+}
