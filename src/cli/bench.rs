@@ -46,7 +46,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         let mut names: Vec<String> =
             HAND_MADE.iter().chain(WORKLOADS.iter().map(|w| &w.name)).map(|n| n.to_string()).collect();
         names.extend(super::bench_fill::names());
-        names.extend(super::bench_surface::names());
+        names.extend(super::bench_surface::names(args)?);
         if !names.iter().any(|n| n.contains(only.as_str())) {
             return Err(Error::usage(format!(
                 "--only {only:?} matches no workload; the workloads: {}",

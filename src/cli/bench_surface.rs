@@ -9,6 +9,7 @@ use crate::io;
 use crate::progress::NoProgress;
 use crate::surface::{self, Guide, Options};
 use crate::volume::Image2d;
+use std::path::{Path, PathBuf};
 
 /// The skins the project draws itself.
 const SKINS: [&str; 2] = ["fuzz", "bark-skin"];
@@ -17,25 +18,46 @@ const SQUARE_POINTS: usize = 65_536;
 /// Points on the bunny.
 const BUNNY_POINTS: usize = 100_000;
 
-/// The workload names.
-pub fn names() -> Vec<String> {
+/// The workload names (a photo's: `surface/photo/` and its file name without `.png`).
+pub fn names(args: &BenchArgs) -> Result<Vec<String>> {
     let mut names: Vec<String> = SKINS.iter().map(|s| format!("surface/square/{s}")).collect();
     names.push("surface/bunny/100k".into());
-    names.push("surface/photo/".into());
-    names
+    for photo in photos(args)? {
+        names.push(format!("surface/photo/{}", stem(&photo)));
+    }
+    Ok(names)
+}
+
+/// The PNGs of `--photos`, sorted.
+fn photos(args: &BenchArgs) -> Result<Vec<PathBuf>> {
+    let Some(folder) = &args.photos else { return Ok(Vec::new()) };
+    let mut photos: Vec<PathBuf> = std::fs::read_dir(folder)
+        .map_err(|e| crate::Error::file(folder, e.to_string()))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|e| e.eq_ignore_ascii_case("png")))
+        .collect();
+    photos.sort();
+    Ok(photos)
+}
+
+fn stem(path: &Path) -> String {
+    path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default()
 }
 
 /// Run the surface workloads.
 pub fn run(args: &BenchArgs) -> Result<()> {
-    if !names().iter().any(|n| wanted(args, n)) {
+    if !names(args)?.iter().any(|n| wanted(args, n)) {
         return Ok(());
     }
     say!("{:<30} {:>5} {:>9} {:>9}  {}", "workload", "runs", "median s", "min s", "figures");
     for skin in SKINS {
-        let image = crate::sections::draw(skin, 128, 128, 1)?;
-        square(args, &format!("surface/square/{skin}"), &image)?;
+        let name = format!("surface/square/{skin}");
+        if wanted(args, &name) {
+            square(args, &name, &crate::sections::draw(skin, 128, 128, 1)?)?;
+        }
     }
-    if let Some(path) = args.meshes.as_deref().map(|d| d.join("libigl_bunny.obj")).filter(|p| p.exists()) {
+    let bunny = args.meshes.as_deref().map(|d| d.join("libigl_bunny.obj")).filter(|p| p.exists());
+    if let Some(path) = bunny.filter(|_| wanted(args, "surface/bunny/100k")) {
         let bunny = io::mesh_file::read_mesh(&path)?;
         let image = crate::sections::draw("bark-skin", 128, 128, 1)?;
         let options = Options { points: BUNNY_POINTS, seed: 1, texel: None, guide: Guide::Along(glam::Vec3::Y) };
@@ -45,17 +67,10 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             Ok(format!("{} points, histogram {:.3} {:.3} {:.3}", skin.mesh.vertices.len(), h[0], h[1], h[2]))
         })?;
     }
-    if let Some(folder) = &args.photos {
-        let mut photos: Vec<_> = std::fs::read_dir(folder)
-            .map_err(|e| crate::Error::file(folder, e.to_string()))?
-            .filter_map(|e| e.ok().map(|e| e.path()))
-            .filter(|p| p.extension().is_some_and(|e| e.eq_ignore_ascii_case("png")))
-            .collect();
-        photos.sort();
-        for photo in photos {
-            let name = photo.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
-            let image = io::read_image_fit(&photo, Some(128))?;
-            square(args, &format!("surface/photo/{name}"), &image)?;
+    for photo in photos(args)? {
+        let name = format!("surface/photo/{}", stem(&photo));
+        if wanted(args, &name) {
+            square(args, &name, &io::read_image_fit(&photo, Some(128))?)?;
         }
     }
     Ok(())

@@ -625,8 +625,9 @@ pub fn run_render(args: &RenderArgs) -> Result<()> {
         (Some(s), Some(path)) => skin_reach(path, &s.mesh, &pairs(&loaded), None)?,
         _ => 0.0,
     };
+    let depth = skin_depth(&loaded, args.skin.is_some());
     let layer = lookup.as_ref().map(|lookup| translucent::SkinLayer {
-        skin: crate::fill::view::Skin { lookup, within },
+        skin: crate::fill::view::Skin { lookup, within, depth: depth.as_deref() },
         opacity: args.skin_opacity,
     });
     let started = Instant::now();
@@ -676,6 +677,15 @@ pub fn run_bake(args: &BakeArgs) -> Result<()> {
         started.elapsed().as_secs_f64()
     );
     Ok(())
+}
+
+/// The models' Depth textures, when a skin is drawn and every exemplar has the channel
+/// (else the skin covers the whole surface).
+fn skin_depth(loaded: &[Loaded], wanted: bool) -> Option<Vec<Textures>> {
+    if !wanted {
+        return None;
+    }
+    channel_textures(loaded, &Channel::Depth).ok()
 }
 
 /// `solidtex view SKIN.ply`: the skin alone, as `solidtex surface` wrote it.
@@ -754,7 +764,8 @@ pub fn run_view(args: &ViewArgs) -> Result<()> {
         (Some(s), Some(path)) => skin_reach(path, &s.mesh, &pairs(&loaded), args.displacement)?,
         _ => 0.0,
     };
-    let skin = lookup.as_ref().map(|lookup| crate::fill::view::Skin { lookup, within });
+    let depth = skin_depth(&loaded, args.skin.is_some());
+    let skin = lookup.as_ref().map(|lookup| crate::fill::view::Skin { lookup, within, depth: depth.as_deref() });
     let (picture, triangles) =
         crate::fill::view::surfaces(&pairs(&loaded), displacement, skin, camera, args.size, shading);
     let note = args

@@ -96,10 +96,10 @@ pub fn render(
     let pixels = settings.size * settings.size;
     let mut colour = vec![Vec3::ZERO; pixels];
     let mut through = vec![1.0f32; pixels];
-    let entry_points = entries(models, &frame, forward);
-    let entry: Vec<f32> = entry_points.iter().map(|p| p.map_or(f32::INFINITY, |p| forward.dot(p))).collect();
+    let entry_hits = entries(models, &frame, forward);
+    let entry: Vec<f32> = entry_hits.iter().map(|h| h.map_or(f32::INFINITY, |h| h.depth)).collect();
     if let Some(layer) = skin {
-        layer.cover(&entry_points, settings.cutaway, &mut colour, &mut through)?;
+        layer.cover(models, &entry_hits, settings.cutaway, &mut colour, &mut through)?;
     }
     let mut started = vec![false; pixels];
     let mut done = 0;
@@ -211,7 +211,7 @@ fn frames(models: &[(&LstModel, &Textures)], s: &Settings) -> (Vec3, Frame) {
 
 /// Per pixel, the depth along `forward` where its ray first enters a model (the nearest
 /// front-facing boundary face; infinity where it enters none).
-fn entries(models: &[(&LstModel, &Textures)], frame: &Frame, forward: Vec3) -> Vec<Option<Vec3>> {
+fn entries(models: &[(&LstModel, &Textures)], frame: &Frame, forward: Vec3) -> Vec<Option<Hit>> {
     let size = frame.size;
     let mut hits: Vec<Option<Hit>> = vec![None; size * size];
     let (right, down) = (frame.right / frame.right.length_squared(), frame.down / frame.down.length_squared());
@@ -228,7 +228,7 @@ fn entries(models: &[(&LstModel, &Textures)], frame: &Frame, forward: Vec3) -> V
             });
         }
     }
-    hits.iter().map(|h| h.map(|h| h.point)).collect()
+    hits
 }
 
 /// A synthesized surface texture drawn where the rays enter the models, over the material.
@@ -244,7 +244,8 @@ impl SkinLayer<'_> {
     /// Composites the skin at each ray's entry point that the cutaway keeps.
     fn cover(
         &self,
-        entries: &[Option<Vec3>],
+        models: &[(&LstModel, &Textures)],
+        entries: &[Option<Hit>],
         cutaway: Option<(Vec3, Vec3)>,
         colour: &mut [Vec3],
         through: &mut [f32],
@@ -254,9 +255,9 @@ impl SkinLayer<'_> {
         }
         let kept = |p: Vec3| cutaway.is_none_or(|(at, normal)| (p - at).dot(normal) <= 0.0);
         colour.par_iter_mut().zip(through.par_iter_mut()).zip(entries).for_each(|((c, t), entry)| {
-            let Some(p) = entry.filter(|p| kept(*p)) else { return };
-            let (distance, rgb) = self.skin.lookup.at(p);
-            if distance <= self.skin.within {
+            let Some(h) = entry.filter(|h| kept(h.point)) else { return };
+            let model = models[h.model as usize].0;
+            if let Some(rgb) = self.skin.colour_at(model, h.model as usize, h.tet as usize, h.point) {
                 *c += Vec3::from_array(rgb) * (*t * self.opacity);
                 *t *= 1.0 - self.opacity;
             }
@@ -382,7 +383,7 @@ mod tests {
         let red = vec![[1.0, 0.0, 0.0]; skin.vertices.len()];
         let lookup = crate::surface::SkinLookup::new(&skin, &red);
         let layer = |opacity: f32| {
-            Some(SkinLayer { skin: super::super::view::Skin { lookup: &lookup, within: 0.01 }, opacity })
+            Some(SkinLayer { skin: super::super::view::Skin { lookup: &lookup, within: 0.01, depth: None }, opacity })
         };
         let s = settings(0.0, 0.15);
         let opaque = render(&models, Density::Uniform, &s, layer(1.0)).unwrap();
@@ -396,7 +397,7 @@ mod tests {
         let cut = render(&models, Density::Uniform, &opened, layer(1.0)).unwrap();
         let without = render(&models, Density::Uniform, &opened, None).unwrap();
         assert_eq!(cut.picture.at(32, 32), without.picture.at(32, 32), "the cut face shows the material");
-        let far = SkinLayer { skin: super::super::view::Skin { lookup: &lookup, within: 0.01 }, opacity: 1.5 };
+        let far = SkinLayer { skin: super::super::view::Skin { lookup: &lookup, within: 0.01, depth: None }, opacity: 1.5 };
         assert!(render(&models, Density::Uniform, &s, Some(far)).is_err());
     }
 

@@ -83,13 +83,13 @@ impl Frame {
         self.shade_with_skin(models, hits, None)
     }
 
-    /// [`Frame::shade`], with the colour of the points within `skin.1` of the skin taken
-    /// from the skin instead of the solid texture.
+    /// [`Frame::shade`], with the colour of the points the skin covers taken from the skin
+    /// instead of the solid texture.
     pub fn shade_with_skin(
         &self,
         models: &[(&LstModel, &Textures)],
         hits: &[Option<Hit>],
-        skin: Option<(&SkinLookup, f32)>,
+        skin: Option<Skin>,
     ) -> Rgb8 {
         let light = self.light();
         let colours: Vec<[u8; 3]> = hits
@@ -98,10 +98,9 @@ impl Frame {
                 None => BACKGROUND,
                 Some(h) => {
                     let (model, textures) = models[h.model as usize];
-                    let on_skin =
-                        skin.and_then(|(lookup, within)| Some(lookup.at(h.point)).filter(|(d, _)| *d <= within));
+                    let on_skin = skin.and_then(|s| s.colour_at(model, h.model as usize, h.tet as usize, h.point));
                     let c = match on_skin {
-                        Some((_, [r, g, b])) => [r, g, b, 1.0],
+                        Some([r, g, b]) => [r, g, b, 1.0],
                         None => shade_point(model, textures, h.tet as usize, h.point),
                     };
                     let lit = 0.35 + 0.65 * h.normal.dot(light).max(0.0);
@@ -172,13 +171,34 @@ const MAX_LEVEL: usize = 32;
 const MAX_TRIANGLES: usize = 2_000_000;
 
 /// A synthesized surface texture drawn where the model's surface lies within `within`
-/// model units of it (see [`crate::surface`]).
+/// model units of it (see [`crate::surface`]) and, when the exemplars carry a Depth
+/// channel, where the solid is at depth 0 there (so the cut ends of a log keep their
+/// rings while its side shows bark).
 #[derive(Clone, Copy)]
 pub struct Skin<'a> {
     /// The skin's colours near the surface.
     pub lookup: &'a SkinLookup<'a>,
     /// How far from the skin a surface point may be and still take its colour.
     pub within: f32,
+    /// Per model, its exemplars' Depth channel (see [`Textures::channel`]), if they have one.
+    pub depth: Option<&'a [Textures]>,
+}
+
+/// The deepest solid depth the skin covers (depth runs from 0 outside to 1 inside).
+pub const SKIN_DEPTH: f32 = 0.05;
+
+impl Skin<'_> {
+    /// The skin's colour at `point` of tet `tet` of model `index`, or `None` where the
+    /// solid shows.
+    pub fn colour_at(&self, model: &LstModel, index: usize, tet: usize, point: Vec3) -> Option<[f32; 3]> {
+        if let Some(depth) = self.depth
+            && shade_point(model, &depth[index], tet, point)[0] > SKIN_DEPTH
+        {
+            return None;
+        }
+        let (distance, colour) = self.lookup.at(point);
+        (distance <= self.within).then_some(colour)
+    }
 }
 
 /// The surfaces of several models (each pixel shows the nearest), seen from `camera`
@@ -209,7 +229,7 @@ pub fn surfaces(
         all.extend(facets);
     }
     let hits = rasterize(&all, &frame, |_| true);
-    (frame.shade_with_skin(models, &hits, skin.map(|s| (s.lookup, s.within))), all.len())
+    (frame.shade_with_skin(models, &hits, skin), all.len())
 }
 
 /// A skin (a mesh with an RGB colour per vertex, see [`crate::surface`]) seen from
