@@ -42,6 +42,7 @@ pub fn run(args: &SurfaceArgs) -> Result<()> {
     let mesh = mesh_file::read_mesh(&args.mesh)?;
     let guide = guide(args, &mesh)?;
     let exemplar = io::read_image(&args.exemplar)?;
+    surface::check_exemplar(&exemplar).map_err(|e| e.in_file(&args.exemplar))?;
     let options = Options { points: args.points, seed: args.seed, texel: args.texel, guide };
     let started = Instant::now();
     let bar = super::fill::Bar::new();

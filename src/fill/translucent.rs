@@ -397,7 +397,8 @@ mod tests {
         let cut = render(&models, Density::Uniform, &opened, layer(1.0)).unwrap();
         let without = render(&models, Density::Uniform, &opened, None).unwrap();
         assert_eq!(cut.picture.at(32, 32), without.picture.at(32, 32), "the cut face shows the material");
-        let far = SkinLayer { skin: super::super::view::Skin { lookup: &lookup, within: 0.01, depth: None }, opacity: 1.5 };
+        let far =
+            SkinLayer { skin: super::super::view::Skin { lookup: &lookup, within: 0.01, depth: None }, opacity: 1.5 };
         assert!(render(&models, Density::Uniform, &s, Some(far)).is_err());
     }
 

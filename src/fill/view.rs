@@ -85,12 +85,7 @@ impl Frame {
 
     /// [`Frame::shade`], with the colour of the points the skin covers taken from the skin
     /// instead of the solid texture.
-    pub fn shade_with_skin(
-        &self,
-        models: &[(&LstModel, &Textures)],
-        hits: &[Option<Hit>],
-        skin: Option<Skin>,
-    ) -> Rgb8 {
+    pub fn shade_with_skin(&self, models: &[(&LstModel, &Textures)], hits: &[Option<Hit>], skin: Option<Skin>) -> Rgb8 {
         let light = self.light();
         let colours: Vec<[u8; 3]> = hits
             .par_iter()

@@ -554,9 +554,12 @@ impl Body<'_> {
     }
 }
 
+/// Vertex positions and, when the file has them, their colours.
+type Vertices = (Vec<Vec3>, Option<Vec<[f32; 3]>>);
+
 /// The vertices and, when the element has `red`, `green` and `blue`, their colours (integer
 /// types read as 0-255, floating-point ones as 0-1).
-fn ply_vertices(element: &Element, body: &mut Body, file_len: usize) -> Result<(Vec<Vec3>, Option<Vec<[f32; 3]>>)> {
+fn ply_vertices(element: &Element, body: &mut Body, file_len: usize) -> Result<Vertices> {
     let find = |axis: &str| {
         element.scalar(axis).ok_or_else(|| {
             Error::invalid(format!("PLY header line {}: element vertex has no property {axis}", element.line))

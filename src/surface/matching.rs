@@ -419,13 +419,9 @@ struct Penalty {
 impl Penalty {
     fn new(ex: &Prepared, coords: &[[i32; 2]], wanted: &Histogram) -> Penalty {
         let used = Histogram::of(coords.iter().map(|&u| colour(ex, u)));
-        let mut colour = [[0.0f32; BINS]; 3];
-        for k in 0..3 {
-            for b in 0..BINS {
-                let (u, w) = (used.0[k][b], wanted.0[k][b]);
-                colour[k][b] = COLOUR_USE * if w > 0.0 { (u / w - 1.0).max(0.0) } else { 0.0 };
-            }
-        }
+        let over = |u: f32, w: f32| COLOUR_USE * if w > 0.0 { (u / w - 1.0).max(0.0) } else { 0.0 };
+        let colour: [[f32; BINS]; 3] =
+            std::array::from_fn(|k| std::array::from_fn(|b| over(used.0[k][b], wanted.0[k][b])));
         let block = [ex.width.div_ceil(BLOCKS), ex.height.div_ceil(BLOCKS)];
         let mut counts = vec![0.0f32; BLOCKS * BLOCKS];
         for &u in coords {

@@ -51,6 +51,14 @@ pub fn retile(mesh: &Mesh, points: usize, progress: &dyn Progress) -> Result<Mes
             if tiling.split_long(4.0 / 3.0 * edge) == 0 {
                 break;
             }
+            let budget = 32 * points + 4 * mesh.triangles.len();
+            if tiling.triangles.len() > budget {
+                return Err(Error::invalid(format!(
+                    "the mesh's triangles are too long and thin to tile with {points} points: splitting them \
+                     reached {} triangles before their edges came down to {edge:.3e}",
+                    tiling.triangles.len()
+                )));
+            }
         }
         for round in 0..ROUNDS {
             if progress.cancelled() {
@@ -469,6 +477,14 @@ mod tests {
         let surface = Surface::new(&sphere, 1.0);
         let off = tiled.vertices.iter().map(|p| p.distance(surface.closest_triangle(*p).1)).fold(0.0f32, f32::max);
         assert!(off < 1e-4, "a point {off} off the surface");
+    }
+
+    #[test]
+    fn a_sliver_too_long_for_the_points_is_refused_before_it_fills_memory() {
+        let sliver =
+            Mesh::new(vec![Vec3::ZERO, Vec3::new(1e6, 0.0, 0.0), Vec3::new(0.0, 1e-4, 0.0)], vec![[0, 1, 2]]).unwrap();
+        let err = retile(&sliver, 100, &NoProgress).unwrap_err().to_string();
+        assert!(err.contains("too long and thin to tile with 100 points"), "{err}");
     }
 
     #[test]

@@ -66,8 +66,8 @@ fn smoothed(mesh: &Mesh, colours: &[[f32; 3]]) -> Vec<[f32; 3]> {
         for k in 0..3 {
             let (a, b) = (t[k] as usize, t[(k + 1) % 3] as usize);
             for (x, y) in [(a, b), (b, a)] {
-                for c in 0..3 {
-                    sum[x].0[c] += colours[y][c] / 2.0;
+                for (total, v) in sum[x].0.iter_mut().zip(colours[y]) {
+                    *total += v / 2.0;
                 }
                 sum[x].1 += 0.5;
             }
@@ -126,11 +126,17 @@ fn the_surface_command_writes_a_coloured_ply_and_refuses_bad_input() {
         assert!(!run.status.success(), "{args:?} succeeded");
         assert!(stderr(&run).contains(says), "{args:?}: {}", stderr(&run));
     };
-    bad(&["surface", &mesh, "--exemplar", photo, "--points", "50", "-o", &out], "points = 50 is out of range");
+    bad(
+        &["surface", &mesh, "--exemplar", photo, "--points", "50", "-o", &out],
+        "points = 50 is out of range; allowed: 100 to 500000",
+    );
     bad(&["surface", &mesh, "--exemplar", photo, "--direction", "0,0,0", "-o", &out], "must be a non-zero vector");
     bad(&["surface", &mesh, "--exemplar", photo, "--texel", "-1", "-o", &out], "must be a length greater than 0");
     bad(&["surface", &mesh, "--exemplar", photo, "-o", &at(dir.path(), "skin.obj")], "written as a .ply");
     bad(&["surface", &mesh, "--exemplar", &mesh, "-o", &out], "blob.obj");
+    let small = at(dir.path(), "small.png");
+    image::RgbImage::new(15, 40).save(&small).unwrap();
+    bad(&["surface", &mesh, "--exemplar", &small, "-o", &out], "small.png: the exemplar is 15x40");
     let before = std::fs::read(&mesh).unwrap();
     let as_ply = at(dir.path(), "blob.ply");
     std::fs::copy(&mesh, &as_ply).unwrap();
