@@ -11,8 +11,14 @@
 //!  a pass: for each point p, the neighbours q within a radius, their offsets d(q) in
 //!  p's frame (up = the direction field, right = up x normal) in pixels of E(l);
 //!  candidates u(q) - d(q) and their k-coherence sets; keep the u minimizing
-//!  sum_q w(q) |E(u + d(q)) - E(u(q))|²
+//!  sum_q w(q) |E(u + d(q)) - E(u(q))|²  x (1 + usage penalty), halved for an exact
+//!  continuation of a neighbour's patch
 //! ```
+//!
+//! Matching runs on the sparsest point level still at least as dense as the exemplar's
+//! pixels; the denser levels below copy the nearest matched point's coordinates plus
+//! their offset. The usage penalties (colour bins and exemplar blocks used more than
+//! their share) keep k-coherence from settling on a few parts of the photo.
 //!
 //! Order independence (the result is the same on any thread count): space is cut into
 //! cubes the size of the neighbourhood radius, and each pass runs eight sub-passes, one
