@@ -43,6 +43,7 @@ pub mod correlation;
 pub mod error;
 pub mod fill;
 pub mod ground_truth;
+pub mod guided;
 pub mod io;
 pub mod labels;
 pub mod library;

@@ -1,6 +1,7 @@
 //! The surface-synthesis workloads of `solidtex bench`: the project's own skins grown on a
 //! flat square (time and the yardstick's figures), with `--meshes` 100,000 points on the
-//! bunny, with `--photos` the yardstick on every PNG of a folder.
+//! bunny, with `--photos` the yardstick on every PNG of a folder; and the guided frame
+//! field's solve on the kiwi's 5,000 tets.
 
 use super::bench::BenchArgs;
 use super::bench_fill::{timed, wanted};
@@ -11,17 +12,18 @@ use crate::surface::{self, Guide, Options};
 use crate::volume::Image2d;
 use std::path::{Path, PathBuf};
 
-/// The skins the project draws itself.
-const SKINS: [&str; 2] = ["fuzz", "bark-skin"];
 /// Points on the square: 128 exemplar pixels across at four points per pixel.
 const SQUARE_POINTS: usize = 65_536;
+/// The frame-field workload.
+const FIELD: &str = "guided/field/fruit/5k";
 /// Points on the bunny.
 const BUNNY_POINTS: usize = 100_000;
 
 /// The workload names (a photo's: `surface/photo/` and its file name without `.png`).
 pub fn names(args: &BenchArgs) -> Result<Vec<String>> {
-    let mut names: Vec<String> = SKINS.iter().map(|s| format!("surface/square/{s}")).collect();
+    let mut names: Vec<String> = crate::sections::SKINS.iter().map(|s| format!("surface/square/{s}")).collect();
     names.push("surface/bunny/100k".into());
+    names.push(FIELD.into());
     for photo in photos(args)? {
         names.push(format!("surface/photo/{}", stem(&photo)));
     }
@@ -50,7 +52,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         return Ok(());
     }
     say!("{:<30} {:>5} {:>9} {:>9}  {}", "workload", "runs", "median s", "min s", "figures");
-    for skin in SKINS {
+    for skin in crate::sections::SKINS {
         let name = format!("surface/square/{skin}");
         if wanted(args, &name) {
             square(args, &name, &crate::sections::draw(skin, 128, 128, 1)?)?;
@@ -67,6 +69,9 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             Ok(format!("{} points, histogram {:.3} {:.3} {:.3}", skin.mesh.vertices.len(), h[0], h[1], h[2]))
         })?;
     }
+    if wanted(args, FIELD) {
+        field(args)?;
+    }
     for photo in photos(args)? {
         let name = format!("surface/photo/{}", stem(&photo));
         if wanted(args, &name) {
@@ -74,6 +79,21 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// The kiwi spec's frame field on the fruit's tet mesh: the sketched frames and the solve.
+fn field(args: &BenchArgs) -> Result<()> {
+    let fruit = crate::mesh::shapes::named("fruit").expect("a drawn shape").canonical();
+    let tets = crate::fill::mesher::tetrahedralize(&fruit, 5000)?;
+    let directions =
+        [(glam::Vec3::new(-0.75, 0.0, 0.0), glam::Vec3::X), (glam::Vec3::new(0.0, 0.2, 0.0), glam::Vec3::X)];
+    let depth: Vec<(glam::Vec3, f32)> =
+        fruit.vertices.iter().map(|p| (*p, 0.0)).chain([(glam::Vec3::ZERO, 1.0)]).collect();
+    timed(args, FIELD, || {
+        let frames = crate::guided::field::sketched_frames(&directions, &depth)?;
+        let field = crate::guided::field::solve(&tets, &frames)?;
+        Ok(format!("{} tets, {} vertices", tets.tets.len(), field.components.len()))
+    })
 }
 
 /// Grows `image` on the unit square and reports the yardstick.

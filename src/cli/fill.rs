@@ -433,7 +433,7 @@ fn cut_values(args: &CutArgs) -> Result<Option<(glam::Vec3, glam::Vec3)>> {
 
 /// A plane PX,PY,PZ,NX,NY,NZ of `option`: a point and a normal, each number within the
 /// position limit, the normal long enough to have a direction.
-fn plane(option: &str, text: &str) -> Result<(glam::Vec3, glam::Vec3)> {
+pub(super) fn plane(option: &str, text: &str) -> Result<(glam::Vec3, glam::Vec3)> {
     let v = io::values::numbers(option, text, &[6])?;
     io::values::positions(option, text, &v)?;
     let normal = glam::Vec3::new(v[3], v[4], v[5]);

@@ -13,6 +13,7 @@ mod bench_surface;
 pub mod build;
 mod commands;
 mod fill;
+mod guided;
 mod handmade;
 mod info;
 mod masks;
@@ -186,6 +187,8 @@ pub enum Command {
     Render(fill::RenderArgs),
     /// Grow a 2D exemplar over a mesh's surface (Turk 2001): a .ply with vertex colours.
     Surface(surface::SurfaceArgs),
+    /// Draw the frame field of sketch-guided synthesis (Zhang 2011) on a cut as a PNG.
+    Field(guided::FieldArgs),
 }
 
 /// Run one command of the command line. The terminal UI (`tui`, or no command) is the
@@ -225,6 +228,7 @@ pub fn run(command: Command) -> crate::Result<()> {
         Command::View(args) => fill::run_view(&args),
         Command::Render(args) => fill::run_render(&args),
         Command::Surface(args) => surface::run(&args),
+        Command::Field(args) => guided::run(&args),
     }
 }
 

@@ -169,6 +169,12 @@ fn smooth_vectors(mesh: &TetMesh, directions: &[(Vec3, Vec3)], depth: Option<&[f
         .collect())
 }
 
+/// `K` values per vertex of `mesh`, as smooth as the uniform Laplacian allows while meeting
+/// the values at `points` (soft constraints, interpolated in the tet holding each point).
+pub fn smooth_at_vertices<const K: usize>(mesh: &TetMesh, points: &[(Vec3, [f32; K])]) -> Result<Vec<f64>> {
+    Smoothing::new(mesh, None).solve(mesh, points)
+}
+
 /// Laplacian smoothing of the scale constraints; the default scale where there are none.
 fn smooth_scales(mesh: &TetMesh, c: &Constraints) -> Result<Vec<f32>> {
     if c.scales.is_empty() {

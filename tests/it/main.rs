@@ -6,6 +6,7 @@ mod cli;
 mod fill;
 mod formats;
 mod fuzz;
+mod guided;
 mod handmade;
 mod library;
 mod masks;
