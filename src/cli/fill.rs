@@ -619,17 +619,12 @@ pub fn run_render(args: &RenderArgs) -> Result<()> {
         DensityFrom::Alpha => translucent::Density::Channel(&channel),
     };
     io::values::within("--skin-opacity", args.skin_opacity, 0.0, 1.0).map_err(usage)?;
-    let skin = args.skin.as_deref().map(io::mesh_file::read_coloured_ply).transpose()?;
-    let lookup = skin.as_ref().map(|s| crate::surface::SkinLookup::new(&s.mesh, &s.colours));
-    let within = match (&skin, &args.skin) {
-        (Some(s), Some(path)) => skin_reach(path, &s.mesh, &pairs(&loaded), None)?,
-        _ => 0.0,
-    };
-    let depth = skin_depth(&loaded, args.skin.is_some());
-    let layer = lookup.as_ref().map(|lookup| translucent::SkinLayer {
-        skin: crate::fill::view::Skin { lookup, within, depth: depth.as_deref() },
-        opacity: args.skin_opacity,
-    });
+    let input = args.skin.as_deref().map(|path| SkinInput::read(path, &loaded, None)).transpose()?;
+    let lookup = input.as_ref().map(SkinInput::lookup);
+    let layer = input
+        .as_ref()
+        .zip(lookup.as_ref())
+        .map(|(input, lookup)| translucent::SkinLayer { skin: input.skin(lookup), opacity: args.skin_opacity });
     let started = Instant::now();
     let rendering = translucent::render(&pairs(&loaded), density, &settings, layer)?;
     let seconds = started.elapsed().as_secs_f64();
@@ -679,13 +674,30 @@ pub fn run_bake(args: &BakeArgs) -> Result<()> {
     Ok(())
 }
 
-/// The models' Depth textures, when a skin is drawn and every exemplar has the channel
-/// (else the skin covers the whole surface).
-fn skin_depth(loaded: &[Loaded], wanted: bool) -> Option<Vec<Textures>> {
-    if !wanted {
-        return None;
+/// A skin read to be drawn on models: the coloured mesh, how far from it a surface point
+/// may lie, and the models' Depth textures when every exemplar has the channel (else the
+/// skin covers the whole surface within reach).
+struct SkinInput {
+    coloured: io::mesh_file::ColouredMesh,
+    within: f32,
+    depth: Option<Vec<Textures>>,
+}
+
+impl SkinInput {
+    fn read(path: &Path, loaded: &[Loaded], displacement: Option<f32>) -> Result<SkinInput> {
+        let coloured = io::mesh_file::read_coloured_ply(path)?;
+        let within = skin_reach(path, &coloured.mesh, &pairs(loaded), displacement)?;
+        let depth = channel_textures(loaded, &Channel::Depth).ok();
+        Ok(SkinInput { coloured, within, depth })
     }
-    channel_textures(loaded, &Channel::Depth).ok()
+
+    fn lookup(&self) -> crate::surface::SkinLookup<'_> {
+        crate::surface::SkinLookup::new(&self.coloured.mesh, &self.coloured.colours)
+    }
+
+    fn skin<'a>(&'a self, lookup: &'a crate::surface::SkinLookup<'a>) -> crate::fill::view::Skin<'a> {
+        crate::fill::view::Skin { lookup, within: self.within, depth: self.depth.as_deref() }
+    }
 }
 
 /// `solidtex view SKIN.ply`: the skin alone, as `solidtex surface` wrote it.
@@ -758,14 +770,9 @@ pub fn run_view(args: &ViewArgs) -> Result<()> {
     };
     let displacement =
         relief.as_ref().map(|(textures, scale)| crate::fill::view::Displacement { textures, scale: *scale });
-    let skin = args.skin.as_deref().map(io::mesh_file::read_coloured_ply).transpose()?;
-    let lookup = skin.as_ref().map(|s| crate::surface::SkinLookup::new(&s.mesh, &s.colours));
-    let within = match (&skin, &args.skin) {
-        (Some(s), Some(path)) => skin_reach(path, &s.mesh, &pairs(&loaded), args.displacement)?,
-        _ => 0.0,
-    };
-    let depth = skin_depth(&loaded, args.skin.is_some());
-    let skin = lookup.as_ref().map(|lookup| crate::fill::view::Skin { lookup, within, depth: depth.as_deref() });
+    let input = args.skin.as_deref().map(|path| SkinInput::read(path, &loaded, args.displacement)).transpose()?;
+    let lookup = input.as_ref().map(SkinInput::lookup);
+    let skin = input.as_ref().zip(lookup.as_ref()).map(|(input, lookup)| input.skin(lookup));
     let (picture, triangles) =
         crate::fill::view::surfaces(&pairs(&loaded), displacement, skin, camera, args.size, shading);
     let note = args

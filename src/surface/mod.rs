@@ -9,9 +9,9 @@
 //!                                                        --> per-vertex colours (Skin)
 //! ```
 //!
-//! One exemplar pixel covers `texel` model units on the surface (by default the spacing of
-//! the points, so each point shows about one pixel). Everything is deterministic for a
-//! seed, on any thread count.
+//! One exemplar pixel covers `texel` model units on the surface (by default two spacings of
+//! the points, [`DEFAULT_TEXEL`]). Everything is deterministic for a seed, on any thread
+//! count.
 
 pub mod directions;
 pub mod matching;
@@ -44,7 +44,7 @@ pub struct Options {
     pub points: usize,
     /// Seed of the random start.
     pub seed: u64,
-    /// Model units one exemplar pixel covers; `None`: the points' spacing.
+    /// Model units one exemplar pixel covers; `None`: [`DEFAULT_TEXEL`] point spacings.
     pub texel: Option<f32>,
     /// Where the texture's "up" points.
     pub guide: Guide,
