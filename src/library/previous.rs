@@ -54,14 +54,19 @@ pub fn keep(output: &Path, name: &str) -> Result<bool> {
 pub fn drop_kept(output: &Path, name: &str) -> Result<()> {
     let Some(old) = record(output, name) else { return Ok(()) };
     let kept = folder(output, name);
+    if !real_folders(output, kept.strip_prefix(output).unwrap_or(&kept)) {
+        return Ok(());
+    }
     for file in old.files.iter().filter(|f| listed(&f.path)) {
-        remove_written(&kept.join(&file.path))?;
+        remove_written(&kept, Path::new(&file.path))?;
         // the folders the file was in, if it leaves them empty (a mask folder)
         for parent in Path::new(&file.path).ancestors().skip(1).filter(|p| !p.as_os_str().is_empty()) {
-            let _ = std::fs::remove_dir(kept.join(parent));
+            if real_folders(&kept, parent) {
+                let _ = std::fs::remove_dir(kept.join(parent));
+            }
         }
     }
-    remove_written(&kept.join(RECORD))?;
+    remove_written(&kept, Path::new(RECORD))?;
     let _ = std::fs::remove_dir(&kept);
     Ok(())
 }
@@ -72,11 +77,25 @@ fn listed(path: &str) -> bool {
     Path::new(path).components().all(|c| matches!(c, Component::Normal(_)))
 }
 
-/// Removes the regular file at `path` (a link or a folder there is left alone); a file
-/// already gone is fine.
-fn remove_written(path: &Path) -> Result<()> {
-    match std::fs::symlink_metadata(path) {
-        Ok(meta) if meta.is_file() => std::fs::remove_file(path).map_err(|e| Error::io(path, e)),
+/// Whether every step of `relative` below `base` is a folder, not a link (a link in the
+/// cache could lead a removal into a user's folder).
+fn real_folders(base: &Path, relative: &Path) -> bool {
+    let mut at = base.to_path_buf();
+    relative.components().all(|c| {
+        at.push(c);
+        std::fs::symlink_metadata(&at).is_ok_and(|m| m.is_dir())
+    })
+}
+
+/// Removes the regular file `relative` below `base` when it is one and no folder on the way
+/// is a link (a link or a folder there is left alone); a file already gone is fine.
+fn remove_written(base: &Path, relative: &Path) -> Result<()> {
+    if !relative.parent().is_none_or(|parent| real_folders(base, parent)) {
+        return Ok(());
+    }
+    let path = base.join(relative);
+    match std::fs::symlink_metadata(&path) {
+        Ok(meta) if meta.is_file() => std::fs::remove_file(&path).map_err(|e| Error::io(&path, e)),
         _ => Ok(()),
     }
 }
@@ -93,7 +112,7 @@ pub fn restore(output: &Path, name: &str) -> Result<()> {
     if let Some(new) = cache::read_record(output, name) {
         let only_new = new.files.iter().filter(|f| listed(&f.path) && !old.files.iter().any(|o| o.path == f.path));
         for file in only_new {
-            remove_written(&output.join(&file.path))?;
+            remove_written(output, Path::new(&file.path))?;
         }
     }
     cache::write_record(output, &old)?;
@@ -157,6 +176,37 @@ mod tests {
         std::fs::create_dir(&outside).unwrap();
         drop_kept(&out, "../../x").unwrap();
         assert!(!keep(&out, "../../x").unwrap() && outside.exists());
+    }
+
+    /// A link planted in the kept copy (to a user's folder holding a file of a listed name)
+    /// leads no removal there.
+    #[cfg(unix)]
+    #[test]
+    fn a_link_in_the_kept_copy_leads_no_removal_outside() {
+        let dir = tempfile::tempdir().unwrap();
+        let (manifest, out) = (dir.path().join("lib.toml"), dir.path().join("out"));
+        let text =
+            "[[exemplar]]\nname = \"m\"\nrecipe = \"procedural:marble\"\nsize = 8\nseed = 1\nmasks = [\"splotch\"]\n";
+        build_with(&manifest, &out, text);
+        assert!(keep(&out, "m").unwrap());
+        let kept = folder(&out, "m");
+        let listed: Vec<String> = record(&out, "m").unwrap().files.iter().map(|f| f.path.clone()).collect();
+        let user = dir.path().join("user");
+        std::fs::create_dir(&user).unwrap();
+        for path in &listed {
+            std::fs::write(user.join(Path::new(path).file_name().unwrap()), b"mine").unwrap();
+        }
+        // the kept copy moved aside and a link to the user's folder, holding the record so the
+        // copy seems kept there, in its place
+        std::fs::copy(kept.join(RECORD), user.join(RECORD)).unwrap();
+        let aside = dir.path().join("aside");
+        std::fs::rename(&kept, &aside).unwrap();
+        std::os::unix::fs::symlink(&user, &kept).unwrap();
+        assert!(record(&out, "m").is_some(), "the record reads through the link");
+        drop_kept(&out, "m").unwrap();
+        for path in listed.iter().map(String::as_str).chain([RECORD]) {
+            assert!(user.join(Path::new(path).file_name().unwrap()).exists(), "{path} removed through the link");
+        }
     }
 
     fn volume_is_kept(out: &Path) -> bool {
