@@ -29,8 +29,9 @@
 use crate::error::{Error, Result};
 use crate::noise::mix64;
 use crate::progress::Progress;
+use crate::quality::{BINS, histogram};
 use crate::synth::exemplar::{PrepareOptions, Prepared};
-use crate::volume::Image2d;
+use crate::volume::{Edge, Image2d, Volume, downsample};
 use glam::Vec3;
 use rayon::prelude::*;
 use std::collections::HashMap;
@@ -102,8 +103,12 @@ pub fn coordinates(
             finer(points, (&subsets[at + 1], poisson_radius(points, at + 1)), &coords, members, (scale, 2), image)
         };
         let passes = if level + 1 == levels { PASSES.0 } else { PASSES.1 };
+        let pixels: Vec<[i32; 2]> = (0..image.width() * image.height())
+            .map(|i| [(i % image.width()) as i32, (i / image.width()) as i32])
+            .collect();
+        let wanted = shares(&prepared, &pixels);
         for _ in 0..passes {
-            graph.pass(&prepared, &mut coords);
+            graph.pass(&prepared, &mut coords, &wanted);
         }
     }
     for at in (0..below).rev() {
@@ -144,27 +149,15 @@ fn pyramid(exemplar: &Image2d, points: usize) -> Vec<Image2d> {
     images
 }
 
-/// The image blurred by the 5-tap binomial and halved (sides rounded up), edges clamped.
+/// The image blurred by the 5-tap binomial and halved (sides rounded up), edges clamped:
+/// the volumes' pyramid step on a one-voxel-deep volume.
 fn reduced(image: &Image2d) -> Image2d {
-    const TAPS: [f32; 5] = [1.0 / 16.0, 4.0 / 16.0, 6.0 / 16.0, 4.0 / 16.0, 1.0 / 16.0];
-    let (w, h, c) = (image.width(), image.height(), image.channel_count());
-    let (nw, nh) = (w.div_ceil(2), h.div_ceil(2));
-    let mut data = vec![0.0f32; nw * nh * c];
-    for y in 0..nh {
-        for x in 0..nw {
-            let out = &mut data[(y * nw + x) * c..(y * nw + x + 1) * c];
-            for (j, wy) in TAPS.iter().enumerate() {
-                let sy = (2 * y as i64 + j as i64 - 2).clamp(0, h as i64 - 1) as usize;
-                for (i, wx) in TAPS.iter().enumerate() {
-                    let sx = (2 * x as i64 + i as i64 - 2).clamp(0, w as i64 - 1) as usize;
-                    for (o, v) in out.iter_mut().zip(image.pixel(sx, sy)) {
-                        *o += wx * wy * v;
-                    }
-                }
-            }
-        }
-    }
-    Image2d::from_data(nw, nh, image.channels().to_vec(), data).expect("the sizes agree")
+    let names = image.channels().to_vec();
+    let flat = Volume::from_data([image.width(), image.height(), 1], names.clone(), image.data().to_vec())
+        .expect("the sizes agree");
+    let half = downsample(&flat, Edge::Clamp).expect("a smaller image fits the budget the larger did");
+    let [w, h, _] = half.dims();
+    Image2d::from_data(w, h, names, half.into_data()).expect("the sizes agree")
 }
 
 fn prepared_pixel(prepared: &Prepared, centre: u32) -> [i32; 2] {
@@ -312,13 +305,11 @@ impl Graph {
         self.offsets[slot]..self.offsets[slot + 1]
     }
 
-    /// One pass of eight sub-passes over the parity classes.
-    fn pass(&self, ex: &Prepared, coords: &mut [[i32; 2]]) {
-        let wanted = Histogram::of(
-            (0..ex.width * ex.height).map(|i| colour(ex, [(i % ex.width) as i32, (i / ex.width) as i32])),
-        );
+    /// One pass of eight sub-passes over the parity classes; `wanted` is the exemplar
+    /// level's [`Shares`].
+    fn pass(&self, ex: &Prepared, coords: &mut [[i32; 2]], wanted: &Shares) {
         for class in &self.classes {
-            let penalty = Penalty::new(ex, coords, &wanted);
+            let penalty = Penalty::new(ex, coords, wanted);
             let updates: Vec<Vec<(u32, [i32; 2])>> =
                 class.par_iter().map(|slots| self.update_cube(ex, coords, slots, &penalty)).collect();
             for (slot, value) in updates.into_iter().flatten() {
@@ -381,8 +372,6 @@ impl Graph {
     }
 }
 
-/// Histogram bins of the colour penalty.
-const BINS: usize = 32;
 /// How much a colour bin used twice as often as in the exemplar costs: matches there count
 /// `1 + COLOUR_USE` times (Kopf et al. 2007 weight matches by the histogram in a similar way).
 const COLOUR_USE: f32 = 1.0;
@@ -395,21 +384,13 @@ fn bin(v: f32) -> usize {
     ((v.clamp(0.0, 1.0) * BINS as f32) as usize).min(BINS - 1)
 }
 
-/// Per channel, the share of colours in each bin.
-struct Histogram([[f32; BINS]; 3]);
+/// Per channel, the share of colours in each of the [`BINS`] bins.
+type Shares = [Vec<f64>; 3];
 
-impl Histogram {
-    fn of(colours: impl Iterator<Item = [f32; 3]>) -> Histogram {
-        let mut h = [[0.0f32; BINS]; 3];
-        let mut count = 0.0f32;
-        for c in colours {
-            for k in 0..3 {
-                h[k][bin(c[k])] += 1.0;
-            }
-            count += 1.0;
-        }
-        Histogram(h.map(|row| row.map(|v| v / count.max(1.0))))
-    }
+/// The [`Shares`] of the exemplar colours at `pixels`.
+fn shares(ex: &Prepared, pixels: &[[i32; 2]]) -> Shares {
+    let colours: Vec<[f32; 3]> = pixels.iter().map(|&u| colour(ex, u)).collect();
+    std::array::from_fn(|k| histogram(colours.iter().map(|c| &c[k])))
 }
 
 /// What over-use costs, frozen for one sub-pass: the matches of a candidate whose colour
@@ -423,11 +404,10 @@ struct Penalty {
 }
 
 impl Penalty {
-    fn new(ex: &Prepared, coords: &[[i32; 2]], wanted: &Histogram) -> Penalty {
-        let used = Histogram::of(coords.iter().map(|&u| colour(ex, u)));
-        let over = |u: f32, w: f32| COLOUR_USE * if w > 0.0 { (u / w - 1.0).max(0.0) } else { 0.0 };
-        let colour: [[f32; BINS]; 3] =
-            std::array::from_fn(|k| std::array::from_fn(|b| over(used.0[k][b], wanted.0[k][b])));
+    fn new(ex: &Prepared, coords: &[[i32; 2]], wanted: &Shares) -> Penalty {
+        let used = shares(ex, coords);
+        let over = |u: f64, w: f64| COLOUR_USE * if w > 0.0 { (u / w - 1.0).max(0.0) as f32 } else { 0.0 };
+        let colour: [[f32; BINS]; 3] = std::array::from_fn(|k| std::array::from_fn(|b| over(used[k][b], wanted[k][b])));
         let block = [ex.width.div_ceil(BLOCKS), ex.height.div_ceil(BLOCKS)];
         let mut counts = vec![0.0f32; BLOCKS * BLOCKS];
         for &u in coords {

@@ -22,7 +22,7 @@ pub fn draw(dir: &Path, what: &str) -> String {
     path
 }
 
-pub const KIWI: &str = r#"
+const KIWI: &str = r#"
 exemplar = "kiwi"
 seed = 3
 tets = 3000
@@ -31,6 +31,11 @@ axis = [[[-0.75, 0, 0], [0.75, 0, 0]]]
 [[direction]]
 points = [[-0.75, 0, 0], [0.75, 0, 0]]
 "#;
+
+/// The drawn fruit and the kiwi spec, written into `dir`: (mesh, spec).
+pub fn kiwi_fruit(dir: &Path) -> (String, String) {
+    (draw(dir, "fruit"), spec(dir, "kiwi.toml", KIWI))
+}
 
 pub fn fill(dir: &Path, mesh: &str, spec: &str, out: &str) -> serde_json::Value {
     let json = at(dir, &format!("{out}.json"));
@@ -56,7 +61,7 @@ fn pixel(png: &str, x: u32, y: u32) -> [f32; 3] {
 fn a_kiwi_fill_covers_every_tet_and_puts_the_skin_on_the_surface() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let (mesh, spec) = (draw(d, "fruit"), spec(d, "kiwi.toml", KIWI));
+    let (mesh, spec) = kiwi_fruit(d);
     let stats = fill(d, &mesh, &spec, "kiwi.lst");
     assert_eq!(stats["fill"]["paste"]["forced"], 0, "{stats}");
     assert!(stats["fill"]["tets"].as_u64().unwrap() > 2000);
@@ -187,7 +192,7 @@ fn a_cut_across_the_kiwi_shows_a_ring_of_seeds_around_a_round_core() {
 fn fills_replay_for_a_seed_and_ignore_the_mesh_orientation() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let (mesh, spec) = (draw(d, "fruit"), spec(d, "kiwi.toml", KIWI));
+    let (mesh, spec) = kiwi_fruit(d);
     fill(d, &mesh, &spec, "a.lst");
     fill(d, &mesh, &spec, "b.lst");
     let same = std::fs::read(d.join("a.lst")).unwrap() == std::fs::read(d.join("b.lst")).unwrap();
@@ -254,8 +259,7 @@ fn two_models_cut_together_and_the_surface_view_draws_the_model() {
     let block = draw(d, "block");
     let spec = spec(d, "strata.toml", "exemplar = \"strata\"\ntype = \"0\"\nscale = 1.0\ntets = 2000\n");
     fill(d, &block, &spec, "block.lst");
-    let fruit = draw(d, "fruit");
-    let kiwi = self::spec(d, "kiwi.toml", KIWI);
+    let (fruit, kiwi) = kiwi_fruit(d);
     fill(d, &fruit, &kiwi, "kiwi.lst");
     let png = at(d, "both.png");
     let run = solidtex(&[
@@ -440,7 +444,7 @@ fn displacement_mapping_raises_the_bark_into_furrows() {
     let (smooth, furrowed) = (rough(&plain), rough(&raised));
     assert!(smooth <= 6 && furrowed >= 12, "brightness steps: plain {smooth}, displaced {furrowed}");
     // the kiwi's exemplar has no relief: refused, naming its file and the channel
-    let (fruit, kiwi) = (draw(d, "fruit"), self::spec(d, "kiwi.toml", KIWI));
+    let (fruit, kiwi) = kiwi_fruit(d);
     fill(d, &fruit, &kiwi, "kiwi.lst");
     let bad = at(d, "bad.png");
     let run = solidtex(&["view", &at(d, "kiwi.lst"), "--displacement", "0.1", "-o", &bad]);

@@ -9,8 +9,7 @@ use crate::support::{at, solidtex, stderr};
 fn the_field_of_a_kiwi_spec_follows_its_stroke_on_a_cut() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let fruit = crate::fill::draw(d, "fruit");
-    let spec = crate::fill::spec(d, "kiwi.toml", crate::fill::KIWI);
+    let (fruit, spec) = crate::fill::kiwi_fruit(d);
     let png = at(d, "field.png");
     let run = solidtex(&["field", &fruit, "--spec", &spec, "--size", "96", "--plane", "0,0,0,0,0,1", "-o", &png]);
     assert!(run.status.success(), "{}", stderr(&run));

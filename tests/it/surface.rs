@@ -153,8 +153,7 @@ fn the_surface_command_writes_a_coloured_ply_and_refuses_bad_input() {
 fn a_filled_model_is_viewed_with_its_skin() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let fruit = crate::fill::draw(d, "fruit");
-    let spec = crate::fill::spec(d, "kiwi.toml", crate::fill::KIWI);
+    let (fruit, spec) = crate::fill::kiwi_fruit(d);
     crate::fill::fill(d, &fruit, &spec, "kiwi.lst");
     let mesh = read_mesh(Path::new(&fruit)).unwrap();
     let colours = mesh.vertices.iter().map(|p| if p.x > 0.0 { [1.0, 0.0, 0.0] } else { [0.0, 0.0, 1.0] }).collect();
