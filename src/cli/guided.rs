@@ -1,11 +1,20 @@
-//! `solidtex field`: the frame field of sketch-guided solid texturing, drawn on a cut.
+//! `solidtex field` and `solidtex guided`: the frame field of sketch-guided solid
+//! texturing drawn on a cut, and a solid texture synthesized along it (a cut on demand, or
+//! the whole solid).
 
 use super::commands::usage;
-use crate::error::Result;
-use crate::fill::render::View;
-use crate::guided::field::{sketched_frames, solve, streamlines};
-use crate::io::{self, fill_spec, mesh_file};
-use std::path::PathBuf;
+use crate::error::{Error, Result};
+use crate::fill::render::{View, field_cut};
+use crate::fill::tets::TetMesh;
+use crate::guided::field::{FrameField, FrameGrid, sketched_frames, solve, streamlines};
+use crate::guided::region::Mask;
+use crate::guided::solid::{self, Domain};
+use crate::guided::synth::{self, Exemplars, Options, Setup};
+use crate::io::{self, fill_spec, guided_cache, mesh_file};
+use crate::mesh::Mesh;
+use crate::volume::{Channel, Image2d};
+use glam::Vec3;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 /// The arguments of `solidtex field`.
@@ -32,35 +41,268 @@ pub struct FieldArgs {
     pub output: PathBuf,
 }
 
+/// A model's frame field from a fill spec: the surface, its tet mesh, the field, and how
+/// many frames the strokes gave and how long the solve took (ms).
+struct Guide {
+    surface: Mesh,
+    tets: TetMesh,
+    field: FrameField,
+    frames: usize,
+    solve_ms: f64,
+}
+
+fn guide(mesh: &Path, spec: &Path, tets: Option<usize>) -> Result<Guide> {
+    let mut fill = fill_spec::read_fill_spec(spec)?;
+    fill.tets = tets.unwrap_or(fill.tets);
+    let surface = mesh_file::read_mesh(mesh)?.canonical();
+    let (tet_mesh, _) = crate::fill::tetrahedralize(&surface, &fill).map_err(|e| e.in_file(mesh))?;
+    let constraints = crate::fill::spec::constraints(&fill, &surface, 1.0).map_err(|e| e.in_file(spec))?;
+    let started = Instant::now();
+    let frames = sketched_frames(&constraints.directions, &constraints.depth).map_err(|e| e.in_file(spec))?;
+    let field = solve(&tet_mesh, &frames)?;
+    let solve_ms = started.elapsed().as_secs_f64() * 1000.0;
+    Ok(Guide { surface, tets: tet_mesh, field, frames: frames.len(), solve_ms })
+}
+
+fn check_tets(tets: Option<usize>) -> Result<()> {
+    if let Some(tets) = tets {
+        io::values::within("--tets", tets, *fill_spec::TETS.start(), *fill_spec::TETS.end())?;
+    }
+    Ok(())
+}
+
 /// Run `solidtex field`.
 pub fn run(args: &FieldArgs) -> Result<()> {
-    let checks = || -> Result<Option<(glam::Vec3, glam::Vec3)>> {
+    let checks = || -> Result<Option<(Vec3, Vec3)>> {
         io::values::within("--size", args.size, 8, 4096)?;
-        if let Some(tets) = args.tets {
-            io::values::within("--tets", tets, *fill_spec::TETS.start(), *fill_spec::TETS.end())?;
-        }
+        check_tets(args.tets)?;
         args.plane.as_deref().map(|text| super::fill::plane("--plane", text)).transpose()
     };
     let plane = checks().map_err(usage)?;
     io::check_folder(&args.output)?;
-    let mut spec = fill_spec::read_fill_spec(&args.spec)?;
-    spec.tets = args.tets.unwrap_or(spec.tets);
-    let surface = mesh_file::read_mesh(&args.mesh)?.canonical();
-    let (tets, _) = crate::fill::tetrahedralize(&surface, &spec).map_err(|e| e.in_file(&args.mesh))?;
-    let constraints = crate::fill::spec::constraints(&spec, &surface, 1.0).map_err(|e| e.in_file(&args.spec))?;
-    let started = Instant::now();
-    let frames = sketched_frames(&constraints.directions, &constraints.depth).map_err(|e| e.in_file(&args.spec))?;
-    let field = solve(&tets, &frames)?;
-    let solved = started.elapsed().as_secs_f64() * 1000.0;
-    let bounds = surface.bounds();
-    let (point, normal) = plane.unwrap_or(((bounds.0 + bounds.1) / 2.0, glam::Vec3::Z));
+    let g = guide(&args.mesh, &args.spec, args.tets)?;
+    let bounds = g.surface.bounds();
+    let (point, normal) = plane.unwrap_or(((bounds.0 + bounds.1) / 2.0, Vec3::Z));
     let view = View::framing(bounds, point, normal, args.size)?;
-    io::write_rgb8(&args.output, &streamlines(&tets, &field, &view))?;
+    io::write_rgb8(&args.output, &streamlines(&g.tets, &g.field, &view))?;
     eprintln!(
-        "wrote {} ({} tets, {} sketched frames; the field solved in {solved:.0} ms)",
+        "wrote {} ({} tets, {} sketched frames; the field solved in {:.0} ms)",
         args.output.display(),
-        tets.tets.len(),
-        frames.len()
+        g.tets.tets.len(),
+        g.frames,
+        g.solve_ms
     );
     Ok(())
+}
+
+/// The arguments of `solidtex guided`.
+#[derive(Debug, clap::Args)]
+pub struct GuidedArgs {
+    /// The closed mesh (.obj, .stl, .ply).
+    pub mesh: PathBuf,
+    /// The fill spec whose strokes and depth give the frame field (as for `solidtex field`).
+    #[arg(long)]
+    pub spec: PathBuf,
+    /// The exemplar: the cross-section orthogonal to the frame's x axis (alone, all three).
+    #[arg(long)]
+    pub exemplar: PathBuf,
+    /// Ey, Ez and shrinking (default: exemplars shrunk to 128 pixels).
+    #[command(flatten)]
+    pub others: super::synth::OtherExemplars,
+    /// Voxels along the longest side of the grid around the model (16 to 512); one
+    /// exemplar pixel spans one voxel.
+    #[arg(long, default_value_t = 128)]
+    pub res: usize,
+    /// Synthesize only the cut PX,PY,PZ,NX,NY,NZ (a point and a normal) and write it as a
+    /// PNG; without it, the whole solid is written as a volume.
+    #[arg(long, allow_hyphen_values = true)]
+    pub cut: Option<String>,
+    /// The cut's picture size in pixels, 8 to 4096.
+    #[arg(long, default_value_t = 256)]
+    pub size: usize,
+    /// A folder keeping the coarse levels between cuts of the same inputs.
+    #[arg(long)]
+    pub cache: Option<PathBuf>,
+    /// Override the spec's target tet count (100 to 200000).
+    #[arg(long)]
+    pub tets: Option<usize>,
+    /// Random seed.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// The cut's PNG, or the solid's volume (.exr, .vol, .nrrd, .dds, .vdb, ...).
+    #[arg(short, long)]
+    pub output: PathBuf,
+}
+
+/// Corners of the field's sampling grid along the grid's longest side (Zhang et al.: 20-30
+/// cells on the shortest side suffice for a smooth field).
+const FIELD_CELLS: usize = 32;
+
+/// Run `solidtex guided`.
+pub fn run_guided(args: &GuidedArgs) -> Result<()> {
+    let checks = || -> Result<Option<(Vec3, Vec3)>> {
+        io::values::within("--res", args.res, *solid::RESOLUTION.start(), *solid::RESOLUTION.end())?;
+        io::values::within("--size", args.size, 8, 4096)?;
+        check_tets(args.tets)?;
+        args.others.check()?;
+        args.cut.as_deref().map(|text| super::fill::plane("--cut", text)).transpose()
+    };
+    let cut = checks().map_err(usage)?;
+    io::check_folder(&args.output)?;
+    let inputs = [&args.mesh, &args.spec, &args.exemplar];
+    if inputs.iter().any(|p| io::atomic::canonical(p).is_some_and(|c| io::atomic::canonical(&args.output) == Some(c))) {
+        return Err(usage(Error::file(&args.output, "is one of the inputs; give another output")));
+    }
+    let started = Instant::now();
+    let g = guide(&args.mesh, &args.spec, args.tets)?;
+    let exemplars = load_exemplars(args)?;
+    let options = Options::default();
+    let prepared = Exemplars::prepare([&exemplars[0], &exemplars[1], &exemplars[2]], &options)
+        .map_err(|e| e.in_file(&args.exemplar))?;
+    let domain = Domain::around(g.surface.bounds(), args.res)?;
+    let bounds = (domain.origin, domain.centre(domain.dims.map(|d| d - 1)) + domain.voxel / 2.0);
+    let frames = FrameGrid::sample(&g.tets, &g.field, bounds, FIELD_CELLS).in_voxels(domain.origin, domain.voxel);
+    let setup = Setup { exemplars: &prepared, frames: &frames, dims: domain.dims, seed: args.seed, options };
+    let ready = started.elapsed().as_secs_f64();
+    let bar = super::fill::Bar::new();
+    let outcome = match cut {
+        Some((point, normal)) => write_cut(args, &g, &setup, &domain, (point, normal), &bar),
+        None => write_solid(args, &g, &setup, &domain, &bar),
+    };
+    bar.0.finish_and_clear();
+    let (voxels, corrections, full) = outcome?;
+    eprintln!(
+        "wrote {}: {}x{}x{} grid, {} tets, field solved in {:.0} ms, set up in {ready:.2} s, synthesized in {:.2} s",
+        args.output.display(),
+        domain.dims[0],
+        domain.dims[1],
+        domain.dims[2],
+        g.tets.tets.len(),
+        g.solve_ms,
+        started.elapsed().as_secs_f64() - ready
+    );
+    eprintln!(
+        "voxels synthesized: {voxels} of the {full} a whole solid needs ({:.1} %), {corrections} corrections",
+        100.0 * voxels as f64 / full.max(1) as f64
+    );
+    Ok(())
+}
+
+/// The exemplars per plane, alpha dropped (the solid's alpha is the model's coverage).
+fn load_exemplars(args: &GuidedArgs) -> Result<[Image2d; 3]> {
+    let shrink = super::synth::OtherExemplars {
+        ey: None,
+        ez: None,
+        max_exemplar: Some(args.others.max_exemplar.unwrap_or(DEFAULT_EXEMPLAR)),
+    };
+    let ex = without_alpha(shrink.load(&args.exemplar, "exemplar")?)?;
+    let ey = args.others.ey.as_deref().map(|p| shrink.load(p, "Ey exemplar").and_then(without_alpha)).transpose()?;
+    let ez = args.others.ez.as_deref().map(|p| shrink.load(p, "Ez exemplar").and_then(without_alpha)).transpose()?;
+    let ey = ey.unwrap_or_else(|| ex.clone());
+    let ez = ez.unwrap_or_else(|| ey.clone());
+    Ok([ex, ey, ez])
+}
+
+/// Exemplars are shrunk to this many pixels on their longer side unless `--max-exemplar` says.
+const DEFAULT_EXEMPLAR: usize = 128;
+
+fn without_alpha(image: Image2d) -> Result<Image2d> {
+    let keep: Vec<usize> = (0..image.channel_count()).filter(|&c| image.channels()[c] != Channel::A).collect();
+    if keep.len() == image.channel_count() {
+        return Ok(image);
+    }
+    let data = image.data().chunks_exact(image.channel_count()).flat_map(|px| keep.iter().map(|&c| px[c])).collect();
+    let names = keep.iter().map(|&c| image.channels()[c].clone()).collect();
+    Image2d::from_data(image.width(), image.height(), names, data)
+}
+
+/// The finest level's request, run with the cache when one is given: (voxels, corrections,
+/// the whole solid's voxel count).
+fn synthesize(
+    args: &GuidedArgs,
+    setup: &Setup,
+    request: &Mask,
+    bar: &super::fill::Bar,
+) -> Result<(synth::Synthesized, usize)> {
+    let masks = synth::plan(setup, request);
+    let full: usize = setup.level_dims().iter().map(|d| d.iter().product::<usize>()).sum();
+    let from = match &args.cache {
+        Some(folder) => Some(cached_level(folder, setup, bar)?),
+        None => None,
+    };
+    Ok((synth::run(setup, &masks, from, bar)?, full))
+}
+
+/// The coarser levels computed over the whole grid, from the cache or computed and cached:
+/// the level just below the finest, and its index.
+fn cached_level(
+    folder: &Path,
+    setup: &Setup,
+    bar: &super::fill::Bar,
+) -> Result<(usize, crate::guided::region::Sparse<synth::Voxel>)> {
+    let dims = setup.level_dims();
+    let level = dims.len() - 2;
+    let key = synth::fingerprint(setup);
+    let path = guided_cache::path(folder, key);
+    let slots = [0, 1, 2].map(|a| setup.exemplars.planes[a][level].centres.len());
+    if let Some(found) = guided_cache::read(&path, key, dims[level], slots)? {
+        return Ok(found);
+    }
+    std::fs::create_dir_all(folder).map_err(|e| Error::io(folder, e))?;
+    let mut masks = synth::plan(setup, &Mask::full(setup.dims));
+    masks.truncate(level + 1);
+    let mut out = synth::run(setup, &masks, None, bar)?;
+    let values = out.levels.pop().expect("one level at least");
+    guided_cache::write(&path, key, level, &values)?;
+    Ok((level, values))
+}
+
+fn write_cut(
+    args: &GuidedArgs,
+    g: &Guide,
+    setup: &Setup,
+    domain: &Domain,
+    (point, normal): (Vec3, Vec3),
+    bar: &super::fill::Bar,
+) -> Result<(usize, usize, usize)> {
+    let view = View::framing(g.surface.bounds(), point, normal, args.size)?;
+    let ones = vec![1.0; g.tets.vertices.len()];
+    let inside: Vec<bool> = field_cut(&g.tets, &ones, &view).iter().map(Option::is_some).collect();
+    let request = solid::cut_request(domain, &view, &inside);
+    let (out, full) = synthesize(args, setup, &request, bar)?;
+    io::write_image(&args.output, &solid::cut_image(setup, &out, domain, &view, &inside)?)?;
+    Ok((out.voxels, out.corrections, full))
+}
+
+fn write_solid(
+    args: &GuidedArgs,
+    g: &Guide,
+    setup: &Setup,
+    domain: &Domain,
+    bar: &super::fill::Bar,
+) -> Result<(usize, usize, usize)> {
+    crate::volume::check_size(domain.dims, setup.exemplars.channels() + 1, io::budget_from_env()?)?;
+    let (out, full) = synthesize(args, setup, &Mask::full(domain.dims), bar)?;
+    let alpha = coverage(&g.surface, domain);
+    io::write_volume(&args.output, &solid::solid_volume(setup, &out, &alpha)?)?;
+    Ok((out.voxels, out.corrections, full))
+}
+
+/// The model's coverage of every voxel of the grid.
+fn coverage(surface: &Mesh, domain: &Domain) -> Vec<f32> {
+    let to_voxels = glam::Affine3A::from_scale_rotation_translation(
+        Vec3::splat(1.0 / domain.voxel),
+        glam::Quat::IDENTITY,
+        -domain.origin / domain.voxel,
+    );
+    let covered = crate::mesh::voxelize::voxelize(&surface.transformed(to_voxels), domain.dims, 2);
+    let mut alpha = Vec::with_capacity(domain.dims.iter().product());
+    for z in 0..domain.dims[2] {
+        for y in 0..domain.dims[1] {
+            for x in 0..domain.dims[0] {
+                alpha.push(covered.at(x, y, z));
+            }
+        }
+    }
+    alpha
 }

@@ -189,6 +189,9 @@ pub enum Command {
     Surface(surface::SurfaceArgs),
     /// Draw the frame field of sketch-guided synthesis (Zhang 2011) on a cut as a PNG.
     Field(guided::FieldArgs),
+    /// Synthesize a solid texture along the frame field (Zhang 2011): a cut on demand as a
+    /// PNG, or the whole solid as a volume.
+    Guided(guided::GuidedArgs),
 }
 
 /// Run one command of the command line. The terminal UI (`tui`, or no command) is the
@@ -229,6 +232,7 @@ pub fn run(command: Command) -> crate::Result<()> {
         Command::Render(args) => fill::run_render(&args),
         Command::Surface(args) => surface::run(&args),
         Command::Field(args) => guided::run(&args),
+        Command::Guided(args) => guided::run_guided(&args),
     }
 }
 

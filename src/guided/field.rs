@@ -60,16 +60,15 @@ pub fn sketched_frames(directions: &[(Vec3, Vec3)], depth: &[(Vec3, f32)]) -> Re
     Ok(frames)
 }
 
-/// The world axis least along `t`.
+/// The world axis least along `t`; near ties (within 0.1) go to z, then y, so a stroke
+/// lying in a world plane keeps one axis along its whole length.
 fn least_along(t: Vec3) -> Vec3 {
-    let a = t.abs();
-    if a.x <= a.y && a.x <= a.z {
-        Vec3::X
-    } else if a.y <= a.z {
-        Vec3::Y
-    } else {
-        Vec3::Z
-    }
+    let a = t.normalize_or_zero().abs();
+    let least = a.min_element();
+    [(a.z, Vec3::Z), (a.y, Vec3::Y), (a.x, Vec3::X)]
+        .into_iter()
+        .find(|(c, _)| *c <= least + 0.1)
+        .map_or(Vec3::Z, |(_, axis)| axis)
 }
 
 /// The rotation whose x axis is `x` made orthogonal to `z`, and whose z axis is `z`.
@@ -132,6 +131,124 @@ impl FrameField {
             sum += if q.dot(first) < 0.0 { -q } else { q } * w;
         }
         sum
+    }
+}
+
+/// The field sampled at the corners of a regular grid over a box, read per voxel by
+/// trilinear interpolation of the corners' quaternions (flipped towards the first) and
+/// normalization, as Zhang et al. read theirs. Corners outside the mesh take the mean of
+/// their sampled neighbours, layer by layer outwards.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FrameGrid {
+    /// The first corner.
+    pub lo: Vec3,
+    /// Corner spacing.
+    pub step: f32,
+    /// Corners per axis.
+    pub dims: [usize; 3],
+    /// Per corner, a unit quaternion as (x, y, z, w), x fastest.
+    pub corners: Vec<Vec4>,
+}
+
+impl FrameGrid {
+    /// Sample `field` over the box `(lo, hi)` with `cells` cells along its longest side.
+    pub fn sample(mesh: &TetMesh, field: &FrameField, (lo, hi): (Vec3, Vec3), cells: usize) -> FrameGrid {
+        let step = (hi - lo).max_element().max(1e-6) / cells.max(1) as f32;
+        let dims = ((hi - lo) / step).ceil().to_array().map(|d| d as usize + 2);
+        let index = |i: [usize; 3]| i[0] + dims[0] * (i[1] + dims[1] * i[2]);
+        let mut corners: Vec<Option<Vec4>> = vec![None; dims.iter().product()];
+        for (t, tet) in mesh.tets.iter().enumerate() {
+            let ps = tet.map(|v| mesh.vertices[v as usize]);
+            let (a, b) = ps.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(a, b), p| (a.min(*p), b.max(*p)));
+            let first = ((a - lo) / step).ceil().max(Vec3::ZERO).to_array().map(|c| c as usize);
+            let last = ((b - lo) / step).floor().to_array().map(|c| c.max(-1.0) as i64);
+            for z in first[2] as i64..=last[2].min(dims[2] as i64 - 1) {
+                for y in first[1] as i64..=last[1].min(dims[1] as i64 - 1) {
+                    for x in first[0] as i64..=last[0].min(dims[0] as i64 - 1) {
+                        let i = [x as usize, y as usize, z as usize];
+                        let p = lo + Vec3::new(x as f32, y as f32, z as f32) * step;
+                        let w = mesh.barycentric(t, p);
+                        if corners[index(i)].is_none() && w.iter().all(|c| *c >= -1e-5) {
+                            corners[index(i)] = Some(Vec4::from(field.at(*tet, w)));
+                        }
+                    }
+                }
+            }
+        }
+        fill_outwards(&mut corners, dims);
+        let corners = corners.into_iter().map(|c| c.unwrap_or(Vec4::W)).collect();
+        FrameGrid { lo, step, dims, corners }
+    }
+
+    /// The same grid in the coordinates of a voxel grid whose voxel (0, 0, 0) spans
+    /// `origin` to `origin + voxel` (voxel v's centre at v).
+    pub fn in_voxels(&self, origin: Vec3, voxel: f32) -> FrameGrid {
+        FrameGrid { lo: (self.lo - origin) / voxel - 0.5, step: self.step / voxel, ..self.clone() }
+    }
+
+    /// The frame at `p` (clamped into the box): its axes as the columns of a rotation.
+    pub fn at(&self, p: Vec3) -> Mat3 {
+        let g = ((p - self.lo) / self.step).clamp(Vec3::ZERO, Vec3::from_array(self.dims.map(|d| (d - 1) as f32)));
+        let base = g.floor().min(Vec3::from_array(self.dims.map(|d| d.saturating_sub(2) as f32)));
+        let f = g - base;
+        let b = base.to_array().map(|c| c as usize);
+        let mut sum = Vec4::ZERO;
+        let mut first = None;
+        for k in 0..8 {
+            let (dx, dy, dz) = (k & 1, (k >> 1) & 1, k >> 2);
+            let i = [b[0] + dx, b[1] + dy, b[2] + dz];
+            let at = i[0].min(self.dims[0] - 1)
+                + self.dims[0] * (i[1].min(self.dims[1] - 1) + self.dims[1] * i[2].min(self.dims[2] - 1));
+            let q = self.corners[at];
+            let q = match first {
+                None => {
+                    first = Some(q);
+                    q
+                }
+                Some(f0) if q.dot(f0) < 0.0 => -q,
+                Some(_) => q,
+            };
+            let w = [1.0 - f.x, f.x][dx] * [1.0 - f.y, f.y][dy] * [1.0 - f.z, f.z][dz];
+            sum += q * w;
+        }
+        Mat3::from_quat(sum.try_normalize().map_or(Quat::IDENTITY, Quat::from_vec4))
+    }
+}
+
+/// Give every unset corner the mean of its set face neighbours (flipped towards the
+/// first), one layer per round, until all are set (all at identity when none is).
+fn fill_outwards(corners: &mut [Option<Vec4>], dims: [usize; 3]) {
+    let stride = [1, dims[0], dims[0] * dims[1]];
+    while corners.iter().any(Option::is_none) && corners.iter().any(Option::is_some) {
+        let next: Vec<Option<Vec4>> = (0..corners.len())
+            .map(|i| {
+                if corners[i].is_some() {
+                    return corners[i];
+                }
+                let v = [i % dims[0], (i / dims[0]) % dims[1], i / (dims[0] * dims[1])];
+                let (mut sum, mut first): (Option<Vec4>, Option<Vec4>) = (None, None);
+                for a in 0..3 {
+                    for up in [false, true] {
+                        let j = match up {
+                            true if v[a] + 1 < dims[a] => i + stride[a],
+                            false if v[a] > 0 => i - stride[a],
+                            _ => continue,
+                        };
+                        if let Some(q) = corners[j] {
+                            first = first.or(Some(q));
+                            sum = Some(match sum {
+                                Some(s) if q.dot(s) < 0.0 => s - q,
+                                Some(s) => s + q,
+                                None => q,
+                            });
+                        }
+                    }
+                }
+                // opposite neighbours cancelling exactly leave the first one's frame
+                sum.and_then(Vec4::try_normalize).or(first)
+            })
+            .collect();
+        corners.copy_from_slice(&next);
     }
 }
 

@@ -1,6 +1,10 @@
 //! Sketch-guided solid texturing (Zhang et al. 2011): a smooth frame field inside a model
-//! from the designer's strokes and depth, along which a solid texture is to be synthesized.
-//! So far the field ([`field`]): harmonic interpolation of quaternions on the tet mesh, and
-//! its picture on a cut.
+//! from the designer's strokes and depth ([`field`]: harmonic interpolation of quaternions
+//! on the tet mesh), and a solid texture synthesized along it on demand ([`synth`]: only
+//! the voxels a cut or the whole solid needs, [`region`]).
 
 pub mod field;
+pub mod region;
+pub mod solid;
+pub mod synth;
+pub mod triples;

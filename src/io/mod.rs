@@ -20,6 +20,7 @@ mod exr_file;
 mod fields;
 pub mod fill_spec;
 pub mod flipbook;
+pub mod guided_cache;
 mod kopf_vol;
 pub mod lst_file;
 pub mod manifest;

@@ -197,7 +197,7 @@ fn prepare(job: &Job, params: &SynthParams, progress: &dyn Progress) -> Result<P
 }
 
 /// Gaussian pyramid of a 2D image, coarsest first.
-fn image_pyramid(image: &Image2d, levels: usize) -> Result<Vec<Image2d>> {
+pub(crate) fn image_pyramid(image: &Image2d, levels: usize) -> Result<Vec<Image2d>> {
     let mut volume =
         Volume::from_data([image.width(), image.height(), 1], image.channels().to_vec(), image.data().to_vec())?;
     let mut out = vec![image.clone()];

@@ -21,7 +21,7 @@ mod direction;
 mod driver;
 pub(crate) mod exemplar;
 mod grid;
-mod knn;
+pub(crate) mod knn;
 mod optimize;
 mod params;
 mod pca;
@@ -29,6 +29,7 @@ mod search;
 mod spectrum;
 
 pub use direction::{DIRECTIONAL, Direction, direction};
+pub(crate) use driver::image_pyramid;
 pub use params::{LayeredParams, SynthParams};
 
 use crate::error::{Error, Result};

@@ -1,0 +1,106 @@
+//! Where guided synthesis runs and what it gives back: the voxel grid around a model, the
+//! voxels a cut needs, the cut's picture and the whole solid as a volume.
+
+use super::region::Mask;
+use super::synth::{Setup, Synthesized};
+use crate::error::{Error, Result};
+use crate::fill::render::View;
+use crate::volume::{Channel, Image2d, Volume};
+use glam::Vec3;
+
+/// Finest-level resolutions `guided` accepts (voxels along the grid's longest side).
+pub const RESOLUTION: std::ops::RangeInclusive<usize> = 16..=512;
+
+/// Share of the model's longest side added around it on every side: neighbourhoods at the
+/// surface read texture, not the grid's clamped edge.
+const MARGIN: f32 = 0.05;
+
+/// The finest voxel grid around a model.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Domain {
+    /// The corner of voxel (0, 0, 0).
+    pub origin: Vec3,
+    /// Voxel side in model units.
+    pub voxel: f32,
+    /// Voxels per axis.
+    pub dims: [usize; 3],
+}
+
+impl Domain {
+    /// The grid over `bounds` plus a margin, `res` voxels along its longest side.
+    pub fn around((lo, hi): (Vec3, Vec3), res: usize) -> Result<Domain> {
+        if !RESOLUTION.contains(&res) {
+            return Err(Error::invalid(format!(
+                "resolution {res} is out of range; allowed {} to {}",
+                RESOLUTION.start(),
+                RESOLUTION.end()
+            )));
+        }
+        let longest = (hi - lo).max_element();
+        if !(longest.is_finite() && longest > 0.0) {
+            return Err(Error::invalid("the mesh has no extent"));
+        }
+        let margin = Vec3::splat(MARGIN * longest);
+        let (lo, hi) = (lo - margin, hi + margin);
+        let voxel = (hi - lo).max_element() / res as f32;
+        let dims = ((hi - lo) / voxel).round().to_array().map(|d| (d as usize).clamp(1, res));
+        Ok(Domain { origin: lo, voxel, dims })
+    }
+
+    /// The voxel holding model point `p` (clamped into the grid).
+    pub fn voxel_of(&self, p: Vec3) -> [usize; 3] {
+        let g = (p - self.origin) / self.voxel;
+        [0, 1, 2].map(|a| (g[a].floor().max(0.0) as usize).min(self.dims[a] - 1))
+    }
+
+    /// The centre of voxel `v` in model units.
+    pub fn centre(&self, v: [usize; 3]) -> Vec3 {
+        self.origin + (Vec3::from_array(v.map(|c| c as f32)) + 0.5) * self.voxel
+    }
+}
+
+/// The voxels a cut shows: the one under each pixel inside the model (`inside`, per pixel).
+pub fn cut_request(domain: &Domain, view: &View, inside: &[bool]) -> Mask {
+    let mut mask = Mask::empty(domain.dims);
+    for (i, _) in inside.iter().enumerate().filter(|(_, b)| **b) {
+        let v = domain.voxel_of(view.point(i % view.width, i / view.width));
+        let at = mask.index(v);
+        mask.on[at] = true;
+    }
+    mask
+}
+
+/// The cut's picture: each pixel inside the model takes the colour of the voxel under it
+/// (the exemplar's channels, then alpha 1); outside, transparent.
+pub fn cut_image(setup: &Setup, out: &Synthesized, domain: &Domain, view: &View, inside: &[bool]) -> Result<Image2d> {
+    let channels = setup.exemplars.channels();
+    let mut data = Vec::with_capacity(view.width * view.height * (channels + 1));
+    for (i, inside) in inside.iter().enumerate() {
+        if *inside {
+            let v = domain.voxel_of(view.point(i % view.width, i / view.width));
+            data.extend(out.colour(setup, v));
+            data.push(1.0);
+        } else {
+            data.extend(std::iter::repeat_n(0.0, channels + 1));
+        }
+    }
+    Image2d::from_data(view.width, view.height, with_alpha(setup), data)
+}
+
+/// The whole solid: every voxel's colour, then `alpha` (the model's coverage per voxel).
+pub fn solid_volume(setup: &Setup, out: &Synthesized, alpha: &[f32]) -> Result<Volume> {
+    let dims = setup.dims;
+    let channels = setup.exemplars.channels();
+    let mut data = Vec::with_capacity(alpha.len() * (channels + 1));
+    for (i, a) in alpha.iter().enumerate() {
+        let v = [i % dims[0], (i / dims[0]) % dims[1], i / (dims[0] * dims[1])];
+        data.extend(out.colour(setup, v));
+        data.push(*a);
+    }
+    Volume::from_data(dims, with_alpha(setup), data)
+}
+
+/// The exemplars' channels (alpha-free: [`super::synth::Exemplars::prepare`]) and alpha.
+fn with_alpha(setup: &Setup) -> Vec<Channel> {
+    setup.exemplars.names.iter().cloned().chain([Channel::A]).collect()
+}

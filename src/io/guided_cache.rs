@@ -1,0 +1,87 @@
+//! The cache of guided synthesis: a coarse level computed over the whole grid, kept
+//! between cuts of the same model, field, exemplars and seed.
+//!
+//! ```text
+//!  file  DIR/guided-<key as 16 hex digits>.cache
+//!  "solidtex guided cache 1\n"  key u64  level u32  dims 3 x u32   (little-endian)
+//!  per voxel, x fastest: its centre slot per plane, 3 x u32
+//! ```
+//!
+//! A file of that name that does not hold this key is not overwritten: the run stops and
+//! names it.
+
+use super::atomic;
+use crate::error::{Error, Result};
+use crate::guided::region::{Mask, Sparse};
+use crate::guided::synth::Voxel;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+const MAGIC: &[u8] = b"solidtex guided cache 1\n";
+const HEADER: usize = 24 + 8 + 4 + 12;
+const PER_VOXEL: usize = 12;
+
+/// The cache file of `key` in `folder`.
+pub fn path(folder: &Path, key: u64) -> PathBuf {
+    folder.join(format!("guided-{key:016x}.cache"))
+}
+
+/// The level cached under `key`, if the file exists: `(level, values)`. Every slot is
+/// checked against `slots[plane]` (the level's exemplar centre counts).
+pub fn read(path: &Path, key: u64, dims: [usize; 3], slots: [usize; 3]) -> Result<Option<(usize, Sparse<Voxel>)>> {
+    if !path.exists() {
+        return Ok(None);
+    }
+    let count: usize = dims.iter().product();
+    let bytes = atomic::read_bytes_within(path, (HEADER + count * PER_VOXEL) as u64)?;
+    let foreign = || {
+        Error::file(
+            path,
+            "is not the guided-synthesis cache of these inputs; solidtex does not overwrite it (move it away or \
+             give another --cache folder)",
+        )
+    };
+    if bytes.len() != HEADER + count * PER_VOXEL || !bytes.starts_with(MAGIC) {
+        return Err(foreign());
+    }
+    let word = |at: usize| u32::from_le_bytes(bytes[at..at + 4].try_into().expect("four bytes"));
+    let stored_key = u64::from_le_bytes(bytes[24..32].try_into().expect("eight bytes"));
+    let stored_dims = [word(36), word(40), word(44)].map(|d| d as usize);
+    if stored_key != key || stored_dims != dims {
+        return Err(foreign());
+    }
+    let level = word(32) as usize;
+    let body = &bytes[HEADER..];
+    let value = |i: usize| {
+        let at = i * PER_VOXEL;
+        let slot = [0, 4, 8].map(|o| u32::from_le_bytes(body[at + o..at + o + 4].try_into().expect("four bytes")));
+        Voxel { slot }
+    };
+    let bad = (0..count).map(value).position(|v| (0..3).any(|a| v.slot[a] as usize >= slots[a]));
+    if let Some(i) = bad {
+        return Err(Error::file(path, format!("voxel {i} holds a pixel outside the exemplar; the cache is damaged")));
+    }
+    let mask = Mask::full(dims);
+    Ok(Some((level, Sparse::compute(&mask, |v| value(mask.index(v))))))
+}
+
+/// Write `values` (the whole grid of `level`) under `key`.
+pub fn write(path: &Path, key: u64, level: usize, values: &Sparse<Voxel>) -> Result<()> {
+    let dims = values.dims;
+    let count: usize = dims.iter().product();
+    let mut bytes = Vec::with_capacity(HEADER + count * PER_VOXEL);
+    bytes.extend_from_slice(MAGIC);
+    bytes.extend_from_slice(&key.to_le_bytes());
+    bytes.extend_from_slice(&(level as u32).to_le_bytes());
+    for d in dims {
+        bytes.extend_from_slice(&(d as u32).to_le_bytes());
+    }
+    let mask = Mask::full(dims);
+    for i in 0..count {
+        let v = values.at(mask.voxel(i).map(|c| c as i64));
+        for s in v.slot {
+            bytes.extend_from_slice(&s.to_le_bytes());
+        }
+    }
+    atomic::write_file(path, |w| w.write_all(&bytes).map_err(|e| Error::io(path, e)))
+}
