@@ -47,6 +47,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             HAND_MADE.iter().chain(WORKLOADS.iter().map(|w| &w.name)).map(|n| n.to_string()).collect();
         names.extend(super::bench_fill::names());
         names.extend(super::bench_surface::names(args)?);
+        names.extend(super::bench_guided::names());
         if !names.iter().any(|n| n.contains(only.as_str())) {
             return Err(Error::usage(format!(
                 "--only {only:?} matches no workload; the workloads: {}",
@@ -71,6 +72,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     }
     super::bench_fill::run(args)?;
     super::bench_surface::run(args)?;
+    super::bench_guided::run(args)?;
     synthesis(args)
 }
 

@@ -4,10 +4,10 @@
 
 use super::commands::usage;
 use crate::error::{Error, Result};
-use crate::fill::render::{View, field_cut};
+use crate::fill::render::View;
 use crate::fill::tets::TetMesh;
-use crate::guided::field::{FrameField, FrameGrid, sketched_frames, solve, streamlines};
-use crate::guided::region::Mask;
+use crate::guided::field::{FrameField, sketched_frames, solve, streamlines};
+use crate::guided::region::{Mask, Sparse};
 use crate::guided::solid::{self, Domain};
 use crate::guided::synth::{self, Exemplars, Options, Setup};
 use crate::io::{self, fill_spec, guided_cache, mesh_file};
@@ -47,6 +47,7 @@ struct Guide {
     surface: Mesh,
     tets: TetMesh,
     field: FrameField,
+    depth: Vec<(Vec3, f32)>,
     frames: usize,
     solve_ms: f64,
 }
@@ -61,7 +62,7 @@ fn guide(mesh: &Path, spec: &Path, tets: Option<usize>) -> Result<Guide> {
     let frames = sketched_frames(&constraints.directions, &constraints.depth).map_err(|e| e.in_file(spec))?;
     let field = solve(&tet_mesh, &frames)?;
     let solve_ms = started.elapsed().as_secs_f64() * 1000.0;
-    Ok(Guide { surface, tets: tet_mesh, field, frames: frames.len(), solve_ms })
+    Ok(Guide { surface, tets: tet_mesh, field, depth: constraints.depth, frames: frames.len(), solve_ms })
 }
 
 fn check_tets(tets: Option<usize>) -> Result<()> {
@@ -109,6 +110,10 @@ pub struct GuidedArgs {
     /// Ey, Ez and shrinking (default: exemplars shrunk to 128 pixels).
     #[command(flatten)]
     pub others: super::synth::OtherExemplars,
+    /// Layered exemplars: their rows run along depth (frame z: the outside in), like the
+    /// library's cross-sections; the plane along a layer is left free.
+    #[arg(long)]
+    pub layered: bool,
     /// Voxels along the longest side of the grid around the model (16 to 512); one
     /// exemplar pixel spans one voxel.
     #[arg(long, default_value_t = 128)]
@@ -118,10 +123,10 @@ pub struct GuidedArgs {
     #[arg(long, allow_hyphen_values = true)]
     pub cut: Option<String>,
     /// The cut's picture size in pixels, 8 to 4096.
-    #[arg(long, default_value_t = 256)]
+    #[arg(long, default_value_t = 256, requires = "cut")]
     pub size: usize,
     /// A folder keeping the coarse levels between cuts of the same inputs.
-    #[arg(long)]
+    #[arg(long, requires = "cut")]
     pub cache: Option<PathBuf>,
     /// Override the spec's target tet count (100 to 200000).
     #[arg(long)]
@@ -133,10 +138,6 @@ pub struct GuidedArgs {
     #[arg(short, long)]
     pub output: PathBuf,
 }
-
-/// Corners of the field's sampling grid along the grid's longest side (Zhang et al.: 20-30
-/// cells on the shortest side suffice for a smooth field).
-const FIELD_CELLS: usize = 32;
 
 /// Run `solidtex guided`.
 pub fn run_guided(args: &GuidedArgs) -> Result<()> {
@@ -156,13 +157,22 @@ pub fn run_guided(args: &GuidedArgs) -> Result<()> {
     let started = Instant::now();
     let g = guide(&args.mesh, &args.spec, args.tets)?;
     let exemplars = load_exemplars(args)?;
-    let options = Options::default();
+    let side = exemplars.iter().map(|e| e.width().min(e.height())).min().unwrap_or(0);
+    let options = Options { layered: args.layered, ..Options::for_exemplar(side) };
     let prepared = Exemplars::prepare([&exemplars[0], &exemplars[1], &exemplars[2]], &options)
         .map_err(|e| e.in_file(&args.exemplar))?;
     let domain = Domain::around(g.surface.bounds(), args.res)?;
-    let bounds = (domain.origin, domain.centre(domain.dims.map(|d| d - 1)) + domain.voxel / 2.0);
-    let frames = FrameGrid::sample(&g.tets, &g.field, bounds, FIELD_CELLS).in_voxels(domain.origin, domain.voxel);
-    let setup = Setup { exemplars: &prepared, frames: &frames, dims: domain.dims, seed: args.seed, options };
+    let frames = solid::frames_over(&g.tets, &g.field, &domain);
+    let depth =
+        args.layered.then(|| solid::depth_over(&g.depth, &domain)).transpose().map_err(|e| e.in_file(&args.spec))?;
+    let setup = Setup {
+        exemplars: &prepared,
+        frames: &frames,
+        depth: depth.as_ref(),
+        dims: domain.dims,
+        seed: args.seed,
+        options,
+    };
     let ready = started.elapsed().as_secs_f64();
     let bar = super::fill::Bar::new();
     let outcome = match cut {
@@ -200,11 +210,25 @@ fn load_exemplars(args: &GuidedArgs) -> Result<[Image2d; 3]> {
     let ez = args.others.ez.as_deref().map(|p| shrink.load(p, "Ez exemplar").and_then(without_alpha)).transpose()?;
     let ey = ey.unwrap_or_else(|| ex.clone());
     let ez = ez.unwrap_or_else(|| ey.clone());
-    Ok([ex, ey, ez])
+    let depth = |image: Image2d| if args.layered { with_depth(image) } else { Ok(image) };
+    Ok([depth(ex)?, depth(ey)?, depth(ez)?])
 }
 
 /// Exemplars are shrunk to this many pixels on their longer side unless `--max-exemplar` says.
 const DEFAULT_EXEMPLAR: usize = 128;
+
+/// The image with a Depth channel: its row coordinate, 0 at the top (the outside).
+fn with_depth(image: Image2d) -> Result<Image2d> {
+    let (w, h, c) = (image.width(), image.height(), image.channel_count());
+    let data = image
+        .data()
+        .chunks_exact(c)
+        .enumerate()
+        .flat_map(|(i, px)| px.iter().copied().chain([(i / w) as f32 / (h - 1).max(1) as f32]))
+        .collect();
+    let names = image.channels().iter().cloned().chain([Channel::Depth]).collect();
+    Image2d::from_data(w, h, names, data)
+}
 
 fn without_alpha(image: Image2d) -> Result<Image2d> {
     let keep: Vec<usize> = (0..image.channel_count()).filter(|&c| image.channels()[c] != Channel::A).collect();
@@ -216,45 +240,25 @@ fn without_alpha(image: Image2d) -> Result<Image2d> {
     Image2d::from_data(image.width(), image.height(), names, data)
 }
 
-/// The finest level's request, run with the cache when one is given: (voxels, corrections,
-/// the whole solid's voxel count).
-fn synthesize(
-    args: &GuidedArgs,
-    setup: &Setup,
-    request: &Mask,
-    bar: &super::fill::Bar,
-) -> Result<(synth::Synthesized, usize)> {
-    let masks = synth::plan(setup, request);
-    let full: usize = setup.level_dims().iter().map(|d| d.iter().product::<usize>()).sum();
-    let from = match &args.cache {
-        Some(folder) => Some(cached_level(folder, setup, bar)?),
-        None => None,
-    };
-    Ok((synth::run(setup, &masks, from, bar)?, full))
-}
-
-/// The coarser levels computed over the whole grid, from the cache or computed and cached:
-/// the level just below the finest, and its index.
-fn cached_level(
-    folder: &Path,
-    setup: &Setup,
-    bar: &super::fill::Bar,
-) -> Result<(usize, crate::guided::region::Sparse<synth::Voxel>)> {
-    let dims = setup.level_dims();
-    let level = dims.len() - 2;
+/// The coarse level from the cache folder, or computed and cached there.
+fn cached_level(folder: &Path, setup: &Setup, bar: &super::fill::Bar) -> Result<(usize, Sparse<synth::Voxel>)> {
+    let level = setup.options.levels - 2;
     let key = synth::fingerprint(setup);
     let path = guided_cache::path(folder, key);
     let slots = [0, 1, 2].map(|a| setup.exemplars.planes[a][level].centres.len());
-    if let Some(found) = guided_cache::read(&path, key, dims[level], slots)? {
+    let voxel = |slot| setup.voxel(level, slot);
+    if let Some(found) = guided_cache::read(&path, key, setup.level_dims()[level], slots, voxel)? {
         return Ok(found);
     }
     std::fs::create_dir_all(folder).map_err(|e| Error::io(folder, e))?;
-    let mut masks = synth::plan(setup, &Mask::full(setup.dims));
-    masks.truncate(level + 1);
-    let mut out = synth::run(setup, &masks, None, bar)?;
-    let values = out.levels.pop().expect("one level at least");
+    let (level, values) = solid::coarse_levels(setup, bar)?;
     guided_cache::write(&path, key, level, &values)?;
     Ok((level, values))
+}
+
+/// The voxel count of every level of the whole solid.
+fn whole(setup: &Setup) -> usize {
+    setup.level_dims().iter().map(|d| d.iter().product::<usize>()).sum()
 }
 
 fn write_cut(
@@ -266,12 +270,10 @@ fn write_cut(
     bar: &super::fill::Bar,
 ) -> Result<(usize, usize, usize)> {
     let view = View::framing(g.surface.bounds(), point, normal, args.size)?;
-    let ones = vec![1.0; g.tets.vertices.len()];
-    let inside: Vec<bool> = field_cut(&g.tets, &ones, &view).iter().map(Option::is_some).collect();
-    let request = solid::cut_request(domain, &view, &inside);
-    let (out, full) = synthesize(args, setup, &request, bar)?;
-    io::write_image(&args.output, &solid::cut_image(setup, &out, domain, &view, &inside)?)?;
-    Ok((out.voxels, out.corrections, full))
+    let from = args.cache.as_deref().map(|folder| cached_level(folder, setup, bar)).transpose()?;
+    let (picture, out) = solid::cut(setup, domain, &g.tets, &view, from, bar)?;
+    io::write_image(&args.output, &picture)?;
+    Ok((out.voxels, out.corrections, whole(setup)))
 }
 
 fn write_solid(
@@ -282,10 +284,10 @@ fn write_solid(
     bar: &super::fill::Bar,
 ) -> Result<(usize, usize, usize)> {
     crate::volume::check_size(domain.dims, setup.exemplars.channels() + 1, io::budget_from_env()?)?;
-    let (out, full) = synthesize(args, setup, &Mask::full(domain.dims), bar)?;
+    let out = synth::run(setup, &synth::plan(setup, &Mask::full(domain.dims), 0), None, bar)?;
     let alpha = coverage(&g.surface, domain);
     io::write_volume(&args.output, &solid::solid_volume(setup, &out, &alpha)?)?;
-    Ok((out.voxels, out.corrections, full))
+    Ok((out.voxels, out.corrections, whole(setup)))
 }
 
 /// The model's coverage of every voxel of the grid.

@@ -9,6 +9,7 @@ macro_rules! say {
 
 mod bench;
 mod bench_fill;
+mod bench_guided;
 mod bench_surface;
 pub mod build;
 mod commands;

@@ -32,7 +32,10 @@ pub type FrameAt = (Vec3, Quat);
 /// The frames the strokes give: one per stroke sample `(point, tangent)`, with z along the
 /// gradient of the depth through `depth` (when there are depth constraints and the
 /// gradient there is clear: not on a depth axis, where it vanishes, nor along the stroke).
-/// Each is flipped into the hemisphere of the one before it.
+/// Each is flipped into the hemisphere of the one before it. Then frames where the depth
+/// is 0 (up to [`DEPTH_FRAMES`] of those points): z along the gradient, x along the nearest
+/// stroke sample's tangent, in that sample's hemisphere; with them the field turns around
+/// a depth axis (a log's rings), which frames on the axis alone cannot say.
 pub fn sketched_frames(directions: &[(Vec3, Vec3)], depth: &[(Vec3, f32)]) -> Result<Vec<FrameAt>> {
     if directions.is_empty() {
         return Err(Error::invalid("the frame field needs at least one direction stroke ([[direction]])"));
@@ -57,8 +60,29 @@ pub fn sketched_frames(directions: &[(Vec3, Vec3)], depth: &[(Vec3, f32)]) -> Re
         }
         frames.push((p, q));
     }
+    if let Some(rbf) = rbf {
+        let strokes = frames.len();
+        let outside: Vec<Vec3> = depth.iter().filter(|d| d.1 == 0.0).map(|d| d.0).collect();
+        for &p in outside.iter().step_by(outside.len().div_ceil(DEPTH_FRAMES).max(1)) {
+            let Some(z) = Some(rbf.gradient(p)).filter(|g| g.length() > clear).and_then(Vec3::try_normalize) else {
+                continue;
+            };
+            let nearest = (0..strokes)
+                .min_by(|&a, &b| directions[a].0.distance_squared(p).total_cmp(&directions[b].0.distance_squared(p)));
+            let Some(i) = nearest else { continue };
+            let t = directions[i].1.normalize_or_zero();
+            if z.dot(t).abs() >= 0.9 {
+                continue;
+            }
+            let q = frame(t, z);
+            frames.push((p, if q.dot(frames[i].1) < 0.0 { -q } else { q }));
+        }
+    }
     Ok(frames)
 }
+
+/// Most frames taken from points of depth 0.
+pub const DEPTH_FRAMES: usize = 200;
 
 /// The world axis least along `t`; near ties (within 0.1) go to z, then y, so a stroke
 /// lying in a world plane keeps one axis along its whole length.
@@ -215,6 +239,59 @@ impl FrameGrid {
     }
 }
 
+/// A scalar field (the model's depth) sampled at the corners of a regular grid, read by
+/// trilinear interpolation.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ScalarGrid {
+    /// The first corner.
+    pub lo: Vec3,
+    /// Corner spacing.
+    pub step: f32,
+    /// Corners per axis.
+    pub dims: [usize; 3],
+    /// Per corner, x fastest.
+    pub values: Vec<f32>,
+}
+
+impl ScalarGrid {
+    /// Sample `f` over the box `(lo, hi)` with `cells` cells along its longest side.
+    pub fn sample(f: impl Fn(Vec3) -> f32 + Sync, (lo, hi): (Vec3, Vec3), cells: usize) -> ScalarGrid {
+        let step = (hi - lo).max_element().max(1e-6) / cells.max(1) as f32;
+        let dims = ((hi - lo) / step).ceil().to_array().map(|d| d as usize + 2);
+        let values = (0..dims.iter().product::<usize>())
+            .into_par_iter()
+            .map(|i| {
+                let c = [i % dims[0], (i / dims[0]) % dims[1], i / (dims[0] * dims[1])];
+                f(lo + Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32) * step)
+            })
+            .collect();
+        ScalarGrid { lo, step, dims, values }
+    }
+
+    /// The same grid in the coordinates of a voxel grid (see [`FrameGrid::in_voxels`]).
+    pub fn in_voxels(&self, origin: Vec3, voxel: f32) -> ScalarGrid {
+        ScalarGrid { lo: (self.lo - origin) / voxel - 0.5, step: self.step / voxel, ..self.clone() }
+    }
+
+    /// The value at `p` (clamped into the box).
+    pub fn at(&self, p: Vec3) -> f32 {
+        let top = Vec3::from_array(self.dims.map(|d| (d - 1) as f32));
+        let g = ((p - self.lo) / self.step).clamp(Vec3::ZERO, top);
+        let base = g.floor().min(Vec3::from_array(self.dims.map(|d| d.saturating_sub(2) as f32)));
+        let f = g - base;
+        let b = base.to_array().map(|c| c as usize);
+        let mut sum = 0.0;
+        for k in 0..8 {
+            let (dx, dy, dz) = (k & 1, (k >> 1) & 1, k >> 2);
+            let i = [b[0] + dx, b[1] + dy, b[2] + dz];
+            let at = i[0].min(self.dims[0] - 1)
+                + self.dims[0] * (i[1].min(self.dims[1] - 1) + self.dims[1] * i[2].min(self.dims[2] - 1));
+            sum += self.values[at] * [1.0 - f.x, f.x][dx] * [1.0 - f.y, f.y][dy] * [1.0 - f.z, f.z][dz];
+        }
+        sum
+    }
+}
+
 /// Give every unset corner the mean of its set face neighbours (flipped towards the
 /// first), one layer per round, until all are set (all at identity when none is).
 fn fill_outwards(corners: &mut [Option<Vec4>], dims: [usize; 3]) {
@@ -325,6 +402,26 @@ mod tests {
             [(Vec3::ZERO, 0.0), (Vec3::new(0.0, 1.0, 0.0), 1.0), (Vec3::new(1.0, 0.0, 0.0), 0.0), (Vec3::Z, 0.0)];
         let frames = sketched_frames(&[(Vec3::new(0.3, 0.6, 0.3), Vec3::X)], &depth).unwrap();
         assert!((frames[0].1 * Vec3::Z).dot(Vec3::Y) > 0.99, "z follows the depth gradient");
+    }
+
+    /// Points of depth 0 give frames too: z towards the depth axis, x along the stroke;
+    /// around the axis the frames turn (a log's rings).
+    #[test]
+    fn depth_points_give_frames_turning_around_the_axis() {
+        let mut depth: Vec<(Vec3, f32)> = (0..5).map(|i| (Vec3::new(0.2 * i as f32, 0.5, 0.5), 1.0)).collect();
+        for i in 0..5 {
+            for (y, z) in [(0.0, 0.5), (1.0, 0.5), (0.5, 0.0), (0.5, 1.0)] {
+                depth.push((Vec3::new(0.2 * i as f32 + 0.1, y, z), 0.0));
+            }
+        }
+        let stroke = [(Vec3::new(0.3, 0.5, 0.5), Vec3::X), (Vec3::new(0.7, 0.5, 0.5), Vec3::X)];
+        let frames = sketched_frames(&stroke, &depth).unwrap();
+        assert_eq!(frames.len(), 2 + 20);
+        for &(p, q) in &frames[2..] {
+            let inward = (Vec3::new(p.x, 0.5, 0.5) - p).normalize();
+            assert!((q * Vec3::Z).dot(inward) > 0.9, "at {p}: z {} towards the axis {inward}", q * Vec3::Z);
+            assert!((q * Vec3::X).dot(Vec3::X) > 0.99, "at {p}: x along the stroke");
+        }
     }
 
     /// Frames twisting about x from one face of a cube to the other: the harmonic field

@@ -53,36 +53,36 @@ impl Mask {
         out
     }
 
+    /// Grown along one axis: the grid seen as blocks of `len` layers of `inner` voxels
+    /// (`inner`: the axis' stride), a window of counts sliding over the layers of each block.
     fn grown_along(&self, axis: usize, reach: usize) -> Mask {
-        let [dx, dy, dz] = self.dims;
         let len = self.dims[axis];
-        let stride = [1, dx, dx * dy][axis];
-        let lines: Vec<usize> = (0..dx * dy * dz).filter(|&i| (i / stride) % len == 0).collect();
-        let grown: Vec<Vec<bool>> = lines
-            .par_iter()
-            .map(|&start| {
-                let line: Vec<bool> = (0..len).map(|k| self.on[start + k * stride]).collect();
-                let mut out = vec![false; len];
-                // the window [k - reach, k + reach], counted as it slides
-                let mut inside = line[..reach.min(len)].iter().filter(|b| **b).count();
-                for (k, flag) in out.iter_mut().enumerate() {
-                    if k + reach < len {
-                        inside += usize::from(line[k + reach]);
-                    }
-                    if k > reach {
-                        inside -= usize::from(line[k - reach - 1]);
-                    }
-                    *flag = inside > 0;
-                }
-                out
-            })
-            .collect();
+        let inner: usize = self.dims[..axis].iter().product();
         let mut out = Mask::empty(self.dims);
-        for (start, line) in lines.iter().zip(grown) {
-            for (k, flag) in line.into_iter().enumerate() {
-                out.on[start + k * stride] = flag;
+        out.on.par_chunks_mut(len * inner).zip(self.on.par_chunks(len * inner)).for_each(|(out, block)| {
+            let layer = |k: usize| &block[k * inner..(k + 1) * inner];
+            let mut counts = vec![0u32; inner];
+            let add = |counts: &mut [u32], k: usize, sign: i32| {
+                for (c, on) in counts.iter_mut().zip(layer(k)) {
+                    *c = c.wrapping_add_signed(sign * i32::from(*on));
+                }
+            };
+            // the window [k - reach, k + reach], counted as it slides
+            for k in 0..reach.min(len) {
+                add(&mut counts, k, 1);
             }
-        }
+            for k in 0..len {
+                if k + reach < len {
+                    add(&mut counts, k + reach, 1);
+                }
+                if k > reach {
+                    add(&mut counts, k - reach - 1, -1);
+                }
+                for (o, c) in out[k * inner..(k + 1) * inner].iter_mut().zip(&counts) {
+                    *o = *c > 0;
+                }
+            }
+        });
         out
     }
 

@@ -1,10 +1,14 @@
 //! Where guided synthesis runs and what it gives back: the voxel grid around a model, the
 //! voxels a cut needs, the cut's picture and the whole solid as a volume.
 
-use super::region::Mask;
-use super::synth::{Setup, Synthesized};
+use super::field::{FrameField, FrameGrid, ScalarGrid};
+use super::region::{Mask, Sparse};
+use super::synth::{self, Setup, Synthesized, Voxel};
 use crate::error::{Error, Result};
 use crate::fill::render::View;
+use crate::fill::render::field_cut;
+use crate::fill::tets::TetMesh;
+use crate::progress::Progress;
 use crate::volume::{Channel, Image2d, Volume};
 use glam::Vec3;
 
@@ -57,6 +61,58 @@ impl Domain {
     pub fn centre(&self, v: [usize; 3]) -> Vec3 {
         self.origin + (Vec3::from_array(v.map(|c| c as f32)) + 0.5) * self.voxel
     }
+}
+
+/// Corners of the field's sampling grid along the grid's longest side (Zhang et al.: 20-30
+/// cells on the shortest side suffice for a smooth field).
+const FIELD_CELLS: usize = 32;
+
+/// The field sampled over `domain`, in its voxel coordinates.
+pub fn frames_over(tets: &TetMesh, field: &FrameField, domain: &Domain) -> FrameGrid {
+    let hi = domain.origin + Vec3::from_array(domain.dims.map(|d| d as f32)) * domain.voxel;
+    FrameGrid::sample(tets, field, (domain.origin, hi), FIELD_CELLS).in_voxels(domain.origin, domain.voxel)
+}
+
+/// The model's depth (the RBF through the spec's depth constraints, as the fill computes
+/// it, clamped to 0..1) sampled over `domain`, in its voxel coordinates.
+pub fn depth_over(constraints: &[(Vec3, f32)], domain: &Domain) -> Result<ScalarGrid> {
+    if !constraints.iter().any(|c| c.1 > 0.0) {
+        return Err(Error::invalid(
+            "layered guided synthesis needs the spec's depth: a [depth] section with an axis or points inside",
+        ));
+    }
+    let rbf = crate::fill::field::Rbf::fit(constraints)?;
+    let hi = domain.origin + Vec3::from_array(domain.dims.map(|d| d as f32)) * domain.voxel;
+    let grid = ScalarGrid::sample(|p| rbf.value(p).clamp(0.0, 1.0), (domain.origin, hi), FIELD_CELLS);
+    Ok(grid.in_voxels(domain.origin, domain.voxel))
+}
+
+/// A cut through the model synthesized on demand: its picture and the run (voxels and
+/// corrections). `from`: a coarse level computed over the whole grid (e.g. cached).
+pub fn cut(
+    setup: &Setup,
+    domain: &Domain,
+    tets: &TetMesh,
+    view: &View,
+    from: Option<(usize, Sparse<Voxel>)>,
+    progress: &dyn Progress,
+) -> Result<(Image2d, Synthesized)> {
+    let ones = vec![1.0; tets.vertices.len()];
+    let inside: Vec<bool> = field_cut(tets, &ones, view).iter().map(Option::is_some).collect();
+    let request = cut_request(domain, view, &inside);
+    let first = from.as_ref().map_or(0, |(level, _)| level + 1);
+    let out = synth::run(setup, &synth::plan(setup, &request, first), from, progress)?;
+    Ok((cut_image(setup, &out, domain, view, &inside)?, out))
+}
+
+/// The level below the finest computed over the whole grid, and its index: what a cache
+/// keeps so that a cut recomputes only the finest level.
+pub fn coarse_levels(setup: &Setup, progress: &dyn Progress) -> Result<(usize, Sparse<Voxel>)> {
+    let level = setup.options.levels - 2;
+    let mut masks = synth::plan(setup, &Mask::full(setup.dims), 0);
+    masks.truncate(level + 1);
+    let mut out = synth::run(setup, &masks, None, progress)?;
+    Ok((level, out.levels.pop().expect("one level at least")))
 }
 
 /// The voxels a cut shows: the one under each pixel inside the model (`inside`, per pixel).

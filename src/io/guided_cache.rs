@@ -27,8 +27,15 @@ pub fn path(folder: &Path, key: u64) -> PathBuf {
 }
 
 /// The level cached under `key`, if the file exists: `(level, values)`. Every slot is
-/// checked against `slots[plane]` (the level's exemplar centre counts).
-pub fn read(path: &Path, key: u64, dims: [usize; 3], slots: [usize; 3]) -> Result<Option<(usize, Sparse<Voxel>)>> {
+/// checked against `slots[plane]` (the level's exemplar centre counts); `voxel` makes a
+/// voxel of its slots.
+pub fn read(
+    path: &Path,
+    key: u64,
+    dims: [usize; 3],
+    slots: [usize; 3],
+    voxel: impl Fn([u32; 3]) -> Voxel + Sync,
+) -> Result<Option<(usize, Sparse<Voxel>)>> {
     if !path.exists() {
         return Ok(None);
     }
@@ -54,15 +61,14 @@ pub fn read(path: &Path, key: u64, dims: [usize; 3], slots: [usize; 3]) -> Resul
     let body = &bytes[HEADER..];
     let value = |i: usize| {
         let at = i * PER_VOXEL;
-        let slot = [0, 4, 8].map(|o| u32::from_le_bytes(body[at + o..at + o + 4].try_into().expect("four bytes")));
-        Voxel { slot }
+        [0, 4, 8].map(|o| u32::from_le_bytes(body[at + o..at + o + 4].try_into().expect("four bytes")))
     };
-    let bad = (0..count).map(value).position(|v| (0..3).any(|a| v.slot[a] as usize >= slots[a]));
+    let bad = (0..count).map(value).position(|v| (0..3).any(|a| v[a] as usize >= slots[a]));
     if let Some(i) = bad {
         return Err(Error::file(path, format!("voxel {i} holds a pixel outside the exemplar; the cache is damaged")));
     }
     let mask = Mask::full(dims);
-    Ok(Some((level, Sparse::compute(&mask, |v| value(mask.index(v))))))
+    Ok(Some((level, Sparse::compute(&mask, |v| voxel(value(mask.index(v)))))))
 }
 
 /// Write `values` (the whole grid of `level`) under `key`.

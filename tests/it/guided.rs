@@ -1,4 +1,4 @@
-//! Sketch-guided solid texturing: the frame field and its picture.
+//! Sketch-guided solid texturing: the frame field and its picture, guided cuts and solids.
 
 use crate::support::{at, solidtex, stderr};
 
@@ -30,4 +30,84 @@ fn the_field_of_a_kiwi_spec_follows_its_stroke_on_a_cut() {
     assert!(!run.status.success());
     assert!(stderr(&run).contains("bare.toml") && stderr(&run).contains("direction stroke"), "{}", stderr(&run));
     assert!(!d.join("bare.png").exists());
+}
+
+/// The repository's CC0 gravel photo.
+fn gravel() -> String {
+    concat!(env!("CARGO_MANIFEST_DIR"), "/exemplars/gravel_photo.png").to_string()
+}
+
+/// `solidtex guided --cut` writes the cut through the fruit: transparent outside, opaque
+/// inside, textured (not flat); it reports the voxels it synthesized, far fewer than a
+/// whole solid; with `--cache` a second cut is the same picture, and a file at the cache's
+/// name that solidtex did not write there stops the run and stays as it was.
+#[test]
+fn a_guided_cut_is_synthesized_on_demand_and_cached() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (fruit, spec) = crate::fill::kiwi_fruit(d);
+    let ex = gravel();
+    let cut = |out: &str, cache: bool| {
+        let mut args = vec!["guided", &fruit, "--spec", &spec, "--exemplar", &ex, "--max-exemplar", "64"];
+        args.extend(["--res", "64", "--cut", "0,0,0,0,0,1", "--size", "64", "-o", out]);
+        let folder = at(d, "cache");
+        if cache {
+            args.extend(["--cache", &folder]);
+        }
+        solidtex(&args.iter().map(|s| &**s).collect::<Vec<&str>>())
+    };
+    let plain = at(d, "cut.png");
+    let run = cut(&plain, false);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let err = stderr(&run);
+    let line = err.lines().find(|l| l.starts_with("voxels synthesized:")).expect("the voxel report");
+    let numbers: Vec<f64> = line.split(' ').filter_map(|w| w.parse().ok()).collect();
+    assert!(numbers[0] < 0.6 * numbers[1], "{line}");
+    let img = image::open(&plain).unwrap().to_rgba8();
+    assert_eq!(img.get_pixel(0, 0).0[3], 0, "outside the fruit is transparent");
+    let inside: Vec<[u8; 4]> = (24..40).map(|x| img.get_pixel(x, 32).0).collect();
+    assert!(inside.iter().all(|p| p[3] == 255), "inside is opaque");
+    let (lo, hi) = inside.iter().fold((255, 0), |(lo, hi), p| (lo.min(p[1]), hi.max(p[1])));
+    assert!(hi - lo > 20, "the cut is textured: green {lo}..{hi}");
+
+    let (first, second) = (at(d, "first.png"), at(d, "second.png"));
+    assert!(cut(&first, true).status.success());
+    let run = cut(&second, true);
+    assert!(run.status.success(), "{}", stderr(&run));
+    assert_eq!(std::fs::read(&first).unwrap(), std::fs::read(&second).unwrap());
+    assert_eq!(std::fs::read(&first).unwrap(), std::fs::read(&plain).unwrap(), "the cache changes nothing");
+    let names = crate::support::listing(&d.join("cache"));
+    assert!(names.len() == 1 && names[0].starts_with("guided-"), "{names:?}");
+    let planted = d.join("cache").join(&names[0]);
+    std::fs::write(&planted, b"my notes").unwrap();
+    let third = at(d, "third.png");
+    crate::support::assert_fails(&cut(&third, true), &[&names[0], "does not overwrite"]);
+    assert_eq!(std::fs::read(&planted).unwrap(), b"my notes");
+    assert!(!d.join("third.png").exists());
+}
+
+/// Without `--cut`, the whole solid is written: the exemplar's channels (one: the photo is
+/// grey) and the fruit's coverage as alpha. Bad values are refused by name.
+#[test]
+fn a_whole_guided_solid_carries_the_model_as_alpha() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (fruit, spec) = crate::fill::kiwi_fruit(d);
+    let ex = gravel();
+    let out = at(d, "solid.exr");
+    let base = ["guided", &fruit, "--spec", &spec, "--exemplar", &ex, "--max-exemplar", "64"];
+    let run = solidtex(&[&base[..], &["--res", "24", "-o", &out]].concat());
+    assert!(run.status.success(), "{}", stderr(&run));
+    let volume = solidtex::io::read_volume(std::path::Path::new(&out), 1 << 30).unwrap();
+    let names: Vec<String> = volume.channels().iter().map(|c| c.to_string()).collect();
+    assert_eq!(names, ["R", "A"], "the grey photo's channel, then alpha");
+    let [x, y, z] = volume.dims();
+    assert_eq!(volume.voxel(x / 2, y / 2, z / 2)[1], 1.0, "the fruit's centre is inside");
+    assert_eq!(volume.voxel(0, 0, 0)[1], 0.0, "the grid's corner is outside");
+
+    crate::support::assert_usage(&solidtex(&[&base[..], &["--res", "8", "-o", &out]].concat()), &["--res", "16"]);
+    let bare = crate::fill::spec(d, "bare.toml", "exemplar = \"kiwi\"\n");
+    let run = solidtex(&["guided", &fruit, "--spec", &bare, "--exemplar", &ex, "-o", &at(d, "bare.exr")]);
+    crate::support::assert_fails(&run, &["bare.toml", "direction stroke"]);
+    assert!(!d.join("bare.exr").exists());
 }

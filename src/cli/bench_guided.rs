@@ -1,0 +1,101 @@
+//! The guided-synthesis workloads of `solidtex bench`, on the drawn fruit with the kiwi
+//! spec's frames (a stroke along the axis, depth 1 on it) and the drawn bark-skin
+//! exemplar: a 256² cut through the axis at resolution 256 on demand, the same cut with
+//! the coarse levels kept from an earlier run, and the whole solid at 128.
+
+use super::bench::BenchArgs;
+use super::bench_fill::{timed, wanted};
+use crate::error::Result;
+use crate::fill::render::View;
+use crate::fill::tets::TetMesh;
+use crate::guided::field::{FrameField, sketched_frames, solve};
+use crate::guided::region::Mask;
+use crate::guided::solid::{self, Domain};
+use crate::guided::synth::{self, Exemplars, Options, Setup};
+use crate::progress::NoProgress;
+use crate::volume::Image2d;
+use glam::Vec3;
+use std::time::Instant;
+
+const CUT: &str = "guided/cut/fruit/256";
+const CACHED: &str = "guided/cut/fruit/256/cached";
+const SOLID: &str = "guided/solid/fruit/128";
+
+/// The workload names.
+pub fn names() -> Vec<String> {
+    [CUT, CACHED, SOLID].map(String::from).to_vec()
+}
+
+/// The fruit, its tets and its frame field.
+fn fruit() -> Result<(crate::mesh::Mesh, TetMesh, FrameField)> {
+    let fruit = crate::mesh::shapes::named("fruit").expect("a drawn shape").canonical();
+    let tets = crate::fill::mesher::tetrahedralize(&fruit, 5000)?;
+    let directions = [(Vec3::new(-0.75, 0.0, 0.0), Vec3::X), (Vec3::new(0.0, 0.2, 0.0), Vec3::X)];
+    let depth: Vec<(Vec3, f32)> = fruit.vertices.iter().map(|p| (*p, 0.0)).chain([(Vec3::ZERO, 1.0)]).collect();
+    let field = solve(&tets, &sketched_frames(&directions, &depth)?)?;
+    Ok((fruit, tets, field))
+}
+
+/// Run the guided workloads.
+pub fn run(args: &BenchArgs) -> Result<()> {
+    if !names().iter().any(|n| wanted(args, n)) {
+        return Ok(());
+    }
+    let (fruit, tets, field) = fruit()?;
+    let image = crate::sections::draw("bark-skin", 128, 128, 1)?;
+    let options = Options::default();
+    let started = Instant::now();
+    let exemplars = Exemplars::prepare([&image, &image, &image], &options)?;
+    let prepared = started.elapsed().as_secs_f64();
+    let view = View::framing(fruit.bounds(), Vec3::ZERO, Vec3::Y, 256)?;
+    let domain = Domain::around(fruit.bounds(), 256)?;
+    let frames = solid::frames_over(&tets, &field, &domain);
+    let setup = Setup { exemplars: &exemplars, frames: &frames, depth: None, dims: domain.dims, seed: 1, options };
+    let whole: usize = setup.level_dims().iter().map(|d| d.iter().product::<usize>()).sum();
+    timed(args, CUT, || {
+        let (picture, out) = solid::cut(&setup, &domain, &tets, &view, None, &NoProgress)?;
+        Ok(format!("{} of the exemplars prepared in {prepared:.2} s", report(&picture, &image, &out, whole)?))
+    })?;
+    if wanted(args, CACHED) {
+        let coarse = solid::coarse_levels(&setup, &NoProgress)?;
+        timed(args, CACHED, || {
+            let (picture, out) = solid::cut(&setup, &domain, &tets, &view, Some(coarse.clone()), &NoProgress)?;
+            report(&picture, &image, &out, whole)
+        })?;
+    }
+    let domain = Domain::around(fruit.bounds(), 128)?;
+    let frames = solid::frames_over(&tets, &field, &domain);
+    let setup = Setup { dims: domain.dims, frames: &frames, ..setup };
+    timed(args, SOLID, || {
+        let out = synth::run(&setup, &synth::plan(&setup, &Mask::full(domain.dims), 0), None, &NoProgress)?;
+        Ok(format!("{} voxels, {} corrections", out.voxels, out.corrections))
+    })
+}
+
+/// The voxels a cut took against the whole solid's, and the sharpness yardstick of the
+/// largest centred square inside the model against the exemplar.
+fn report(picture: &Image2d, exemplar: &Image2d, out: &synth::Synthesized, whole: usize) -> Result<String> {
+    let square = inside_square(picture)?;
+    let s = crate::sharpness::compare(&[square], exemplar, &[0, 1, 2])?;
+    Ok(format!(
+        "{:.1} % of the voxels, gradient {:.2} length {:.2},",
+        100.0 * out.voxels as f64 / whole as f64,
+        s.gradient_ratio,
+        s.length_ratio
+    ))
+}
+
+/// The largest centred square of opaque pixels, without alpha.
+fn inside_square(picture: &Image2d) -> Result<Image2d> {
+    let (w, h, c) = (picture.width(), picture.height(), picture.channel_count());
+    let (cx, cy) = (w / 2, h / 2);
+    let opaque = |r: usize| (cx - r..cx + r).all(|x| (cy - r..cy + r).all(|y| picture.pixel(x, y)[c - 1] > 0.5));
+    let r = (1..cx.min(cy)).take_while(|r| opaque(*r)).last().unwrap_or(1);
+    let mut data = Vec::with_capacity(4 * r * r * (c - 1));
+    for y in cy - r..cy + r {
+        for x in cx - r..cx + r {
+            data.extend_from_slice(&picture.pixel(x, y)[..c - 1]);
+        }
+    }
+    Image2d::from_data(2 * r, 2 * r, picture.channels()[..c - 1].to_vec(), data)
+}
