@@ -57,9 +57,9 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         Ok(format!("{} of the exemplars prepared in {prepared:.2} s", report(&picture, &image, &out, whole)?))
     })?;
     if wanted(args, CACHED) {
-        let coarse = solid::coarse_levels(&setup, &NoProgress)?;
+        let (level, coarse) = solid::coarse_levels(&setup, &NoProgress)?;
         timed(args, CACHED, || {
-            let (picture, out) = solid::cut(&setup, &domain, &tets, &view, Some(coarse.clone()), &NoProgress)?;
+            let (picture, out) = solid::cut(&setup, &domain, &tets, &view, Some((level, &coarse)), &NoProgress)?;
             report(&picture, &image, &out, whole)
         })?;
     }

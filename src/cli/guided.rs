@@ -173,6 +173,7 @@ pub fn run_guided(args: &GuidedArgs) -> Result<()> {
         seed: args.seed,
         options,
     };
+    solid::check_memory(&setup, cut.is_none(), args.res, io::budget_from_env()?)?;
     let ready = started.elapsed().as_secs_f64();
     let bar = super::fill::Bar::new();
     let outcome = match cut {
@@ -181,6 +182,9 @@ pub fn run_guided(args: &GuidedArgs) -> Result<()> {
     };
     bar.0.finish_and_clear();
     let (voxels, corrections, full) = outcome?;
+    if voxels == 0 {
+        eprintln!("warning: the cut misses the model; the picture is transparent");
+    }
     eprintln!(
         "wrote {}: {}x{}x{} grid, {} tets, field solved in {:.0} ms, set up in {ready:.2} s, synthesized in {:.2} s",
         args.output.display(),
@@ -271,7 +275,7 @@ fn write_cut(
 ) -> Result<(usize, usize, usize)> {
     let view = View::framing(g.surface.bounds(), point, normal, args.size)?;
     let from = args.cache.as_deref().map(|folder| cached_level(folder, setup, bar)).transpose()?;
-    let (picture, out) = solid::cut(setup, domain, &g.tets, &view, from, bar)?;
+    let (picture, out) = solid::cut(setup, domain, &g.tets, &view, from.as_ref().map(|(l, v)| (*l, v)), bar)?;
     io::write_image(&args.output, &picture)?;
     Ok((out.voxels, out.corrections, whole(setup)))
 }

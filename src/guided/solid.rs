@@ -94,13 +94,13 @@ pub fn cut(
     domain: &Domain,
     tets: &TetMesh,
     view: &View,
-    from: Option<(usize, Sparse<Voxel>)>,
+    from: Option<(usize, &Sparse<Voxel>)>,
     progress: &dyn Progress,
 ) -> Result<(Image2d, Synthesized)> {
     let ones = vec![1.0; tets.vertices.len()];
     let inside: Vec<bool> = field_cut(tets, &ones, view).iter().map(Option::is_some).collect();
     let request = cut_request(domain, view, &inside);
-    let first = from.as_ref().map_or(0, |(level, _)| level + 1);
+    let first = from.map_or(0, |(level, _)| level + 1);
     let out = synth::run(setup, &synth::plan(setup, &request, first), from, progress)?;
     Ok((cut_image(setup, &out, domain, view, &inside)?, out))
 }
@@ -111,8 +111,39 @@ pub fn coarse_levels(setup: &Setup, progress: &dyn Progress) -> Result<(usize, S
     let level = setup.options.levels - 2;
     let mut masks = synth::plan(setup, &Mask::full(setup.dims), 0);
     masks.truncate(level + 1);
-    let mut out = synth::run(setup, &masks, None, progress)?;
-    Ok((level, out.levels.pop().expect("one level at least")))
+    Ok((level, synth::run(setup, &masks, None, progress)?.values))
+}
+
+/// About how many bytes synthesizing needs (before it starts): a flag per voxel of every
+/// level and version for the plan, and for the whole solid two versions of every voxel.
+pub fn memory_needed(setup: &Setup, whole: bool) -> u128 {
+    let per_voxel = std::mem::size_of::<Voxel>() as u128;
+    setup
+        .level_dims()
+        .iter()
+        .enumerate()
+        .map(|(level, d)| {
+            let voxels = d.iter().map(|&n| n as u128).product::<u128>();
+            let masks = voxels * (setup.options.passes_at(level) as u128 + 1);
+            masks + if whole { 2 * voxels * per_voxel } else { 0 }
+        })
+        .sum()
+}
+
+/// Refuse a synthesis that would need more than `budget` bytes, naming `--res`.
+pub fn check_memory(setup: &Setup, whole: bool, res: usize, budget: u64) -> Result<()> {
+    let needed = memory_needed(setup, whole);
+    if needed > budget as u128 {
+        let what = if whole { "the whole solid" } else { "a cut" };
+        return Err(Error::invalid(format!(
+            "--res {res}: synthesizing {what} needs about {} MB, more than the budget of {} MB; lower --res{} or \
+             raise the budget with SOLIDTEX_MAX_BYTES",
+            needed >> 20,
+            budget >> 20,
+            if whole { ", cut with --cut," } else { "" }
+        )));
+    }
+    Ok(())
 }
 
 /// The voxels a cut shows: the one under each pixel inside the model (`inside`, per pixel).

@@ -271,43 +271,37 @@ pub fn plan(setup: &Setup, request: &Mask, first: usize) -> Vec<Vec<Mask>> {
     out
 }
 
-/// What a run gives: the finest level's final values, every level's final values, and
-/// how many voxels it synthesized.
+/// What a run gives: the final version of its last level, and how much it computed.
 pub struct Synthesized {
-    /// The final version of the levels computed or given (coarsest first), the last one
-    /// the finest.
-    pub levels: Vec<Sparse<Voxel>>,
-    /// The finest level's index.
+    /// The last level's final values.
+    pub values: Sparse<Voxel>,
+    /// The last level's index.
     pub finest: usize,
-    /// Voxels materialized (every level's version 0) and corrections made (later versions).
+    /// Voxels materialized (every computed level's version 0).
     pub voxels: usize,
-    /// Corrections made.
+    /// Corrections made (the later versions' voxels).
     pub corrections: usize,
 }
 
 impl Synthesized {
     /// The colour of finest voxel `v` (meaningful where the request asked for it).
     pub fn colour(&self, setup: &Setup, v: [usize; 3]) -> Vec<f32> {
-        let last = &self.levels[self.levels.len() - 1];
-        last.at(v.map(|c| c as i64)).colour[..setup.exemplars.channels()].to_vec()
+        self.values.at(v.map(|c| c as i64)).colour[..setup.exemplars.channels()].to_vec()
     }
 }
 
 /// Synthesize the voxels `masks` lists ([`plan`]). `from`: a level computed earlier over
 /// the whole grid (its index and final values, e.g. from a cache): the levels up to it are
-/// taken from it, not recomputed.
+/// read from it, not recomputed.
 pub fn run(
     setup: &Setup,
     masks: &[Vec<Mask>],
-    from: Option<(usize, Sparse<Voxel>)>,
+    from: Option<(usize, &Sparse<Voxel>)>,
     progress: &dyn Progress,
 ) -> Result<Synthesized> {
     let levels = masks.len();
-    let (start, mut parent) = match from {
-        Some((level, values)) => (level + 1, Some(values)),
-        None => (0, None),
-    };
-    let mut out: Vec<Sparse<Voxel>> = Vec::new();
+    let start = from.map_or(0, |(level, _)| level + 1);
+    let mut made: Option<Sparse<Voxel>> = None;
     let (mut voxels, mut corrections) = (0, 0);
     let total: f64 = masks[start..].iter().flatten().map(|m| m.count() as f64).sum::<f64>().max(1.0);
     let mut done = 0.0;
@@ -315,7 +309,7 @@ pub fn run(
         if progress.cancelled() {
             return Err(Error::Cancelled);
         }
-        let mut current = match &parent {
+        let mut current = match made.as_ref().or(from.map(|(_, values)| values)) {
             None => Sparse::compute(&versions[0], |v| initial(setup, v)),
             Some(p) => Sparse::compute(&versions[0], |v| upsampled(setup, level, p, v)),
         };
@@ -331,13 +325,14 @@ pub fn run(
             done += mask.count() as f64;
             progress.update(&format!("level {}/{levels}, pass {pass}", level + 1), (done / total) as f32);
         }
-        if let Some(p) = parent.take() {
-            out.push(p);
-        }
-        parent = Some(current);
+        made = Some(current);
     }
-    out.extend(parent);
-    Ok(Synthesized { levels: out, finest: levels - 1, voxels, corrections })
+    let values = match (made, from) {
+        (Some(values), _) => values,
+        (None, Some((_, given))) => given.clone(),
+        (None, None) => return Err(Error::invalid("guided synthesis was asked for no level")),
+    };
+    Ok(Synthesized { values, finest: levels - 1, voxels, corrections })
 }
 
 /// A key of everything a synthesis depends on (exemplars, field, grid, seed, settings):
@@ -409,7 +404,7 @@ fn upsampled(setup: &Setup, level: usize, parents: &Sparse<Voxel>, v: [usize; 3]
 fn corrected(setup: &Setup, level: usize, pass: usize, before: &Sparse<Voxel>, v: [usize; 3]) -> Voxel {
     let frame = setup.frame(level, v);
     let here = Vec3::from_array(v.map(|c| c as f32));
-    let at = |p: Vec3| before.at(p.round().as_i64vec3().to_array());
+    let at = |p: Vec3| before.at(nearest(p));
     let channels = setup.exemplar(0, level).channels;
     let scale = (1usize << (setup.options.levels - 1 - level)) as f32;
     let depth = setup.exemplars.depth.zip(setup.depth);
@@ -435,58 +430,78 @@ fn corrected(setup: &Setup, level: usize, pass: usize, before: &Sparse<Voxel>, v
         ex.pca.project(&vector, query);
     }
     // neighbours propose the same pixels again and again: each plane's distances are kept
-    let mut memo = [Memo::new(), Memo::new(), Memo::new()];
-    let mut cost = |t: [u32; 3]| -> f32 {
-        setup
-            .planes()
-            .map(|a| {
-                memo[a].get_or(t[a], || {
-                    crate::synth::exemplar::squared(&queries[a], setup.exemplar(a, level).projection(t[a] as usize))
+    MEMOS.with_borrow_mut(|memo| {
+        memo.iter_mut().for_each(Memo::start);
+        let mut cost = |t: [u32; 3]| -> f32 {
+            setup
+                .planes()
+                .map(|a| {
+                    memo[a].get_or(t[a], || {
+                        crate::synth::exemplar::squared(&queries[a], setup.exemplar(a, level).projection(t[a] as usize))
+                    })
                 })
-            })
-            .sum()
-    };
-    let own = before.at(v.map(|c| c as i64)).slot;
-    let mut best = (cost(own), own);
-    let mut consider = |t: [u32; 3]| {
-        let d = cost(t);
-        if d < best.0 || (d == best.0 && t < best.1) {
-            best = (d, t);
-        }
-    };
-    let triples = &setup.exemplars.triples[level];
-    for a in setup.planes() {
-        let ex = setup.exemplar(a, level);
-        let (pa, sa) = Axis::ALL[a].plane_axes();
-        let (u, w) = (frame.col(pa), frame.col(sa));
-        for ey in -1i64..=1 {
-            for ex_ in -1i64..=1 {
-                let neighbour = at(here + u * ex_ as f32 + w * ey as f32);
-                // the neighbour's whole triple, each plane shifted back by the offset (Eq. 4)
-                let mut offset = [0i64; 3];
-                offset[pa] = ex_;
-                offset[sa] = ey;
-                if let Some(t) = shifted(setup, level, neighbour, offset) {
-                    consider(t);
-                }
-                let source = ex.centres[neighbour.slot[a] as usize] as usize;
-                let (x, y) = ((source % ex.width) as i64 - ex_, (source / ex.width) as i64 - ey);
-                for &t in triples.of(a, ex.clamped_slot(x, y)) {
-                    consider(t);
+                .sum()
+        };
+        let own = before.at(v.map(|c| c as i64)).slot;
+        let mut best = (cost(own), own);
+        let mut consider = |t: [u32; 3]| {
+            let d = cost(t);
+            if d < best.0 || (d == best.0 && t < best.1) {
+                best = (d, t);
+            }
+        };
+        let triples = &setup.exemplars.triples[level];
+        for a in setup.planes() {
+            let ex = setup.exemplar(a, level);
+            let (pa, sa) = Axis::ALL[a].plane_axes();
+            let (u, w) = (frame.col(pa), frame.col(sa));
+            for ey in -1i64..=1 {
+                for ex_ in -1i64..=1 {
+                    let neighbour = at(here + u * ex_ as f32 + w * ey as f32);
+                    // the neighbour's whole triple, each plane shifted back by the offset (Eq. 4)
+                    let mut offset = [0i64; 3];
+                    offset[pa] = ex_;
+                    offset[sa] = ey;
+                    if let Some(t) = shifted(setup, level, neighbour, offset) {
+                        consider(t);
+                    }
+                    let source = ex.centres[neighbour.slot[a] as usize] as usize;
+                    let (x, y) = ((source % ex.width) as i64 - ex_, (source / ex.width) as i64 - ey);
+                    for &t in triples.of(a, ex.clamped_slot(x, y)) {
+                        consider(t);
+                    }
                 }
             }
         }
-    }
-    let key = [v[0] as i64, v[1] as i64, v[2] as i64 + (((level * 64 + pass) as i64) << 32)];
-    let random = setup.exemplar(0, level).random_slot(hash3(setup.seed, key[0], key[1], key[2]));
-    consider(triples.of(0, random)[0]);
-    setup.voxel(level, best.1)
+        let key = [v[0] as i64, v[1] as i64, v[2] as i64 + (((level * 64 + pass) as i64) << 32)];
+        let random = setup.exemplar(0, level).random_slot(hash3(setup.seed, key[0], key[1], key[2]));
+        consider(triples.of(0, random)[0]);
+        setup.voxel(level, best.1)
+    })
+}
+
+/// The voxel nearest to `p` (halves round up): a float-to-integer conversion of a value
+/// made positive, which is several times cheaper than `round` where neighbourhoods are
+/// sampled. Positions lie within the grid and its reach, far above -4096.
+#[inline]
+fn nearest(p: Vec3) -> [i64; 3] {
+    const LIFT: f32 = 4096.0;
+    [p.x, p.y, p.z].map(|c| (c + 0.5 + LIFT) as i64 - LIFT as i64)
 }
 
 /// A small map from centre slots to their distance, for one correction.
 struct Memo {
     keys: [u32; MEMO],
+    /// An entry holds a value of this correction when its stamp is `now`.
+    stamps: [u32; MEMO],
     values: [f32; MEMO],
+    now: u32,
+}
+
+thread_local! {
+    /// Each thread's memos, one per plane: started afresh per correction by a new stamp
+    /// instead of being cleared.
+    static MEMOS: std::cell::RefCell<[Memo; 3]> = std::cell::RefCell::new([Memo::new(), Memo::new(), Memo::new()]);
 }
 
 /// Entries of a [`Memo`] (a correction sees at most about 140 distinct slots per plane).
@@ -494,7 +509,16 @@ const MEMO: usize = 256;
 
 impl Memo {
     fn new() -> Memo {
-        Memo { keys: [u32::MAX; MEMO], values: [0.0; MEMO] }
+        Memo { keys: [0; MEMO], stamps: [0; MEMO], values: [0.0; MEMO], now: 0 }
+    }
+
+    /// Forget every entry.
+    fn start(&mut self) {
+        self.now = self.now.wrapping_add(1);
+        if self.now == 0 {
+            self.stamps = [0; MEMO];
+            self.now = 1;
+        }
     }
 
     /// The value of `key`, computed by `value` the first time.
@@ -502,14 +526,13 @@ impl Memo {
     fn get_or(&mut self, key: u32, value: impl FnOnce() -> f32) -> f32 {
         let mut i = (key.wrapping_mul(0x9e37_79b1) >> 24) as usize;
         for _ in 0..MEMO {
+            if self.stamps[i] != self.now {
+                let v = value();
+                (self.keys[i], self.stamps[i], self.values[i]) = (key, self.now, v);
+                return v;
+            }
             if self.keys[i] == key {
                 return self.values[i];
-            }
-            if self.keys[i] == u32::MAX {
-                let v = value();
-                self.keys[i] = key;
-                self.values[i] = v;
-                return v;
             }
             i = (i + 1) % MEMO;
         }
@@ -608,8 +631,11 @@ mod tests {
             pool(3).install(|| run(&setup, &plan(&setup, &full_mask, 0), None, &crate::progress::NoProgress).unwrap());
         assert_eq!(colours(&setup, &whole, &every), colours(&setup, &three, &every));
         // a level taken over from an earlier whole run (a cache) gives the same cut
-        let coarse = whole.levels[0].clone();
-        let resumed = run(&setup, &plan(&setup, &request, 1), Some((0, coarse)), &crate::progress::NoProgress).unwrap();
+        let mut coarse_masks = plan(&setup, &full_mask, 0);
+        coarse_masks.truncate(1);
+        let coarse = run(&setup, &coarse_masks, None, &crate::progress::NoProgress).unwrap().values;
+        let resumed =
+            run(&setup, &plan(&setup, &request, 1), Some((0, &coarse)), &crate::progress::NoProgress).unwrap();
         assert_eq!(colours(&setup, &resumed, &cut), colours(&setup, &whole, &cut));
     }
 

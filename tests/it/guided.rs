@@ -87,7 +87,8 @@ fn a_guided_cut_is_synthesized_on_demand_and_cached() {
 }
 
 /// Without `--cut`, the whole solid is written: the exemplar's channels (one: the photo is
-/// grey) and the fruit's coverage as alpha. Bad values are refused by name.
+/// grey) and the fruit's coverage as alpha. Bad values, and a solid larger than the memory
+/// budget, are refused by name before any work.
 #[test]
 fn a_whole_guided_solid_carries_the_model_as_alpha() {
     let dir = tempfile::tempdir().unwrap();
@@ -106,6 +107,13 @@ fn a_whole_guided_solid_carries_the_model_as_alpha() {
     assert_eq!(volume.voxel(0, 0, 0)[1], 0.0, "the grid's corner is outside");
 
     crate::support::assert_usage(&solidtex(&[&base[..], &["--res", "8", "-o", &out]].concat()), &["--res", "16"]);
+    let big = at(d, "big.exr");
+    let run = crate::support::solidtex_env(
+        &[&base[..], &["--res", "256", "-o", &big]].concat(),
+        &[("SOLIDTEX_MAX_BYTES", "100000000")],
+    );
+    crate::support::assert_fails(&run, &["--res 256", "budget", "SOLIDTEX_MAX_BYTES"]);
+    assert!(!d.join("big.exr").exists());
     let bare = crate::fill::spec(d, "bare.toml", "exemplar = \"kiwi\"\n");
     let run = solidtex(&["guided", &fruit, "--spec", &bare, "--exemplar", &ex, "-o", &at(d, "bare.exr")]);
     crate::support::assert_fails(&run, &["bare.toml", "direction stroke"]);
