@@ -212,10 +212,15 @@ fn load_exemplars(args: &GuidedArgs) -> Result<[Image2d; 3]> {
     let ex = without_alpha(shrink.load(&args.exemplar, "exemplar")?)?;
     let ey = args.others.ey.as_deref().map(|p| shrink.load(p, "Ey exemplar").and_then(without_alpha)).transpose()?;
     let ez = args.others.ez.as_deref().map(|p| shrink.load(p, "Ez exemplar").and_then(without_alpha)).transpose()?;
+    let ey_path = args.others.ey.as_deref().unwrap_or(&args.exemplar);
+    let ez_path = args.others.ez.as_deref().unwrap_or(ey_path);
     let ey = ey.unwrap_or_else(|| ex.clone());
     let ez = ez.unwrap_or_else(|| ey.clone());
-    let depth = |image: Image2d| if args.layered { with_depth(image) } else { Ok(image) };
-    Ok([depth(ex)?, depth(ey)?, depth(ez)?])
+    let depth = |image: Image2d, path: &Path| match args.layered {
+        true => with_depth(image).map_err(|e| e.in_file(path)),
+        false => Ok(image),
+    };
+    Ok([depth(ex, &args.exemplar)?, depth(ey, ey_path)?, depth(ez, ez_path)?])
 }
 
 /// Exemplars are shrunk to this many pixels on their longer side unless `--max-exemplar` says.
@@ -223,6 +228,11 @@ const DEFAULT_EXEMPLAR: usize = 128;
 
 /// The image with a Depth channel: its row coordinate, 0 at the top (the outside).
 fn with_depth(image: Image2d) -> Result<Image2d> {
+    if image.channels().contains(&Channel::Depth) {
+        return Err(Error::invalid(
+            "the exemplar already has a Depth channel; --layered adds one from the rows (give an image without it)",
+        ));
+    }
     let (w, h, c) = (image.width(), image.height(), image.channel_count());
     let data = image
         .data()

@@ -174,6 +174,12 @@ impl Exemplars {
             .map(|l| Triples::new([&planes[0][l], &planes[1][l], &planes[2][l]], options.k))
             .collect();
         let depth = channels.iter().position(|c| *c == Channel::Depth);
+        if depth.is_some_and(|d| d + 1 != channels.len()) {
+            return Err(Error::invalid(format!(
+                "the exemplar has channels {}; a Depth channel must be the last",
+                crate::volume::channel_names(channels)
+            )));
+        }
         let names = channels.iter().filter(|c| **c != Channel::Depth).cloned().collect();
         Ok(Exemplars { planes, triples, names, depth })
     }
