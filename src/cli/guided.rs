@@ -256,7 +256,7 @@ fn without_alpha(image: Image2d) -> Result<Image2d> {
 
 /// The coarse level from the cache folder, or computed and cached there.
 fn cached_level(folder: &Path, setup: &Setup, bar: &super::fill::Bar) -> Result<(usize, Sparse<synth::Voxel>)> {
-    let level = setup.options.levels - 2;
+    let level = solid::below_finest(setup)?;
     let key = synth::fingerprint(setup);
     let path = guided_cache::path(folder, key);
     let slots = [0, 1, 2].map(|a| setup.exemplars.planes[a][level].centres.len());

@@ -108,10 +108,20 @@ pub fn cut(
 /// The level below the finest computed over the whole grid, and its index: what a cache
 /// keeps so that a cut recomputes only the finest level.
 pub fn coarse_levels(setup: &Setup, progress: &dyn Progress) -> Result<(usize, Sparse<Voxel>)> {
-    let level = setup.options.levels - 2;
+    let level = below_finest(setup)?;
     let mut masks = synth::plan(setup, &Mask::full(setup.dims), 0);
     masks.truncate(level + 1);
     Ok((level, synth::run(setup, &masks, None, progress)?.values))
+}
+
+/// The index of the level below the finest; an error when there is one level only.
+pub fn below_finest(setup: &Setup) -> Result<usize> {
+    setup.options.levels.checked_sub(2).ok_or_else(|| {
+        Error::invalid(
+            "there is no coarse level to keep: the exemplar allows one level only (its shorter side is under 32 \
+             pixels); cut without --cache or give a larger exemplar",
+        )
+    })
 }
 
 /// About how many bytes synthesizing needs (before it starts): a flag per voxel of every

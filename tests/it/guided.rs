@@ -84,6 +84,14 @@ fn a_guided_cut_is_synthesized_on_demand_and_cached() {
     crate::support::assert_fails(&cut(&third, true), &[&names[0], "does not overwrite"]);
     assert_eq!(std::fs::read(&planted).unwrap(), b"my notes");
     assert!(!d.join("third.png").exists());
+
+    // an exemplar too small for a second level has nothing to cache: refused, not a crash
+    let small = at(d, "small.png");
+    assert!(solidtex(&["draw", "kiwi", "--size", "24x24", "-o", &small]).status.success());
+    let args = ["guided", &fruit, "--spec", &spec, "--exemplar", &small, "--res", "32", "--cut", "0,0,0,0,0,1"];
+    let run = solidtex(&[&args[..], &["--cache", &at(d, "cache2"), "-o", &at(d, "small_cut.png")]].concat());
+    crate::support::assert_fails(&run, &["one level only", "--cache"]);
+    assert!(!d.join("small_cut.png").exists());
 }
 
 /// Without `--cut`, the whole solid is written: the exemplar's channels (one: the photo is
