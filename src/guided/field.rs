@@ -212,28 +212,12 @@ impl FrameGrid {
 
     /// The frame at `p` (clamped into the box): its axes as the columns of a rotation.
     pub fn at(&self, p: Vec3) -> Mat3 {
-        let g = ((p - self.lo) / self.step).clamp(Vec3::ZERO, Vec3::from_array(self.dims.map(|d| (d - 1) as f32)));
-        let base = g.floor().min(Vec3::from_array(self.dims.map(|d| d.saturating_sub(2) as f32)));
-        let f = g - base;
-        let b = base.to_array().map(|c| c as usize);
         let mut sum = Vec4::ZERO;
         let mut first = None;
-        for k in 0..8 {
-            let (dx, dy, dz) = (k & 1, (k >> 1) & 1, k >> 2);
-            let i = [b[0] + dx, b[1] + dy, b[2] + dz];
-            let at = i[0].min(self.dims[0] - 1)
-                + self.dims[0] * (i[1].min(self.dims[1] - 1) + self.dims[1] * i[2].min(self.dims[2] - 1));
+        for (at, w) in trilinear(self.lo, self.step, self.dims, p) {
             let q = self.corners[at];
-            let q = match first {
-                None => {
-                    first = Some(q);
-                    q
-                }
-                Some(f0) if q.dot(f0) < 0.0 => -q,
-                Some(_) => q,
-            };
-            let w = [1.0 - f.x, f.x][dx] * [1.0 - f.y, f.y][dy] * [1.0 - f.z, f.z][dz];
-            sum += q * w;
+            let first = *first.get_or_insert(q);
+            sum += if q.dot(first) < 0.0 { -q } else { q } * w;
         }
         Mat3::from_quat(sum.try_normalize().map_or(Quat::IDENTITY, Quat::from_vec4))
     }
@@ -275,21 +259,23 @@ impl ScalarGrid {
 
     /// The value at `p` (clamped into the box).
     pub fn at(&self, p: Vec3) -> f32 {
-        let top = Vec3::from_array(self.dims.map(|d| (d - 1) as f32));
-        let g = ((p - self.lo) / self.step).clamp(Vec3::ZERO, top);
-        let base = g.floor().min(Vec3::from_array(self.dims.map(|d| d.saturating_sub(2) as f32)));
-        let f = g - base;
-        let b = base.to_array().map(|c| c as usize);
-        let mut sum = 0.0;
-        for k in 0..8 {
-            let (dx, dy, dz) = (k & 1, (k >> 1) & 1, k >> 2);
-            let i = [b[0] + dx, b[1] + dy, b[2] + dz];
-            let at = i[0].min(self.dims[0] - 1)
-                + self.dims[0] * (i[1].min(self.dims[1] - 1) + self.dims[1] * i[2].min(self.dims[2] - 1));
-            sum += self.values[at] * [1.0 - f.x, f.x][dx] * [1.0 - f.y, f.y][dy] * [1.0 - f.z, f.z][dz];
-        }
-        sum
+        trilinear(self.lo, self.step, self.dims, p).iter().map(|&(at, w)| self.values[at] * w).sum()
     }
+}
+
+/// The eight corners around `p` (clamped into the grid of `dims` corners from `lo`, spaced
+/// `step`) with their trilinear weights: what both grids read.
+fn trilinear(lo: Vec3, step: f32, dims: [usize; 3], p: Vec3) -> [(usize, f32); 8] {
+    let top = Vec3::from_array(dims.map(|d| (d - 1) as f32));
+    let g = ((p - lo) / step).clamp(Vec3::ZERO, top);
+    let base = g.floor().min(Vec3::from_array(dims.map(|d| d.saturating_sub(2) as f32)));
+    let f = g - base;
+    let b = base.to_array().map(|c| c as usize);
+    std::array::from_fn(|k| {
+        let (dx, dy, dz) = (k & 1, (k >> 1) & 1, k >> 2);
+        let i = [(b[0] + dx).min(dims[0] - 1), (b[1] + dy).min(dims[1] - 1), (b[2] + dz).min(dims[2] - 1)];
+        (i[0] + dims[0] * (i[1] + dims[1] * i[2]), [1.0 - f.x, f.x][dx] * [1.0 - f.y, f.y][dy] * [1.0 - f.z, f.z][dz])
+    })
 }
 
 /// Give every unset corner the mean of its set face neighbours (flipped towards the
