@@ -581,8 +581,8 @@ mod tests {
     }
 
     /// A 32x32 exemplar of blobs, a unit cube whose frames turn 60° about x from one face
-    /// to the other, a 32³ grid.
-    fn world() -> (Exemplars, FrameGrid) {
+    /// to the other, a grid of `side`³ voxels.
+    fn world(side: usize) -> (Exemplars, FrameGrid) {
         let texel = |x: usize, y: usize| {
             let f = ((x as f32 * 0.41).sin() + (y as f32 * 0.53 + x as f32 * 0.13).cos()) * 0.25 + 0.5;
             let n = (crate::noise::hash3(7, x as i64, y as i64, 0) % 100) as f32 / 1000.0;
@@ -596,13 +596,14 @@ mod tests {
         let turned = Quat::from_rotation_x(std::f32::consts::FRAC_PI_3);
         let frames = vec![(Vec3::new(0.05, 0.5, 0.5), Quat::IDENTITY), (Vec3::new(0.95, 0.5, 0.5), turned)];
         let field: FrameField = solve(&mesh, &frames).unwrap();
-        let grid = FrameGrid::sample(&mesh, &field, (Vec3::ZERO, Vec3::ONE), 8).in_voxels(Vec3::ZERO, 1.0 / 32.0);
+        let grid =
+            FrameGrid::sample(&mesh, &field, (Vec3::ZERO, Vec3::ONE), 8).in_voxels(Vec3::ZERO, 1.0 / side as f32);
         (exemplars, grid)
     }
 
-    fn setup<'a>(exemplars: &'a Exemplars, frames: &'a FrameGrid) -> Setup<'a> {
+    fn setup<'a>(exemplars: &'a Exemplars, frames: &'a FrameGrid, side: usize) -> Setup<'a> {
         let options = Options { levels: 2, n: 5, coarse_passes: 2, passes: 2, k: 3, max_dims: 8, layered: false };
-        Setup { exemplars, frames, depth: None, dims: [32; 3], seed: 5, options }
+        Setup { exemplars, frames, depth: None, dims: [side; 3], seed: 5, options }
     }
 
     fn colours(setup: &Setup, out: &Synthesized, voxels: &[[usize; 3]]) -> Vec<f32> {
@@ -613,26 +614,27 @@ mod tests {
     /// bit, and needs fewer voxels; the whole solid is the same on 1 and 3 threads.
     #[test]
     fn a_cut_alone_equals_the_whole_solid_on_any_thread_count() {
-        let (exemplars, frames) = world();
-        let setup = setup(&exemplars, &frames);
-        let mut request = Mask::empty([32; 3]);
+        const SIDE: usize = 64;
+        let (exemplars, frames) = world(SIDE);
+        let setup = setup(&exemplars, &frames, SIDE);
+        let mut request = Mask::empty([SIDE; 3]);
         let mut cut = Vec::new();
-        for y in 0..32 {
-            for x in 0..32 {
-                let v = [x, y, (10 + x / 3).min(31)];
+        for y in 0..SIDE {
+            for x in 0..SIDE {
+                let v = [x, y, (20 + x / 3).min(SIDE - 1)];
                 let at = request.index(v);
                 request.on[at] = true;
                 cut.push(v);
             }
         }
         let alone = run(&setup, &plan(&setup, &request, 0), None, &crate::progress::NoProgress).unwrap();
-        let full_mask = Mask::full([32; 3]);
+        let full_mask = Mask::full([SIDE; 3]);
         let pool = |threads: usize| rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
         let whole =
             pool(1).install(|| run(&setup, &plan(&setup, &full_mask, 0), None, &crate::progress::NoProgress).unwrap());
         assert_eq!(colours(&setup, &alone, &cut), colours(&setup, &whole, &cut));
         assert!(alone.voxels < whole.voxels, "{} voxels for the cut, {} for the whole", alone.voxels, whole.voxels);
-        let every: Vec<[usize; 3]> = (0..32 * 32 * 32).map(|i| full_mask.voxel(i)).collect();
+        let every: Vec<[usize; 3]> = (0..SIDE * SIDE * SIDE).map(|i| full_mask.voxel(i)).collect();
         let three =
             pool(3).install(|| run(&setup, &plan(&setup, &full_mask, 0), None, &crate::progress::NoProgress).unwrap());
         assert_eq!(colours(&setup, &whole, &every), colours(&setup, &three, &every));
@@ -649,8 +651,8 @@ mod tests {
     /// colours stay within the exemplar's range, and it is not flat.
     #[test]
     fn the_solid_is_made_of_exemplar_colours() {
-        let (exemplars, frames) = world();
-        let setup = setup(&exemplars, &frames);
+        let (exemplars, frames) = world(32);
+        let setup = setup(&exemplars, &frames, 32);
         let out = run(&setup, &plan(&setup, &Mask::full([32; 3]), 0), None, &crate::progress::NoProgress).unwrap();
         let image = &exemplars.planes[0][1].colours;
         let range = |c: usize, xs: &[f32]| {
