@@ -81,12 +81,12 @@ impl Options {
         if level == 0 { self.coarse_passes } else { self.passes }
     }
 
-    /// How far (in voxels, per axis) a pass reads from the voxel it corrects: the
-    /// neighbourhood turned any way in its plane, rounded to voxels, and the 3 x 3
-    /// candidate sources.
+    /// How far (in voxels, per axis) a pass reads from the voxel it corrects: a
+    /// neighbourhood offset (up to n/2 along two orthonormal axes: at most n/2·√2 along any
+    /// world axis) rounded to the nearest voxel, and the 3 x 3 candidate sources within it.
     pub fn reach(&self) -> usize {
         let half = (self.n / 2) as f32;
-        ((half * std::f32::consts::SQRT_2 + 0.5).ceil() as usize).max(2)
+        ((half * std::f32::consts::SQRT_2 + 0.5).floor() as usize).max(1)
     }
 }
 
@@ -433,25 +433,36 @@ fn corrected(setup: &Setup, level: usize, pass: usize, before: &Sparse<Voxel>, v
             }
         }
         query.resize(ex.pca.dims, 0.0);
-        ex.pca.project(&vector, query);
+        ex.pca.project_centring(&mut vector, query);
     }
-    // neighbours propose the same pixels again and again: each plane's distances are kept
-    MEMOS.with_borrow_mut(|memo| {
-        memo.iter_mut().for_each(Memo::start);
-        let mut cost = |t: [u32; 3]| -> f32 {
-            setup
-                .planes()
-                .map(|a| {
-                    memo[a].get_or(t[a], || {
-                        crate::synth::exemplar::squared(&queries[a], setup.exemplar(a, level).projection(t[a] as usize))
-                    })
-                })
-                .sum()
+    // neighbours propose the same triples and pixels again and again: each is weighed once
+    SCRATCH.with_borrow_mut(|scratch| {
+        let Scratch { distances, triples: seen, predicted } = scratch;
+        distances.iter_mut().for_each(Table::start);
+        predicted.iter_mut().for_each(Table::start);
+        seen.start();
+        // the summed distance of triple `t`, or infinity once a partial sum passes `bound`
+        // (distances are not negative: such a triple cannot win)
+        let mut cost = |t: [u32; 3], bound: f32| -> f32 {
+            let mut sum = 0.0;
+            for a in setup.planes() {
+                sum += distances[a].get_or(t[a], || {
+                    crate::synth::exemplar::squared(&queries[a], setup.exemplar(a, level).projection(t[a] as usize))
+                });
+                if sum > bound {
+                    return f32::INFINITY;
+                }
+            }
+            sum
         };
         let own = before.at(v.map(|c| c as i64)).slot;
-        let mut best = (cost(own), own);
+        seen.contains_else_add(own);
+        let mut best = (cost(own, f32::INFINITY), own);
         let mut consider = |t: [u32; 3]| {
-            let d = cost(t);
+            if seen.contains_else_add(t) {
+                return;
+            }
+            let d = cost(t, best.0);
             if d < best.0 || (d == best.0 && t < best.1) {
                 best = (d, t);
             }
@@ -473,8 +484,11 @@ fn corrected(setup: &Setup, level: usize, pass: usize, before: &Sparse<Voxel>, v
                     }
                     let source = ex.centres[neighbour.slot[a] as usize] as usize;
                     let (x, y) = ((source % ex.width) as i64 - ex_, (source / ex.width) as i64 - ey);
-                    for &t in triples.of(a, ex.clamped_slot(x, y)) {
-                        consider(t);
+                    let pixel = ex.clamped_slot(x, y);
+                    if !predicted[a].contains_else_add(pixel as u32) {
+                        for &t in triples.of(a, pixel) {
+                            consider(t);
+                        }
                     }
                 }
             }
@@ -495,43 +509,74 @@ fn nearest(p: Vec3) -> [i64; 3] {
     [p.x, p.y, p.z].map(|c| (c + 0.5 + LIFT) as i64 - LIFT as i64)
 }
 
-/// A small map from centre slots to their distance, for one correction.
-struct Memo {
-    keys: [u32; MEMO],
-    /// An entry holds a value of this correction when its stamp is `now`.
-    stamps: [u32; MEMO],
-    values: [f32; MEMO],
-    now: u32,
+/// What one correction remembers: each plane's distances by slot, the triples weighed,
+/// each plane's predicted pixels whose candidate triples were taken.
+struct Scratch {
+    distances: [Table<u32, f32>; 3],
+    triples: Table<[u32; 3], ()>,
+    predicted: [Table<u32, ()>; 3],
 }
 
 thread_local! {
-    /// Each thread's memos, one per plane: started afresh per correction by a new stamp
-    /// instead of being cleared.
-    static MEMOS: std::cell::RefCell<[Memo; 3]> = std::cell::RefCell::new([Memo::new(), Memo::new(), Memo::new()]);
+    /// Each thread's scratch tables, started afresh per correction by a new stamp instead
+    /// of being cleared.
+    static SCRATCH: std::cell::RefCell<Scratch> = std::cell::RefCell::new(Scratch {
+        distances: [Table::new(), Table::new(), Table::new()],
+        triples: Table::new(),
+        predicted: [Table::new(), Table::new(), Table::new()],
+    });
 }
 
-/// Entries of a [`Memo`] (a correction sees at most about 140 distinct slots per plane).
-const MEMO: usize = 256;
+/// Entries of a [`Table`] (a correction weighs at most about 140 triples).
+const TABLE: usize = 256;
 
-impl Memo {
-    fn new() -> Memo {
-        Memo { keys: [0; MEMO], stamps: [0; MEMO], values: [0.0; MEMO], now: 0 }
+/// A key a [`Table`] can hash.
+trait TableKey: Copy + PartialEq + Default {
+    fn hashed(&self) -> u32;
+}
+
+impl TableKey for u32 {
+    #[inline]
+    fn hashed(&self) -> u32 {
+        self.wrapping_mul(0x9e37_79b1)
+    }
+}
+
+impl TableKey for [u32; 3] {
+    #[inline]
+    fn hashed(&self) -> u32 {
+        (self[0] ^ self[1].wrapping_mul(0x85eb_ca6b) ^ self[2].wrapping_mul(0xc2b2_ae35)).wrapping_mul(0x9e37_79b1)
+    }
+}
+
+/// A small open-addressing map for one correction; `start` forgets every entry at once.
+struct Table<K, V> {
+    keys: [K; TABLE],
+    /// An entry holds a value of this correction when its stamp is `now`.
+    stamps: [u32; TABLE],
+    values: [V; TABLE],
+    now: u32,
+}
+
+impl<K: TableKey, V: Copy + Default> Table<K, V> {
+    fn new() -> Self {
+        Table { keys: [K::default(); TABLE], stamps: [0; TABLE], values: [V::default(); TABLE], now: 0 }
     }
 
     /// Forget every entry.
     fn start(&mut self) {
         self.now = self.now.wrapping_add(1);
         if self.now == 0 {
-            self.stamps = [0; MEMO];
+            self.stamps = [0; TABLE];
             self.now = 1;
         }
     }
 
     /// The value of `key`, computed by `value` the first time.
     #[inline]
-    fn get_or(&mut self, key: u32, value: impl FnOnce() -> f32) -> f32 {
-        let mut i = (key.wrapping_mul(0x9e37_79b1) >> 24) as usize;
-        for _ in 0..MEMO {
+    fn get_or(&mut self, key: K, value: impl FnOnce() -> V) -> V {
+        let mut i = (key.hashed() >> 24) as usize;
+        for _ in 0..TABLE {
             if self.stamps[i] != self.now {
                 let v = value();
                 (self.keys[i], self.stamps[i], self.values[i]) = (key, self.now, v);
@@ -540,9 +585,28 @@ impl Memo {
             if self.keys[i] == key {
                 return self.values[i];
             }
-            i = (i + 1) % MEMO;
+            i = (i + 1) % TABLE;
         }
         value()
+    }
+}
+
+impl<K: TableKey> Table<K, ()> {
+    /// Whether `key` was added before in this correction; it is added.
+    #[inline]
+    fn contains_else_add(&mut self, key: K) -> bool {
+        let mut i = (key.hashed() >> 24) as usize;
+        for _ in 0..TABLE {
+            if self.stamps[i] != self.now {
+                (self.keys[i], self.stamps[i]) = (key, self.now);
+                return false;
+            }
+            if self.keys[i] == key {
+                return true;
+            }
+            i = (i + 1) % TABLE;
+        }
+        false
     }
 }
 
@@ -575,9 +639,10 @@ mod tests {
     #[test]
     fn the_reach_covers_a_turned_neighbourhood() {
         let o = Options { n: 5, ..Options::default() };
-        // offsets up to 2 along two unit axes turned 45°: 2.83 voxels, rounded: 3.33
-        assert_eq!(o.reach(), 4);
-        assert_eq!(Options { n: 3, ..o }.reach(), 2);
+        // offsets up to 2 along two unit axes turned 45°: 2.83 voxels, to the nearest: 3
+        assert_eq!(o.reach(), 3);
+        assert_eq!(Options { n: 3, ..o }.reach(), 1);
+        assert_eq!(Options { n: 7, ..o }.reach(), 4);
     }
 
     /// A 32x32 exemplar of blobs, a unit cube whose frames turn 60° about x from one face

@@ -66,6 +66,35 @@ impl Pca {
     }
 }
 
+impl Pca {
+    /// As [`Pca::project`], with `x` centred in place and every component summed in eight
+    /// lanes: several times faster, equal to `project` up to rounding.
+    pub fn project_centring(&self, x: &mut [f32], out: &mut [f32]) {
+        x.iter_mut().zip(&self.mean).for_each(|(v, m)| *v -= m);
+        for (k, o) in out.iter_mut().enumerate() {
+            *o = dot(&self.basis[k * self.input..(k + 1) * self.input], x);
+        }
+    }
+}
+
+/// The dot product of `a` and `b`, summed in eight lanes.
+fn dot(a: &[f32], b: &[f32]) -> f32 {
+    const LANES: usize = 8;
+    let mut acc = [0.0f32; LANES];
+    let (xs, ys) = (a.chunks_exact(LANES), b.chunks_exact(LANES));
+    let (x_rest, y_rest) = (xs.remainder(), ys.remainder());
+    for (x, y) in xs.zip(ys) {
+        for l in 0..LANES {
+            acc[l] += x[l] * y[l];
+        }
+    }
+    for (l, (x, y)) in x_rest.iter().zip(y_rest).enumerate() {
+        acc[l] += x * y;
+    }
+    let half = [acc[0] + acc[4], acc[1] + acc[5], acc[2] + acc[6], acc[3] + acc[7]];
+    (half[0] + half[2]) + (half[1] + half[3])
+}
+
 /// Covariance matrix (input x input, f64) of row-major vectors.
 fn covariance(data: &[f32], input: usize, mean: &[f64]) -> Vec<f64> {
     let count = (data.len() / input).max(1);
@@ -251,5 +280,20 @@ mod tests {
         let mut out = [0.0];
         pca.project(&[0.6 * 10.0, 0.8 * 10.0], &mut out);
         assert!((out[0].abs() - 10.0).abs() < 0.01);
+    }
+
+    /// The lane-summed projection gives the plain one's values, on vectors longer than a
+    /// lane group and with a remainder (27 inputs).
+    #[test]
+    fn the_lane_sums_project_as_the_plain_sums() {
+        let data: Vec<f32> = (0..40 * 27).map(|i| ((i * 37 % 101) as f32 * 0.013).sin()).collect();
+        let pca = Pca::fit(&data, 27, 0.99, 6);
+        let x: Vec<f32> = (0..27).map(|i| (i as f32 * 0.7).cos()).collect();
+        let (mut plain, mut lanes) = (vec![0.0; pca.dims], vec![0.0; pca.dims]);
+        pca.project(&x, &mut plain);
+        pca.project_centring(&mut x.clone(), &mut lanes);
+        for (p, l) in plain.iter().zip(&lanes) {
+            assert!((p - l).abs() < 1e-5 * (1.0 + p.abs()), "{plain:?} against {lanes:?}");
+        }
     }
 }
