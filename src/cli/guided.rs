@@ -110,6 +110,16 @@ pub struct GuidedArgs {
     /// Ey, Ez and shrinking (default: exemplars shrunk to 128 pixels).
     #[command(flatten)]
     pub others: super::synth::OtherExemplars,
+    /// A feature mask for the exemplar: a grey image of its size, light on the structures
+    /// to keep whole (e.g. the mortar between bricks); matched with the colours, not shown.
+    #[arg(long)]
+    pub mask: Option<PathBuf>,
+    /// The feature mask of --ey (needed when --mask and --ey are given).
+    #[arg(long, requires = "mask", requires = "ey")]
+    pub ey_mask: Option<PathBuf>,
+    /// The feature mask of --ez (needed when --mask and --ez are given).
+    #[arg(long, requires = "mask", requires = "ez")]
+    pub ez_mask: Option<PathBuf>,
     /// Layered exemplars: their rows run along depth (frame z: the outside in), like the
     /// library's cross-sections; the plane along a layer is left free.
     #[arg(long)]
@@ -150,7 +160,8 @@ pub fn run_guided(args: &GuidedArgs) -> Result<()> {
     };
     let cut = checks().map_err(usage)?;
     io::check_folder(&args.output)?;
-    let inputs = [&args.mesh, &args.spec, &args.exemplar];
+    let masks = [&args.mask, &args.ey_mask, &args.ez_mask].into_iter().flatten();
+    let inputs: Vec<&PathBuf> = [&args.mesh, &args.spec, &args.exemplar].into_iter().chain(masks).collect();
     if inputs.iter().any(|p| io::atomic::canonical(p).is_some_and(|c| io::atomic::canonical(&args.output) == Some(c))) {
         return Err(usage(Error::file(&args.output, "is one of the inputs; give another output")));
     }
@@ -202,25 +213,68 @@ pub fn run_guided(args: &GuidedArgs) -> Result<()> {
     Ok(())
 }
 
-/// The exemplars per plane, alpha dropped (the solid's alpha is the model's coverage).
+/// The exemplars per plane, alpha dropped (the solid's alpha is the model's coverage),
+/// with their feature masks and (layered) depth.
 fn load_exemplars(args: &GuidedArgs) -> Result<[Image2d; 3]> {
     let shrink = super::synth::OtherExemplars {
         ey: None,
         ez: None,
         max_exemplar: Some(args.others.max_exemplar.unwrap_or(DEFAULT_EXEMPLAR)),
     };
-    let ex = without_alpha(shrink.load(&args.exemplar, "exemplar")?)?;
-    let ey = args.others.ey.as_deref().map(|p| shrink.load(p, "Ey exemplar").and_then(without_alpha)).transpose()?;
-    let ez = args.others.ez.as_deref().map(|p| shrink.load(p, "Ez exemplar").and_then(without_alpha)).transpose()?;
-    let ey_path = args.others.ey.as_deref().unwrap_or(&args.exemplar);
-    let ez_path = args.others.ez.as_deref().unwrap_or(ey_path);
+    for (flag, given, mask) in [("--ey", &args.others.ey, &args.ey_mask), ("--ez", &args.others.ez, &args.ez_mask)] {
+        if let (Some(_), Some(path), None) = (&args.mask, given, mask) {
+            return Err(usage(Error::invalid(format!(
+                "{flag} {} needs its feature mask ({flag}-mask) when --mask is given",
+                path.display()
+            ))));
+        }
+    }
+    let load = |path: &Path, mask: Option<&PathBuf>, what: &str| -> Result<Image2d> {
+        let image = without_alpha(shrink.load(path, what)?)?;
+        let image = match mask {
+            Some(m) => with_mask(image, &shrink.load(m, "feature mask")?, path, m)?,
+            None => image,
+        };
+        match args.layered {
+            true => with_depth(image).map_err(|e| e.in_file(path)),
+            false => Ok(image),
+        }
+    };
+    let ex = load(&args.exemplar, args.mask.as_ref(), "exemplar")?;
+    let ey = args.others.ey.as_deref().map(|p| load(p, args.ey_mask.as_ref(), "Ey exemplar")).transpose()?;
+    let ez = args.others.ez.as_deref().map(|p| load(p, args.ez_mask.as_ref(), "Ez exemplar")).transpose()?;
     let ey = ey.unwrap_or_else(|| ex.clone());
     let ez = ez.unwrap_or_else(|| ey.clone());
-    let depth = |image: Image2d, path: &Path| match args.layered {
-        true => with_depth(image).map_err(|e| e.in_file(path)),
-        false => Ok(image),
-    };
-    Ok([depth(ex, &args.exemplar)?, depth(ey, ey_path)?, depth(ez, ez_path)?])
+    Ok([ex, ey, ez])
+}
+
+/// The image with a feature channel: the mask's grey (the mean of its colour channels).
+fn with_mask(image: Image2d, mask: &Image2d, path: &Path, mask_path: &Path) -> Result<Image2d> {
+    if (mask.width(), mask.height()) != (image.width(), image.height()) {
+        return Err(Error::file(
+            mask_path,
+            format!(
+                "the feature mask is {}x{} pixels and its exemplar {} {}x{} (both as loaded); a mask needs its \
+                 exemplar's size",
+                mask.width(),
+                mask.height(),
+                path.display(),
+                image.width(),
+                image.height()
+            ),
+        ));
+    }
+    let colours: Vec<usize> = (0..mask.channel_count()).filter(|&c| mask.channels()[c] != Channel::A).collect();
+    let grey = |px: &[f32]| colours.iter().map(|&c| px[c]).sum::<f32>() / colours.len().max(1) as f32;
+    let (c, m) = (image.channel_count(), mask.channel_count());
+    let data = image
+        .data()
+        .chunks_exact(c)
+        .zip(mask.data().chunks_exact(m))
+        .flat_map(|(px, mx)| px.iter().copied().chain([grey(mx)]))
+        .collect();
+    let names = image.channels().iter().cloned().chain([Channel::Named(synth::FEATURE.into())]).collect();
+    Image2d::from_data(image.width(), image.height(), names, data)
 }
 
 /// Exemplars are shrunk to this many pixels on their longer side unless `--max-exemplar` says.

@@ -127,3 +127,43 @@ fn a_whole_guided_solid_carries_the_model_as_alpha() {
     crate::support::assert_fails(&run, &["bare.toml", "direction stroke"]);
     assert!(!d.join("bare.exr").exists());
 }
+
+/// `--mask` adds a feature mask to the exemplar: matched (the cut changes), not shown (the
+/// solid keeps the photo's channel and alpha). A mask of another size, and `--ey` without
+/// its `--ey-mask`, are refused by name, with nothing written.
+#[test]
+fn a_feature_mask_steers_the_match_and_is_not_shown() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (fruit, spec) = crate::fill::kiwi_fruit(d);
+    let ex = gravel();
+    let photo = image::open(&ex).unwrap().to_luma8();
+    let mask = image::GrayImage::from_fn(photo.width(), photo.height(), |x, y| {
+        image::Luma([if photo.get_pixel(x, y).0[0] > 110 { 255 } else { 0 }])
+    });
+    let mask_path = at(d, "mask.png");
+    mask.save(&mask_path).unwrap();
+    let base = ["guided", &fruit, "--spec", &spec, "--exemplar", &ex, "--max-exemplar", "64"];
+    let cut = ["--res", "48", "--cut", "0,0,0,0,0,1", "--size", "48"];
+    let (plain, masked) = (at(d, "plain.png"), at(d, "masked.png"));
+    assert!(solidtex(&[&base[..], &cut, &["-o", &plain]].concat()).status.success());
+    let run = solidtex(&[&base[..], &cut, &["--mask", &mask_path, "-o", &masked]].concat());
+    assert!(run.status.success(), "{}", stderr(&run));
+    assert_ne!(std::fs::read(&plain).unwrap(), std::fs::read(&masked).unwrap(), "the mask is matched");
+
+    let solid = at(d, "solid.exr");
+    let run = solidtex(&[&base[..], &["--res", "24", "--mask", &mask_path, "-o", &solid]].concat());
+    assert!(run.status.success(), "{}", stderr(&run));
+    let volume = solidtex::io::read_volume(std::path::Path::new(&solid), 1 << 30).unwrap();
+    let names: Vec<String> = volume.channels().iter().map(|c| c.to_string()).collect();
+    assert_eq!(names, ["R", "A"], "the mask is not a channel of the solid");
+
+    let small = at(d, "small.png");
+    image::GrayImage::new(10, 10).save(&small).unwrap();
+    let out = at(d, "refused.png");
+    let run = solidtex(&[&base[..], &cut, &["--mask", &small, "-o", &out]].concat());
+    crate::support::assert_fails(&run, &["small.png", "10x10", "64x64", "gravel_photo.png"]);
+    let run = solidtex(&[&base[..], &cut, &["--mask", &mask_path, "--ey", &ex, "-o", &out]].concat());
+    crate::support::assert_usage(&run, &["--ey", "--ey-mask"]);
+    assert!(!d.join("refused.png").exists());
+}
