@@ -282,7 +282,7 @@ fn blur_values(args: &BlurArgs) -> Result<glam::Vec3> {
 pub struct DrawArgs {
     /// kiwi, carrot, trunk or bark (a cross-section or relief image), fuzz or bark-skin (a
     /// skin for `solidtex surface`), seed or bubble (a mesh
-    /// to stamp), a closed shape to fill (fruit, pipe, log or block), or cake (a folder of
+    /// to stamp), a closed shape to fill (fruit, pipe, log, block or vase), or cake (a folder of
     /// layer meshes and their fill specs).
     pub what: String,
     /// Image size WxH, each side 2 to 4096 (columns around the object, rows from the outside in).
@@ -380,7 +380,7 @@ pub fn run_draw(args: &DrawArgs) -> Result<()> {
     }
     let (w, h) = draw_size(&args.size).map_err(usage)?;
     let image = crate::sections::draw(&args.what, w, h, args.seed)
-        .map_err(|e| Error::usage(format!("{e}, or seed, fruit, pipe, log, block")))?;
+        .map_err(|e| Error::usage(format!("{e}, or seed, fruit, pipe, log, block, vase")))?;
     io::write_image(&args.output, &image)?;
     eprintln!("wrote {} ({w}x{h})", args.output.display());
     Ok(())

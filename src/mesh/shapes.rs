@@ -1,5 +1,5 @@
 //! Closed meshes the project makes itself, for fills, tests and benchmarks: an ellipsoid
-//! (a kiwi fruit), a torus (a pipe, genus 1), a capped cylinder (a trunk) and a box.
+//! (a kiwi fruit), a torus (a pipe, genus 1), a capped cylinder (a trunk), a box and a vase.
 //! All are outward-facing and watertight (shared vertices, no seams).
 
 use super::Mesh;
@@ -103,6 +103,30 @@ pub fn cuboid(lo: Vec3, hi: Vec3) -> Mesh {
     Mesh::new(vertices, triangles).expect("a valid box").oriented()
 }
 
+/// The radius of the vase at height `t` (0 at the foot, 1 at the lip) for a height of 2: a
+/// belly a third of the way up, a narrow neck, a flared lip.
+pub fn vase_radius(t: f32) -> f32 {
+    let bump = |at: f32, width: f32| (-((t - at) / width).powi(2)).exp();
+    0.28 + 0.42 * bump(0.33, 0.24) + 0.16 * bump(1.0, 0.1)
+}
+
+/// A vase (a solid of revolution about z from 0 to 2, closed at the foot and the lip):
+/// `rings` bands up its height, `segments` around.
+pub fn vase(rings: usize, segments: usize) -> Mesh {
+    let (rings, segments) = (rings.max(2), segments.max(3));
+    let mut vertices = vec![Vec3::ZERO];
+    for i in 1..rings {
+        let t = i as f32 / rings as f32;
+        let r = vase_radius(t);
+        for j in 0..segments {
+            let a = TAU * j as f32 / segments as f32;
+            vertices.push(Vec3::new(r * a.cos(), r * a.sin(), 2.0 * t));
+        }
+    }
+    vertices.push(Vec3::new(0.0, 0.0, 2.0));
+    Mesh::new(vertices, pole_rings(rings, segments)).expect("a valid vase").oriented()
+}
+
 /// One layer of the cake `solidtex draw cake` makes: its file stem, its mesh, and how to
 /// fill it (the library exemplar, the texture scale in model units, the tet count).
 pub struct CakeLayer {
@@ -142,16 +166,18 @@ pub fn cake() -> Vec<CakeLayer> {
 }
 
 /// The named shapes `solidtex draw` makes, in model units of about 2.
-pub const NAMES: [&str; 4] = ["fruit", "pipe", "log", "block"];
+pub const NAMES: [&str; 5] = ["fruit", "pipe", "log", "block", "vase"];
 
 /// A named shape: `fruit` (a 2 x 1.3 x 1.3 ellipsoid along x, like a kiwi), `pipe` (a torus,
-/// genus 1), `log` (a capped cylinder along z) or `block` (a 2 x 1 x 1 box).
+/// genus 1), `log` (a capped cylinder along z), `block` (a 2 x 1 x 1 box) or `vase` (a solid of
+/// revolution about z, 2 high, with a belly, a neck and a lip).
 pub fn named(name: &str) -> Option<Mesh> {
     match name {
         "fruit" => Some(ellipsoid(Vec3::new(1.0, 0.65, 0.65), 24, 48)),
         "pipe" => Some(torus(0.75, 0.3, 64, 24)),
         "log" => Some(cylinder(0.5, 2.0, 48, 8)),
         "block" => Some(cuboid(Vec3::new(-1.0, -0.5, -0.5), Vec3::new(1.0, 0.5, 0.5))),
+        "vase" => Some(vase(64, 48)),
         _ => None,
     }
 }
@@ -167,6 +193,7 @@ mod tests {
             (torus(2.0, 0.5, 64, 32), 2.0 * PI * PI * 2.0 * 0.25),
             (cylinder(1.0, 2.0, 128, 3), PI * 2.0),
             (cuboid(Vec3::ZERO, Vec3::new(1.0, 2.0, 3.0)), 6.0),
+            (vase(256, 128), (0..2000).map(|i| PI * vase_radius((i as f32 + 0.5) / 2000.0).powi(2) / 1000.0).sum()),
         ];
         for (mesh, volume) in checks {
             assert_eq!(mesh.boundary_edges(), 0);
