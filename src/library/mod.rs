@@ -12,6 +12,7 @@ pub mod build;
 pub mod cache;
 pub mod files;
 pub mod fill;
+pub mod guided;
 pub mod previous;
 pub mod recipe;
 

@@ -347,6 +347,9 @@ pub fn filled(model: &mut Model, name: &str, result: Result<std::sync::Arc<super
                     undo: Vec::new(),
                     dragging: false,
                     refilling: false,
+                    overlay: None,
+                    picture: None,
+                    pending: false,
                 });
             }
             if let Some(edit) = &mut view.edit {

@@ -4,10 +4,12 @@
 //! fill spec they make written out. Pure: the refill and the writing are effects.
 
 use super::message::Effect;
-use super::model::{FillEdit, FillView, Model, Screen};
+use super::model::{FillEdit, FillView, Model, OverlayKey, Screen};
 use crate::fill::render::{self, View};
 use crate::fill::spec::{FaceGroup, PasteSpec};
+use crate::library::guided::{Overlay, Picture};
 use glam::{Quat, Vec3};
+use std::sync::Arc;
 
 /// How far the cursor keys move it: a share of the cut.
 pub const CURSOR_STEP: f32 = 1.0 / 32.0;
@@ -203,6 +205,79 @@ pub fn toggle_depth(model: &mut Model) {
             .into();
 }
 
+/// Side of the overlay pictures in pixels (drawn scaled to the cut on screen).
+pub const OVERLAY_SIZE: usize = 128;
+
+/// `v`: the cut shows the texture, the frame field of the spec as placed (strokes and
+/// depth; it follows each finished stroke), or a cut synthesized along that field.
+pub fn next_overlay(model: &mut Model) {
+    let Screen::Fill(FillView { edit: Some(e), filled: Some(_), .. }) = &mut model.screen else {
+        model.status = "the fill is still running".into();
+        return;
+    };
+    e.overlay = match e.overlay {
+        None => Some(Overlay::Field),
+        Some(Overlay::Field) => Some(Overlay::Guided),
+        Some(Overlay::Guided) => None,
+    };
+    model.status = match e.overlay {
+        Some(Overlay::Field) => {
+            "the frame field of the strokes and depth (x red, y green, z blue), made after each stroke"
+        }
+        Some(Overlay::Guided) => "a cut synthesized along the field from the exemplar's central slices (sketch-guided)",
+        None => "the texture",
+    }
+    .into();
+}
+
+/// The overlay picture the cut on screen needs, if it is not there and none is being made.
+pub fn overlay_due(model: &mut Model) -> Vec<Effect> {
+    let Screen::Fill(view) = &mut model.screen else { return Vec::new() };
+    let (Some(filled), Some(e)) = (&view.filled, &mut view.edit) else { return Vec::new() };
+    let Some(overlay) = e.overlay else { return Vec::new() };
+    if e.pending {
+        return Vec::new();
+    }
+    let key = OverlayKey { overlay, axis: view.axis, offset: view.offset, spec: e.spec.clone() };
+    if e.picture.as_ref().is_some_and(|(made, _)| **made == key) {
+        return Vec::new();
+    }
+    e.pending = true;
+    let shared = super::message::SharedFill(filled.clone());
+    vec![Effect::Overlay(view.name.clone(), shared, Box::new(key))]
+}
+
+/// An overlay picture arrived: kept with what it shows (the cut shows it while that is
+/// still the cut and the spec on screen); a failure turns the overlay off and says why.
+pub fn overlay_made(model: &mut Model, name: &str, key: OverlayKey, result: Result<Arc<Picture>, String>) {
+    let Screen::Fill(FillView { edit: Some(e), name: shown, .. }) = &mut model.screen else { return };
+    if shown != name {
+        return;
+    }
+    e.pending = false;
+    match result {
+        Ok(picture) => e.picture = Some((Box::new(key), picture)),
+        Err(why) => {
+            e.overlay = None;
+            model.status = match key.overlay {
+                Overlay::Field => format!("no frame field: {why}"),
+                Overlay::Guided => format!("no guided cut: {why}"),
+            };
+        }
+    }
+}
+
+/// The overlay picture to draw on the cut on screen, if it shows that cut and spec.
+pub fn overlay_shown(view: &FillView) -> Option<&Picture> {
+    let e = view.edit.as_ref()?;
+    let (made, picture) = e.picture.as_ref()?;
+    let current = e.overlay.is_some_and(|o| o == made.overlay)
+        && made.axis == view.axis
+        && made.offset == view.offset
+        && made.spec == e.spec;
+    current.then_some(&**picture)
+}
+
 /// `r`: fill again with the constraints placed.
 pub fn refill(model: &mut Model) -> Vec<Effect> {
     let Screen::Fill(view) = &mut model.screen else { return Vec::new() };
@@ -301,6 +376,72 @@ pub(crate) mod tests {
     fn edit(m: &Model) -> &FillEdit {
         let Screen::Fill(FillView { edit: Some(e), .. }) = &m.screen else { panic!("the fill preview") };
         e
+    }
+
+    /// The overlay effect an update asked for, made at once as the runner makes it.
+    fn make_overlay(m: &mut Model, effects: Vec<Effect>) -> OverlayKey {
+        let Some(Effect::Overlay(name, filled, key)) = effects.into_iter().next() else { panic!("an overlay effect") };
+        let view = plane_view(&filled.0, key.axis, key.offset, OVERLAY_SIZE);
+        let made =
+            crate::library::guided::picture(&filled.0, &key.spec, key.overlay, &view, &crate::progress::NoProgress);
+        update(m, Message::OverlayMade(name, key.clone(), made.map(Arc::new).map_err(|e| e.to_string())));
+        *key
+    }
+
+    fn shown(m: &Model) -> Option<Picture> {
+        let Screen::Fill(view) = &m.screen else { panic!("the fill preview") };
+        overlay_shown(view).cloned()
+    }
+
+    /// `v` shows the frame field of the strokes placed: along a stroke on x the cut is red
+    /// (x); a new stroke across makes the field again (the old picture is not shown for the
+    /// new spec). `v` again shows a cut synthesized along the field from the built
+    /// exemplar; without a built exemplar it says why and turns the overlay off.
+    #[test]
+    fn the_field_follows_each_stroke_and_a_guided_cut_is_shown() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut cube = filled_cube(None);
+        // the cube made the drawn block's size, so the spec's strokes lie inside the block
+        for v in &mut cube.model.mesh.vertices {
+            *v = (*v * 2.0 - Vec3::ONE) * Vec3::new(1.0, 0.5, 0.5);
+        }
+        cube.spec.built = dir.path().to_path_buf();
+        let mut m = filling(cube);
+        let stroke = |m: &mut Model, (right, down): (f32, f32)| {
+            update(m, Message::StrokePoint);
+            (0..8).for_each(|_| _ = update(m, Message::MoveCursor(right, down)));
+            update(m, Message::StrokePoint);
+            update(m, Message::FinishStroke)
+        };
+        (0..4).for_each(|_| _ = update(&mut m, Message::MoveCursor(-1.0, 0.0)));
+        assert!(stroke(&mut m, (1.0, 0.0)).is_empty(), "no overlay asked for yet");
+        let effects = update(&mut m, Message::NextOverlay);
+        assert!(shown(&m).is_none());
+        let key = make_overlay(&mut m, effects);
+        assert_eq!(key.overlay, Overlay::Field);
+        let along = shown(&m).expect("the field on the cut");
+        let inside: Vec<[u8; 3]> = along.pixels.iter().flatten().copied().collect();
+        let red = inside.iter().filter(|[r, g, b]| r > g && r > b).count();
+        assert!(red * 10 > inside.len() * 8, "{red} of {} pixels show x as red", inside.len());
+
+        (0..3).for_each(|_| _ = update(&mut m, Message::MoveCursor(0.0, -1.0)));
+        let effects = stroke(&mut m, (0.0, 1.0));
+        assert!(shown(&m).is_none(), "the picture of the old spec is not shown for the new one");
+        assert_eq!(make_overlay(&mut m, effects).spec.directions.len(), 2);
+        assert_ne!(shown(&m).expect("the new field").pixels, along.pixels, "the field follows the stroke");
+
+        let effects = update(&mut m, Message::NextOverlay);
+        make_overlay(&mut m, effects);
+        assert!(edit(&m).overlay.is_none() && m.status.contains("no guided cut"), "{}", m.status);
+        let marble = crate::procedural::generate(crate::procedural::Recipe::Marble, [32; 3], 1).unwrap();
+        crate::io::write_volume(&crate::library::files::volume(dir.path(), "marble"), &marble).unwrap();
+        update(&mut m, Message::NextOverlay);
+        let effects = update(&mut m, Message::NextOverlay);
+        assert_eq!(make_overlay(&mut m, effects).overlay, Overlay::Guided);
+        let guided = shown(&m).expect("the guided cut");
+        let greys: Vec<u8> = guided.pixels.iter().flatten().map(|p| p[0]).collect();
+        let (lo, hi) = greys.iter().fold((255, 0), |(lo, hi), g| (lo.min(*g), hi.max(*g)));
+        assert!(greys.len() > guided.pixels.len() / 4 && hi - lo > 40, "a textured cut: red {lo}..{hi}");
     }
 
     #[test]

@@ -133,6 +133,10 @@ pub enum Message {
     FillPreview,
     /// A fill preview finished.
     Filled(String, Result<Arc<super::model::FillPreview>, String>),
+    /// `v`: the fill preview's cut shows the texture, the frame field, or a guided cut.
+    NextOverlay,
+    /// An overlay picture of fill `name` was made (or failed).
+    OverlayMade(String, Box<super::model::OverlayKey>, Result<Arc<crate::library::guided::Picture>, String>),
     /// Move the cut plane by this share of the model.
     MovePlane(f32),
     /// Fill preview: move the cursor on the cut by (right, down) steps.
@@ -245,6 +249,8 @@ pub enum Effect {
     StepMesh(PathBuf, bool),
     /// Fill the drawn shape (third) with exemplar `name`'s spec (second).
     Refill(String, Box<crate::fill::spec::FillSpec>, String),
+    /// Make the overlay picture `key` asks for over fill `name`'s preview.
+    Overlay(String, SharedFill, Box<super::model::OverlayKey>),
     /// Write exemplar `name`'s fill spec and the drawn shape into `OUTPUT/exports/`.
     WriteSpec(String, Box<crate::fill::spec::FillSpec>, String),
     /// Read a volume to compare: side, its label, the exemplar, and whether it is the

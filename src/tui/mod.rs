@@ -254,6 +254,14 @@ fn start(effects: Vec<Effect>, model: &Model, send: &Sender<Message>) {
                     .map_err(|e| e.to_string());
                 let _ = send.send(Message::Filled(name, result));
             }
+            Effect::Overlay(name, filled, key) => {
+                let view = fill_edit::plane_view(&filled.0, key.axis, key.offset, fill_edit::OVERLAY_SIZE);
+                let result =
+                    library::guided::picture(&filled.0, &key.spec, key.overlay, &view, &crate::progress::NoProgress)
+                        .map(Arc::new)
+                        .map_err(|e| e.to_string());
+                let _ = send.send(Message::OverlayMade(name, key, result));
+            }
             Effect::WriteSpec(name, spec, shape) => {
                 let _ =
                     send.send(Message::Exported(write_spec(&output, &name, &spec, &shape).map_err(|e| e.to_string())));

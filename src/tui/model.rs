@@ -203,6 +203,26 @@ pub struct FillEdit {
     pub dragging: bool,
     /// Whether a refill with the spec runs (the fill shown stays until it ends).
     pub refilling: bool,
+    /// What the cut shows over the texture (`v`): the frame field of the spec as it is, or
+    /// a cut synthesized along it; `None`: the texture.
+    pub overlay: Option<crate::library::guided::Overlay>,
+    /// The last overlay picture made, and what it shows.
+    pub picture: Option<(Box<OverlayKey>, std::sync::Arc<crate::library::guided::Picture>)>,
+    /// Whether an overlay picture is being made.
+    pub pending: bool,
+}
+
+/// What an overlay picture shows: which overlay, on which cut, of which spec.
+#[derive(Debug, Clone, PartialEq)]
+pub struct OverlayKey {
+    /// Field or guided cut.
+    pub overlay: crate::library::guided::Overlay,
+    /// The cut's axis.
+    pub axis: crate::volume::Axis,
+    /// The cut's offset, -1 to 1.
+    pub offset: f32,
+    /// The spec whose strokes and depth give the field.
+    pub spec: crate::fill::spec::FillSpec,
 }
 
 /// An action that loses unsaved work, asked for once and done on the second press.

@@ -7,6 +7,12 @@ use crate::volume::Axis;
 
 /// Apply `message` to `model`; returns the effects to run.
 pub fn update(model: &mut Model, message: Message) -> Vec<Effect> {
+    let mut effects = handle(model, message);
+    effects.extend(fill_edit::overlay_due(model));
+    effects
+}
+
+fn handle(model: &mut Model, message: Message) -> Vec<Effect> {
     // A confirmation holds for the very next key only; results from workers leave it.
     let asked = if from_key(&message) { model.confirm.take() } else { model.confirm };
     match message {
@@ -148,6 +154,8 @@ pub fn update(model: &mut Model, message: Message) -> Vec<Effect> {
         }
         Message::WarpPaste(degrees, factor) => fill_edit::warp_paste(model, degrees, factor),
         Message::ShowDepth => fill_edit::toggle_depth(model),
+        Message::NextOverlay => fill_edit::next_overlay(model),
+        Message::OverlayMade(name, key, result) => fill_edit::overlay_made(model, &name, *key, result),
         Message::Refill => return fill_edit::refill(model),
         Message::WriteSpec => return fill_edit::write(model),
         Message::Zoom(closer) => {
@@ -211,6 +219,7 @@ fn from_key(message: &Message) -> bool {
             | Message::Saved(_)
             | Message::Previewed(..)
             | Message::Filled(..)
+            | Message::OverlayMade(..)
             | Message::MasksLoaded(..)
             | Message::SeedLoaded(_)
             | Message::BuildPreview(..)

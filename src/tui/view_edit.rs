@@ -117,7 +117,9 @@ pub fn fill(frame: &mut Frame, view: &FillView, area: Rect, regions: &mut super:
             e.spec.depth.faces.len(),
             e.spec.pastes.len(),
             e.depth,
-            if e.refilling {
+            if e.pending {
+                " [making the field or guided cut...]"
+            } else if e.refilling {
                 " [filling again...]"
             } else if changed {
                 " [r refills]"
@@ -130,7 +132,7 @@ pub fn fill(frame: &mut Frame, view: &FillView, area: Rect, regions: &mut super:
     let block = Block::default()
         .borders(Borders::ALL)
         .title(title)
-        .title_bottom(" x/y/z cut axis  arrows move  HJKL cursor  s/S stroke  d depth  g faces  p paste  c depth map  r refill  w write ");
+        .title_bottom(" x/y/z cut axis  arrows move  HJKL cursor  s/S stroke  d depth  g faces  p paste  c depth map  v field/guided  r refill  w write ");
     let inner = block.inner(area);
     frame.render_widget(block, area);
     let Some(filled) = &view.filled else {
@@ -177,9 +179,14 @@ impl Widget for CutWidget<'_> {
             (true, Some(values)) => Some(render::field_cut(&self.filled.model.mesh, values, &plane)),
             _ => None,
         };
-        let cut = (depth.is_none()).then(|| render::cut_many(&[(&self.filled.model, &self.filled.textures)], &plane));
+        let overlay = super::fill_edit::overlay_shown(self.view);
+        let cut = (depth.is_none() && overlay.is_none())
+            .then(|| render::cut_many(&[(&self.filled.model, &self.filled.textures)], &plane));
         let px = |x: usize, y: usize| match (&depth, &cut) {
             (Some(d), _) => d[y * size + x].map(depth_colour),
+            (None, None) if let Some(o) = overlay => {
+                o.pixels[(y * o.size / size) * o.size + x * o.size / size].map(|[r, g, b]| Color::Rgb(r, g, b))
+            }
             (None, Some(cut)) => {
                 let p = cut.pixels[y * size + x];
                 (p[3] > 0.0).then(|| Color::Rgb(to_u8(p[0]), to_u8(p[1]), to_u8(p[2])))
