@@ -10,6 +10,7 @@ use crate::fill::spec::FillSpec;
 use crate::guided::field::{FrameField, sketched_frames, solve, streamlines};
 use crate::guided::solid::{self, Domain};
 use crate::guided::synth::{Exemplars, Options, Setup};
+use crate::mesh::Mesh;
 use crate::progress::Progress;
 use crate::volume::{Axis, Channel, Image2d, Volume};
 
@@ -22,7 +23,7 @@ pub enum Overlay {
     Guided,
 }
 
-/// Voxels along the guided grid's longest side: a cut in about a second.
+/// Voxels along the guided grid's longest side: a quick look, not the final solid.
 pub const GUIDED_RES: usize = 96;
 
 /// A square picture over the cut: `None` outside the model.
@@ -34,15 +35,16 @@ pub struct Picture {
     pub pixels: Vec<Option<[u8; 3]>>,
 }
 
-/// The frame field of `spec` (its strokes and depth, as `solidtex field` reads them) over
-/// the preview's tet mesh.
-fn field_of(filled: &FillPreview, spec: &FillSpec) -> Result<FrameField> {
+/// The drawn shape the preview fills, and the frame field of `spec` (its strokes and
+/// depth, as `solidtex field` reads them) over the preview's tet mesh.
+fn field_of(filled: &FillPreview, spec: &FillSpec) -> Result<(Mesh, FrameField)> {
     let surface = crate::mesh::shapes::named(&filled.shape)
         .ok_or_else(|| Error::invalid(format!("no drawn shape named {}", filled.shape)))?
         .canonical();
     let constraints = crate::fill::spec::constraints(spec, &surface, 1.0)?;
     let frames = sketched_frames(&constraints.directions, &constraints.depth)?;
-    solve(&filled.model.mesh, &frames)
+    let field = solve(&filled.model.mesh, &frames)?;
+    Ok((surface, field))
 }
 
 /// The `overlay` picture of `spec` on the preview's cut `view` (a square view).
@@ -53,7 +55,7 @@ pub fn picture(
     view: &View,
     progress: &dyn Progress,
 ) -> Result<Picture> {
-    let field = field_of(filled, spec)?;
+    let (surface, field) = field_of(filled, spec)?;
     let mesh = &filled.model.mesh;
     let ones = vec![1.0; mesh.vertices.len()];
     let inside: Vec<bool> = crate::fill::render::field_cut(mesh, &ones, view).iter().map(Option::is_some).collect();
@@ -68,10 +70,7 @@ pub fn picture(
             let side = planes.iter().map(|e| e.width().min(e.height())).min().unwrap_or(0);
             let options = Options::for_exemplar(side);
             let exemplars = Exemplars::prepare([&planes[0], &planes[1], &planes[2]], &options)?;
-            let (lo, hi) = (mesh.vertices.iter().copied().fold(glam::Vec3::MAX, glam::Vec3::min), {
-                mesh.vertices.iter().copied().fold(glam::Vec3::MIN, glam::Vec3::max)
-            });
-            let domain = Domain::around((lo, hi), GUIDED_RES)?;
+            let domain = Domain::around(surface.bounds(), GUIDED_RES)?;
             let frames = solid::frames_over(mesh, &field, &domain);
             let setup = Setup {
                 exemplars: &exemplars,
