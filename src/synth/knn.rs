@@ -118,18 +118,23 @@ impl KdTree {
 /// fixed, so the result is the same on every machine.
 #[inline(always)]
 pub fn squared(a: &[f32], b: &[f32]) -> f32 {
+    lane_sum(a, b, |x, y| (x - y) * (x - y))
+}
+
+/// The sum of `term` over pairs of `a` and `b`, in eight lanes added in a fixed order.
+#[inline(always)]
+pub fn lane_sum(a: &[f32], b: &[f32], term: impl Fn(f32, f32) -> f32) -> f32 {
     const LANES: usize = 8;
     let mut acc = [0.0f32; LANES];
     let (xs, ys) = (a.chunks_exact(LANES), b.chunks_exact(LANES));
     let (x_rest, y_rest) = (xs.remainder(), ys.remainder());
     for (x, y) in xs.zip(ys) {
         for l in 0..LANES {
-            let d = x[l] - y[l];
-            acc[l] += d * d;
+            acc[l] += term(x[l], y[l]);
         }
     }
     for (l, (x, y)) in x_rest.iter().zip(y_rest).enumerate() {
-        acc[l] += (x - y) * (x - y);
+        acc[l] += term(*x, *y);
     }
     let half = [acc[0] + acc[4], acc[1] + acc[5], acc[2] + acc[6], acc[3] + acc[7]];
     (half[0] + half[2]) + (half[1] + half[3])

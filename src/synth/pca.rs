@@ -72,27 +72,9 @@ impl Pca {
     pub fn project_centring(&self, x: &mut [f32], out: &mut [f32]) {
         x.iter_mut().zip(&self.mean).for_each(|(v, m)| *v -= m);
         for (k, o) in out.iter_mut().enumerate() {
-            *o = dot(&self.basis[k * self.input..(k + 1) * self.input], x);
+            *o = super::knn::lane_sum(&self.basis[k * self.input..(k + 1) * self.input], x, |b, v| b * v);
         }
     }
-}
-
-/// The dot product of `a` and `b`, summed in eight lanes.
-fn dot(a: &[f32], b: &[f32]) -> f32 {
-    const LANES: usize = 8;
-    let mut acc = [0.0f32; LANES];
-    let (xs, ys) = (a.chunks_exact(LANES), b.chunks_exact(LANES));
-    let (x_rest, y_rest) = (xs.remainder(), ys.remainder());
-    for (x, y) in xs.zip(ys) {
-        for l in 0..LANES {
-            acc[l] += x[l] * y[l];
-        }
-    }
-    for (l, (x, y)) in x_rest.iter().zip(y_rest).enumerate() {
-        acc[l] += x * y;
-    }
-    let half = [acc[0] + acc[4], acc[1] + acc[5], acc[2] + acc[6], acc[3] + acc[7]];
-    (half[0] + half[2]) + (half[1] + half[3])
 }
 
 /// Covariance matrix (input x input, f64) of row-major vectors.
