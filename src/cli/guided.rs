@@ -167,15 +167,16 @@ pub fn run_guided(args: &GuidedArgs) -> Result<()> {
     }
     let started = Instant::now();
     let g = guide(&args.mesh, &args.spec, args.tets)?;
-    let exemplars = load_exemplars(args)?;
+    let domain = Domain::around(g.surface.bounds(), args.res)?;
+    let depth =
+        args.layered.then(|| solid::depth_over(&g.depth, &domain)).transpose().map_err(|e| e.in_file(&args.spec))?;
+    let rows = depth.as_ref().map(|d| solid::layer_rows(d, args.res)).transpose()?;
+    let exemplars = load_exemplars(args, rows)?;
     let side = exemplars.iter().map(|e| e.width().min(e.height())).min().unwrap_or(0);
     let options = Options { layered: args.layered, ..Options::for_exemplar(side) };
     let prepared = Exemplars::prepare([&exemplars[0], &exemplars[1], &exemplars[2]], &options)
         .map_err(|e| e.in_file(&args.exemplar))?;
-    let domain = Domain::around(g.surface.bounds(), args.res)?;
     let frames = solid::frames_over(&g.tets, &g.field, &domain);
-    let depth =
-        args.layered.then(|| solid::depth_over(&g.depth, &domain)).transpose().map_err(|e| e.in_file(&args.spec))?;
     let setup = Setup {
         exemplars: &prepared,
         frames: &frames,
@@ -214,8 +215,9 @@ pub fn run_guided(args: &GuidedArgs) -> Result<()> {
 }
 
 /// The exemplars per plane, alpha dropped (the solid's alpha is the model's coverage),
-/// with their feature masks and (layered) depth.
-fn load_exemplars(args: &GuidedArgs) -> Result<[Image2d; 3]> {
+/// with their feature masks and (layered, `rows`) scaled so that their rows span the
+/// model's depth in voxels, with a Depth channel.
+fn load_exemplars(args: &GuidedArgs, rows: Option<usize>) -> Result<[Image2d; 3]> {
     let shrink = super::synth::OtherExemplars {
         ey: None,
         ez: None,
@@ -235,9 +237,9 @@ fn load_exemplars(args: &GuidedArgs) -> Result<[Image2d; 3]> {
             Some(m) => with_mask(image, &shrink.load(m, "feature mask")?, path, m)?,
             None => image,
         };
-        match args.layered {
-            true => with_depth(image).map_err(|e| e.in_file(path)),
-            false => Ok(image),
+        match rows {
+            Some(rows) => with_depth(fitted(image, rows, path)?).map_err(|e| e.in_file(path)),
+            None => Ok(image),
         }
     };
     let ex = load(&args.exemplar, args.mask.as_ref(), "exemplar")?;
@@ -279,6 +281,24 @@ fn with_mask(image: Image2d, mask: &Image2d, path: &Path, mask_path: &Path) -> R
 
 /// Exemplars are shrunk to this many pixels on their longer side unless `--max-exemplar` says.
 const DEFAULT_EXEMPLAR: usize = 128;
+
+/// A layered exemplar scaled (both sides alike) to `rows` rows: one voxel takes one pixel,
+/// so rows that do not match the voxels the model's depth runs over are skipped or
+/// repeated, and layers (a log's rings) break into dashes.
+fn fitted(image: Image2d, rows: usize, path: &Path) -> Result<Image2d> {
+    if image.height() == rows {
+        return Ok(image);
+    }
+    let width = (image.width() as f64 * rows as f64 / image.height() as f64).round().max(1.0) as usize;
+    eprintln!(
+        "layered: {} scaled from {}x{} to {width}x{rows} pixels, so that its rows span the model's depth \
+         ({rows} voxels at this --res)",
+        path.display(),
+        image.width(),
+        image.height()
+    );
+    image.resized(width, rows)
+}
 
 /// The image with a Depth channel: its row coordinate, 0 at the top (the outside).
 fn with_depth(image: Image2d) -> Result<Image2d> {

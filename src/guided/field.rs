@@ -261,6 +261,30 @@ impl ScalarGrid {
     pub fn at(&self, p: Vec3) -> f32 {
         trilinear(self.lo, self.step, self.dims, p).iter().map(|&(at, w)| self.values[at] * w).sum()
     }
+
+    /// How far (in this grid's units) the value takes to rise by 1 where it lies strictly
+    /// between `0.05` and `0.95`: the median of 1 / gradient length over those corners
+    /// (central differences); `None` when no corner has a gradient there.
+    pub fn span(&self) -> Option<f32> {
+        let d = self.dims;
+        let stride = [1, d[0], d[0] * d[1]];
+        let mut spans: Vec<f32> = (0..self.values.len())
+            .filter_map(|i| {
+                let c = [i % d[0], (i / d[0]) % d[1], i / (d[0] * d[1])];
+                if !(0.05..0.95).contains(&self.values[i]) || (0..3).any(|a| c[a] == 0 || c[a] + 1 == d[a]) {
+                    return None;
+                }
+                let g = Vec3::from_array([0, 1, 2].map(|a| self.values[i + stride[a]] - self.values[i - stride[a]]));
+                let length = g.length() / (2.0 * self.step);
+                (length > 1e-6).then(|| 1.0 / length)
+            })
+            .collect();
+        if spans.is_empty() {
+            return None;
+        }
+        let middle = spans.len() / 2;
+        Some(*spans.select_nth_unstable_by(middle, f32::total_cmp).1)
+    }
 }
 
 /// The eight corners around `p` (clamped into the grid of `dims` corners from `lo`, spaced
@@ -376,6 +400,19 @@ fn integrate(flow: &[Option<Vec2>], noise: &[f32], (w, h): (usize, usize), start
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A ramp rising by 1 over 10 units spans 10, whichever way it runs and however
+    /// finely it is sampled; a constant spans nothing.
+    #[test]
+    fn a_ramp_spans_its_rise() {
+        let ramp = |p: Vec3| ((p.x + p.y) / (10.0 * 2f32.sqrt())).clamp(0.0, 1.0);
+        for cells in [16, 40] {
+            let grid = ScalarGrid::sample(ramp, (Vec3::ZERO, Vec3::splat(20.0)), cells);
+            let span = grid.span().unwrap();
+            assert!((span - 10.0).abs() < 0.2, "{cells} cells: {span}");
+        }
+        assert_eq!(ScalarGrid::sample(|_| 0.5, (Vec3::ZERO, Vec3::ONE), 8).span(), None);
+    }
     use crate::fill::tets::cube_lattice;
 
     #[test]

@@ -87,6 +87,25 @@ pub fn depth_over(constraints: &[(Vec3, f32)], domain: &Domain) -> Result<Scalar
     Ok(grid.in_voxels(domain.origin, domain.voxel))
 }
 
+/// Fewest and most rows a layered exemplar is scaled to (see [`layer_rows`]).
+pub const LAYER_ROWS: std::ops::RangeInclusive<usize> = 16..=512;
+
+/// How many rows a layered exemplar should have at finest-level resolution `res`: as many
+/// as the voxels the model's depth (`depth`, in voxels) takes to run from 0 to 1.
+pub fn layer_rows(depth: &ScalarGrid, res: usize) -> Result<usize> {
+    let span = depth.span().ok_or_else(|| Error::invalid("the spec's depth does not vary inside the model"))?;
+    let rows = span.round() as usize;
+    if rows < *LAYER_ROWS.start() {
+        let wanted = (res as f32 * *LAYER_ROWS.start() as f32 / span).ceil();
+        return Err(Error::invalid(format!(
+            "the model's depth runs over only {span:.0} voxels at resolution {res}; layered synthesis needs at least \
+             {} (one exemplar row per voxel): raise the resolution to {wanted:.0} or more",
+            LAYER_ROWS.start()
+        )));
+    }
+    Ok(rows.min(*LAYER_ROWS.end()))
+}
+
 /// A cut through the model synthesized on demand: its picture and the run (voxels and
 /// corrections). `from`: a coarse level computed over the whole grid (e.g. cached).
 pub fn cut(

@@ -177,7 +177,10 @@ impl Exemplars {
             }
             let weights = weights(image);
             let pyramid = crate::synth::image_pyramid(image, options.levels)?;
-            planes.push(Arc::new(pyramid.iter().map(|level| Prepared::new(level, &weights, opt)).collect()));
+            let pad = |level: &Image2d| padded_rows(level, pad_rows(options));
+            let prepared: Result<Vec<Prepared>> =
+                pyramid.iter().map(|level| Ok(Prepared::new(&pad(level)?, &weights, opt))).collect();
+            planes.push(Arc::new(prepared?));
         }
         let planes = [planes[0].clone(), planes[1].clone(), planes[2].clone()];
         let triples = (0..options.levels)
@@ -206,9 +209,36 @@ impl Exemplars {
     }
 }
 
+/// Rows added above and below each layered exemplar level (see [`padded_rows`]).
+fn pad_rows(options: &Options) -> usize {
+    if options.layered { options.n / 2 } else { 0 }
+}
+
+/// `image` with its first and last rows repeated `pad` times: a neighbourhood centre must
+/// have its whole neighbourhood in the image, so without them a layered exemplar's outer
+/// and inner rows (a skin, a core) could never be a voxel's pixel; the repeated rows match
+/// the model's depth, which stays 0 outside the surface and 1 at the innermost.
+fn padded_rows(image: &Image2d, pad: usize) -> Result<Image2d> {
+    if pad == 0 {
+        return Ok(image.clone());
+    }
+    let (w, h, c) = (image.width(), image.height(), image.channel_count());
+    let row = |y: usize| &image.data()[y * w * c..(y + 1) * w * c];
+    let data: Vec<f32> = (0..h + 2 * pad).flat_map(|y| row(y.saturating_sub(pad).min(h - 1)).iter().copied()).collect();
+    Image2d::from_data(w, h + 2 * pad, image.channels().to_vec(), data)
+}
+
+/// How many times the colours' summed variance the depth channel's weighted variance is.
+/// Matched at the colours' own share, a region that has taken the wrong layer's colours
+/// keeps them (its neighbours agree with it), and a kiwi's pale core or a log's heartwood
+/// never forms; at 16 times, a neighbourhood a tenth of the depth off costs about as much
+/// as one of wholly other colours.
+const DEPTH_SHARE: f64 = 16.0;
+
 /// Each channel's matching weight: 1, but a feature mask's scaled so that its variance
 /// equals the colours' summed variance (a mask of 0 and 1 would otherwise outweigh the
-/// colours of most photos many times over, and a faint one count for nothing).
+/// colours of most photos many times over, and a faint one count for nothing), and the
+/// depth's so that its variance is [`DEPTH_SHARE`] times theirs (at least 1).
 fn weights(image: &Image2d) -> Vec<f32> {
     let c = image.channel_count();
     let variance = |k: usize| {
@@ -220,9 +250,10 @@ fn weights(image: &Image2d) -> Vec<f32> {
     let names = image.channels();
     let colours: f64 = (0..c).filter(|&k| !matched_only(&names[k])).map(variance).sum();
     (0..c)
-        .map(|k| match names[k] == Channel::Named(FEATURE.into()) {
-            true => (colours / variance(k).max(1e-12)).sqrt().min(1e3) as f32,
-            false => 1.0,
+        .map(|k| match &names[k] {
+            Channel::Named(name) if name == FEATURE => (colours / variance(k).max(1e-12)).sqrt().min(1e3) as f32,
+            Channel::Depth => (DEPTH_SHARE * colours / variance(k).max(1e-12)).sqrt().clamp(1.0, 1e3) as f32,
+            _ => 1.0,
         })
         .collect()
 }
@@ -436,8 +467,9 @@ fn upsampled(setup: &Setup, level: usize, parents: &Sparse<Voxel>, v: [usize; 3]
         let (coarse, fine) = (setup.exemplar(a, level - 1), setup.exemplar(a, level));
         let (pa, sa) = Axis::ALL[a].plane_axes();
         let at = coarse.centres[parent.slot[a] as usize] as usize;
+        let pad = pad_rows(&setup.options) as i64;
         let x = 2 * (at % coarse.width) as i64 + local[pa].round() as i64;
-        let y = 2 * (at / coarse.width) as i64 + local[sa].round() as i64;
+        let y = 2 * ((at / coarse.width) as i64 - pad) + local[sa].round() as i64 + pad;
         fine.clamped_slot(x, y) as u32
     });
     setup.voxel(level, slot)
@@ -815,6 +847,52 @@ mod tests {
     /// A feature mask is matched: an exemplar of faint noise whose structure only its mask
     /// holds (blobs). With the mask, a voxel's three planes agree on it far more often than
     /// without, and the mask is not a shown channel.
+    /// A layered exemplar's outermost and innermost rows (a skin, a core, two rows each,
+    /// whose pixels have no whole neighbourhood in the image) are shown where the depth
+    /// asks for them, though the colourful rows between them fit their neighbours better.
+    #[test]
+    fn the_skin_and_core_rows_land_at_the_surface_and_the_axis() {
+        let (w, h) = (32, 32);
+        let (skin, core) = ([0.1, 0.2, 0.05], [0.95, 0.95, 0.8]);
+        let data = (0..w * h)
+            .flat_map(|i| {
+                let (x, y) = ((i % w) as i64, (i / w) as i64);
+                let n = |k: i64| (crate::noise::hash3(5 + k as u64, x, y, 0) % 1000) as f32 / 1000.0;
+                let colour = match y {
+                    0 | 1 => skin,
+                    30 | 31 => core,
+                    _ => [0.2 + 0.6 * n(0), 0.5 + 0.4 * n(1), 0.1 + 0.5 * n(2)],
+                };
+                colour.into_iter().chain([y as f32 / (h - 1) as f32])
+            })
+            .collect();
+        let names = vec![Channel::R, Channel::G, Channel::B, Channel::Depth];
+        let image = Image2d::from_data(w, h, names, data).unwrap();
+        let options = Options { levels: 2, n: 5, coarse_passes: 2, passes: 2, k: 3, max_dims: 8, layered: true };
+        let exemplars = Exemplars::prepare([&image, &image, &image], &options).unwrap();
+        let q = glam::Vec4::from(Quat::from_rotation_y(std::f32::consts::FRAC_PI_2));
+        let frames = FrameGrid { lo: Vec3::splat(-0.5), step: 32.0, dims: [2; 3], corners: vec![q; 8] };
+        let depth = crate::guided::field::ScalarGrid {
+            lo: Vec3::splat(-0.5),
+            step: 32.0,
+            dims: [2; 3],
+            values: (0..8).map(|i| (i % 2) as f32).collect(),
+        };
+        let setup =
+            Setup { exemplars: &exemplars, frames: &frames, depth: Some(&depth), dims: [32; 3], seed: 4, options };
+        let out = run(&setup, &plan(&setup, &Mask::full([32; 3]), 0), None, &crate::progress::NoProgress).unwrap();
+        // the share of the voxels of layer x (depth (x + 0.5) / 32) showing `colour`
+        let share = |x: usize, colour: [f32; 3]| {
+            let near = |v: [usize; 3]| {
+                let c = out.colour(&setup, v);
+                (0..3).all(|k| (c[k] - colour[k]).abs() < 0.02)
+            };
+            (0..32 * 32).filter(|i| near([x, i % 32, i / 32])).count() as f32 / 1024.0
+        };
+        let (outside, inside) = (share(0, skin), share(31, core));
+        assert!(outside > 0.8 && inside > 0.8, "skin at the surface {outside}, core at the axis {inside}");
+    }
+
     #[test]
     fn a_feature_mask_is_matched_not_shown() {
         let blob = |x: usize, y: usize| ((x as f32 * 0.45).sin() * (y as f32 * 0.4).cos() > 0.0) as u8 as f32;

@@ -167,3 +167,35 @@ fn a_feature_mask_steers_the_match_and_is_not_shown() {
     crate::support::assert_usage(&run, &["--ey", "--ey-mask"]);
     assert!(!d.join("refused.png").exists());
 }
+
+/// `--layered` scales the exemplar so that its rows span the model's depth in voxels (and
+/// says so), and the kiwi section's pale core, its innermost rows, fills the middle of a
+/// cut across the fruit's axis. A resolution too low for one row per voxel is refused by
+/// name with the one that would do, with nothing written.
+#[test]
+fn a_layered_cut_shows_the_innermost_rows_at_the_axis() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (fruit, spec) = crate::fill::kiwi_fruit(d);
+    let kiwi = concat!(env!("CARGO_MANIFEST_DIR"), "/exemplars/kiwi_section.png");
+    let base = ["guided", &fruit, "--spec", &spec, "--exemplar", kiwi, "--layered", "--cut", "0,0,0,1,0,0"];
+    let png = at(d, "across.png");
+    let run = solidtex(&[&base[..], &["--res", "128", "--size", "64", "-o", &png]].concat());
+    assert!(run.status.success(), "{}", stderr(&run));
+    assert!(stderr(&run).contains("kiwi_section.png scaled from 64x64 to"), "{}", stderr(&run));
+    let img = image::open(&png).unwrap().to_rgb8();
+    let pale = (30..34).flat_map(|y| (30..34).map(move |x| (x, y))).filter(|&(x, y)| {
+        let [r, g, b] = img.get_pixel(x, y).0;
+        r > 200 && g > 200 && b > 160
+    });
+    assert!(pale.count() >= 14, "the middle 4x4 pixels are mostly the pale core");
+    let [r, g, _] = img.get_pixel(32, 8).0;
+    assert!(g > r + 30, "green flesh between the core and the skin: {:?}", img.get_pixel(32, 8).0);
+
+    let low = at(d, "low.png");
+    crate::support::assert_fails(
+        &solidtex(&[&base[..], &["--res", "32", "-o", &low]].concat()),
+        &["resolution 32", "raise the resolution to"],
+    );
+    assert!(!d.join("low.png").exists());
+}
