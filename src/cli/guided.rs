@@ -282,6 +282,9 @@ fn with_mask(image: Image2d, mask: &Image2d, path: &Path, mask_path: &Path) -> R
 /// Exemplars are shrunk to this many pixels on their longer side unless `--max-exemplar` says.
 const DEFAULT_EXEMPLAR: usize = 128;
 
+/// The widest a layered exemplar may become when fitted to the model's depth.
+const MOST_FITTED_WIDTH: usize = 2048;
+
 /// A layered exemplar scaled (both sides alike) to `rows` rows: one voxel takes one pixel,
 /// so rows that do not match the voxels the model's depth runs over are skipped or
 /// repeated, and layers (a log's rings) break into dashes.
@@ -290,6 +293,16 @@ fn fitted(image: Image2d, rows: usize, path: &Path) -> Result<Image2d> {
         return Ok(image);
     }
     let width = (image.width() as f64 * rows as f64 / image.height() as f64).round().max(1.0) as usize;
+    if width > MOST_FITTED_WIDTH {
+        return Err(Error::file(
+            path,
+            format!(
+                "fitting its {} rows to the model's depth ({rows} voxels at this --res) would make it {width} pixels \
+                 wide, more than {MOST_FITTED_WIDTH}; lower --res or crop the exemplar",
+                image.height()
+            ),
+        ));
+    }
     eprintln!(
         "layered: {} scaled from {}x{} to {width}x{rows} pixels, so that its rows span the model's depth \
          ({rows} voxels at this --res)",
