@@ -4,7 +4,7 @@
 //! the coarse levels kept from an earlier run, and the whole solid at 128.
 
 use super::bench::BenchArgs;
-use super::bench_fill::{timed, wanted};
+use super::bench_fill::{timed, timed_then, wanted};
 use crate::error::Result;
 use crate::fill::render::View;
 use crate::fill::tets::TetMesh;
@@ -52,16 +52,22 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let frames = solid::frames_over(&tets, &field, &domain);
     let setup = Setup { exemplars: &exemplars, frames: &frames, depth: None, dims: domain.dims, seed: 1, options };
     let whole: usize = setup.level_dims().iter().map(|d| d.iter().product::<usize>()).sum();
-    timed(args, CUT, || {
-        let (picture, out) = solid::cut(&setup, &domain, &tets, &view, None, &NoProgress)?;
-        Ok(format!("{} of the exemplars prepared in {prepared:.2} s", report(&picture, &image, &out, whole)?))
-    })?;
+    timed_then(
+        args,
+        CUT,
+        || solid::cut(&setup, &domain, &tets, &view, None, &NoProgress),
+        |(picture, out)| {
+            Ok(format!("{} of the exemplars prepared in {prepared:.2} s", report(picture, &image, out, whole)?))
+        },
+    )?;
     if wanted(args, CACHED) {
         let (level, coarse) = solid::coarse_levels(&setup, &NoProgress)?;
-        timed(args, CACHED, || {
-            let (picture, out) = solid::cut(&setup, &domain, &tets, &view, Some((level, &coarse)), &NoProgress)?;
-            report(&picture, &image, &out, whole)
-        })?;
+        timed_then(
+            args,
+            CACHED,
+            || solid::cut(&setup, &domain, &tets, &view, Some((level, &coarse)), &NoProgress),
+            |(picture, out)| report(picture, &image, out, whole),
+        )?;
     }
     let domain = Domain::around(fruit.bounds(), 128)?;
     let frames = solid::frames_over(&tets, &field, &domain);
