@@ -128,6 +128,10 @@ pub struct GuidedArgs {
     /// exemplar pixel spans one voxel.
     #[arg(long, default_value_t = 128)]
     pub res: usize,
+    /// Neighbourhood side at the coarsest level (odd, 3 to 11): 7 or 9 keep long
+    /// structures (grooves, grain) longer, a little less sharp (docs/guided.md).
+    #[arg(long, default_value_t = 5)]
+    pub coarse_n: usize,
     /// Synthesize only the cut PX,PY,PZ,NX,NY,NZ (a point and a normal) and write it as a
     /// PNG; without it, the whole solid is written as a volume.
     #[arg(long, allow_hyphen_values = true)]
@@ -154,6 +158,10 @@ pub fn run_guided(args: &GuidedArgs) -> Result<()> {
     let checks = || -> Result<Option<(Vec3, Vec3)>> {
         io::values::within("--res", args.res, *solid::RESOLUTION.start(), *solid::RESOLUTION.end())?;
         io::values::within("--size", args.size, 8, 4096)?;
+        io::values::within("--coarse-n", args.coarse_n, 3, 11)?;
+        if args.coarse_n.is_multiple_of(2) {
+            return Err(Error::invalid(format!("--coarse-n {} must be odd (3, 5, 7, 9 or 11)", args.coarse_n)));
+        }
         check_tets(args.tets)?;
         args.others.check()?;
         args.cut.as_deref().map(|text| super::fill::plane("--cut", text)).transpose()
@@ -173,7 +181,7 @@ pub fn run_guided(args: &GuidedArgs) -> Result<()> {
     let rows = depth.as_ref().map(|d| solid::layer_rows(d, args.res)).transpose()?;
     let exemplars = load_exemplars(args, rows)?;
     let side = exemplars.iter().map(|e| e.width().min(e.height())).min().unwrap_or(0);
-    let options = Options { layered: args.layered, ..Options::for_exemplar(side) };
+    let options = Options { layered: args.layered, coarse_n: args.coarse_n, ..Options::for_exemplar(side) };
     let prepared = Exemplars::prepare([&exemplars[0], &exemplars[1], &exemplars[2]], &options)
         .map_err(|e| e.in_file(&args.exemplar))?;
     let frames = solid::frames_over(&g.tets, &g.field, &domain);

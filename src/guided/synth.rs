@@ -43,8 +43,10 @@ use std::sync::Arc;
 pub struct Options {
     /// Pyramid levels.
     pub levels: usize,
-    /// Side of the square neighbourhoods.
+    /// Side of the square neighbourhoods at the levels above the coarsest.
     pub n: usize,
+    /// Side of the square neighbourhoods at the coarsest level.
+    pub coarse_n: usize,
     /// Correction passes at the coarsest level.
     pub coarse_passes: usize,
     /// Correction passes at every finer level.
@@ -61,7 +63,7 @@ pub struct Options {
 
 impl Default for Options {
     fn default() -> Options {
-        Options { levels: 4, n: 5, coarse_passes: 4, passes: 2, k: 4, max_dims: 16, layered: false }
+        Options { levels: 4, n: 5, coarse_n: 5, coarse_passes: 4, passes: 2, k: 4, max_dims: 16, layered: false }
     }
 }
 
@@ -81,11 +83,16 @@ impl Options {
         if level == 0 { self.coarse_passes } else { self.passes }
     }
 
-    /// How far (in voxels, per axis) a pass reads from the voxel it corrects: a
+    /// The neighbourhood side at `level` (0: coarsest).
+    pub fn n_at(&self, level: usize) -> usize {
+        if level == 0 { self.coarse_n } else { self.n }
+    }
+
+    /// How far (in voxels, per axis) a pass at `level` reads from the voxel it corrects: a
     /// neighbourhood offset (up to n/2 along two orthonormal axes: at most n/2·√2 along any
     /// world axis) rounded to the nearest voxel, and the 3 x 3 candidate sources within it.
-    pub fn reach(&self) -> usize {
-        let half = (self.n / 2) as f32;
+    pub fn reach_at(&self, level: usize) -> usize {
+        let half = (self.n_at(level) / 2) as f32;
         ((half * std::f32::consts::SQRT_2 + 0.5).floor() as usize).max(1)
     }
 }
@@ -146,7 +153,9 @@ impl Exemplars {
                 crate::volume::channel_names(channels)
             )));
         }
-        let opt = PrepareOptions { n: options.n, variance: 0.97, max_dims: options.max_dims, k: 0 };
+        let opt =
+            |level: usize| PrepareOptions { n: options.n_at(level), variance: 0.97, max_dims: options.max_dims, k: 0 };
+        let smallest = (options.n_at(0) + 2).max(options.n + 2);
         let mut planes: Vec<Arc<Vec<Prepared>>> = Vec::new();
         for (a, image) in images.iter().enumerate() {
             if image.channels() != channels {
@@ -163,7 +172,7 @@ impl Exemplars {
             }
             let shrink = |s: usize| (1..options.levels).fold(s, |s, _| s.div_ceil(2));
             let (w, h) = (shrink(image.width()), shrink(image.height()));
-            if w < options.n + 2 || h < options.n + 2 {
+            if w < smallest || h < smallest {
                 return Err(Error::invalid(format!(
                     "{} is {}x{} pixels; at {} levels its coarsest level is {w}x{h}, smaller than the {m}x{m} a \
                      {n}x{n} neighbourhood needs; use fewer levels or a larger exemplar",
@@ -171,15 +180,17 @@ impl Exemplars {
                     image.width(),
                     image.height(),
                     options.levels,
-                    m = options.n + 2,
-                    n = options.n
+                    m = smallest,
+                    n = smallest - 2
                 )));
             }
             let weights = weights(image);
             let pyramid = crate::synth::image_pyramid(image, options.levels)?;
-            let pad = |level: &Image2d| padded_rows(level, pad_rows(options));
-            let prepared: Result<Vec<Prepared>> =
-                pyramid.iter().map(|level| Ok(Prepared::new(&pad(level)?, &weights, opt))).collect();
+            let prepared: Result<Vec<Prepared>> = pyramid
+                .iter()
+                .enumerate()
+                .map(|(l, image)| Ok(Prepared::new(&padded_rows(image, pad_rows(options, l))?, &weights, opt(l))))
+                .collect();
             planes.push(Arc::new(prepared?));
         }
         let planes = [planes[0].clone(), planes[1].clone(), planes[2].clone()];
@@ -209,9 +220,9 @@ impl Exemplars {
     }
 }
 
-/// Rows added above and below each layered exemplar level (see [`padded_rows`]).
-fn pad_rows(options: &Options) -> usize {
-    if options.layered { options.n / 2 } else { 0 }
+/// Rows added above and below a layered exemplar's `level` (see [`padded_rows`]).
+fn pad_rows(options: &Options, level: usize) -> usize {
+    if options.layered { options.n_at(level) / 2 } else { 0 }
 }
 
 /// `image` with its first and last rows repeated `pad` times: a neighbourhood centre must
@@ -323,12 +334,11 @@ impl Setup<'_> {
 /// `first` (taken from an earlier run) get no masks.
 pub fn plan(setup: &Setup, request: &Mask, first: usize) -> Vec<Vec<Mask>> {
     let dims = setup.level_dims();
-    let reach = setup.options.reach();
     let levels = dims.len();
     let mut out: Vec<Vec<Mask>> = vec![Vec::new(); levels];
     let mut last = request.clone();
     for level in (first..levels).rev() {
-        let passes = setup.options.passes_at(level);
+        let (passes, reach) = (setup.options.passes_at(level), setup.options.reach_at(level));
         let mut versions = vec![last];
         for _ in 0..passes {
             let grown = versions[versions.len() - 1].grown(reach);
@@ -428,7 +438,7 @@ pub fn fingerprint(setup: &Setup) -> u64 {
     f.dims.iter().chain(&setup.dims).for_each(|d| add(*d as u64));
     f.corners.iter().flat_map(|q| q.to_array()).for_each(|c| add(u64::from(c.to_bits())));
     let o = setup.options;
-    [o.levels, o.n, o.coarse_passes, o.passes, o.k, o.max_dims, usize::from(o.layered)]
+    [o.levels, o.n, o.coarse_n, o.coarse_passes, o.passes, o.k, o.max_dims, usize::from(o.layered)]
         .iter()
         .for_each(|v| add(*v as u64));
     add(setup.seed);
@@ -467,9 +477,9 @@ fn upsampled(setup: &Setup, level: usize, parents: &Sparse<Voxel>, v: [usize; 3]
         let (coarse, fine) = (setup.exemplar(a, level - 1), setup.exemplar(a, level));
         let (pa, sa) = Axis::ALL[a].plane_axes();
         let at = coarse.centres[parent.slot[a] as usize] as usize;
-        let pad = pad_rows(&setup.options) as i64;
+        let pad = [level - 1, level].map(|l| pad_rows(&setup.options, l) as i64);
         let x = 2 * (at % coarse.width) as i64 + local[pa].round() as i64;
-        let y = 2 * ((at / coarse.width) as i64 - pad) + local[sa].round() as i64 + pad;
+        let y = 2 * ((at / coarse.width) as i64 - pad[0]) + local[sa].round() as i64 + pad[1];
         fine.clamped_slot(x, y) as u32
     });
     setup.voxel(level, slot)
@@ -709,9 +719,10 @@ mod tests {
     fn the_reach_covers_a_turned_neighbourhood() {
         let o = Options { n: 5, ..Options::default() };
         // offsets up to 2 along two unit axes turned 45°: 2.83 voxels, to the nearest: 3
-        assert_eq!(o.reach(), 3);
-        assert_eq!(Options { n: 3, ..o }.reach(), 1);
-        assert_eq!(Options { n: 7, ..o }.reach(), 4);
+        assert_eq!(o.reach_at(1), 3);
+        assert_eq!(Options { n: 3, ..o }.reach_at(1), 1);
+        assert_eq!(Options { n: 7, ..o }.reach_at(1), 4);
+        assert_eq!(Options { coarse_n: 9, ..o }.reach_at(0), 6);
     }
 
     /// A 32x32 exemplar of blobs, a unit cube whose frames turn 60° about x from one face
@@ -724,8 +735,7 @@ mod tests {
         };
         let data = (0..32 * 32).flat_map(|i| texel(i % 32, i / 32)).collect();
         let image = Image2d::from_data(32, 32, Channel::rgb(), data).unwrap();
-        let options = Options { levels: 2, n: 5, coarse_passes: 2, passes: 2, k: 3, max_dims: 8, layered: false };
-        let exemplars = Exemplars::prepare([&image, &image, &image], &options).unwrap();
+        let exemplars = Exemplars::prepare([&image, &image, &image], &options()).unwrap();
         let mesh = cube_lattice([4, 4, 4], 0.25);
         let turned = Quat::from_rotation_x(std::f32::consts::FRAC_PI_3);
         let frames = vec![(Vec3::new(0.05, 0.5, 0.5), Quat::IDENTITY), (Vec3::new(0.95, 0.5, 0.5), turned)];
@@ -735,9 +745,13 @@ mod tests {
         (exemplars, grid)
     }
 
+    /// Two levels, a wider neighbourhood at the coarsest (so each level has its own reach).
+    fn options() -> Options {
+        Options { levels: 2, n: 5, coarse_n: 7, coarse_passes: 2, passes: 2, k: 3, max_dims: 8, layered: false }
+    }
+
     fn setup<'a>(exemplars: &'a Exemplars, frames: &'a FrameGrid, side: usize) -> Setup<'a> {
-        let options = Options { levels: 2, n: 5, coarse_passes: 2, passes: 2, k: 3, max_dims: 8, layered: false };
-        Setup { exemplars, frames, depth: None, dims: [side; 3], seed: 5, options }
+        Setup { exemplars, frames, depth: None, dims: [side; 3], seed: 5, options: options() }
     }
 
     fn colours(setup: &Setup, out: &Synthesized, voxels: &[[usize; 3]]) -> Vec<f32> {
@@ -815,7 +829,8 @@ mod tests {
             .collect();
         let names = vec![Channel::R, Channel::G, Channel::Depth];
         let image = Image2d::from_data(w, h, names, data).unwrap();
-        let options = Options { levels: 2, n: 5, coarse_passes: 2, passes: 2, k: 3, max_dims: 8, layered: true };
+        let options =
+            Options { levels: 2, n: 5, coarse_n: 5, coarse_passes: 2, passes: 2, k: 3, max_dims: 8, layered: true };
         let exemplars = Exemplars::prepare([&image, &image, &image], &options).unwrap();
         assert_eq!(exemplars.channels(), 2, "the Depth channel is matched, not shown");
         let z_along_x = Quat::from_rotation_y(std::f32::consts::FRAC_PI_2);
@@ -868,7 +883,8 @@ mod tests {
             .collect();
         let names = vec![Channel::R, Channel::G, Channel::B, Channel::Depth];
         let image = Image2d::from_data(w, h, names, data).unwrap();
-        let options = Options { levels: 2, n: 5, coarse_passes: 2, passes: 2, k: 3, max_dims: 8, layered: true };
+        let options =
+            Options { levels: 2, n: 5, coarse_n: 5, coarse_passes: 2, passes: 2, k: 3, max_dims: 8, layered: true };
         let exemplars = Exemplars::prepare([&image, &image, &image], &options).unwrap();
         let q = glam::Vec4::from(Quat::from_rotation_y(std::f32::consts::FRAC_PI_2));
         let frames = FrameGrid { lo: Vec3::splat(-0.5), step: 32.0, dims: [2; 3], corners: vec![q; 8] };
@@ -913,7 +929,16 @@ mod tests {
         let (_, frames) = world(32);
         let agreement = |masked: bool| {
             let image = image(masked);
-            let options = Options { levels: 2, n: 5, coarse_passes: 2, passes: 2, k: 3, max_dims: 8, layered: false };
+            let options = Options {
+                levels: 2,
+                n: 5,
+                coarse_n: 5,
+                coarse_passes: 2,
+                passes: 2,
+                k: 3,
+                max_dims: 8,
+                layered: false,
+            };
             let exemplars = Exemplars::prepare([&image, &image, &image], &options).unwrap();
             assert_eq!(exemplars.channels(), 3, "the mask is not shown");
             let setup = setup(&exemplars, &frames, 32);

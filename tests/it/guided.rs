@@ -70,6 +70,20 @@ fn a_guided_cut_is_synthesized_on_demand_and_cached() {
     let (lo, hi) = inside.iter().fold((255, 0), |(lo, hi), p| (lo.min(p[1]), hi.max(p[1])));
     assert!(hi - lo > 20, "the cut is textured: green {lo}..{hi}");
 
+    // a wider coarsest neighbourhood gives another cut; an even side is refused
+    let wide = at(d, "wide.png");
+    let mut args = vec!["guided", &fruit, "--spec", &spec, "--exemplar", &ex, "--max-exemplar", "64", "--res", "64"];
+    args.extend(["--cut", "0,0,0,0,0,1", "--size", "64", "--coarse-n", "7", "-o", &wide]);
+    let run = solidtex(&args);
+    assert!(run.status.success(), "{}", stderr(&run));
+    assert_ne!(std::fs::read(&wide).unwrap(), std::fs::read(&plain).unwrap());
+    let even = at(d, "even.png");
+    let last = args.len() - 1;
+    args[last] = &even;
+    args[last - 2] = "6";
+    crate::support::assert_usage(&solidtex(&args), &["--coarse-n 6", "odd"]);
+    assert!(!d.join("even.png").exists());
+
     let (first, second) = (at(d, "first.png"), at(d, "second.png"));
     assert!(cut(&first, true).status.success());
     let run = cut(&second, true);
