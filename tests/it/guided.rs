@@ -82,6 +82,9 @@ fn a_guided_cut_is_synthesized_on_demand_and_cached() {
     args[last] = &even;
     args[last - 2] = "6";
     crate::support::assert_usage(&solidtex(&args), &["--coarse-n 6", "odd"]);
+    args[last - 3] = "--n";
+    args[last - 2] = "13";
+    crate::support::assert_usage(&solidtex(&args), &["--n 13", "3 to 11"]);
     assert!(!d.join("even.png").exists());
 
     let (first, second) = (at(d, "first.png"), at(d, "second.png"));
