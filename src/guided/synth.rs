@@ -859,9 +859,6 @@ mod tests {
         assert!(guided < 0.12 && guided * 2.0 < free, "mean error with depth {guided}, without {free}");
     }
 
-    /// A feature mask is matched: an exemplar of faint noise whose structure only its mask
-    /// holds (blobs). With the mask, a voxel's three planes agree on it far more often than
-    /// without, and the mask is not a shown channel.
     /// A layered exemplar's outermost and innermost rows (a skin, a core, two rows each,
     /// whose pixels have no whole neighbourhood in the image) are shown where the depth
     /// asks for them, though the colourful rows between them fit their neighbours better.
@@ -909,6 +906,9 @@ mod tests {
         assert!(outside > 0.8 && inside > 0.8, "skin at the surface {outside}, core at the axis {inside}");
     }
 
+    /// A feature mask is matched: an exemplar of faint noise whose structure only its mask
+    /// holds (blobs). With the mask, a voxel's three planes agree on it far more often than
+    /// without, and the mask is not a shown channel.
     #[test]
     fn a_feature_mask_is_matched_not_shown() {
         let blob = |x: usize, y: usize| ((x as f32 * 0.45).sin() * (y as f32 * 0.4).cos() > 0.0) as u8 as f32;
