@@ -1,18 +1,20 @@
 //! Sketch-guided synthesis on a fill preview (the TUI's fill editor): the frame field the
 //! spec's strokes and depth give, drawn as streamlines on the preview's cut, and a guided
-//! cut synthesized along it from the exemplar's own central slices.
+//! cut synthesized along it from the exemplar's own central slices (layered, with the
+//! spec's depth, when the exemplar has a Depth channel).
 
 use super::fill::load_built;
 use crate::error::{Error, Result};
 use crate::fill::FillPreview;
 use crate::fill::render::View;
 use crate::fill::spec::FillSpec;
-use crate::guided::field::{FrameField, sketched_frames, solve, streamlines};
+use crate::guided::field::{FrameField, ScalarGrid, sketched_frames, solve, streamlines};
 use crate::guided::solid::{self, Domain};
 use crate::guided::synth::{Exemplars, Options, Setup};
 use crate::mesh::Mesh;
 use crate::progress::Progress;
 use crate::volume::{Axis, Channel, Image2d, Volume};
+use glam::Vec3;
 
 /// What a picture over the preview's cut shows.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -35,16 +37,23 @@ pub struct Picture {
     pub pixels: Vec<Option<[u8; 3]>>,
 }
 
-/// The drawn shape the preview fills, and the frame field of `spec` (its strokes and
-/// depth, as `solidtex field` reads them) over the preview's tet mesh.
-fn field_of(filled: &FillPreview, spec: &FillSpec) -> Result<(Mesh, FrameField)> {
+/// What a spec gives over a fill preview: the drawn shape it fills, the frame field of the
+/// spec's strokes and depth (as `solidtex field` reads them) over the preview's tet mesh,
+/// and the depth constraints.
+struct Guide {
+    surface: Mesh,
+    field: FrameField,
+    depths: Vec<(Vec3, f32)>,
+}
+
+fn field_of(filled: &FillPreview, spec: &FillSpec) -> Result<Guide> {
     let surface = crate::mesh::shapes::named(&filled.shape)
         .ok_or_else(|| Error::invalid(format!("no drawn shape named {}", filled.shape)))?
         .canonical();
     let constraints = crate::fill::spec::constraints(spec, &surface, 1.0)?;
     let frames = sketched_frames(&constraints.directions, &constraints.depth)?;
     let field = solve(&filled.model.mesh, &frames)?;
-    Ok((surface, field))
+    Ok(Guide { surface, field, depths: constraints.depth })
 }
 
 /// The `overlay` picture of `spec` on the preview's cut `view` (a square view).
@@ -55,7 +64,7 @@ pub fn picture(
     view: &View,
     progress: &dyn Progress,
 ) -> Result<Picture> {
-    let (surface, field) = field_of(filled, spec)?;
+    let Guide { surface, field, depths } = field_of(filled, spec)?;
     let mesh = &filled.model.mesh;
     let ones = vec![1.0; mesh.vertices.len()];
     let inside: Vec<bool> = crate::fill::render::field_cut(mesh, &ones, view).iter().map(Option::is_some).collect();
@@ -66,16 +75,19 @@ pub fn picture(
         }
         Overlay::Guided => {
             let volume = load_built(spec, &spec.exemplar)?;
-            let planes = central_slices(&volume)?;
-            let side = planes.iter().map(|e| e.width().min(e.height())).min().unwrap_or(0);
-            let options = Options::for_exemplar(side);
-            let exemplars = Exemplars::prepare([&planes[0], &planes[1], &planes[2]], &options)?;
             let domain = Domain::around(surface.bounds(), GUIDED_RES)?;
+            let (planes, depth) = match layered_slices(&volume, &depths, &domain)? {
+                Some((planes, depth)) => (planes, Some(depth)),
+                None => (central_slices(&volume)?, None),
+            };
+            let side = planes.iter().map(|e| e.width().min(e.height())).min().unwrap_or(0);
+            let options = Options { layered: depth.is_some(), ..Options::for_exemplar(side) };
+            let exemplars = Exemplars::prepare([&planes[0], &planes[1], &planes[2]], &options)?;
             let frames = solid::frames_over(mesh, &field, &domain);
             let setup = Setup {
                 exemplars: &exemplars,
                 frames: &frames,
-                depth: None,
+                depth: depth.as_ref(),
                 dims: domain.dims,
                 seed: spec.seed,
                 options,
@@ -100,19 +112,82 @@ pub fn picture(
 /// grey), shrunk to at most 64 pixels.
 fn central_slices(volume: &Volume) -> Result<[Image2d; 3]> {
     let d = volume.dims();
+    let keep = colour_channels(volume);
+    let slice = |axis: Axis| -> Result<Image2d> {
+        shrunk(picked(&volume.slice(axis, d[axis.index()] / 2)?, &keep, false)?, 64)
+    };
+    Ok([slice(Axis::X)?, slice(Axis::Y)?, slice(Axis::Z)?])
+}
+
+/// For a volume with a Depth channel and a spec whose depth rises inside the model: the
+/// two central slices holding the depth axis, rows along it from the outside in (as
+/// `solidtex guided --layered` takes a section), fitted to the voxels the model's depth
+/// spans on the grid (the third plane is not matched), with the model's depth. `None`
+/// otherwise, and where the depth spans too few voxels at [`GUIDED_RES`] to be layered.
+fn layered_slices(
+    volume: &Volume,
+    depths: &[(Vec3, f32)],
+    domain: &Domain,
+) -> Result<Option<([Image2d; 3], ScalarGrid)>> {
+    let (Some(axis), Some(c)) = (crate::fill::spec::depth_axis(volume), volume.channel_index(&Channel::Depth)) else {
+        return Ok(None);
+    };
+    if !depths.iter().any(|d| d.1 > 0.0) {
+        return Ok(None);
+    }
+    let depth = solid::depth_over(depths, domain)?;
+    let Ok(rows) = solid::layer_rows(&depth, GUIDED_RES) else {
+        return Ok(None);
+    };
+    let keep: Vec<usize> = colour_channels(volume).into_iter().chain([c]).collect();
+    let d = volume.dims();
+    let slice = |across: usize| -> Result<Image2d> {
+        let image = picked(&volume.slice(Axis::ALL[across], d[across] / 2)?, &keep, true)?;
+        let image = if Axis::ALL[across].plane_axes().0 == axis { transposed(&image)? } else { image };
+        let depth_at = |y: usize| image.pixel(image.width() / 2, y)[keep.len() - 1];
+        let image = if depth_at(0) > depth_at(image.height() - 1) { flipped(&image)? } else { image };
+        let width = (image.width() * rows).div_ceil(image.height()).max(1);
+        image.resized(width, rows)
+    };
+    let [a, b] = [0, 1, 2].into_iter().filter(|&a| a != axis).collect::<Vec<_>>()[..] else {
+        return Ok(None);
+    };
+    let (first, second) = (slice(a)?, slice(b)?);
+    Ok(Some(([first, second.clone(), second], depth)))
+}
+
+/// The volume's colour channels (red, green, blue, or the first as grey).
+fn colour_channels(volume: &Volume) -> Vec<usize> {
     let names = volume.channels();
     let keep: Vec<usize> =
         [Channel::R, Channel::G, Channel::B].iter().filter_map(|c| names.iter().position(|n| n == c)).collect();
-    let keep = if keep.is_empty() { vec![0] } else { keep };
-    let slice = |axis: Axis| -> Result<Image2d> {
-        let image = volume.slice(axis, d[axis.index()] / 2)?;
-        let c = image.channel_count();
-        let data = image.data().chunks_exact(c).flat_map(|px| keep.iter().map(|&k| px[k])).collect();
-        let channels = [Channel::R, Channel::G, Channel::B][..keep.len()].to_vec();
-        let picked = Image2d::from_data(image.width(), image.height(), channels, data)?;
-        shrunk(picked, 64)
-    };
-    Ok([slice(Axis::X)?, slice(Axis::Y)?, slice(Axis::Z)?])
+    if keep.is_empty() { vec![0] } else { keep }
+}
+
+/// The channels `keep` of `image`, named red, green, blue (and Depth last, with `depth`).
+fn picked(image: &Image2d, keep: &[usize], depth: bool) -> Result<Image2d> {
+    let c = image.channel_count();
+    let data = image.data().chunks_exact(c).flat_map(|px| keep.iter().map(|&k| px[k])).collect();
+    let colours = keep.len() - usize::from(depth);
+    let mut channels = [Channel::R, Channel::G, Channel::B][..colours].to_vec();
+    if depth {
+        channels.push(Channel::Depth);
+    }
+    Image2d::from_data(image.width(), image.height(), channels, data)
+}
+
+/// `image` with rows and columns swapped.
+fn transposed(image: &Image2d) -> Result<Image2d> {
+    let (w, h) = (image.width(), image.height());
+    let data = (0..w * h).flat_map(|i| image.pixel(i / h, i % h).to_vec()).collect();
+    Image2d::from_data(h, w, image.channels().to_vec(), data)
+}
+
+/// `image` upside down.
+fn flipped(image: &Image2d) -> Result<Image2d> {
+    let (w, h) = (image.width(), image.height());
+    let data = (0..w * h).flat_map(|i| image.pixel(i % w, h - 1 - i / w).to_vec()).collect();
+    Image2d::from_data(w, h, image.channels().to_vec(), data)
 }
 
 /// `image` halved (a Gaussian pyramid) until its longer side is at most `side`.

@@ -444,6 +444,56 @@ pub(crate) mod tests {
         assert!(greys.len() > guided.pixels.len() / 4 && hi - lo > 40, "a textured cut: red {lo}..{hi}");
     }
 
+    /// A built exemplar with a Depth channel (strata along z) and a spec with a depth axis
+    /// give a layered guided cut: across the block's axis the strata lie at their depth,
+    /// rings around the axis, so pixels at one distance from it are alike (most of the
+    /// picture's variance lies between rings, not within them); the same strata without
+    /// their Depth channel are not layered and show no rings.
+    #[test]
+    fn a_layered_exemplar_gives_a_layered_guided_cut() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut cube = filled_cube(None);
+        for v in &mut cube.model.mesh.vertices {
+            *v = (*v * 2.0 - Vec3::ONE) * Vec3::new(1.0, 0.5, 0.5);
+        }
+        let mut spec = cube.spec.clone();
+        spec.built = dir.path().to_path_buf();
+        spec.directions = vec![vec![Vec3::new(-0.8, 0.0, 0.0), Vec3::new(0.8, 0.0, 0.0)]];
+        spec.depth.axes = vec![vec![Vec3::new(-0.9, 0.0, 0.0), Vec3::new(0.9, 0.0, 0.0)]];
+        let strata = crate::procedural::generate(crate::procedural::Recipe::Strata, [48; 3], 1).unwrap();
+        let path = crate::library::files::volume(dir.path(), "marble");
+        let view = plane_view(&cube, crate::volume::Axis::X, 0.5, 96);
+        // (the variance within rings of 2 pixels around the picture's centre, the whole
+        // variance), over the pixels within 30 of it
+        let rings = |volume: &crate::Volume| {
+            crate::io::write_volume(&path, volume).unwrap();
+            let picture =
+                crate::library::guided::picture(&cube, &spec, Overlay::Guided, &view, &crate::progress::NoProgress)
+                    .unwrap();
+            let mut by_ring = vec![Vec::new(); 16];
+            for (i, p) in picture.pixels.iter().enumerate() {
+                let (dx, dy) = ((i % 96) as f32 - 47.5, (i / 96) as f32 - 47.5);
+                let r = (dx * dx + dy * dy).sqrt();
+                if let (Some(p), true) = (p, r < 30.0) {
+                    by_ring[(r / 2.0) as usize].push(p.iter().map(|&c| f32::from(c)).sum::<f32>());
+                }
+            }
+            let variance = |xs: &[f32]| {
+                let mean = xs.iter().sum::<f32>() / xs.len().max(1) as f32;
+                xs.iter().map(|x| (x - mean).powi(2)).sum::<f32>()
+            };
+            let all: Vec<f32> = by_ring.concat();
+            (by_ring.iter().map(|r| variance(r)).sum::<f32>(), variance(&all))
+        };
+        let (within, whole) = rings(&strata);
+        assert!(within < 0.5 * whole, "layered: {within} of {whole} within rings");
+        let c = strata.channel_count();
+        let rgb: Vec<f32> = strata.data().chunks_exact(c).flat_map(|px| px[..3].to_vec()).collect();
+        let colours = crate::Volume::from_data([48; 3], crate::Channel::rgb(), rgb).unwrap();
+        let (within, whole) = rings(&colours);
+        assert!(within > 0.6 * whole, "not layered: {within} of {whole} within rings");
+    }
+
     #[test]
     fn constraints_placed_on_the_cut_make_the_fill_spec() {
         let mut m = filling(filled_cube(None));
