@@ -815,6 +815,24 @@ mod tests {
         }
     }
 
+    /// Layered settings, frames whose z runs along x and a depth rising from 0 to 1 along x,
+    /// over a 32³ grid.
+    fn layered_along_x() -> (Options, FrameGrid, crate::guided::field::ScalarGrid) {
+        let options =
+            Options { levels: 2, n: 5, coarse_n: 5, coarse_passes: 2, passes: 2, k: 3, max_dims: 8, layered: true };
+        let z_along_x = Quat::from_rotation_y(std::f32::consts::FRAC_PI_2);
+        assert!((z_along_x * Vec3::Z).distance(Vec3::X) < 1e-6);
+        let q = glam::Vec4::from(z_along_x);
+        let frames = FrameGrid { lo: Vec3::splat(-0.5), step: 32.0, dims: [2; 3], corners: vec![q; 8] };
+        let depth = crate::guided::field::ScalarGrid {
+            lo: Vec3::splat(-0.5),
+            step: 32.0,
+            dims: [2; 3],
+            values: (0..8).map(|i| (i % 2) as f32).collect(),
+        };
+        (options, frames, depth)
+    }
+
     /// Layered, with the model's depth: an exemplar whose rows darken from the outside
     /// in lands each row at its depth (the depth rising along x, the frames' z along x).
     #[test]
@@ -829,20 +847,9 @@ mod tests {
             .collect();
         let names = vec![Channel::R, Channel::G, Channel::Depth];
         let image = Image2d::from_data(w, h, names, data).unwrap();
-        let options =
-            Options { levels: 2, n: 5, coarse_n: 5, coarse_passes: 2, passes: 2, k: 3, max_dims: 8, layered: true };
+        let (options, frames, depth) = layered_along_x();
         let exemplars = Exemplars::prepare([&image, &image, &image], &options).unwrap();
         assert_eq!(exemplars.channels(), 2, "the Depth channel is matched, not shown");
-        let z_along_x = Quat::from_rotation_y(std::f32::consts::FRAC_PI_2);
-        assert!((z_along_x * Vec3::Z).distance(Vec3::X) < 1e-6);
-        let q = glam::Vec4::from(z_along_x);
-        let frames = FrameGrid { lo: Vec3::splat(-0.5), step: 32.0, dims: [2; 3], corners: vec![q; 8] };
-        let depth = crate::guided::field::ScalarGrid {
-            lo: Vec3::splat(-0.5),
-            step: 32.0,
-            dims: [2; 3],
-            values: (0..8).map(|i| (i % 2) as f32).collect(),
-        };
         let run_with = |depth: Option<&crate::guided::field::ScalarGrid>| {
             let setup = Setup { exemplars: &exemplars, frames: &frames, depth, dims: [32; 3], seed: 2, options };
             let out = run(&setup, &plan(&setup, &Mask::full([32; 3]), 0), None, &crate::progress::NoProgress).unwrap();
@@ -880,17 +887,8 @@ mod tests {
             .collect();
         let names = vec![Channel::R, Channel::G, Channel::B, Channel::Depth];
         let image = Image2d::from_data(w, h, names, data).unwrap();
-        let options =
-            Options { levels: 2, n: 5, coarse_n: 5, coarse_passes: 2, passes: 2, k: 3, max_dims: 8, layered: true };
+        let (options, frames, depth) = layered_along_x();
         let exemplars = Exemplars::prepare([&image, &image, &image], &options).unwrap();
-        let q = glam::Vec4::from(Quat::from_rotation_y(std::f32::consts::FRAC_PI_2));
-        let frames = FrameGrid { lo: Vec3::splat(-0.5), step: 32.0, dims: [2; 3], corners: vec![q; 8] };
-        let depth = crate::guided::field::ScalarGrid {
-            lo: Vec3::splat(-0.5),
-            step: 32.0,
-            dims: [2; 3],
-            values: (0..8).map(|i| (i % 2) as f32).collect(),
-        };
         let setup =
             Setup { exemplars: &exemplars, frames: &frames, depth: Some(&depth), dims: [32; 3], seed: 4, options };
         let out = run(&setup, &plan(&setup, &Mask::full([32; 3]), 0), None, &crate::progress::NoProgress).unwrap();
