@@ -375,7 +375,8 @@ impl<'a> Paster<'a> {
                 a.fill(0);
                 a[0] = tet_shows(mask, bounds, &self.samples, corners);
             } else {
-                tet_alphas(mask, bounds, &self.samples, corners, a);
+                let coverage = &self.coverage[t as usize * SAMPLES..(t as usize + 1) * SAMPLES];
+                tet_alphas(mask, bounds, &self.samples, corners, coverage, a);
             }
             if let (Some(f), true) = (&frame, a.iter().any(|x| *x >= 128)) {
                 *angle = Some(self.angle(t as usize, &patch, f));
@@ -420,13 +421,19 @@ const FULL: f32 = 0.999;
 /// The coverage byte every sample of a tet whose corners have texture coordinates `w`
 /// takes, when the mask's block bounds decide it (0 or 255) without sampling.
 fn decided(bounds: &AlphaBounds, w: &[Vec3; 4]) -> Option<u8> {
-    let lo = w[0].min(w[1]).min(w[2].min(w[3]));
-    let hi = w[0].max(w[1]).max(w[2].max(w[3]));
-    match bounds.range(lo, hi) {
+    match bounds_of(bounds, w) {
         (_, most) if most <= 0.0 => Some(0),
         (least, _) if least >= FULL => Some(255),
         _ => None,
     }
+}
+
+/// The least and greatest mask value anywhere in a tet whose corners have texture
+/// coordinates `w` (conservative).
+fn bounds_of(bounds: &AlphaBounds, w: &[Vec3; 4]) -> (f32, f32) {
+    let lo = w[0].min(w[1]).min(w[2].min(w[3]));
+    let hi = w[0].max(w[1]).max(w[2].max(w[3]));
+    bounds.range(lo, hi)
 }
 
 /// The coverage byte of sample `b` (barycentric) of a tet with texture coordinates `w`.
@@ -435,26 +442,56 @@ fn sample(mask: &Sampler, w: &[Vec3; 4], b: &[f32; 4]) -> u8 {
 }
 
 /// The largest coverage byte of a tet whose corners have texture coordinates `w`, as far as
-/// it matters: the first of at least 128 found ends the search.
+/// it matters: the first of at least 128 found ends the search, and where the mask's block
+/// bounds keep every sample under 128, the first above 0 does (or the bounds alone decide).
 fn tet_shows(mask: &Sampler, bounds: &AlphaBounds, samples: &[[f32; 4]], w: [Vec3; 4]) -> u8 {
-    decided(bounds, &w).unwrap_or_else(|| {
-        let mut most = 0;
-        for b in samples {
-            most = most.max(sample(mask, &w, b));
-            if most >= 128 {
-                break;
-            }
+    if let Some(all) = decided(bounds, &w) {
+        return all;
+    }
+    let (least, most) = bounds_of(bounds, &w);
+    let (least, most) = (to_byte(least), to_byte(most));
+    if least >= 1 && (least >= 128 || most < 128) {
+        return least;
+    }
+    let enough = if most < 128 { 1 } else { 128 };
+    let mut found = 0;
+    for b in samples {
+        found = found.max(sample(mask, &w, b));
+        if found >= enough {
+            break;
         }
-        most
-    })
+    }
+    found
 }
 
 /// The coverage bytes of a tet whose corners have texture coordinates `w`, into `out`: 0
-/// or 255 at once where the mask's block bounds decide every sample, else sampled.
-fn tet_alphas(mask: &Sampler, bounds: &AlphaBounds, samples: &[[f32; 4]], w: [Vec3; 4], out: &mut [u8]) {
-    match decided(bounds, &w) {
-        Some(all) => out.fill(all),
-        None => out.iter_mut().zip(samples).for_each(|(o, b)| *o = sample(mask, &w, b)),
+/// or 255 at once where the mask's block bounds decide every sample, else sampled. Where
+/// the tet's `coverage` is already full (255), a byte only tells whether the patch shows
+/// there and shows at least half: those samples are taken only until one shows half (the
+/// rest left 0).
+fn tet_alphas(
+    mask: &Sampler,
+    bounds: &AlphaBounds,
+    samples: &[[f32; 4]],
+    w: [Vec3; 4],
+    coverage: &[u8],
+    out: &mut [u8],
+) {
+    if let Some(all) = decided(bounds, &w) {
+        out.fill(all);
+        return;
+    }
+    let mut half = false;
+    for ((o, b), _) in out.iter_mut().zip(samples).zip(coverage).filter(|(_, c)| **c < 255) {
+        *o = sample(mask, &w, b);
+        half |= *o >= 128;
+    }
+    for ((o, b), _) in out.iter_mut().zip(samples).zip(coverage).filter(|(_, c)| **c == 255) {
+        if half {
+            break;
+        }
+        *o = sample(mask, &w, b);
+        half = *o >= 128;
     }
 }
 
@@ -500,5 +537,41 @@ mod tests {
         let (_, out) = fill(TextureType::T1a, &c, &masks, 5);
         assert_eq!(out.stats.forced, 0);
         assert!(out.stats.angle_mean < 8.0 && out.stats.angle_p95 < 20.0, "{:?}", out.stats);
+    }
+
+    /// Every sample, as if none were skipped.
+    fn exact(mask: &Sampler, w: [Vec3; 4]) -> Vec<u8> {
+        sample_points().iter().map(|b| sample(mask, &w, b)).collect()
+    }
+
+    #[test]
+    fn skipped_samples_change_neither_coverage_nor_where_a_patch_shows() {
+        let volume = mask::splotch(16, 0.1, 2).unwrap();
+        let mask = Sampler::mask(&volume);
+        let bounds = AlphaBounds::new(&mask);
+        let samples = sample_points();
+        let mut rng = Pcg64Mcg::seed_from_u64(7);
+        let (mut skipped, mut partly) = (0, 0);
+        for _ in 0..400 {
+            let centre = Vec3::new(rng.random(), rng.random(), rng.random()) * 1.2 - 0.1;
+            let w = [0, 1, 2, 3].map(|_| centre + (Vec3::new(rng.random(), rng.random(), rng.random()) - 0.5) * 0.3);
+            let all = exact(&mask, w);
+            let shows = |a: &[u8]| (a.iter().any(|x| *x > 0), a.iter().any(|x| *x >= 128));
+            // already full everywhere
+            let found = tet_shows(&mask, &bounds, &samples, w);
+            assert_eq!(shows(&[found]), shows(&all), "{w:?}");
+            // full at some samples: the open ones exact, the sums and what shows the same
+            let coverage: Vec<u8> =
+                (0..SAMPLES).map(|_| if rng.random::<bool>() { 255 } else { rng.random() }).collect();
+            let mut out = vec![0; SAMPLES];
+            tet_alphas(&mask, &bounds, &samples, w, &coverage, &mut out);
+            let sum = |a: &[u8]| coverage.iter().zip(a).map(|(c, x)| c.saturating_add(*x)).collect::<Vec<u8>>();
+            assert_eq!(sum(&out), sum(&all));
+            assert_eq!(shows(&out), shows(&all));
+            skipped += out.iter().zip(&all).filter(|(o, a)| o != a).count();
+            partly += usize::from(shows(&all).0 && !shows(&all).1);
+        }
+        // the skipping and the partial showing both happen
+        assert!(skipped > 1000 && partly > 5, "{skipped} {partly}");
     }
 }

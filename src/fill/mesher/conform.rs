@@ -57,6 +57,9 @@ struct Work<'a> {
     alive: Vec<bool>,
     /// Whether each vertex lies on a boundary face of the live tets.
     boundary: Vec<bool>,
+    /// Whether each vertex was snapped the whole way onto the surface (easing keeps a
+    /// boundary vertex there).
+    on_surface: Vec<bool>,
     /// The live tets around vertex `v`: `around[offsets[v]..offsets[v + 1]]`.
     offsets: Vec<usize>,
     around: Vec<u32>,
@@ -66,7 +69,9 @@ impl<'a> Work<'a> {
     fn new(mesh: &'a mut TetMesh) -> Work<'a> {
         let neighbours = mesh.neighbours();
         let alive = vec![true; mesh.tets.len()];
-        let mut work = Work { mesh, neighbours, alive, boundary: Vec::new(), offsets: Vec::new(), around: Vec::new() };
+        let on_surface = vec![false; mesh.vertices.len()];
+        let mut work =
+            Work { mesh, neighbours, alive, boundary: Vec::new(), on_surface, offsets: Vec::new(), around: Vec::new() };
         work.refresh();
         work
     }
@@ -108,23 +113,52 @@ impl<'a> Work<'a> {
         worst_with(self.mesh, self.star(v), v, p)
     }
 
-    /// Snaps every boundary vertex, twice (a vertex blocked in the first sweep may be free
-    /// once its neighbours moved); the vertices that did not get all the way.
-    /// The closest points are looked up in parallel before each sweep: a vertex's target
-    /// depends on its own position only, which no other vertex's move changes.
+    /// Snaps every boundary vertex not yet on the surface, twice (a vertex blocked in the
+    /// first sweep may be free once its neighbours moved); the vertices that did not get all
+    /// the way, sorted. The closest points are looked up before each sweep (a vertex's
+    /// target depends on its own position only), and the moves are made a group of
+    /// independent vertices at a time (see [`Work::independent`]).
     fn snap_boundary(&mut self, surface: &Surface) -> Vec<u32> {
-        let mut stuck: Vec<u32> = (0..self.mesh.vertices.len() as u32).filter(|&v| self.boundary[v as usize]).collect();
+        let n = self.mesh.vertices.len() as u32;
+        let mut stuck: Vec<u32> =
+            (0..n).filter(|&v| self.boundary[v as usize] && !self.on_surface[v as usize]).collect();
         for _ in 0..2 {
             let targets = self.closest_of(&stuck, surface);
-            let mut still = Vec::new();
-            for (&v, target) in stuck.iter().zip(targets) {
-                if !self.move_towards(v, target) {
-                    still.push(v);
+            let mut target = vec![Vec3::ZERO; n as usize];
+            stuck.iter().zip(targets).for_each(|(&v, t)| target[v as usize] = t);
+            for group in self.independent(&stuck) {
+                let moves: Vec<(Vec3, bool)> = group.par_iter().map(|&v| self.towards(v, target[v as usize])).collect();
+                for (&v, (p, whole)) in group.iter().zip(moves) {
+                    self.mesh.vertices[v as usize] = p;
+                    self.on_surface[v as usize] = whole;
                 }
             }
-            stuck = still;
+            stuck.retain(|&v| !self.on_surface[v as usize]);
         }
         stuck
+    }
+
+    /// `vertices` split into groups of which no two share a tet, so that a group's vertices
+    /// can move at once, each seeing its neighbours where they are: a greedy colouring, in
+    /// the order given (each vertex takes the first group holding none of its neighbours),
+    /// so the groups, and the moves, are the same on any thread count.
+    fn independent(&self, vertices: &[u32]) -> Vec<Vec<u32>> {
+        let mut colour = vec![u32::MAX; self.mesh.vertices.len()];
+        let mut groups: Vec<Vec<u32>> = Vec::new();
+        let mut taken = Vec::new();
+        for &v in vertices {
+            taken.clear();
+            let corners = self.star(v).iter().flat_map(|&t| self.mesh.tets[t as usize]);
+            taken.extend(corners.map(|u| colour[u as usize]).filter(|&c| c != u32::MAX));
+            // one of these is free (a lattice vertex has at most 14 neighbours)
+            let free = (0..=taken.len() as u32).find(|c| !taken.contains(c)).unwrap_or(taken.len() as u32);
+            colour[v as usize] = free;
+            if groups.len() <= free as usize {
+                groups.resize(free as usize + 1, Vec::new());
+            }
+            groups[free as usize].push(v);
+        }
+        groups
     }
 
     /// The closest surface points of `vertices`.
@@ -135,17 +169,23 @@ impl<'a> Work<'a> {
     /// Moves `v` the whole way to `target` when that keeps its tets good, else by the largest
     /// of a few halved steps that does, else not at all. Whether it got the whole way.
     fn move_towards(&mut self, v: u32, target: Vec3) -> bool {
+        let (p, whole) = self.towards(v, target);
+        self.mesh.vertices[v as usize] = p;
+        whole
+    }
+
+    /// Where [`Work::move_towards`] puts `v`, and whether that is the whole way.
+    fn towards(&self, v: u32, target: Vec3) -> (Vec3, bool) {
         let from = self.mesh.vertices[v as usize];
         let mut step = 1.0;
         for _ in 0..=HALVINGS {
             let p = from + (target - from) * step;
             if self.worst(v, p) <= cos_deg(MIN_DIHEDRAL) {
-                self.mesh.vertices[v as usize] = p;
-                return step == 1.0;
+                return (p, step == 1.0);
             }
             step *= 0.5;
         }
-        false
+        (from, false)
     }
 
     /// The tets that keep the `stuck` vertices off the surface and whose corners are all
@@ -264,33 +304,42 @@ impl<'a> Work<'a> {
     }
 
     /// Eases the corners of the poor tets (boundary vertices along the surface), but not
-    /// the `fixed` ones.
+    /// the `fixed` ones, a group of independent vertices at a time.
     fn relax(&mut self, surface: &Surface, fixed: &[bool]) {
-        for v in self.corners_of_poor_tets(EASE_BELOW) {
-            if fixed.get(v as usize).copied().unwrap_or(false) {
-                continue;
-            }
-            let best = ease(self, v, self.boundary[v as usize].then_some(surface));
-            self.mesh.vertices[v as usize] = best;
+        let mut eased = self.corners_of_poor_tets(EASE_BELOW);
+        eased.retain(|&v| !fixed.get(v as usize).copied().unwrap_or(false));
+        for group in self.independent(&eased) {
+            let moved: Vec<Vec3> =
+                group.par_iter().map(|&v| ease(self, v, self.boundary[v as usize].then_some(surface))).collect();
+            group.iter().zip(moved).for_each(|(&v, p)| self.mesh.vertices[v as usize] = p);
         }
     }
 
     /// Sweeps of smoothing over the interior corners of the distorted tets: each moves to
-    /// the mean of its tets' corners when that raises the smallest angle around it.
+    /// the mean of its tets' corners when that raises the smallest angle around it (a group
+    /// of independent vertices at a time).
     fn smooth(&mut self) {
         for _ in 0..SMOOTHING_PASSES {
-            for v in self.corners_of_poor_tets(SMOOTH_BELOW) {
-                let star = self.star(v);
-                if self.boundary[v as usize] || star.is_empty() {
-                    continue;
-                }
-                let corners = star.iter().flat_map(|&t| self.mesh.tets[t as usize]);
-                let mean = corners.map(|u| self.mesh.vertices[u as usize]).sum::<Vec3>() / (4 * star.len()) as f32;
-                if self.worst(v, mean) < self.worst(v, self.mesh.vertices[v as usize]) {
-                    self.mesh.vertices[v as usize] = mean;
+            let mut inner = self.corners_of_poor_tets(SMOOTH_BELOW);
+            inner.retain(|&v| !self.boundary[v as usize] && !self.star(v).is_empty());
+            for group in self.independent(&inner) {
+                let moved: Vec<Option<Vec3>> = group.par_iter().map(|&v| self.smoothed(v)).collect();
+                for (&v, p) in group.iter().zip(moved) {
+                    if let Some(p) = p {
+                        self.mesh.vertices[v as usize] = p;
+                    }
                 }
             }
         }
+    }
+
+    /// The mean of the corners of `v`'s tets, if putting `v` there raises the smallest
+    /// angle around it.
+    fn smoothed(&self, v: u32) -> Option<Vec3> {
+        let star = self.star(v);
+        let corners = star.iter().flat_map(|&t| self.mesh.tets[t as usize]);
+        let mean = corners.map(|u| self.mesh.vertices[u as usize]).sum::<Vec3>() / (4 * star.len()) as f32;
+        (self.worst(v, mean) < self.worst(v, self.mesh.vertices[v as usize])).then_some(mean)
     }
 
     /// Keeps the live tets that share a face with another live tet (a tet left hanging by
@@ -389,4 +438,32 @@ fn drop_unused(mesh: &mut TetMesh) {
     let old = std::mem::take(&mut mesh.vertices);
     mesh.vertices = old.into_iter().zip(&new_index).filter(|(_, n)| **n != u32::MAX).map(|(p, _)| p).collect();
     mesh.tets.iter_mut().flatten().for_each(|v| *v = new_index[*v as usize]);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::fill::tets::cube_lattice;
+
+    #[test]
+    fn independent_groups_share_no_tet_and_keep_the_order() {
+        let mut mesh = cube_lattice([4, 4, 4], 0.25);
+        let work = Work::new(&mut mesh);
+        let vertices: Vec<u32> = (0..work.mesh.vertices.len() as u32).rev().step_by(2).collect();
+        let groups = work.independent(&vertices);
+        let mut seen: Vec<u32> = groups.concat();
+        seen.sort_unstable();
+        let mut want = vertices.clone();
+        want.sort_unstable();
+        assert_eq!(seen, want);
+        for group in &groups {
+            assert!(group.windows(2).all(|p| p[0] > p[1]), "the order given is kept");
+            for (t, tet) in work.mesh.tets.iter().enumerate() {
+                let inside = tet.iter().filter(|v| group.contains(v)).count();
+                assert!(inside <= 1, "tet {t} has {inside} corners in one group");
+            }
+        }
+        // the lattice's vertices have at most 14 neighbours
+        assert!(groups.len() > 1 && groups.len() <= 15, "{}", groups.len());
+    }
 }
