@@ -72,7 +72,8 @@ pub const MIN_DIHEDRAL_DEGREES: f32 = conform::MIN_DIHEDRAL;
 const SURFACE_LOSS: f64 = 1.0;
 
 /// Tetrahedralize a closed triangle mesh into about `target_tets` nearly uniform tets
-/// (within 10 %, or 15 % after a few tries, where the shape allows: see [`SPACING_TRIES`]).
+/// (within 10 %, or 15 % after a few tries or where the count jumps across the target, where
+/// the shape allows: see [`SPACING_TRIES`] and [`LOOSE_TOLERANCE`]).
 ///
 /// The mesh must be closed (no boundary edges) and enclose a volume; its orientation does
 /// not matter. `target_tets` must lie in [`TARGET_TETS`]. Every tet of the result is
@@ -110,15 +111,17 @@ pub fn tetrahedralize(mesh: &Mesh, target_tets: usize) -> Result<TetMesh> {
         if best.as_ref().is_none_or(|b| off(count) < off(b.tets.len())) {
             best = Some(tets);
         }
-        let closest = best.as_ref().map_or(f64::INFINITY, |b| off(b.tets.len()));
-        let tolerance = if attempt + 1 >= CORRECTIONS { LOOSE_TOLERANCE } else { COUNT_TOLERANCE };
-        if closest <= tolerance.ln_1p() {
-            break;
-        }
         if count > target_tets {
             finer = finer.max(h);
         } else {
             coarser = coarser.min(h);
+        }
+        let closest = best.as_ref().map_or(f64::INFINITY, |b| off(b.tets.len()));
+        let bracketed = finer > 0.0 && coarser.is_finite();
+        let loose = attempt + 1 >= CORRECTIONS || bracketed;
+        let tolerance = if loose { LOOSE_TOLERANCE } else { COUNT_TOLERANCE };
+        if closest <= tolerance.ln_1p() {
+            break;
         }
         let corrected = h * (count as f64 / target_tets as f64).cbrt();
         h = if attempt >= CORRECTIONS && finer > 0.0 && coarser.is_finite() {
@@ -223,8 +226,10 @@ fn triangle_samples(mesh: &Mesh) -> Vec<Vec3> {
 /// How far from the target a tet count may be before the spacing is corrected (10 %).
 const COUNT_TOLERANCE: f64 = 0.10;
 
-/// After [`CORRECTIONS`] tries, a count this close to the target (15 %) is kept: where a
-/// box's side holds a whole number of cells, the count jumps past the 10 % band.
+/// After [`CORRECTIONS`] tries, or once spacings on both sides of the target were tried, a
+/// count this close to the target (15 %) is kept: where a box's side holds a whole number of
+/// cells, the count jumps past the 10 % band, and another spacing would land on either side
+/// of the jump again.
 const LOOSE_TOLERANCE: f64 = 0.15;
 
 /// Lattice spacings tried at most. First the estimate from volume and area, then up to
