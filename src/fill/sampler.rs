@@ -58,17 +58,28 @@ impl Sampler {
         self.data[(x + (dx + 1) * (y + (dy + 1) * z)) * self.channels + c]
     }
 
-    /// Alpha at `w`: trilinear inside the unit cube, 0 outside.
+    /// Alpha at `w` (the first channel): trilinear inside the unit cube, 0 outside.
     #[inline]
     pub fn alpha(&self, w: Vec3) -> f32 {
         if w.cmplt(Vec3::ZERO).any() || w.cmpgt(Vec3::ONE).any() {
             return 0.0;
         }
+        // a mask has one channel: its stride known at compile time spares the multiplies
+        match self.channels {
+            1 => self.first::<1>(w),
+            _ => self.first::<0>(w),
+        }
+    }
+
+    /// The first channel at `w` (inside the unit cube), trilinear; `C` is the channel count
+    /// when known, else 0.
+    #[inline]
+    fn first<const C: usize>(&self, w: Vec3) -> f32 {
         let p = (w * self.size - 0.5).clamp(Vec3::ZERO, self.size - 1.0);
         let (x0, y0, z0) = (p.x as usize, p.y as usize, p.z as usize);
         let t = p - Vec3::new(x0 as f32, y0 as f32, z0 as f32);
         let (sx, sy) = (self.dims[0] + 1, (self.dims[0] + 1) * (self.dims[1] + 1));
-        let c = self.channels;
+        let c = if C == 0 { self.channels } else { C };
         let d = &self.data[(x0 + sx * y0 + sy * z0) * c..];
         let lerp = |a: f32, b: f32, t: f32| a + (b - a) * t;
         let along_x = |o: usize| lerp(d[o * c], d[(o + 1) * c], t.x);
@@ -187,7 +198,11 @@ mod tests {
         }
         let m = Sampler::mask(&v);
         assert_eq!(m.alpha(Vec3::new(1.01, 0.5, 0.5)), 0.0);
-        assert!((m.alpha(Vec3::new(0.7, 0.5, 0.5)) - s.rgb(Vec3::new(0.7, 0.5, 0.5)).x).abs() < 1e-6);
+        for w in [Vec3::new(0.7, 0.5, 0.5), Vec3::new(0.2, 0.9, 0.35)] {
+            // one channel and three: the first channel either way
+            assert!((m.alpha(w) - s.rgb(w).x).abs() < 1e-6);
+            assert!((s.alpha(w) - s.rgb(w).x).abs() < 1e-6);
+        }
     }
 
     #[test]
