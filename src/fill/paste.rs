@@ -28,7 +28,6 @@ use glam::Vec3;
 use rand::{RngExt, SeedableRng};
 use rand_pcg::Pcg64Mcg;
 use rayon::prelude::*;
-use std::collections::VecDeque;
 
 /// Times a seed tet may stay uncovered by its own patch before it is given up.
 const STRIKES: u8 = 6;
@@ -270,25 +269,24 @@ impl<'a> Paster<'a> {
     }
 
     /// Grows a clump from `seed` over face neighbours that touch the mask under `coords`
-    /// and (for an oriented fill) whose tensor is close to the seed's.
-    fn grow(&self, seed: usize, coords: &dyn Fn(u32) -> Vec3, source: u16, frame: Option<&Frame>) -> Vec<u32> {
+    /// and (for an oriented fill) whose tensor is close to the seed's; sorted. Whether a tet
+    /// joins depends on the tet alone, so the clump is the same whatever order it grows in:
+    /// a ring of neighbours at a time, tested in parallel.
+    fn grow(&self, seed: usize, coords: &(dyn Fn(u32) -> Vec3 + Sync), source: u16, frame: Option<&Frame>) -> Vec<u32> {
         let mask = &self.masks[source as usize];
-        let mut inside = vec![false; self.mesh.tets.len()];
-        let mut queue = VecDeque::from([seed as u32]);
-        inside[seed] = true;
-        let mut clump = Vec::new();
-        while let Some(t) = queue.pop_front() {
-            clump.push(t);
-            for n in self.neighbours[t as usize] {
-                if n == NONE || inside[n as usize] {
-                    continue;
-                }
-                let w = self.mesh.tets[n as usize].map(coords);
-                if self.alike(seed, n as usize, frame) && touches(mask, w) {
-                    inside[n as usize] = true;
-                    queue.push_back(n);
-                }
-            }
+        let mut seen = vec![false; self.mesh.tets.len()];
+        seen[seed] = true;
+        let (mut clump, mut ring) = (vec![seed as u32], vec![seed as u32]);
+        while !ring.is_empty() {
+            let mut next: Vec<u32> = ring.iter().flat_map(|&t| self.neighbours[t as usize]).collect();
+            // each neighbour once, and never again
+            next.retain(|&n| n != NONE && !std::mem::replace(&mut seen[n as usize], true));
+            let joins: Vec<bool> = next
+                .par_iter()
+                .map(|&n| self.alike(seed, n as usize, frame) && touches(mask, self.mesh.tets[n as usize].map(coords)))
+                .collect();
+            ring = next.into_iter().zip(joins).filter(|(_, j)| *j).map(|(n, _)| n).collect();
+            clump.extend(&ring);
         }
         clump.sort_unstable();
         clump
