@@ -35,7 +35,9 @@
 //!    position with the largest smallest angle around them (boundary vertices slide along
 //!    the surface), which frees the vertices still blocked. At the end, the interior corners
 //!    of distorted tets are smoothed, tets left hanging by an edge or a corner are dropped,
-//!    and so are the vertices no tet uses.
+//!    and so are the vertices no tet uses. Snapping, easing and smoothing move a group of
+//!    vertices that share no tet at a time, in parallel (a greedy colouring in vertex
+//!    order), so the result is the same on any thread count.
 //!
 //! Why a lattice: it is pure Rust, deterministic, fast (linear in the tets), and its angles
 //! are bounded by construction, which the paste loop and the barycentric lookups need.
