@@ -416,10 +416,10 @@ impl<'a> Paster<'a> {
 /// A mask value at least this high shows as full coverage (255) at every sample.
 const FULL: f32 = 0.999;
 
-/// The coverage byte every sample of a tet whose corners have texture coordinates `w`
-/// takes, when the mask's block bounds decide it (0 or 255) without sampling.
-fn decided(bounds: &AlphaBounds, w: &[Vec3; 4]) -> Option<u8> {
-    match bounds_of(bounds, w) {
+/// The coverage byte every sample of a tet takes, when the `range` of the mask's values
+/// over it (see [`bounds_of`]) decides it (0 or 255) without sampling.
+fn decided(range: (f32, f32)) -> Option<u8> {
+    match range {
         (_, most) if most <= 0.0 => Some(0),
         (least, _) if least >= FULL => Some(255),
         _ => None,
@@ -443,11 +443,11 @@ fn sample(mask: &Sampler, w: &[Vec3; 4], b: &[f32; 4]) -> u8 {
 /// it matters: the first of at least 128 found ends the search, and where the mask's block
 /// bounds keep every sample under 128, the first above 0 does (or the bounds alone decide).
 fn tet_shows(mask: &Sampler, bounds: &AlphaBounds, samples: &[[f32; 4]], w: [Vec3; 4]) -> u8 {
-    if let Some(all) = decided(bounds, &w) {
+    let range = bounds_of(bounds, &w);
+    if let Some(all) = decided(range) {
         return all;
     }
-    let (least, most) = bounds_of(bounds, &w);
-    let (least, most) = (to_byte(least), to_byte(most));
+    let (least, most) = (to_byte(range.0), to_byte(range.1));
     if least >= 1 && (least >= 128 || most < 128) {
         return least;
     }
@@ -475,7 +475,7 @@ fn tet_alphas(
     coverage: &[u8],
     out: &mut [u8],
 ) {
-    if let Some(all) = decided(bounds, &w) {
+    if let Some(all) = decided(bounds_of(bounds, &w)) {
         out.fill(all);
         return;
     }

@@ -124,29 +124,47 @@ impl<'a> Work<'a> {
             (0..n).filter(|&v| self.boundary[v as usize] && !self.on_surface[v as usize]).collect();
         for _ in 0..2 {
             let targets = self.closest_of(&stuck, surface);
-            let mut target = vec![Vec3::ZERO; n as usize];
-            stuck.iter().zip(targets).for_each(|(&v, t)| target[v as usize] = t);
-            for group in self.independent(&stuck) {
-                let moves: Vec<(Vec3, bool)> = group.par_iter().map(|&v| self.towards(v, target[v as usize])).collect();
-                for (&v, (p, whole)) in group.iter().zip(moves) {
-                    self.mesh.vertices[v as usize] = p;
-                    self.on_surface[v as usize] = whole;
-                }
-            }
+            self.move_in_groups(
+                &stuck,
+                |work, v, i| work.towards(v, targets[i]),
+                |work, v, (p, whole)| {
+                    work.mesh.vertices[v as usize] = p;
+                    work.on_surface[v as usize] = whole;
+                },
+            );
             stuck.retain(|&v| !self.on_surface[v as usize]);
         }
         stuck
     }
 
-    /// `vertices` split into groups of which no two share a tet, so that a group's vertices
-    /// can move at once, each seeing its neighbours where they are: a greedy colouring, in
-    /// the order given (each vertex takes the first group holding none of its neighbours),
-    /// so the groups, and the moves, are the same on any thread count.
-    fn independent(&self, vertices: &[u32]) -> Vec<Vec<u32>> {
+    /// Moves `vertices` a group of independent ones at a time (see [`Work::independent`]):
+    /// `to(work, v, i)` says where `v`, the `i`-th of `vertices`, goes (worked out in
+    /// parallel for a group, each vertex seeing its neighbours where they are), then
+    /// `apply` puts the group's vertices there in turn.
+    fn move_in_groups<T: Send>(
+        &mut self,
+        vertices: &[u32],
+        to: impl Fn(&Self, u32, usize) -> T + Sync,
+        mut apply: impl FnMut(&mut Self, u32, T),
+    ) {
+        for group in self.independent(vertices) {
+            let moves: Vec<T> = group.par_iter().map(|&i| to(self, vertices[i], i)).collect();
+            for (&i, m) in group.iter().zip(moves) {
+                apply(self, vertices[i], m);
+            }
+        }
+    }
+
+    /// `vertices` split into groups (of positions in `vertices`) of which no two share a
+    /// tet, so that a group's vertices can move at once, each seeing its neighbours where
+    /// they are: a greedy colouring, in the order given (each vertex takes the first group
+    /// holding none of its neighbours), so the groups, and the moves, are the same on any
+    /// thread count.
+    fn independent(&self, vertices: &[u32]) -> Vec<Vec<usize>> {
         let mut colour = vec![u32::MAX; self.mesh.vertices.len()];
-        let mut groups: Vec<Vec<u32>> = Vec::new();
+        let mut groups: Vec<Vec<usize>> = Vec::new();
         let mut taken = Vec::new();
-        for &v in vertices {
+        for (i, &v) in vertices.iter().enumerate() {
             taken.clear();
             let corners = self.star(v).iter().flat_map(|&t| self.mesh.tets[t as usize]);
             taken.extend(corners.map(|u| colour[u as usize]).filter(|&c| c != u32::MAX));
@@ -156,7 +174,7 @@ impl<'a> Work<'a> {
             if groups.len() <= free as usize {
                 groups.resize(free as usize + 1, Vec::new());
             }
-            groups[free as usize].push(v);
+            groups[free as usize].push(i);
         }
         groups
     }
@@ -308,11 +326,11 @@ impl<'a> Work<'a> {
     fn relax(&mut self, surface: &Surface, fixed: &[bool]) {
         let mut eased = self.corners_of_poor_tets(EASE_BELOW);
         eased.retain(|&v| !fixed.get(v as usize).copied().unwrap_or(false));
-        for group in self.independent(&eased) {
-            let moved: Vec<Vec3> =
-                group.par_iter().map(|&v| ease(self, v, self.boundary[v as usize].then_some(surface))).collect();
-            group.iter().zip(moved).for_each(|(&v, p)| self.mesh.vertices[v as usize] = p);
-        }
+        self.move_in_groups(
+            &eased,
+            |work, v, _| ease(work, v, work.boundary[v as usize].then_some(surface)),
+            |work, v, p| work.mesh.vertices[v as usize] = p,
+        );
     }
 
     /// Sweeps of smoothing over the interior corners of the distorted tets: each moves to
@@ -322,14 +340,15 @@ impl<'a> Work<'a> {
         for _ in 0..SMOOTHING_PASSES {
             let mut inner = self.corners_of_poor_tets(SMOOTH_BELOW);
             inner.retain(|&v| !self.boundary[v as usize] && !self.star(v).is_empty());
-            for group in self.independent(&inner) {
-                let moved: Vec<Option<Vec3>> = group.par_iter().map(|&v| self.smoothed(v)).collect();
-                for (&v, p) in group.iter().zip(moved) {
+            self.move_in_groups(
+                &inner,
+                |work, v, _| work.smoothed(v),
+                |work, v, p| {
                     if let Some(p) = p {
-                        self.mesh.vertices[v as usize] = p;
+                        work.mesh.vertices[v as usize] = p;
                     }
-                }
-            }
+                },
+            );
         }
     }
 
@@ -450,7 +469,8 @@ mod tests {
         let mut mesh = cube_lattice([4, 4, 4], 0.25);
         let work = Work::new(&mut mesh);
         let vertices: Vec<u32> = (0..work.mesh.vertices.len() as u32).rev().step_by(2).collect();
-        let groups = work.independent(&vertices);
+        let groups: Vec<Vec<u32>> =
+            work.independent(&vertices).iter().map(|g| g.iter().map(|&i| vertices[i]).collect()).collect();
         let mut seen: Vec<u32> = groups.concat();
         seen.sort_unstable();
         let mut want = vertices.clone();
