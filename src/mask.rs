@@ -2,16 +2,20 @@
 //! outer / middle / inner variants for depth-varying textures.
 //!
 //! ```text
-//!  splotch (a slice)          outer            middle           inner      (depth runs up)
-//!   ..:::::..              #########          .......          .:::::.     # opaque
-//!  .:#######:.             #########         .:#####:.        .:#####:.    : fall-off
-//!  :#########:             :#######:         :#######:        #########    . nearly 0
-//!  .:#######:.             .:#####:.         .:#####:.        #########
-//!   ..:::::..  depth 0 ->   .......           .......         #########
+//!  splotch, middle        outer              inner        (a slice, depth 0 at the top)
+//!                       .:#######:.                       # opaque
+//!     ..:::..           .:#######:.                       : fall-off
+//!   .:#######:.         :#########:         ..:::..       . nearly 0
+//!   :#########:         .:#######:.       .:#######:.
+//!   .:#######:.           ..:::..         :#########:
+//!     ..:::..                             .:#######:.
+//!                                         .:#######:.
 //! ```
 //! Alpha is 1 inside, falls linearly to 0 across a band `falloff x size` wide, 0 outside,
-//! and stays inside the cube. The outer mask is also opaque over the whole depth-0 face (so
-//! every pasted patch covers the skin), the inner one over the innermost face.
+//! and stays inside the cube. The outer mask also reaches the depth-0 face (a slab from the
+//! face to the ball, as wide across as the ball), so every pasted outer patch covers the
+//! skin, and the inner one the innermost face; across, the slab fades like the ball, so a
+//! patch's alpha is 0 before its texture coordinates leave the cube on any side.
 
 use crate::error::{Error, Result};
 use crate::mesh::Mesh;
@@ -87,16 +91,22 @@ pub fn layered(size: usize, falloff: f32, seed: u64, layer: Layer, depth: Axis) 
     let volume = Volume::from_fn_par([size; 3], vec![Channel::A], |x, y, z, o| {
         let p = Vec3::new(x as f32, y as f32, z as f32) + 0.5;
         let r = p - centre;
-        let dir = r.try_normalize().unwrap_or(Vec3::X);
-        let surface = radius * (1.0 + WOBBLE * wobble.sample(dir * 1.5 + 2.0));
-        let mut alpha = ((surface - r.length()) / band).clamp(0.0, 1.0);
+        let rim = |r: Vec3| {
+            let surface = radius * (1.0 + WOBBLE * wobble.sample(r.try_normalize().unwrap_or(Vec3::X) * 1.5 + 2.0));
+            ((surface - r.length()) / band).clamp(0.0, 1.0)
+        };
+        let mut alpha = rim(r);
         let face = match layer {
             Layer::Outer => Some(p[d]),
             Layer::Inner => Some(s - p[d]),
             Layer::Middle => None,
         };
         if let Some(f) = face {
-            alpha = alpha.max(((s * 0.25 - f) / band + 1.0).clamp(0.0, 1.0));
+            // a slab from the face to the ball, as wide as the ball across (its rim fades
+            // inside the cube, so a patch never ends where its texture coordinates do)
+            let mut across = r;
+            across[d] = 0.0;
+            alpha = alpha.max(((s * 0.25 - f) / band + 1.0).clamp(0.0, 1.0) * rim(across));
         }
         o[0] = alpha;
     })?;
@@ -274,16 +284,26 @@ mod tests {
     }
 
     #[test]
-    fn the_outer_mask_covers_the_whole_depth_0_face() {
+    fn the_outer_mask_covers_the_depth_0_face_and_fades_before_the_sides() {
         let outer = layered(24, 0.1, 1, Layer::Outer, Axis::Z).unwrap();
         let inner = layered(24, 0.1, 1, Layer::Inner, Axis::Z).unwrap();
-        for y in 0..24 {
-            for x in 0..24 {
-                assert_eq!(outer.get(x, y, 0, 0), 1.0);
-                assert_eq!(inner.get(x, y, 23, 0), 1.0);
+        for (mask, face) in [(&outer, 0), (&inner, 23)] {
+            let opaque = (0..24 * 24).filter(|i| mask.get(i % 24, i / 24, face, 0) == 1.0).count();
+            assert!(opaque >= 24 * 24 / 4, "{opaque} opaque voxels on the face");
+            assert_eq!(mask.get(12, 12, face, 0), 1.0);
+        }
+        for mask in [&outer, &inner] {
+            for z in 0..24 {
+                for k in 0..24 {
+                    let sides = [(0, k), (23, k), (k, 0), (k, 23)];
+                    assert!(
+                        sides.iter().all(|&(x, y)| mask.get(x, y, z, 0) == 0.0),
+                        "a side at depth {z} is not clear"
+                    );
+                }
             }
         }
-        assert!(outer.get(0, 0, 23, 0) == 0.0 && inner.get(0, 0, 0, 0) == 0.0);
+        assert!(outer.get(12, 12, 23, 0) == 0.0 && inner.get(12, 12, 0, 0) == 0.0);
     }
 
     #[test]

@@ -28,6 +28,7 @@ use glam::Vec3;
 use rand::{RngExt, SeedableRng};
 use rand_pcg::Pcg64Mcg;
 use rayon::prelude::*;
+use std::collections::HashSet;
 
 /// Times a seed tet may stay uncovered by its own patch before it is given up.
 const STRIKES: u8 = 6;
@@ -35,6 +36,14 @@ const STRIKES: u8 = 6;
 const GROWTH: f32 = 1.4;
 /// Growth stops at neighbours whose tensor turns more than 45 degrees from the seed's (cosine).
 const ALIKE: f32 = 0.7;
+/// Regrowing a warped patch stops only at tensors turned more than 90 degrees (cosine).
+const NOT_OPPOSED: f32 = 0.0;
+/// A warped patch is regrown over the tets it reaches and warped again at most this many
+/// times (it takes 2-3 on the repository's fills); the last regrowth's tets are kept.
+const WARPS: usize = 8;
+/// A regrowth adding fewer than one tet in this many of the clump's is kept without
+/// another warp (those tets' coordinates extrapolated from their neighbours').
+const SETTLED: usize = 20;
 
 /// How to paste.
 #[derive(Debug, Clone)]
@@ -241,8 +250,7 @@ impl<'a> Paster<'a> {
         let mut tets = self.grow(seed, &place, source, Some(&frame));
         let mut vertices = vertices_of(self.mesh, &tets);
         let mut coords: Vec<Vec3> = vertices.iter().map(|&v| place(v)).collect();
-        let mut rounds = 0;
-        loop {
+        for round in 1..=WARPS {
             if self.field.primary[seed] != Vec3::ZERO {
                 let boost = frame.scale / self.field.scale[seed];
                 let frames: Vec<Frame> = tets.iter().map(|&t| self.frame_of(t as usize, &frame, boost)).collect();
@@ -251,12 +259,15 @@ impl<'a> Paster<'a> {
                     Warp { mesh: self.mesh, tets: &tets, vertices: &vertices, frames: &frames, axes, pin, fixed };
                 warp.solve(&mut coords);
             }
-            let added = self.regrow(&tets, &vertices, &coords, source, &frame);
-            rounds += 1;
-            if added.is_empty() || rounds > 2 {
+            let added = self.regrow(seed, &frame, &tets, &vertices, &coords, source);
+            if added.is_empty() {
                 break;
             }
+            let settled = added.len() * SETTLED < tets.len();
             (tets, vertices, coords) = self.extend(tets, &vertices, &coords, &added);
+            if settled || round == WARPS {
+                break;
+            }
         }
         self.record(Patch { source, vertices, coords }, &tets, Some(frame));
     }
@@ -283,7 +294,9 @@ impl<'a> Paster<'a> {
             next.retain(|&n| n != NONE && !std::mem::replace(&mut seen[n as usize], true));
             let joins: Vec<bool> = next
                 .par_iter()
-                .map(|&n| self.alike(seed, n as usize, frame) && touches(mask, self.mesh.tets[n as usize].map(coords)))
+                .map(|&n| {
+                    self.alike(seed, n as usize, frame, ALIKE) && touches(mask, self.mesh.tets[n as usize].map(coords))
+                })
                 .collect();
             ring = next.into_iter().zip(joins).filter(|(_, j)| *j).map(|(n, _)| n).collect();
             clump.extend(&ring);
@@ -292,35 +305,49 @@ impl<'a> Paster<'a> {
         clump
     }
 
-    fn alike(&self, seed: usize, t: usize, frame: Option<&Frame>) -> bool {
+    /// Whether tet `t`'s tensor turns from the seed's by an angle of cosine at least `cos`
+    /// (always, for a fill without a field).
+    fn alike(&self, seed: usize, t: usize, frame: Option<&Frame>, cos: f32) -> bool {
         frame.is_none()
             || self.field.primary[seed] == Vec3::ZERO
-            || self.field.primary[t].dot(self.field.primary[seed]) >= ALIKE
+            || self.field.primary[t].dot(self.field.primary[seed]) >= cos
                 && self.field.secondary[t].dot(self.field.secondary[seed])
-                    >= ALIKE.min(self.field.secondary[seed].length())
+                    >= cos.min(self.field.secondary[seed].length())
     }
 
-    /// Neighbours outside the clump that the warped patch now reaches, with their corner
-    /// coordinates (new corners extrapolated by the adjacent clump tet's map).
+    /// The tets outside the clump that the warped patch reaches, with their corner
+    /// coordinates, sorted: a flood from the clump over face neighbours that touch the
+    /// mask, each new tet's new corners extrapolated by the map of the tet it was reached
+    /// from. These join unless their tensor opposes the seed's (the first growth asks
+    /// [`ALIKE`]): the thesis adds the tets the warped patch lacks (§6.2.5), and a patch cut
+    /// off at a tet face where its mask is still high leaves a hard seam; an opposed tensor
+    /// means the patch would wrap around a singular axis (the kiwi's core).
     fn regrow(
         &self,
+        seed: usize,
+        frame: &Frame,
         tets: &[u32],
         vertices: &[u32],
         coords: &[Vec3],
         source: u16,
-        frame: &Frame,
     ) -> Vec<(u32, [Vec3; 4])> {
         let mask = &self.masks[source as usize];
-        let seed = tets[0] as usize;
         let mut added: Vec<(u32, [Vec3; 4])> = Vec::new();
-        for &t in tets {
-            let corners = self.mesh.tets[t as usize];
-            let w_t = corners.map(|v| coords[vertices.binary_search(&v).expect("vertex")]);
+        let mut joined = HashSet::new();
+        let mut i = 0;
+        while i < tets.len() + added.len() {
+            let (t, w_t) = match tets.get(i) {
+                Some(&t) => {
+                    (t, self.mesh.tets[t as usize].map(|v| coords[vertices.binary_search(&v).expect("vertex")]))
+                }
+                None => added[i - tets.len()],
+            };
+            i += 1;
             let jac = jacobian(self.mesh, t as usize, w_t);
-            let origin = self.mesh.vertices[corners[0] as usize];
+            let origin = self.mesh.vertices[self.mesh.tets[t as usize][0] as usize];
             for n in self.neighbours[t as usize] {
-                let seen = |n: u32| tets.binary_search(&n).is_ok() || added.iter().any(|a| a.0 == n);
-                if n == NONE || seen(n) || !self.alike(seed, n as usize, Some(frame)) {
+                let known = tets.binary_search(&n).is_ok() || joined.contains(&n);
+                if n == NONE || known || !self.alike(seed, n as usize, Some(frame), NOT_OPPOSED) {
                     continue;
                 }
                 let w = self.mesh.tets[n as usize].map(|v| match vertices.binary_search(&v) {
@@ -329,6 +356,7 @@ impl<'a> Paster<'a> {
                 });
                 if touches(mask, w) {
                     added.push((n, w));
+                    joined.insert(n);
                 }
             }
         }
@@ -347,9 +375,12 @@ impl<'a> Paster<'a> {
         all.extend(added.iter().map(|a| a.0));
         all.sort_unstable();
         let new_vertices = vertices_of(self.mesh, &all);
-        let from_added = |v: u32| {
-            added.iter().find_map(|(t, w)| self.mesh.tets[*t as usize].iter().position(|&u| u == v).map(|k| w[k]))
-        };
+        // each new corner's coordinates from the first added tet that has it
+        let mut corners: Vec<(u32, Vec3)> =
+            added.iter().flat_map(|(t, w)| self.mesh.tets[*t as usize].into_iter().zip(*w)).collect();
+        corners.sort_by_key(|c| c.0);
+        corners.dedup_by_key(|c| c.0);
+        let from_added = |v: u32| corners.binary_search_by_key(&v, |c| c.0).ok().map(|i| corners[i].1);
         let new_coords = new_vertices
             .iter()
             .map(|&v| match vertices.binary_search(&v) {

@@ -15,8 +15,9 @@ use serde::{Deserialize, Serialize};
 use std::fmt::Write;
 use std::path::{Path, PathBuf};
 
-/// The version of the canonical recipe text and record format: a change rebuilds everything.
-const FORMAT: &str = "solidtex-cache-2";
+/// The version of the canonical recipe text, the record format and what the built files
+/// hold (3: layered masks fade before the cube's sides): a change rebuilds everything.
+const FORMAT: &str = "solidtex-cache-3";
 
 /// What the cache remembers about a built exemplar.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

@@ -67,7 +67,7 @@ fn a_kiwi_fill_covers_every_tet_and_puts_the_skin_on_the_surface() {
     assert!(stats["fill"]["tets"].as_u64().unwrap() > 2000);
     assert!(stats["fill"]["paste"]["angle_mean"].as_f64().unwrap() < 20.0, "{stats}");
     let seams = stats["seam_strength"].as_f64().unwrap();
-    assert!((0.5..2.0).contains(&seams), "seam strength {seams}");
+    assert!((0.5..=1.3).contains(&seams), "seam strength {seams} (docs/fill.md: at most 1.3)");
     // a cut across the fruit's axis: a 0.65-radius disc; 512 px span 1.3 x 1.04
     let png = at(d, "cut.png");
     assert!(
@@ -197,6 +197,26 @@ fn a_cut_across_the_kiwi_shows_a_ring_of_seeds_around_a_round_core() {
         round.sort_by(f32::total_cmp);
         assert!(round[1] >= 0.8, "core roundness {round:.3?} at level {level}");
     }
+}
+
+/// The repository's strata spec on the drawn block: patches end where their masks fade,
+/// not at tet faces (a patch cut off where its mask is still high draws a straight seam
+/// along the lattice; such fills measure 1.4-1.6).
+#[test]
+fn the_strata_block_shows_no_hard_seams() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let repository = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("exemplars/strata_fill.toml"));
+    let body: String = repository
+        .unwrap()
+        .lines()
+        .filter(|l| !l.starts_with("library") && !l.starts_with("built"))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    let (mesh, spec) = (draw(d, "block"), spec(d, "strata.toml", &body));
+    let stats = fill(d, &mesh, &spec, "strata.lst");
+    let seams = stats["seam_strength"].as_f64().unwrap();
+    assert!((0.5..=1.3).contains(&seams), "seam strength {seams} (docs/fill.md: at most 1.3)");
 }
 
 #[test]
