@@ -250,9 +250,9 @@ impl<'a> Paster<'a> {
         let mut tets = self.grow(seed, &place, source, Some(&frame));
         let mut vertices = vertices_of(self.mesh, &tets);
         let mut coords: Vec<Vec3> = vertices.iter().map(|&v| place(v)).collect();
+        let boost = frame.scale / self.field.scale[seed];
         for round in 1..=WARPS {
             if self.field.primary[seed] != Vec3::ZERO {
-                let boost = frame.scale / self.field.scale[seed];
                 let frames: Vec<Frame> = tets.iter().map(|&t| self.frame_of(t as usize, &frame, boost)).collect();
                 let pin = (tets.iter().position(|&t| t as usize == seed).unwrap_or(0), centre);
                 let warp =

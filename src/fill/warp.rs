@@ -52,9 +52,10 @@ impl Rigid {
     }
 }
 
-/// The barycentric coordinates (summing to 0) of the vector `a` in tet `t`.
-fn direction_weights(mesh: &TetMesh, t: usize, a: Vec3) -> [f64; 4] {
-    let local = mesh.edges(t).inverse() * a;
+/// The barycentric coordinates (summing to 0) of the vector `a` in a tet whose edge
+/// matrix has the `inverse`.
+fn direction_weights(inverse: Mat3, a: Vec3) -> [f64; 4] {
+    let local = inverse * a;
     let l = local.as_dvec3();
     [-(l.x + l.y + l.z), l.x, l.y, l.z]
 }
@@ -86,8 +87,9 @@ impl Warp<'_> {
         for (i, &t) in self.tets.iter().enumerate() {
             let tet = self.mesh.tets[t as usize];
             let frame = &self.frames[i];
+            let inverse = self.mesh.edges(t as usize).inverse();
             for (k, dir) in frame.dirs.iter().enumerate() {
-                let r = direction_weights(self.mesh, t as usize, *dir * frame.scale);
+                let r = direction_weights(inverse, *dir * frame.scale);
                 a.push_row(tet.iter().zip(r).map(|(&v, w)| (local(v), w)));
                 let mut target = Vec3::ZERO;
                 target[self.axes[k]] = 1.0;
