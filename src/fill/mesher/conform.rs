@@ -27,19 +27,14 @@ const SMOOTHING_PASSES: usize = 2;
 /// moved onto it.
 const CREASE_REACH: f32 = 0.75;
 
-/// How far inside the surface (in lattice spacings) a face may lie that giving up a tet
-/// would bare: deeper, the tet stays (its blocked corner then stays off the surface by a
-/// little) rather than leave a slit in the skin, as it would in a thin, curved part.
-const BARED_DEPTH: f32 = 0.3;
-
-/// Moves the boundary vertices of `mesh` (a lattice of spacing `h`) onto `surface`, gives
-/// up the tets that would be flattened, moves vertices onto the creases the boundary cuts
-/// across, eases and smooths, and drops loose tets and unused vertices.
-pub(super) fn conform(mesh: &mut TetMesh, surface: &Surface, features: &Features, h: f32) {
+/// Moves the boundary vertices of `mesh` onto `surface`, gives up the tets that would be
+/// flattened, moves vertices onto the creases the boundary cuts across, eases and smooths,
+/// and drops loose tets and unused vertices.
+pub(super) fn conform(mesh: &mut TetMesh, surface: &Surface, features: &Features) {
     let mut work = Work::new(mesh);
     for _ in 0..ROUNDS {
         let stuck = work.snap_boundary(surface);
-        let blockers = work.blockers(&stuck, surface, BARED_DEPTH * h);
+        let blockers = work.blockers(&stuck, surface);
         if !blockers.is_empty() {
             work.give_up(&blockers);
             continue;
@@ -211,11 +206,9 @@ impl<'a> Work<'a> {
         (from, false)
     }
 
-    /// The tets that keep the `stuck` vertices off the surface, whose corners are all
-    /// boundary vertices (giving them up exposes no interior vertex) and whose faces shared
-    /// with live tets lie within `depth` of the surface (giving them up leaves no slit),
-    /// sorted.
-    fn blockers(&self, stuck: &[u32], surface: &Surface, depth: f32) -> Vec<u32> {
+    /// The tets that keep the `stuck` vertices off the surface and whose corners are all
+    /// boundary vertices (giving them up exposes no interior vertex), sorted.
+    fn blockers(&self, stuck: &[u32], surface: &Surface) -> Vec<u32> {
         let mut found: Vec<u32> = Vec::new();
         for (&v, target) in stuck.iter().zip(self.closest_of(stuck, surface)) {
             let spoilt =
@@ -224,16 +217,7 @@ impl<'a> Work<'a> {
         }
         found.sort_unstable();
         found.dedup();
-        found.retain(|&t| self.bared_faces(t).all(|c| surface.closest(c).distance(c) <= depth));
         found
-    }
-
-    /// The centres of the faces tet `t` shares with live tets: the faces giving it up bares.
-    fn bared_faces(&self, t: u32) -> impl Iterator<Item = Vec3> + '_ {
-        let tet = self.mesh.tets[t as usize];
-        let shared =
-            FACES.iter().zip(self.neighbours[t as usize]).filter(|(_, n)| *n != NONE && self.alive[*n as usize]);
-        shared.map(move |(face, _)| face.iter().map(|&s| self.mesh.vertices[tet[s] as usize]).sum::<Vec3>() / 3.0)
     }
 
     fn give_up(&mut self, tets: &[u32]) {
