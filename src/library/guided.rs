@@ -76,7 +76,7 @@ pub fn picture(
         Overlay::Guided => {
             let volume = load_built(spec, &spec.exemplar)?;
             let domain = Domain::around(surface.bounds(), GUIDED_RES)?;
-            let (planes, depth) = match layered_slices(&volume, &depths, &domain)? {
+            let (planes, depth) = match layered_slices(&volume, spec.axes, &depths, &domain)? {
                 Some((planes, depth)) => (planes, Some(depth)),
                 None => (central_slices(&volume)?, None),
             };
@@ -124,8 +124,13 @@ fn central_slices(volume: &Volume) -> Result<[Image2d; 3]> {
 /// `solidtex guided --layered` takes a section), fitted to the voxels the model's depth
 /// spans on the grid (the third plane is not matched), with the model's depth. `None`
 /// otherwise, and where the depth spans too few voxels at [`GUIDED_RES`] to be layered.
+///
+/// The strokes run along frame x, so the first slice is the one across the volume axis
+/// the lapped fill lays along them (the spec's `axes`, else the axis the volume changes
+/// slowest along: a kiwi's length), the second across the remaining one.
 fn layered_slices(
     volume: &Volume,
+    given: Option<[Axis; 2]>,
     depths: &[(Vec3, f32)],
     domain: &Domain,
 ) -> Result<Option<([Image2d; 3], ScalarGrid)>> {
@@ -149,10 +154,12 @@ fn layered_slices(
         let width = (image.width() * rows).div_ceil(image.height()).max(1);
         image.resized(width, rows)
     };
-    let [a, b] = [0, 1, 2].into_iter().filter(|&a| a != axis).collect::<Vec<_>>()[..] else {
-        return Ok(None);
+    // with a Depth channel the type does not enter the choice (see `texture_axes`)
+    let along = match crate::fill::spec::texture_axes(volume, crate::TextureType::T2b, given)? {
+        [_, along, _] if along != axis => along,
+        _ => (0..3).find(|&a| a != axis).expect("two axes besides depth"),
     };
-    let (first, second) = (slice(a)?, slice(b)?);
+    let (first, second) = (slice(along)?, slice(3 - axis - along)?);
     Ok(Some(([first, second.clone(), second], depth)))
 }
 
@@ -198,4 +205,37 @@ fn shrunk(image: Image2d, side: usize) -> Result<Image2d> {
         levels += 1;
     }
     Ok(crate::synth::image_pyramid(&image, levels)?.swap_remove(0))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A volume layered along z (its Depth channel), striped along x and the same along y:
+    /// the strokes' axis is y (the slowest), so the first slice is the one across y (its
+    /// rows show the stripes), the second across x (its rows are even).
+    #[test]
+    fn the_first_layered_slice_is_across_the_strokes_axis() {
+        let volume =
+            Volume::from_fn([32, 32, 32], vec![Channel::R, Channel::G, Channel::B, Channel::Depth], |x, _, z, o| {
+                let stripe = ((x / 8) % 2) as f32;
+                o.copy_from_slice(&[stripe, z as f32 / 31.0, 0.5, z as f32 / 31.0]);
+            })
+            .unwrap();
+        let box_corners = (0..8).map(|i| Vec3::new([-1.0, 1.0][i & 1], [-0.5, 0.5][(i >> 1) & 1], [-0.5, 0.5][i >> 2]));
+        let depths: Vec<(Vec3, f32)> = box_corners
+            .map(|p| (p, 0.0))
+            .chain((0..5).map(|i| (Vec3::new(i as f32 * 0.4 - 0.8, 0.0, 0.0), 1.0)))
+            .collect();
+        let domain = Domain::around((Vec3::new(-1.0, -0.5, -0.5), Vec3::new(1.0, 0.5, 0.5)), GUIDED_RES).unwrap();
+        let (planes, _) = layered_slices(&volume, None, &depths, &domain).unwrap().expect("layered");
+        // the spread of red along the middle row
+        let spread = |image: &Image2d| {
+            let y = image.height() / 2;
+            let reds: Vec<f32> = (0..image.width()).map(|x| image.pixel(x, y)[0]).collect();
+            reds.iter().cloned().fold(f32::MIN, f32::max) - reds.iter().cloned().fold(f32::MAX, f32::min)
+        };
+        assert!(spread(&planes[0]) > 0.8, "across y: {}", spread(&planes[0]));
+        assert!(spread(&planes[1]) < 0.05, "across x: {}", spread(&planes[1]));
+    }
 }
