@@ -34,7 +34,10 @@
 //!    rounds, the corners of tets under 20° are eased by a small pattern search for the
 //!    position with the largest smallest angle around them (boundary vertices slide along
 //!    the surface), which frees the vertices still blocked. At the end, the interior corners
-//!    of distorted tets are smoothed, tets left hanging by an edge or a corner are dropped,
+//!    of distorted tets are smoothed, then a given-up tet that would close a face lying
+//!    deep under the surface (a slit or a pocket in a thin part) comes back if it, with its
+//!    corners where they are or eased along the surface, keeps every tet around at 12° and
+//!    no face around farther from the surface; tets left hanging by an edge or a corner are dropped,
 //!    and so are the vertices no tet uses. Snapping, easing and smoothing move a group of
 //!    vertices that share no tet at a time, in parallel (a greedy colouring in vertex
 //!    order), so the result is the same on any thread count.
@@ -439,7 +442,8 @@ mod tests {
     fn the_hole_of_a_torus_stays_empty() {
         let mesh = torus(1.0, 0.4, (64, 32));
         let tets = tetrahedralize(&mesh, 6000).unwrap();
-        let volume = check_result(&tets, &mesh, 6000, 2.8, 15.0);
+        // a tet given up in the tube's tight curve and brought back may keep only the 12°
+        let volume = check_result(&tets, &mesh, 6000, 2.8, conform::MIN_DIHEDRAL);
         // The tube is only about three lattice spacings across, so the chords cut off more.
         let enclosed = f64::from(mesh.signed_volume());
         assert!((volume / enclosed - 1.0).abs() < 0.04, "volume {volume} against {enclosed}");
@@ -506,9 +510,11 @@ mod tests {
 
     #[test]
     fn the_boundary_stays_within_half_an_edge_of_the_surface_and_a_lost_part_is_seen() {
-        // smooth shapes; a cube turned off the lattice axes comes to 0.72 edges (its
-        // creases and corners are rounded off: not yet within the bound)
-        for name in ["fruit", "pipe"] {
+        // smooth shapes, and the vase's thin lip, where tets given up while snapping left
+        // a pocket under the skin (0.54 edges deep) until they were brought back; a cube
+        // turned off the lattice axes comes to 0.72 edges (its creases and corners are
+        // rounded off: not yet within the bound)
+        for name in ["fruit", "pipe", "vase"] {
             let mesh = crate::mesh::shapes::named(name).unwrap();
             let tets = tetrahedralize(&mesh, 5000).unwrap();
             let d = surface_distance(&mesh, &tets).unwrap();

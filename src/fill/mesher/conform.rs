@@ -1,6 +1,7 @@
 //! Conforming the cut lattice to the surface: boundary vertices move to their closest
 //! surface points as far as their tets stay well shaped, tets that would be flattened
-//! against the surface are given up, and the vertices around poor tets are eased.
+//! against the surface are given up, the vertices around poor tets are eased, and at the
+//! end the given-up tets that leave a slit under the skin come back where they fit.
 
 use super::closest::Surface;
 use super::features::Features;
@@ -27,9 +28,17 @@ const SMOOTHING_PASSES: usize = 2;
 /// moved onto it.
 const CREASE_REACH: f32 = 0.75;
 
+/// A given-up tet comes back at the end if a face it would close lies deeper than this
+/// under the surface (in mean edges), see [`Work::restore`].
+const RESTORE_DEPTH: f32 = 0.1;
+/// Sweeps over the given-up tets that may come back.
+const RESTORE_SWEEPS: usize = 3;
+/// A given-up tet flatter than this (smallest dihedral angle, degrees) is not eased back.
+const REVIVE_FROM: f32 = 3.0;
+
 /// Moves the boundary vertices of `mesh` onto `surface`, gives up the tets that would be
 /// flattened, moves vertices onto the creases the boundary cuts across, eases and smooths,
-/// and drops loose tets and unused vertices.
+/// brings back given-up tets that close slits, and drops loose tets and unused vertices.
 pub(super) fn conform(mesh: &mut TetMesh, surface: &Surface, features: &Features) {
     let mut work = Work::new(mesh);
     for _ in 0..ROUNDS {
@@ -47,6 +56,7 @@ pub(super) fn conform(mesh: &mut TetMesh, surface: &Surface, features: &Features
     let on_crease = work.align_creases(surface, features);
     work.relax(surface, &on_crease);
     work.smooth();
+    work.restore(surface, RESTORE_DEPTH * crate::fill::mean_edge(work.mesh), &on_crease);
     work.finish();
 }
 
@@ -218,6 +228,129 @@ impl<'a> Work<'a> {
         found.sort_unstable();
         found.dedup();
         found
+    }
+
+    /// Brings back the given-up tets that would close a face lying deeper than `depth`
+    /// under the surface (the floor of a slit or a pocket in a thin part), where their
+    /// corners are or after easing the corners that are not `fixed`, as long as every tet
+    /// around keeps [`MIN_DIHEDRAL`] and no face around ends up farther from the surface
+    /// than `depth` or the farthest one there before. In index order, a few sweeps.
+    fn restore(&mut self, surface: &Surface, depth: f32, fixed: &[bool]) {
+        // a tet that failed is tried again only once a tet next to its corners came back
+        let mut tried = vec![false; self.mesh.tets.len()];
+        let mut changed = vec![false; self.mesh.vertices.len()];
+        for _ in 0..RESTORE_SWEEPS {
+            let worth = |t: u32| !tried[t as usize] || self.mesh.tets[t as usize].iter().any(|&v| changed[v as usize]);
+            let deep: Vec<u32> = (0..self.mesh.tets.len() as u32)
+                .into_par_iter()
+                .filter(|&t| !self.alive[t as usize] && worth(t) && revivable(self.mesh.corners(t as usize)))
+                .filter(|&t| self.bared_faces(t).any(|c| surface.closest(c).distance(c) > depth))
+                .collect();
+            changed.iter_mut().for_each(|c| *c = false);
+            let mut revived = Vec::new();
+            for t in deep {
+                tried[t as usize] = true;
+                if self.revive(t, surface, depth, fixed, &revived) {
+                    self.alive[t as usize] = true;
+                    revived.push(t);
+                }
+            }
+            if revived.is_empty() {
+                return;
+            }
+            for &t in &revived {
+                for v in self.mesh.tets[t as usize] {
+                    self.star(v)
+                        .iter()
+                        .flat_map(|&u| self.mesh.tets[u as usize])
+                        .for_each(|u| changed[u as usize] = true);
+                }
+            }
+            self.refresh();
+        }
+    }
+
+    /// Whether the given-up tet `t` can come back (see [`Work::restore`]); `revived`: the
+    /// tets brought back since the stars were last computed. The corners keep the eased
+    /// positions only if it can.
+    fn revive(&mut self, t: u32, surface: &Surface, depth: f32, fixed: &[bool], revived: &[u32]) -> bool {
+        let tet = self.mesh.tets[t as usize];
+        let star_with = |work: &Work, v: u32| {
+            let mut star = work.star(v).to_vec();
+            star.extend(revived.iter().chain([&t]).filter(|&&u| work.mesh.tets[u as usize].contains(&v)));
+            star
+        };
+        let shaped = |work: &Work| {
+            tet.iter().all(|&v| {
+                worst_with(work.mesh, &star_with(work, v), v, work.mesh.vertices[v as usize]) <= cos_deg(MIN_DIHEDRAL)
+            })
+        };
+        let off = |c: Vec3| surface.closest(c).distance(c);
+        // the farthest sample of the open faces that touch the corners (`t` given up): the
+        // faces easing can move
+        let farthest = |work: &Work| {
+            let mut around: Vec<u32> = tet.iter().flat_map(|&v| star_with(work, v)).filter(|&u| u != t).collect();
+            around.sort_unstable();
+            around.dedup();
+            let touching = around.iter().flat_map(|&u| work.open_faces(u, t, Some(tet)));
+            touching.map(off).fold(0.0f32, f32::max)
+        };
+        let allowed = farthest(self).max(depth);
+        let fits = |work: &Work| work.open_faces(t, NONE, None).all(|c| off(c) <= allowed);
+        if shaped(self) && fits(self) {
+            return true;
+        }
+        let saved = tet.map(|v| self.mesh.vertices[v as usize]);
+        for _ in 0..2 {
+            for v in tet.into_iter().filter(|&v| !fixed.get(v as usize).copied().unwrap_or(false)) {
+                let on_boundary = self.bare_without(v, t, revived);
+                let p = ease_in(self, v, &star_with(self, v), on_boundary.then_some(surface));
+                self.mesh.vertices[v as usize] = p;
+            }
+        }
+        if shaped(self) && fits(self) && farthest(self) <= allowed {
+            return true;
+        }
+        for (v, p) in tet.iter().zip(saved) {
+            self.mesh.vertices[*v as usize] = p;
+        }
+        false
+    }
+
+    /// Whether vertex `v` stays on the boundary once tet `t` comes back (it lies on an open
+    /// face of a live tet, `revived` counted live, other than one `t` closes, or on an
+    /// open face of `t`).
+    fn bare_without(&self, v: u32, t: u32, revived: &[u32]) -> bool {
+        let open_at_v = |u: u32, open: &dyn Fn(u32) -> bool| {
+            let tet = self.mesh.tets[u as usize];
+            FACES.iter().zip(self.neighbours[u as usize]).any(|(face, n)| open(n) && face.iter().any(|&s| tet[s] == v))
+        };
+        let others = self.star(v).iter().chain(revived.iter().filter(|&&u| self.mesh.tets[u as usize].contains(&v)));
+        others.copied().any(|u| open_at_v(u, &|n| n == NONE || (n != t && !self.alive[n as usize])))
+            || open_at_v(t, &|n| n == NONE || !self.alive[n as usize])
+    }
+
+    /// The corners, edge midpoints and centres of the faces of tet `t` that no live tet
+    /// (other than `but`) shares; with `touching`, only the faces with a corner among them.
+    fn open_faces(&self, t: u32, but: u32, touching: Option<[u32; 4]>) -> impl Iterator<Item = Vec3> + '_ {
+        let tet = self.mesh.tets[t as usize];
+        let touches = move |face: &[usize; 3]| touching.is_none_or(|c| face.iter().any(|&s| c.contains(&tet[s])));
+        let open = FACES
+            .iter()
+            .zip(self.neighbours[t as usize])
+            .filter(move |(face, n)| (*n == NONE || *n == but || !self.alive[*n as usize]) && touches(face));
+        open.flat_map(move |(face, _)| {
+            let [a, b, c] = face.map(|s| self.mesh.vertices[tet[s] as usize]);
+            [a, b, c, (a + b) / 2.0, (b + c) / 2.0, (c + a) / 2.0, (a + b + c) / 3.0]
+        })
+    }
+
+    /// The centres of the faces tet `t` shares with live tets.
+    fn bared_faces(&self, t: u32) -> impl Iterator<Item = Vec3> + '_ {
+        let tet = self.mesh.tets[t as usize];
+        let shared =
+            FACES.iter().zip(self.neighbours[t as usize]).filter(|(_, n)| *n != NONE && self.alive[*n as usize]);
+        shared.map(move |(face, _)| face.iter().map(|&s| self.mesh.vertices[tet[s] as usize]).sum::<Vec3>() / 3.0)
     }
 
     fn give_up(&mut self, tets: &[u32]) {
@@ -393,17 +526,23 @@ fn nearest_on<'s>(segments: impl Iterator<Item = &'s [Vec3; 2]>, p: Vec3) -> Opt
 /// along the axes with steps from a fifth of the mean distance to its tets' corners down to
 /// a fortieth; with a surface, every candidate is moved onto it.
 fn ease(work: &Work, v: u32, surface: Option<&Surface>) -> Vec3 {
+    ease_in(work, v, work.star(v), surface)
+}
+
+/// [`ease`] with the tets `star` around `v`.
+fn ease_in(work: &Work, v: u32, star: &[u32], surface: Option<&Surface>) -> Vec3 {
     let here = work.mesh.vertices[v as usize];
-    let star = work.star(v);
     let corners = star.iter().flat_map(|&t| work.mesh.tets[t as usize]).map(|u| work.mesh.vertices[u as usize]);
     let mut step = corners.map(|c| c.distance(here)).sum::<f32>() / (3 * star.len()).max(1) as f32 * 0.2;
-    let mut best = (work.worst(v, here), here);
+    let mut best = (worst_with(work.mesh, star, v, here), here);
     for _ in 0..4 {
         for _ in 0..4 {
             let moves = [Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z].map(|d| best.1 + d * step);
             let candidates = moves.map(|p| surface.map_or(p, |s| s.closest(p)));
-            let found =
-                candidates.into_iter().map(|p| (work.worst(v, p), p)).fold(best, |b, c| if c.0 < b.0 { c } else { b });
+            let found = candidates
+                .into_iter()
+                .map(|p| (worst_with(work.mesh, star, v, p), p))
+                .fold(best, |b, c| if c.0 < b.0 { c } else { b });
             if found.1 == best.1 {
                 break;
             }
@@ -427,6 +566,12 @@ fn worst_with(mesh: &TetMesh, star: &[u32], v: u32, p: Vec3) -> f32 {
         worst = worst.max(sharpest(c));
     }
     worst
+}
+
+/// Whether a given-up tet with these corners is worth trying to bring back: positive, and
+/// not flatter than [`REVIVE_FROM`].
+fn revivable(c: [Vec3; 4]) -> bool {
+    (c[1] - c[0]).cross(c[2] - c[0]).dot(c[3] - c[0]) > 0.0 && sharpest(c) <= cos_deg(REVIVE_FROM)
 }
 
 /// The cosine of the smallest dihedral angle of a tet (as in
