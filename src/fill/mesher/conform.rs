@@ -286,30 +286,32 @@ impl<'a> Work<'a> {
             })
         };
         let off = |c: Vec3| surface.closest(c).distance(c);
-        // the farthest sample of the open faces that touch the corners (`t` given up): the
-        // faces easing can move
+        // the farthest sample of the open faces that touch the corners: the faces bringing
+        // `t` back closes or opens, and those easing moves
         let farthest = |work: &Work| {
-            let mut around: Vec<u32> = tet.iter().flat_map(|&v| star_with(work, v)).filter(|&u| u != t).collect();
+            let mut around: Vec<u32> = tet.iter().flat_map(|&v| star_with(work, v)).collect();
             around.sort_unstable();
             around.dedup();
-            let touching = around.iter().flat_map(|&u| work.open_faces(u, t, Some(tet)));
-            touching.map(off).fold(0.0f32, f32::max)
+            let open = around.iter().filter(|&&u| work.alive[u as usize]);
+            open.flat_map(|&u| work.open_faces(u, Some(tet))).map(off).fold(0.0f32, f32::max)
         };
         let allowed = farthest(self).max(depth);
-        let fits = |work: &Work| work.open_faces(t, NONE, None).all(|c| off(c) <= allowed);
-        if shaped(self) && fits(self) {
-            return true;
-        }
         let saved = tet.map(|v| self.mesh.vertices[v as usize]);
-        for _ in 0..2 {
-            for v in tet.into_iter().filter(|&v| !fixed.get(v as usize).copied().unwrap_or(false)) {
-                let on_boundary = self.bare_without(v, t, revived);
-                let p = ease_in(self, v, &star_with(self, v), on_boundary.then_some(surface));
-                self.mesh.vertices[v as usize] = p;
+        // a pocket closed on all sides gets more sweeps of easing
+        let enclosed = self.open_faces(t, None).next().is_none();
+        for sweeps in [0, if enclosed { 6 } else { 2 }] {
+            for _ in 0..sweeps {
+                for v in tet.into_iter().filter(|&v| !fixed.get(v as usize).copied().unwrap_or(false)) {
+                    let on_boundary = self.bare_without(v, t, revived);
+                    let p = ease_in(self, v, &star_with(self, v), on_boundary.then_some(surface));
+                    self.mesh.vertices[v as usize] = p;
+                }
             }
-        }
-        if shaped(self) && fits(self) && farthest(self) <= allowed {
-            return true;
+            self.alive[t as usize] = true;
+            if shaped(self) && farthest(self) <= allowed {
+                return true;
+            }
+            self.alive[t as usize] = false;
         }
         for (v, p) in tet.iter().zip(saved) {
             self.mesh.vertices[*v as usize] = p;
@@ -331,14 +333,14 @@ impl<'a> Work<'a> {
     }
 
     /// The corners, edge midpoints and centres of the faces of tet `t` that no live tet
-    /// (other than `but`) shares; with `touching`, only the faces with a corner among them.
-    fn open_faces(&self, t: u32, but: u32, touching: Option<[u32; 4]>) -> impl Iterator<Item = Vec3> + '_ {
+    /// shares; with `touching`, only the faces with a corner among them.
+    fn open_faces(&self, t: u32, touching: Option<[u32; 4]>) -> impl Iterator<Item = Vec3> + '_ {
         let tet = self.mesh.tets[t as usize];
         let touches = move |face: &[usize; 3]| touching.is_none_or(|c| face.iter().any(|&s| c.contains(&tet[s])));
         let open = FACES
             .iter()
             .zip(self.neighbours[t as usize])
-            .filter(move |(face, n)| (*n == NONE || *n == but || !self.alive[*n as usize]) && touches(face));
+            .filter(move |(face, n)| (*n == NONE || !self.alive[*n as usize]) && touches(face));
         open.flat_map(move |(face, _)| {
             let [a, b, c] = face.map(|s| self.mesh.vertices[tet[s] as usize]);
             [a, b, c, (a + b) / 2.0, (b + c) / 2.0, (c + a) / 2.0, (a + b + c) / 3.0]
