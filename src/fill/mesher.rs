@@ -37,10 +37,11 @@
 //!    of distorted tets are smoothed, then a given-up tet that would close a face lying
 //!    deep under the surface (a slit or a pocket in a thin part) comes back if it, with its
 //!    corners where they are or eased along the surface, keeps every tet around at 12° and
-//!    no face around farther from the surface; tets left hanging by an edge or a corner are dropped,
-//!    and so are the vertices no tet uses. Snapping, easing and smoothing move a group of
-//!    vertices that share no tet at a time, in parallel (a greedy colouring in vertex
-//!    order), so the result is the same on any thread count.
+//!    no face around farther from the surface than before. Tets left hanging by an edge or
+//!    a corner are dropped, and so are the vertices no tet uses. Snapping, easing and
+//!    smoothing move a group of vertices that share no tet at a time, in parallel (a greedy
+//!    colouring in vertex order), and given-up tets come back one at a time in index order,
+//!    so the result is the same on any thread count.
 //!
 //! Why a lattice: it is pure Rust, deterministic, fast (linear in the tets), and its angles
 //! are bounded by construction, which the paste loop and the barycentric lookups need.
