@@ -30,7 +30,7 @@ const CREASE_REACH: f32 = 0.75;
 
 /// A given-up tet comes back at the end if a face it would close lies deeper than this
 /// under the surface (in mean edges), see [`Work::restore`].
-const RESTORE_DEPTH: f32 = 0.1;
+const RESTORE_DEPTH: f32 = 0.25;
 /// Sweeps over the given-up tets that may come back.
 const RESTORE_SWEEPS: usize = 3;
 /// A given-up tet flatter than this (smallest dihedral angle, degrees) is not eased back.
