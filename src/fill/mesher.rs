@@ -225,8 +225,13 @@ pub fn surface_distance(mesh: &Mesh, tets: &TetMesh) -> Result<SurfaceDistance> 
 
 /// The corners, edge midpoints and centre of every triangle of `mesh`.
 fn triangle_samples(mesh: &Mesh) -> Vec<Vec3> {
-    let corners = mesh.triangles.iter().map(|t| t.map(|i| mesh.vertices[i as usize]));
-    corners.flat_map(|[a, b, c]| [a, b, c, (a + b) / 2.0, (b + c) / 2.0, (c + a) / 2.0, (a + b + c) / 3.0]).collect()
+    mesh.triangles.iter().flat_map(|t| face_samples(t.map(|i| mesh.vertices[i as usize]))).collect()
+}
+
+/// The corners, edge midpoints and centre of a triangle: where its distance to a surface
+/// is measured.
+fn face_samples([a, b, c]: [Vec3; 3]) -> [Vec3; 7] {
+    [a, b, c, (a + b) / 2.0, (b + c) / 2.0, (c + a) / 2.0, (a + b + c) / 3.0]
 }
 
 /// How far from the target a tet count may be before the spacing is corrected (10 %).

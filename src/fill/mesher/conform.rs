@@ -4,6 +4,7 @@
 //! end the given-up tets that leave a slit under the skin come back where they fit.
 
 use super::closest::Surface;
+use super::face_samples;
 use super::features::Features;
 use crate::fill::tets::{FACES, NONE, TetMesh};
 use glam::Vec3;
@@ -95,7 +96,7 @@ impl<'a> Work<'a> {
             tet.iter().for_each(|&v| self.offsets[v as usize + 1] += 1);
             for (k, face) in FACES.iter().enumerate() {
                 let across = self.neighbours[t][k];
-                if across == NONE || !self.alive[across as usize] {
+                if self.open(across) {
                     face.iter().for_each(|&s| self.boundary[tet[s] as usize] = true);
                 }
             }
@@ -111,6 +112,11 @@ impl<'a> Work<'a> {
                 fill[v as usize] += 1;
             }
         }
+    }
+
+    /// Whether a face whose neighbour across is `across` is open: no live tet shares it.
+    fn open(&self, across: u32) -> bool {
+        across == NONE || !self.alive[across as usize]
     }
 
     fn star(&self, v: u32) -> &[u32] {
@@ -243,7 +249,7 @@ impl<'a> Work<'a> {
             let worth = |t: u32| !tried[t as usize] || self.mesh.tets[t as usize].iter().any(|&v| changed[v as usize]);
             let deep: Vec<u32> = (0..self.mesh.tets.len() as u32)
                 .into_par_iter()
-                .filter(|&t| !self.alive[t as usize] && worth(t) && revivable(self.mesh.corners(t as usize)))
+                .filter(|&t| !self.alive[t as usize] && worth(t) && revivable(self.mesh, t as usize))
                 .filter(|&t| self.bared_faces(t).any(|c| surface.closest(c).distance(c) > depth))
                 .collect();
             changed.iter_mut().for_each(|c| *c = false);
@@ -328,8 +334,7 @@ impl<'a> Work<'a> {
             FACES.iter().zip(self.neighbours[u as usize]).any(|(face, n)| open(n) && face.iter().any(|&s| tet[s] == v))
         };
         let others = self.star(v).iter().chain(revived.iter().filter(|&&u| self.mesh.tets[u as usize].contains(&v)));
-        others.copied().any(|u| open_at_v(u, &|n| n == NONE || (n != t && !self.alive[n as usize])))
-            || open_at_v(t, &|n| n == NONE || !self.alive[n as usize])
+        others.copied().any(|u| open_at_v(u, &|n| n != t && self.open(n))) || open_at_v(t, &|n| self.open(n))
     }
 
     /// The corners, edge midpoints and centres of the faces of tet `t` that no live tet
@@ -337,21 +342,15 @@ impl<'a> Work<'a> {
     fn open_faces(&self, t: u32, touching: Option<[u32; 4]>) -> impl Iterator<Item = Vec3> + '_ {
         let tet = self.mesh.tets[t as usize];
         let touches = move |face: &[usize; 3]| touching.is_none_or(|c| face.iter().any(|&s| c.contains(&tet[s])));
-        let open = FACES
-            .iter()
-            .zip(self.neighbours[t as usize])
-            .filter(move |(face, n)| (*n == NONE || !self.alive[*n as usize]) && touches(face));
-        open.flat_map(move |(face, _)| {
-            let [a, b, c] = face.map(|s| self.mesh.vertices[tet[s] as usize]);
-            [a, b, c, (a + b) / 2.0, (b + c) / 2.0, (c + a) / 2.0, (a + b + c) / 3.0]
-        })
+        let open =
+            FACES.iter().zip(self.neighbours[t as usize]).filter(move |(face, n)| self.open(*n) && touches(face));
+        open.flat_map(move |(face, _)| face_samples(face.map(|s| self.mesh.vertices[tet[s] as usize])))
     }
 
     /// The centres of the faces tet `t` shares with live tets.
     fn bared_faces(&self, t: u32) -> impl Iterator<Item = Vec3> + '_ {
         let tet = self.mesh.tets[t as usize];
-        let shared =
-            FACES.iter().zip(self.neighbours[t as usize]).filter(|(_, n)| *n != NONE && self.alive[*n as usize]);
+        let shared = FACES.iter().zip(self.neighbours[t as usize]).filter(|(_, n)| !self.open(*n));
         shared.map(move |(face, _)| face.iter().map(|&s| self.mesh.vertices[tet[s] as usize]).sum::<Vec3>() / 3.0)
     }
 
@@ -377,7 +376,7 @@ impl<'a> Work<'a> {
         for (t, tet) in self.mesh.tets.iter().enumerate().filter(|(t, _)| self.alive[*t]) {
             for (k, face) in FACES.iter().enumerate() {
                 let across = self.neighbours[t][k];
-                if across == NONE || !self.alive[across as usize] {
+                if self.open(across) {
                     let f = face.map(|s| tet[s]);
                     edges.extend([(f[0], f[1]), (f[1], f[2]), (f[2], f[0])].map(|(a, b)| (a.min(b), a.max(b))));
                 }
@@ -570,10 +569,10 @@ fn worst_with(mesh: &TetMesh, star: &[u32], v: u32, p: Vec3) -> f32 {
     worst
 }
 
-/// Whether a given-up tet with these corners is worth trying to bring back: positive, and
-/// not flatter than [`REVIVE_FROM`].
-fn revivable(c: [Vec3; 4]) -> bool {
-    (c[1] - c[0]).cross(c[2] - c[0]).dot(c[3] - c[0]) > 0.0 && sharpest(c) <= cos_deg(REVIVE_FROM)
+/// Whether given-up tet `t` is worth trying to bring back: positive, and not flatter than
+/// [`REVIVE_FROM`].
+fn revivable(mesh: &TetMesh, t: usize) -> bool {
+    mesh.volume_of(t) > 0.0 && sharpest(mesh.corners(t)) <= cos_deg(REVIVE_FROM)
 }
 
 /// The cosine of the smallest dihedral angle of a tet (as in
