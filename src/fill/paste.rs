@@ -15,8 +15,12 @@
 //! not depend on the thread count.
 
 use super::field::Field;
+use super::patch::{
+    BATCHED, mask_at_samples, orthogonal, prune, random_frame, sample_batches, sample_points, to_byte, touches,
+    vertices_of,
+};
 pub use super::patch::{Patch, SAMPLES};
-use super::patch::{orthogonal, prune, random_frame, sample_points, to_byte, touches, vertices_of};
+use super::sampler::BATCH;
 use super::sampler::{AlphaBounds, Sampler};
 use super::tets::{NONE, TetMesh};
 use super::warp::{Frame, Rigid, Warp, jacobian};
@@ -94,6 +98,8 @@ pub struct Paster<'a> {
     bounds: Vec<AlphaBounds>,
     params: Params,
     samples: Vec<[f32; 4]>,
+    /// The same samples in batches.
+    batches: Vec<[[f32; BATCH]; 4]>,
     coverage: Vec<u8>,
     out: Pasted,
     angles: Vec<f32>,
@@ -120,6 +126,7 @@ impl<'a> Paster<'a> {
             bounds,
             params,
             samples,
+            batches: sample_batches(),
             coverage,
             out,
             angles: Vec::new(),
@@ -405,7 +412,7 @@ impl<'a> Paster<'a> {
                 a[0] = tet_shows(mask, bounds, &self.samples, corners);
             } else {
                 let coverage = &self.coverage[t as usize * SAMPLES..(t as usize + 1) * SAMPLES];
-                tet_alphas(mask, bounds, &self.samples, corners, coverage, a);
+                tet_alphas(mask, bounds, &self.batches, corners, coverage, a);
             }
             if let (Some(f), true) = (&frame, a.iter().any(|x| *x >= 128)) {
                 *angle = Some(self.angle(t as usize, &patch, f));
@@ -494,14 +501,14 @@ fn tet_shows(mask: &Sampler, bounds: &AlphaBounds, samples: &[[f32; 4]], w: [Vec
 }
 
 /// The coverage bytes of a tet whose corners have texture coordinates `w`, into `out`: 0
-/// or 255 at once where the mask's block bounds decide every sample, else sampled. Where
-/// the tet's `coverage` is already full (255), a byte only tells whether the patch shows
-/// there and shows at least half: those samples are taken only until one shows half (the
-/// rest left 0).
+/// or 255 at once where the mask's block bounds decide every sample, else every sample
+/// looked up (in batches). Where the tet's `coverage` is already full (255), a byte only
+/// tells whether the patch shows there and shows at least half: those bytes are kept only
+/// until one shows half (the rest left 0).
 fn tet_alphas(
     mask: &Sampler,
     bounds: &AlphaBounds,
-    samples: &[[f32; 4]],
+    batches: &[[[f32; BATCH]; 4]],
     w: [Vec3; 4],
     coverage: &[u8],
     out: &mut [u8],
@@ -510,16 +517,18 @@ fn tet_alphas(
         out.fill(all);
         return;
     }
+    let mut alphas = [0.0; BATCHED];
+    mask_at_samples(mask, &w, batches, &mut alphas);
     let mut half = false;
-    for ((o, b), _) in out.iter_mut().zip(samples).zip(coverage).filter(|(_, c)| **c < 255) {
-        *o = sample(mask, &w, b);
+    for ((o, a), _) in out.iter_mut().zip(alphas).zip(coverage).filter(|(_, c)| **c < 255) {
+        *o = to_byte(a);
         half |= *o >= 128;
     }
-    for ((o, b), _) in out.iter_mut().zip(samples).zip(coverage).filter(|(_, c)| **c == 255) {
+    for ((o, a), _) in out.iter_mut().zip(alphas).zip(coverage).filter(|(_, c)| **c == 255) {
         if half {
             break;
         }
-        *o = sample(mask, &w, b);
+        *o = to_byte(a);
         half = *o >= 128;
     }
 }
@@ -593,7 +602,7 @@ mod tests {
             let coverage: Vec<u8> =
                 (0..SAMPLES).map(|_| if rng.random::<bool>() { 255 } else { rng.random() }).collect();
             let mut out = vec![0; SAMPLES];
-            tet_alphas(&mask, &bounds, &samples, w, &coverage, &mut out);
+            tet_alphas(&mask, &bounds, &sample_batches(), w, &coverage, &mut out);
             let sum = |a: &[u8]| coverage.iter().zip(a).map(|(c, x)| c.saturating_add(*x)).collect::<Vec<u8>>();
             assert_eq!(sum(&out), sum(&all));
             assert_eq!(shows(&out), shows(&all));

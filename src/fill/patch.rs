@@ -2,7 +2,7 @@
 //! samples per tet, the mask-touch test, random frames, and pruning a patch to the tets
 //! it shows in.
 
-use super::sampler::Sampler;
+use super::sampler::{BATCH, Sampler};
 use super::tets::TetMesh;
 use glam::Vec3;
 use rand::RngExt;
@@ -10,6 +10,9 @@ use rand_pcg::Pcg64Mcg;
 
 /// Sample points per tet for the coverage test.
 pub const SAMPLES: usize = 165;
+
+/// [`SAMPLES`] rounded up to whole batches of [`BATCH`].
+pub const BATCHED: usize = SAMPLES.next_multiple_of(BATCH);
 
 /// A pasted patch: which source it shows and the texture coordinates of its vertices.
 #[derive(Debug, Clone, PartialEq)]
@@ -81,6 +84,29 @@ pub fn sample_points() -> Vec<[f32; 4]> {
         }
     }
     out
+}
+
+/// The coverage samples in batches for [`Sampler::alphas`], `[batch][corner][lane]`
+/// (barycentric), the last batch padded with the last sample.
+pub fn sample_batches() -> Vec<[[f32; BATCH]; 4]> {
+    let points = sample_points();
+    let at = |i: usize| points[i.min(SAMPLES - 1)];
+    (0..BATCHED / BATCH).map(|j| std::array::from_fn(|k| std::array::from_fn(|i| at(j * BATCH + i)[k]))).collect()
+}
+
+/// The mask's value at each coverage sample of a tet whose corners have texture
+/// coordinates `w`, into `out` ([`BATCHED`] long): bit for bit the single lookups at
+/// `w[0] b[0] + w[1] b[1] + w[2] b[2] + w[3] b[3]`.
+pub fn mask_at_samples(mask: &Sampler, w: &[Vec3; 4], batches: &[[[f32; BATCH]; 4]], out: &mut [f32]) {
+    for (b, o) in batches.iter().zip(out.chunks_exact_mut(BATCH)) {
+        let mut p = [[0.0; BATCH]; 3];
+        for (k, axis) in p.iter_mut().enumerate() {
+            for (i, x) in axis.iter_mut().enumerate() {
+                *x = w[0][k] * b[0][i] + w[1][k] * b[1][i] + w[2][k] * b[2][i] + w[3][k] * b[3][i];
+            }
+        }
+        o.copy_from_slice(&mask.alphas(&p));
+    }
 }
 
 /// Alpha in [0, 1] as a coverage byte.

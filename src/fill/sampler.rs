@@ -7,6 +7,9 @@
 use crate::volume::{Channel, Volume};
 use glam::Vec3;
 
+/// Points per batch of [`Sampler::alphas`].
+pub const BATCH: usize = 8;
+
 /// One volume's samples, ready for lookups.
 #[derive(Debug, Clone)]
 pub struct Sampler {
@@ -69,6 +72,46 @@ impl Sampler {
             1 => self.first::<1>(w),
             _ => self.first::<0>(w),
         }
+    }
+
+    /// Alpha at each point of a batch (`p[axis][lane]`), bit for bit what [`Sampler::alpha`]
+    /// gives: the arithmetic runs in passes over the batch, so it takes the vector lanes;
+    /// only the eight voxel reads go one point at a time.
+    pub fn alphas(&self, p: &[[f32; BATCH]; 3]) -> [f32; BATCH] {
+        if self.channels != 1 {
+            return std::array::from_fn(|i| self.alpha(Vec3::new(p[0][i], p[1][i], p[2][i])));
+        }
+        let mut inside = [true; BATCH];
+        let (mut cell, mut t) = ([[0u32; BATCH]; 3], [[0.0f32; BATCH]; 3]);
+        for k in 0..3 {
+            let (size, top) = (self.size[k], self.size[k] - 1.0);
+            for i in 0..BATCH {
+                let w = p[k][i];
+                inside[i] &= !(w < 0.0 || w > 1.0);
+                // the clamp as glam's (a NaN goes to 0), and truncation as the floor
+                let q = w * size - 0.5;
+                let q = if q > 0.0 { q } else { 0.0 };
+                let q = if q < top { q } else { top };
+                cell[k][i] = q as u32;
+                t[k][i] = q - cell[k][i] as f32;
+            }
+        }
+        let (sx, sy) = (self.dims[0] + 1, (self.dims[0] + 1) * (self.dims[1] + 1));
+        let mut v = [[0.0f32; BATCH]; 8];
+        for i in 0..BATCH {
+            let at = cell[0][i] as usize + sx * cell[1][i] as usize + sy * cell[2][i] as usize;
+            let d = &self.data[at..=at + sy + sx + 1];
+            for (j, o) in [0, 1, sx, sx + 1, sy, sy + 1, sy + sx, sy + sx + 1].into_iter().enumerate() {
+                v[j][i] = d[o];
+            }
+        }
+        let lerp = |a: f32, b: f32, t: f32| a + (b - a) * t;
+        std::array::from_fn(|i| {
+            let x = |j: usize| lerp(v[j][i], v[j + 1][i], t[0][i]);
+            let near = lerp(x(0), x(2), t[1][i]);
+            let far = lerp(x(4), x(6), t[1][i]);
+            if inside[i] { lerp(near, far, t[2][i]) } else { 0.0 }
+        })
     }
 
     /// The first channel at `w` (inside the unit cube), trilinear; `C` is the channel count
@@ -202,6 +245,33 @@ mod tests {
             // one channel and three: the first channel either way
             assert!((m.alpha(w) - s.rgb(w).x).abs() < 1e-6);
             assert!((s.alpha(w) - s.rgb(w).x).abs() < 1e-6);
+        }
+    }
+
+    #[test]
+    fn batched_lookups_equal_single_ones_bit_for_bit() {
+        let v = Volume::from_fn([7, 5, 6], Channel::rgb(), |x, y, z, o| {
+            let h = ((x * 7 + y * 13 + z * 29) % 17) as f32 / 16.0;
+            o.copy_from_slice(&[h, 1.0 - h, h * h]);
+        })
+        .unwrap();
+        let (one, three) = (Sampler::mask(&v), Sampler::colour(&v));
+        let mut points: Vec<Vec3> = (0..200)
+            .map(|i| {
+                let f = |k: u32| ((i * 37 + k * 11) % 101) as f32 / 100.0 * 1.3 - 0.15;
+                Vec3::new(f(0), f(1), f(2))
+            })
+            .collect();
+        points.extend([Vec3::ZERO, Vec3::ONE, Vec3::new(f32::NAN, 0.5, 0.5), Vec3::new(0.5, 1.0 + 1e-7, 0.5)]);
+        points.resize(points.len().next_multiple_of(BATCH), Vec3::splat(0.5));
+        for sampler in [&one, &three] {
+            for chunk in points.chunks(BATCH) {
+                let p: [[f32; BATCH]; 3] = std::array::from_fn(|k| std::array::from_fn(|i| chunk[i][k]));
+                let batch = sampler.alphas(&p);
+                for (w, got) in chunk.iter().zip(batch) {
+                    assert_eq!(got.to_bits(), sampler.alpha(*w).to_bits(), "{w}");
+                }
+            }
         }
     }
 
