@@ -16,8 +16,8 @@
 
 use super::field::Field;
 use super::patch::{
-    BATCHED, mask_at_samples, orthogonal, prune, random_frame, sample_batches, sample_points, to_byte, touches,
-    vertices_of,
+    BATCHED, local_index, mask_at_samples, orthogonal, prune, random_frame, sample_batches, sample_points, to_byte,
+    touches, vertices_of,
 };
 pub use super::patch::{Patch, SAMPLES};
 use super::sampler::BATCH;
@@ -32,7 +32,6 @@ use glam::Vec3;
 use rand::{RngExt, SeedableRng};
 use rand_pcg::Pcg64Mcg;
 use rayon::prelude::*;
-use std::collections::HashSet;
 
 /// Times a seed tet may stay uncovered by its own patch before it is given up.
 const STRIKES: u8 = 6;
@@ -48,6 +47,14 @@ const WARPS: usize = 8;
 /// A regrowth adding fewer than one tet in this many of the clump's is kept without
 /// another warp (those tets' coordinates extrapolated from their neighbours').
 const SETTLED: usize = 20;
+
+/// Where a tet stands in a regrowth.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Standing {
+    Outside,
+    Clump,
+    Joined,
+}
 
 /// How to paste.
 #[derive(Debug, Clone)]
@@ -339,31 +346,37 @@ impl<'a> Paster<'a> {
         source: u16,
     ) -> Vec<(u32, [Vec3; 4])> {
         let mask = &self.masks[source as usize];
+        // where each tet stands (in the clump, joined, neither) and each clump vertex's index
+        let (mut state, local) = (vec![Standing::Outside; self.mesh.tets.len()], local_index(self.mesh, vertices));
+        tets.iter().for_each(|&t| state[t as usize] = Standing::Clump);
         let mut added: Vec<(u32, [Vec3; 4])> = Vec::new();
-        let mut joined = HashSet::new();
         let mut i = 0;
         while i < tets.len() + added.len() {
-            let (t, w_t) = match tets.get(i) {
-                Some(&t) => {
-                    (t, self.mesh.tets[t as usize].map(|v| coords[vertices.binary_search(&v).expect("vertex")]))
-                }
-                None => added[i - tets.len()],
+            let t = tets.get(i).copied().unwrap_or_else(|| added[i - tets.len()].0);
+            let open = |state: &[Standing], n: u32| n != NONE && state[n as usize] == Standing::Outside;
+            if !self.neighbours[t as usize].iter().any(|&n| open(&state, n)) {
+                // inside the clump and what joined so far: nothing to reach
+                i += 1;
+                continue;
+            }
+            let w_t = match tets.get(i) {
+                Some(_) => self.mesh.tets[t as usize].map(|v| coords[local[v as usize] as usize]),
+                None => added[i - tets.len()].1,
             };
             i += 1;
             let jac = jacobian(self.mesh, t as usize, w_t);
             let origin = self.mesh.vertices[self.mesh.tets[t as usize][0] as usize];
             for n in self.neighbours[t as usize] {
-                let known = tets.binary_search(&n).is_ok() || joined.contains(&n);
-                if n == NONE || known || !self.alike(seed, n as usize, Some(frame), NOT_OPPOSED) {
+                if !open(&state, n) || !self.alike(seed, n as usize, Some(frame), NOT_OPPOSED) {
                     continue;
                 }
-                let w = self.mesh.tets[n as usize].map(|v| match vertices.binary_search(&v) {
-                    Ok(i) => coords[i],
-                    Err(_) => self.with_depth(v, w_t[0] + jac * (self.mesh.vertices[v as usize] - origin)),
+                let w = self.mesh.tets[n as usize].map(|v| match local[v as usize] {
+                    NONE => self.with_depth(v, w_t[0] + jac * (self.mesh.vertices[v as usize] - origin)),
+                    i => coords[i as usize],
                 });
                 if touches(mask, w) {
                     added.push((n, w));
-                    joined.insert(n);
+                    state[n as usize] = Standing::Joined;
                 }
             }
         }
@@ -371,6 +384,8 @@ impl<'a> Paster<'a> {
         added
     }
 
+    /// The clump with the `added` tets: its tets, vertices and their coordinates (each new
+    /// corner's from the first added tet that has it), sorted by tet and vertex.
     fn extend(
         &self,
         tets: Vec<u32>,
@@ -381,21 +396,32 @@ impl<'a> Paster<'a> {
         let mut all = tets;
         all.extend(added.iter().map(|a| a.0));
         all.sort_unstable();
-        let new_vertices = vertices_of(self.mesh, &all);
-        // each new corner's coordinates from the first added tet that has it
-        let mut corners: Vec<(u32, Vec3)> =
-            added.iter().flat_map(|(t, w)| self.mesh.tets[*t as usize].into_iter().zip(*w)).collect();
-        corners.sort_by_key(|c| c.0);
-        corners.dedup_by_key(|c| c.0);
-        let from_added = |v: u32| corners.binary_search_by_key(&v, |c| c.0).ok().map(|i| corners[i].1);
-        let new_coords = new_vertices
-            .iter()
-            .map(|&v| match vertices.binary_search(&v) {
-                Ok(i) => coords[i],
-                Err(_) => from_added(v).expect("a new vertex belongs to an added tet"),
-            })
-            .collect();
-        (all, new_vertices, new_coords)
+        let mut at = local_index(self.mesh, vertices);
+        let mut new_coords: Vec<Vec3> = coords.to_vec();
+        let mut new: Vec<u32> = Vec::new();
+        for (t, w) in added {
+            for (v, x) in self.mesh.tets[*t as usize].into_iter().zip(w) {
+                if at[v as usize] == NONE {
+                    at[v as usize] = new_coords.len() as u32;
+                    new_coords.push(*x);
+                    new.push(v);
+                }
+            }
+        }
+        new.sort_unstable();
+        let mut new_vertices = Vec::with_capacity(vertices.len() + new.len());
+        let (mut i, mut j) = (0, 0);
+        while i < vertices.len() || j < new.len() {
+            if j == new.len() || (i < vertices.len() && vertices[i] < new[j]) {
+                new_vertices.push(vertices[i]);
+                i += 1;
+            } else {
+                new_vertices.push(new[j]);
+                j += 1;
+            }
+        }
+        let sorted_coords = new_vertices.iter().map(|&v| new_coords[at[v as usize] as usize]).collect();
+        (all, new_vertices, sorted_coords)
     }
 
     /// Adds a patch: samples its mask in each clump tet, accumulates coverage, lists it
@@ -404,8 +430,10 @@ impl<'a> Paster<'a> {
         let (mask, bounds) = (&self.masks[patch.source as usize], &self.bounds[patch.source as usize]);
         let mut alphas = vec![0u8; tets.len() * SAMPLES];
         let mut angles = vec![None; tets.len()];
+        let local = local_index(self.mesh, &patch.vertices);
+        let corners_of = |t: u32| self.mesh.tets[t as usize].map(|v| patch.coords[local[v as usize] as usize]);
         alphas.par_chunks_mut(SAMPLES).zip(&mut angles).zip(tets).for_each(|((a, angle), &t)| {
-            let corners = patch.corners(self.mesh.tets[t as usize]);
+            let corners = corners_of(t);
             if self.covered(t as usize) {
                 // nothing to add: only whether the patch shows there (and shows half) matters
                 a.fill(0);
@@ -415,7 +443,7 @@ impl<'a> Paster<'a> {
                 tet_alphas(mask, bounds, &self.batches, corners, coverage, a);
             }
             if let (Some(f), true) = (&frame, a.iter().any(|x| *x >= 128)) {
-                *angle = Some(self.angle(t as usize, &patch, f));
+                *angle = Some(self.angle(t as usize, corners, f));
             }
         });
         let index = self.out.patches.len() as u32;
@@ -432,16 +460,17 @@ impl<'a> Paster<'a> {
         self.out.patches.push(prune(patch, self.mesh, tets, &alphas));
     }
 
-    /// The largest angle (degrees) between a field axis mapped by the patch and its texture
-    /// axis: the primary for 1-a/1-b, primary and secondary for 2-a/2-b, none for type 0.
-    fn angle(&self, t: usize, patch: &Patch, seed_frame: &Frame) -> f32 {
+    /// The largest angle (degrees) between a field axis mapped by the patch (its texture
+    /// coordinates at tet `t`'s `corners`) and its texture axis: the primary for 1-a/1-b,
+    /// primary and secondary for 2-a/2-b, none for type 0.
+    fn angle(&self, t: usize, corners: [Vec3; 4], seed_frame: &Frame) -> f32 {
         let checked = match self.params.kind {
             TextureType::T0 => 0,
             TextureType::T1a | TextureType::T1b => 1,
             _ => 2,
         };
         let frame = self.frame_of(t, seed_frame, 1.0);
-        let jac = jacobian(self.mesh, t, patch.corners(self.mesh.tets[t]));
+        let jac = jacobian(self.mesh, t, corners);
         (0..checked)
             .map(|k| {
                 let image = (jac * frame.dirs[k]).normalize_or_zero();

@@ -3,7 +3,7 @@
 //! it shows in.
 
 use super::sampler::{BATCH, Sampler};
-use super::tets::TetMesh;
+use super::tets::{NONE, TetMesh};
 use glam::Vec3;
 use rand::RngExt;
 use rand_pcg::Pcg64Mcg;
@@ -42,16 +42,25 @@ pub fn prune(patch: Patch, mesh: &TetMesh, tets: &[u32], alphas: &[u8]) -> Patch
         .map(|(t, _)| *t)
         .collect();
     let vertices = vertices_of(mesh, &shown);
-    let coords = vertices.iter().map(|v| patch.coords[patch.vertices.binary_search(v).expect("vertex")]).collect();
+    let local = local_index(mesh, &patch.vertices);
+    let coords = vertices.iter().map(|&v| patch.coords[local[v as usize] as usize]).collect();
     Patch { source: patch.source, vertices, coords }
 }
 
 /// The vertices of `tets`, sorted, each once.
 pub fn vertices_of(mesh: &TetMesh, tets: &[u32]) -> Vec<u32> {
-    let mut v: Vec<u32> = tets.iter().flat_map(|&t| mesh.tets[t as usize]).collect();
+    let mut seen = vec![false; mesh.vertices.len()];
+    let corners = tets.iter().flat_map(|&t| mesh.tets[t as usize]);
+    let mut v: Vec<u32> = corners.filter(|&v| !std::mem::replace(&mut seen[v as usize], true)).collect();
     v.sort_unstable();
-    v.dedup();
     v
+}
+
+/// For each vertex of `mesh`, its index in `vertices`, or [`NONE`] where it is not there.
+pub fn local_index(mesh: &TetMesh, vertices: &[u32]) -> Vec<u32> {
+    let mut local = vec![NONE; mesh.vertices.len()];
+    vertices.iter().enumerate().for_each(|(i, &v)| local[v as usize] = i as u32);
+    local
 }
 
 /// `s` made orthogonal to the unit vector `r` and normalized (any orthogonal unit vector if

@@ -10,6 +10,9 @@ use rayon::prelude::*;
 /// Rows from which a product with a vector is worth splitting across threads.
 const PARALLEL_ROWS: usize = 4096;
 
+/// Rows of `AᵀA` made together on one thread.
+const NORMAL_BLOCK: usize = 256;
+
 /// A sparse matrix in compressed-row form.
 #[derive(Debug, Clone, Default)]
 pub struct Sparse {
@@ -100,14 +103,31 @@ impl Sparse {
     }
 
     /// `AᵀA`, square with `cols` rows, columns sorted in each row. Entries are summed in row
-    /// order of `A`, so the result is the same on every run.
+    /// order of `A`, so the result is the same on every run; blocks of rows are made side by
+    /// side (each row alone), so also on any thread count.
     pub fn normal(&self) -> Sparse {
         let by_column = self.transpose();
+        let blocks: Vec<Sparse> = (0..self.cols.div_ceil(NORMAL_BLOCK))
+            .into_par_iter()
+            .map(|b| self.normal_rows(&by_column, b * NORMAL_BLOCK..((b + 1) * NORMAL_BLOCK).min(self.cols)))
+            .collect();
+        let mut out = Sparse::new(self.cols);
+        for block in blocks {
+            let base = out.indices.len();
+            out.offsets.extend(block.offsets[1..].iter().map(|o| o + base));
+            out.indices.extend(block.indices);
+            out.values.extend(block.values);
+        }
+        out
+    }
+
+    /// The rows `rows` of `AᵀA` (`by_column` is `Aᵀ`).
+    fn normal_rows(&self, by_column: &Sparse, rows: std::ops::Range<usize>) -> Sparse {
         let mut out = Sparse::new(self.cols);
         let mut sums = vec![0.0; self.cols];
         let mut seen = vec![false; self.cols];
         let mut touched: Vec<usize> = Vec::new();
-        for column in 0..self.cols {
+        for column in rows {
             for (r, v) in by_column.row(column) {
                 for (c, w) in self.row(r) {
                     if !seen[c] {

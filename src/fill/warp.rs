@@ -15,6 +15,7 @@
 use super::solve::{Sparse, least_squares_each};
 use super::tets::TetMesh;
 use glam::{Mat3, Vec3};
+use rayon::prelude::*;
 
 /// Weight of the row pinning the seed's centre.
 const PIN_WEIGHT: f64 = 30.0;
@@ -82,15 +83,25 @@ impl Warp<'_> {
     /// Improves `coords` (one per vertex, in `vertices` order) in place.
     pub fn solve(&self, coords: &mut [Vec3]) {
         let local = |v: u32| self.vertices.binary_search(&v).expect("clump vertex");
+        // each tet's three rows, made side by side and pushed in tet order
+        let rows: Vec<[[(usize, f64); 4]; 3]> = self
+            .tets
+            .par_iter()
+            .zip(self.frames)
+            .map(|(&t, frame)| {
+                let tet = self.mesh.tets[t as usize].map(local);
+                let inverse = self.mesh.edges(t as usize).inverse();
+                frame.dirs.map(|dir| {
+                    let r = direction_weights(inverse, dir * frame.scale);
+                    std::array::from_fn(|k| (tet[k], r[k]))
+                })
+            })
+            .collect();
         let mut a = Sparse::new(self.vertices.len());
-        let mut targets: Vec<Vec3> = Vec::new();
-        for (i, &t) in self.tets.iter().enumerate() {
-            let tet = self.mesh.tets[t as usize];
-            let frame = &self.frames[i];
-            let inverse = self.mesh.edges(t as usize).inverse();
-            for (k, dir) in frame.dirs.iter().enumerate() {
-                let r = direction_weights(inverse, *dir * frame.scale);
-                a.push_row(tet.iter().zip(r).map(|(&v, w)| (local(v), w)));
+        let mut targets: Vec<Vec3> = Vec::with_capacity(rows.len() * 3 + 1);
+        for tet_rows in rows {
+            for (k, row) in tet_rows.into_iter().enumerate() {
+                a.push_row(row);
                 let mut target = Vec3::ZERO;
                 target[self.axes[k]] = 1.0;
                 targets.push(target);
