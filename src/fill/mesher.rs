@@ -102,6 +102,12 @@ const SURFACE_LOSS: f64 = 1.0;
 /// # Ok::<(), solidtex::Error>(())
 /// ```
 pub fn tetrahedralize(mesh: &Mesh, target_tets: usize) -> Result<TetMesh> {
+    // on a pool thread, the many small parallel steps hand out work without waking and
+    // parking the calling thread each time
+    rayon::scope(|_| tetrahedralize_here(mesh, target_tets))
+}
+
+fn tetrahedralize_here(mesh: &Mesh, target_tets: usize) -> Result<TetMesh> {
     let volume = check(mesh, target_tets)?;
     let off = |count: usize| (count.max(1) as f64 / target_tets as f64).ln().abs();
     let mut h = spacing(volume, area(mesh), target_tets);
@@ -204,6 +210,10 @@ impl SurfaceDistance {
 /// edge midpoints and centres of the triangles on each side, and along the surface's creases
 /// every quarter of a tet edge.
 pub fn surface_distance(mesh: &Mesh, tets: &TetMesh) -> Result<SurfaceDistance> {
+    rayon::scope(|_| surface_distance_here(mesh, tets))
+}
+
+fn surface_distance_here(mesh: &Mesh, tets: &TetMesh) -> Result<SurfaceDistance> {
     let mean_edge = crate::fill::mean_edge(tets);
     let faces = tets.boundary_faces(&tets.neighbours());
     let boundary = Mesh::new(tets.vertices.clone(), faces)?;

@@ -81,6 +81,12 @@ pub struct Job<'a> {
 /// Fills `mesh` (a tetrahedralization of `job.surface`): field, automatic pasting, then
 /// the manual pastes on top.
 pub fn fill(job: &Job, mesh: TetMesh, progress: &dyn Progress) -> Result<(LstModel, FillReport)> {
+    // on a pool thread, the paste's many small parallel steps hand out work without waking
+    // and parking the calling thread each time
+    rayon::scope(|_| fill_here(job, mesh, progress))
+}
+
+fn fill_here(job: &Job, mesh: TetMesh, progress: &dyn Progress) -> Result<(LstModel, FillReport)> {
     let default_scale = spec::size_of(job.surface) / 4.0;
     let constraints = spec::constraints(job.spec, job.surface, default_scale)?;
     progress.update("tensor field", 0.0);
