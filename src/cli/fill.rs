@@ -278,8 +278,8 @@ pub fn run_fill(args: &FillArgs) -> Result<()> {
         eprintln!("warning: {}: {note}", args.spec.display());
     }
     eprintln!("wrote {} ({:.0} KB)", args.output.display(), bytes as f64 / 1024.0);
-    // A figure, not a result: if the model cannot be read back it is left out.
-    let seams = load_model(&args.output).ok().and_then(|loaded| seam_strength(&loaded));
+    // A figure, not a result: if the volumes cannot be read it is left out.
+    let seams = with_volumes(model, &args.output, job.masks).ok().and_then(|loaded| seam_strength(&loaded));
     if let Some(seams) = seams {
         eprintln!("  seam strength {seams:.2} (colour step across patch borders over within, central cuts)");
     }
@@ -383,10 +383,16 @@ impl Loaded {
 fn load_model(path: &Path) -> Result<Loaded> {
     let model = lst_file::read_lst(path)?;
     let base = path.parent().unwrap_or(Path::new("."));
+    let masks = model.sources.iter().map(|s| load_mask(&s.mask, base)).collect::<Result<Vec<_>>>()?;
+    with_volumes(model, path, masks)
+}
+
+/// `model` (written to `path`) with its `masks` and its sources' volumes read.
+fn with_volumes(model: LstModel, path: &Path, masks: Vec<Volume>) -> Result<Loaded> {
+    let base = path.parent().unwrap_or(Path::new("."));
     let budget = io::budget_from_env()?;
     let files: Vec<PathBuf> = model.sources.iter().map(|s| base.join(&s.volume)).collect();
     let volumes = files.iter().map(|f| io::read_volume(f, budget)).collect::<Result<Vec<_>>>()?;
-    let masks = model.sources.iter().map(|s| load_mask(&s.mask, base)).collect::<Result<Vec<_>>>()?;
     let textures = Textures::new(&volumes, &masks);
     Ok(Loaded { model, textures, volumes, files, masks })
 }
