@@ -535,15 +535,20 @@ fn ease_in(work: &Work, v: u32, star: &[u32], surface: Option<&Surface>) -> Vec3
     let here = work.mesh.vertices[v as usize];
     let corners = star.iter().flat_map(|&t| work.mesh.tets[t as usize]).map(|u| work.mesh.vertices[u as usize]);
     let mut step = corners.map(|c| c.distance(here)).sum::<f32>() / (3 * star.len()).max(1) as f32 * 0.2;
-    let mut best = (worst_with(work.mesh, star, v, here), here);
+    // the sharpest tets first: a candidate no better than the best is told after a few
+    let mut star = star.to_vec();
+    star.sort_by(|&a, &b| sharpest(work.mesh.corners(b as usize)).total_cmp(&sharpest(work.mesh.corners(a as usize))));
+    let mut best = (worst_with(work.mesh, &star, v, here), here);
     for _ in 0..4 {
         for _ in 0..4 {
             let moves = [Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z].map(|d| best.1 + d * step);
-            let candidates = moves.map(|p| surface.map_or(p, |s| s.closest(p)));
-            let found = candidates
-                .into_iter()
-                .map(|p| (worst_with(work.mesh, star, v, p), p))
-                .fold(best, |b, c| if c.0 < b.0 { c } else { b });
+            let mut found = best;
+            for p in moves.map(|p| surface.map_or(p, |s| s.closest(p))) {
+                let worst = worst_below(work.mesh, &star, v, p, found.0);
+                if worst < found.0 {
+                    found = (worst, p);
+                }
+            }
             if found.1 == best.1 {
                 break;
             }
@@ -558,6 +563,11 @@ fn ease_in(work: &Work, v: u32, star: &[u32], surface: Option<&Surface>) -> Vec3
 /// (lower is better); 2 when one of them is inverted or flat. Comparing cosines spares the
 /// arc cosines.
 fn worst_with(mesh: &TetMesh, star: &[u32], v: u32, p: Vec3) -> f32 {
+    worst_below(mesh, star, v, p, f32::INFINITY)
+}
+
+/// [`worst_with`], or any value at least `bound` once it is clear the result is.
+fn worst_below(mesh: &TetMesh, star: &[u32], v: u32, p: Vec3, bound: f32) -> f32 {
     let mut worst = -1.0f32;
     for &t in star {
         let c = mesh.tets[t as usize].map(|i| if i == v { p } else { mesh.vertices[i as usize] });
@@ -565,6 +575,9 @@ fn worst_with(mesh: &TetMesh, star: &[u32], v: u32, p: Vec3) -> f32 {
             return 2.0;
         }
         worst = worst.max(sharpest(c));
+        if worst >= bound {
+            return worst;
+        }
     }
     worst
 }
