@@ -20,8 +20,7 @@ use super::patch::{
     touches, vertices_of,
 };
 pub use super::patch::{Patch, SAMPLES};
-use super::sampler::BATCH;
-use super::sampler::{AlphaBounds, Sampler};
+use super::sampler::{AlphaBounds, BATCH, Sampler};
 use super::tets::{NONE, TetMesh};
 use super::warp::{Frame, Rigid, Warp, jacobian};
 use crate::TextureType;
@@ -408,18 +407,8 @@ impl<'a> Paster<'a> {
                 }
             }
         }
-        new.sort_unstable();
-        let mut new_vertices = Vec::with_capacity(vertices.len() + new.len());
-        let (mut i, mut j) = (0, 0);
-        while i < vertices.len() || j < new.len() {
-            if j == new.len() || (i < vertices.len() && vertices[i] < new[j]) {
-                new_vertices.push(vertices[i]);
-                i += 1;
-            } else {
-                new_vertices.push(new[j]);
-                j += 1;
-            }
-        }
+        let mut new_vertices = [vertices, &new].concat();
+        new_vertices.sort_unstable();
         let sorted_coords = new_vertices.iter().map(|&v| new_coords[at[v as usize] as usize]).collect();
         (all, new_vertices, sorted_coords)
     }

@@ -290,14 +290,16 @@ mod tests {
 
     #[test]
     fn the_normal_matrix_is_a_transpose_a() {
-        let a = scattered(40, 11);
-        let unit = |i: usize| (0..11).map(|k| if k == i { 1.0 } else { 0.0 }).collect::<Vec<f64>>();
-        let columns: Vec<Vec<f64>> = (0..11).map(|j| a.times(&unit(j))).collect();
+        // three blocks of rows made apart: check rows on each side of their borders
+        let cols = 2 * NORMAL_BLOCK + 11;
+        let a = scattered(3 * cols, cols);
+        let unit = |i: usize| (0..cols).map(|k| if k == i { 1.0 } else { 0.0 }).collect::<Vec<f64>>();
+        let columns: Vec<Vec<f64>> = (0..cols).map(|j| a.times(&unit(j))).collect();
         let n = a.normal();
-        for i in 0..11 {
-            let mut row = vec![0.0; 11];
+        for i in [0, 5, NORMAL_BLOCK - 1, NORMAL_BLOCK, 2 * NORMAL_BLOCK - 1, 2 * NORMAL_BLOCK, cols - 1] {
+            let mut row = vec![0.0; cols];
             n.times_into(&unit(i), &mut row);
-            for j in 0..11 {
+            for j in 0..cols {
                 let want: f64 = columns[i].iter().zip(&columns[j]).map(|(p, q)| p * q).sum();
                 assert!((row[j] - want).abs() < 1e-9, "({i}, {j}): {} against {want}", row[j]);
             }
