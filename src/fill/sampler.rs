@@ -87,7 +87,10 @@ impl Sampler {
             let (size, top) = (self.size[k], self.size[k] - 1.0);
             for i in 0..BATCH {
                 let w = p[k][i];
-                inside[i] &= !(w < 0.0 || w > 1.0);
+                // not `contains`: a NaN counts as inside, as in `alpha`
+                #[allow(clippy::manual_range_contains)]
+                let outside = w < 0.0 || w > 1.0;
+                inside[i] &= !outside;
                 // the clamp as glam's (a NaN goes to 0), and truncation as the floor
                 let q = w * size - 0.5;
                 let q = if q > 0.0 { q } else { 0.0 };
