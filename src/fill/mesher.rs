@@ -50,6 +50,7 @@
 //! pieces, and the boundary faces are chords of the surface, so a convex shape loses a
 //! little volume (about 1.6 % at 5,000 tets for a sphere, 0.3 % at 50,000).
 
+mod caps;
 pub(crate) mod closest;
 mod conform;
 mod features;
@@ -270,7 +271,9 @@ fn at_spacing(mesh: &Mesh, h: f64) -> Result<TetMesh> {
     let [_, ny, nz] = lattice.cubes;
     let rays = RayGrid::new(mesh, [lattice.origin.y, lattice.origin.z], h, [ny, nz]);
     let mut tets = lattice.compact(lattice.cut(&rays));
-    conform::conform(&mut tets, &Surface::new(mesh, h as f32), &features::features(mesh));
+    let (surface, features) = (Surface::new(mesh, h as f32), features::features(mesh));
+    conform::conform(&mut tets, &surface, &features);
+    caps::cap_far_corners(&mut tets, &surface, &features);
     Ok(tets)
 }
 
@@ -554,5 +557,21 @@ mod tests {
         .unwrap();
         let d = surface_distance(&two, &tetrahedralize(&two, 2000).unwrap()).unwrap();
         assert!(d.from_surface > d.mean_edge, "{d:?}");
+    }
+
+    #[test]
+    fn a_spike_thinner_than_the_lattice_is_capped() {
+        // a tall three-sided pyramid: near its tip it is far thinner than the lattice, whose
+        // boundary stops 1.3 edges short of the tip without a cap
+        let s = 3f32.sqrt();
+        let tip = Vec3::new(0.0, 0.0, 4.0);
+        let corners =
+            vec![Vec3::new(-1.0, -1.0 / s, 0.0), Vec3::new(1.0, -1.0 / s, 0.0), Vec3::new(0.0, 2.0 / s, 0.0), tip];
+        let spike = Mesh::new(corners, vec![[0, 2, 1], [0, 1, 3], [1, 2, 3], [2, 0, 3]]).unwrap();
+        let tets = tetrahedralize(&spike, 2000).unwrap();
+        let d = surface_distance(&spike, &tets).unwrap();
+        assert!(tets.vertices.iter().any(|v| v.distance(tip) < 1e-3 * d.mean_edge), "the tip is not reached");
+        assert!(d.from_surface <= 0.55 * d.mean_edge, "{d:?}");
+        assert!(tets.min_dihedral_degrees() >= conform::MIN_DIHEDRAL);
     }
 }

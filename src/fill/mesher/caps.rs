@@ -1,0 +1,137 @@
+//! Caps on spikes: where three or more creases of the surface meet at a corner that the tet
+//! mesh's boundary stays more than half a tet edge from (a spike thinner than the lattice,
+//! which no lattice vertex reaches), one tet is added from a boundary face below the corner
+//! to the corner itself. A tall three-sided cap keeps good angles (near right angles at its
+//! base, the spike's own at its sides), and it is added only where it keeps
+//! [`MIN_DIHEDRAL`], crosses no other part of the boundary and lies closer to the surface
+//! than the corner was to the boundary.
+
+use super::closest::Surface;
+use super::conform::MIN_DIHEDRAL;
+use super::face_samples;
+use super::features::Features;
+use crate::fill::tets::{TetMesh, min_dihedral};
+use crate::mesh::closest_on_triangle;
+use glam::Vec3;
+
+/// A corner farther than this from the boundary (in mean tet edges) is capped.
+const FAR: f32 = 0.5;
+/// Boundary faces within this many mean tet edges of a corner are tried as a cap's base.
+const REACH: f32 = 2.5;
+
+/// Caps the corners of `features` that `mesh` leaves uncovered (see the module docs).
+pub(super) fn cap_far_corners(mesh: &mut TetMesh, surface: &Surface, features: &Features) {
+    if features.corners.is_empty() || mesh.tets.is_empty() {
+        return;
+    }
+    let edge = crate::fill::mean_edge(mesh);
+    let mut faces = mesh.boundary_faces(&mesh.neighbours());
+    for &corner in &features.corners {
+        let gap = distance_to(mesh, &faces, corner);
+        if gap <= FAR * edge {
+            continue;
+        }
+        let near = |f: &[u32; 3]| f.iter().all(|&v| mesh.vertices[v as usize].distance(corner) <= REACH * edge);
+        let best = faces
+            .iter()
+            .enumerate()
+            .filter(|(_, f)| near(f))
+            .filter_map(|(i, f)| cap_reach(mesh, &faces, surface, *f, corner).map(|d| (d, i)))
+            .filter(|(d, _)| *d < gap)
+            .min_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        let Some((_, i)) = best else { continue };
+        let [a, b, c] = faces.swap_remove(i);
+        let p = mesh.vertices.len() as u32;
+        mesh.vertices.push(corner);
+        mesh.tets.push([a, b, c, p]);
+        faces.extend([[b, c, p], [a, p, c], [a, b, p]]);
+    }
+}
+
+/// How far `p` lies from the boundary `faces` of `mesh`.
+fn distance_to(mesh: &TetMesh, faces: &[[u32; 3]], p: Vec3) -> f32 {
+    let corners = |f: &[u32; 3]| f.map(|v| mesh.vertices[v as usize]);
+    faces.iter().map(|f| closest_on_triangle(p, corners(f)).distance(p)).fold(f32::INFINITY, f32::min)
+}
+
+/// For a cap from boundary face `f` (facing outwards) to `corner`: how far its three new
+/// faces reach from the surface, or `None` when the cap is inverted, sharper than
+/// [`MIN_DIHEDRAL`], or would cross the boundary `faces` or hold one of their corners.
+fn cap_reach(mesh: &TetMesh, faces: &[[u32; 3]], surface: &Surface, f: [u32; 3], corner: Vec3) -> Option<f32> {
+    let [a, b, c] = f.map(|v| mesh.vertices[v as usize]);
+    let tet = [a, b, c, corner];
+    if (b - a).cross(c - a).dot(corner - a) <= 0.0 || min_dihedral(tet) < MIN_DIHEDRAL {
+        return None;
+    }
+    let new_faces = [[b, c, corner], [a, corner, c], [a, b, corner]];
+    let others = faces.iter().filter(|g| **g != f);
+    for g in others {
+        let h = g.map(|v| mesh.vertices[v as usize]);
+        // the new edges against every face not at their base corner
+        for (k, &base) in f.iter().enumerate() {
+            if !g.contains(&base) && crosses(tet[k], corner, h) {
+                return None;
+            }
+        }
+        // the face's edges and corners against the cap, except where they are the base's
+        for k in 0..3 {
+            let (u, w) = (g[k], g[(k + 1) % 3]);
+            let (p, q) = (h[k], h[(k + 1) % 3]);
+            if !(f.contains(&u) && f.contains(&w)) && new_faces.iter().any(|t| crosses(p, q, *t)) {
+                return None;
+            }
+            if !f.contains(&u) && inside(tet, p) {
+                return None;
+            }
+        }
+    }
+    let reach = new_faces.iter().flat_map(|t| face_samples(*t)).map(|q| surface.closest(q).distance(q));
+    Some(reach.fold(0.0, f32::max))
+}
+
+/// Whether segment `p`-`q` passes through the inside of triangle `t` (touching at an end or
+/// along an edge does not count).
+fn crosses(p: Vec3, q: Vec3, [a, b, c]: [Vec3; 3]) -> bool {
+    let (d, e1, e2) = (q - p, b - a, c - a);
+    let h = d.cross(e2);
+    let det = e1.dot(h);
+    if det.abs() <= f32::EPSILON * e1.length() * e2.length() * d.length() {
+        return false;
+    }
+    let s = p - a;
+    let u = s.dot(h) / det;
+    let n = s.cross(e1);
+    let v = d.dot(n) / det;
+    let t = e2.dot(n) / det;
+    let open = 1e-4;
+    u > open && v > open && u + v < 1.0 - open && t > open && t < 1.0 - open
+}
+
+/// Whether `p` lies strictly inside the tet with corners `c` (positively oriented).
+fn inside(c: [Vec3; 4], p: Vec3) -> bool {
+    let volume = |a: Vec3, b: Vec3, d: Vec3, e: Vec3| (b - a).cross(d - a).dot(e - a);
+    let whole = volume(c[0], c[1], c[2], c[3]);
+    let parts = [
+        volume(p, c[1], c[2], c[3]),
+        volume(c[0], p, c[2], c[3]),
+        volume(c[0], c[1], p, c[3]),
+        volume(c[0], c[1], c[2], p),
+    ];
+    parts.iter().all(|v| *v > 1e-6 * whole)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_segment_through_a_triangle_crosses_it_and_one_beside_it_does_not() {
+        let t = [Vec3::ZERO, Vec3::X, Vec3::Y];
+        let through = (Vec3::new(0.2, 0.2, -1.0), Vec3::new(0.2, 0.2, 1.0));
+        assert!(crosses(through.0, through.1, t));
+        assert!(!crosses(Vec3::new(1.2, 1.2, -1.0), Vec3::new(1.2, 1.2, 1.0), t));
+        // ending on the triangle, or at a corner, is touching
+        assert!(!crosses(Vec3::new(0.2, 0.2, 0.0), Vec3::new(0.2, 0.2, 1.0), t));
+        assert!(!crosses(Vec3::ZERO, Vec3::new(0.0, 0.0, 1.0), t));
+    }
+}
