@@ -25,8 +25,19 @@ pub(super) fn cap_far_corners(mesh: &mut TetMesh, surface: &Surface, features: &
         return;
     }
     let edge = crate::fill::mean_edge(mesh);
+    // a corner with a tet corner that near is not far from the boundary either (or lies
+    // inside the tets, where no cap goes): most are, and need no boundary
+    let far: Vec<Vec3> = features
+        .corners
+        .iter()
+        .copied()
+        .filter(|c| mesh.vertices.iter().all(|v| v.distance(*c) > FAR * edge))
+        .collect();
+    if far.is_empty() {
+        return;
+    }
     let mut faces = mesh.boundary_faces(&mesh.neighbours());
-    for &corner in &features.corners {
+    for corner in far {
         let gap = distance_to(mesh, &faces, corner);
         if gap <= FAR * edge {
             continue;
