@@ -272,12 +272,13 @@ impl<'a> Paster<'a> {
                     Warp { mesh: self.mesh, tets: &tets, vertices: &vertices, frames: &frames, axes, pin, fixed };
                 warp.solve(&mut coords);
             }
-            let added = self.regrow(seed, &frame, &tets, &vertices, &coords, source);
+            let local = local_index(self.mesh, &vertices);
+            let added = self.regrow(seed, &frame, &tets, &local, &coords, source);
             if added.is_empty() {
                 break;
             }
             let settled = added.len() * SETTLED < tets.len();
-            (tets, vertices, coords) = self.extend(tets, &vertices, &coords, &added);
+            (tets, vertices, coords) = self.extend(tets, &vertices, local, &coords, &added);
             if settled || round == WARPS {
                 break;
             }
@@ -334,19 +335,20 @@ impl<'a> Paster<'a> {
     /// from. These join unless their tensor opposes the seed's (the first growth asks
     /// [`ALIKE`]): the thesis adds the tets the warped patch lacks (§6.2.5), and a patch cut
     /// off at a tet face where its mask is still high leaves a hard seam; an opposed tensor
-    /// means the patch would wrap around a singular axis (the kiwi's core).
+    /// means the patch would wrap around a singular axis (the kiwi's core). `local` gives
+    /// each mesh vertex's index in `coords` ([`local_index`]).
     fn regrow(
         &self,
         seed: usize,
         frame: &Frame,
         tets: &[u32],
-        vertices: &[u32],
+        local: &[u32],
         coords: &[Vec3],
         source: u16,
     ) -> Vec<(u32, [Vec3; 4])> {
         let mask = &self.masks[source as usize];
-        // where each tet stands (in the clump, joined, neither) and each clump vertex's index
-        let (mut state, local) = (vec![Standing::Outside; self.mesh.tets.len()], local_index(self.mesh, vertices));
+        // where each tet stands: in the clump, joined, neither
+        let mut state = vec![Standing::Outside; self.mesh.tets.len()];
         tets.iter().for_each(|&t| state[t as usize] = Standing::Clump);
         let mut added: Vec<(u32, [Vec3; 4])> = Vec::new();
         let mut i = 0;
@@ -384,18 +386,19 @@ impl<'a> Paster<'a> {
     }
 
     /// The clump with the `added` tets: its tets, vertices and their coordinates (each new
-    /// corner's from the first added tet that has it), sorted by tet and vertex.
+    /// corner's from the first added tet that has it), sorted by tet and vertex; `at` is
+    /// the [`local_index`] of `vertices`.
     fn extend(
         &self,
         tets: Vec<u32>,
         vertices: &[u32],
+        mut at: Vec<u32>,
         coords: &[Vec3],
         added: &[(u32, [Vec3; 4])],
     ) -> (Vec<u32>, Vec<u32>, Vec<Vec3>) {
         let mut all = tets;
         all.extend(added.iter().map(|a| a.0));
         all.sort_unstable();
-        let mut at = local_index(self.mesh, vertices);
         let mut new_coords: Vec<Vec3> = coords.to_vec();
         let mut new: Vec<u32> = Vec::new();
         for (t, w) in added {
@@ -446,7 +449,7 @@ impl<'a> Paster<'a> {
             self.angles.extend(angle);
         }
         self.out.stats.mean_clump += (tets.len() as f64 - self.out.stats.mean_clump) / (index as f64 + 1.0);
-        self.out.patches.push(prune(patch, self.mesh, tets, &alphas));
+        self.out.patches.push(prune(patch, &local, self.mesh, tets, &alphas));
     }
 
     /// The largest angle (degrees) between a field axis mapped by the patch (its texture

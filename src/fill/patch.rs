@@ -33,8 +33,8 @@ impl Patch {
 }
 
 /// Drops the vertices of tets the patch does not show in (`alphas`: [`SAMPLES`] coverage
-/// bytes per tet of `tets`).
-pub fn prune(patch: Patch, mesh: &TetMesh, tets: &[u32], alphas: &[u8]) -> Patch {
+/// bytes per tet of `tets`; `local`: the [`local_index`] of the patch's vertices).
+pub fn prune(patch: Patch, local: &[u32], mesh: &TetMesh, tets: &[u32], alphas: &[u8]) -> Patch {
     let shown: Vec<u32> = tets
         .iter()
         .zip(alphas.chunks_exact(SAMPLES))
@@ -42,7 +42,6 @@ pub fn prune(patch: Patch, mesh: &TetMesh, tets: &[u32], alphas: &[u8]) -> Patch
         .map(|(t, _)| *t)
         .collect();
     let vertices = vertices_of(mesh, &shown);
-    let local = local_index(mesh, &patch.vertices);
     let coords = vertices.iter().map(|&v| patch.coords[local[v as usize] as usize]).collect();
     Patch { source: patch.source, vertices, coords }
 }

@@ -141,14 +141,19 @@ impl TetMesh {
 
     /// The barycentric coordinates of `p` in tet `t` (they sum to 1; all are ≥ 0 inside).
     pub fn barycentric(&self, t: usize, p: Vec3) -> [f32; 4] {
-        let local = self.edges(t).inverse() * (p - self.vertices[self.tets[t][0] as usize]);
-        [1.0 - local.x - local.y - local.z, local.x, local.y, local.z]
+        barycentric_in(self.corners(t), p)
     }
 
     /// The smallest dihedral angle over all tets, in degrees (a quality figure).
     pub fn min_dihedral_degrees(&self) -> f32 {
         (0..self.tets.len()).map(|t| min_dihedral(self.corners(t))).fold(180.0, f32::min)
     }
+}
+
+/// The barycentric coordinates of `p` in the tet with corners `c`.
+pub fn barycentric_in(c: [Vec3; 4], p: Vec3) -> [f32; 4] {
+    let local = Mat3::from_cols(c[1] - c[0], c[2] - c[0], c[3] - c[0]).inverse() * (p - c[0]);
+    [1.0 - local.x - local.y - local.z, local.x, local.y, local.z]
 }
 
 /// A box of `cells` cubes of side `h` from the origin, each split into 6 tets around its

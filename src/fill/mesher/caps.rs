@@ -10,7 +10,7 @@ use super::closest::Surface;
 use super::conform::MIN_DIHEDRAL;
 use super::face_samples;
 use super::features::Features;
-use crate::fill::tets::{TetMesh, min_dihedral};
+use crate::fill::tets::{TetMesh, barycentric_in, min_dihedral};
 use crate::mesh::closest_on_triangle;
 use glam::Vec3;
 
@@ -91,7 +91,7 @@ fn cap_reach(mesh: &TetMesh, faces: &[[u32; 3]], surface: &Surface, f: [u32; 3],
             if !(f.contains(&u) && f.contains(&w)) && new_faces.iter().any(|t| crosses(p, q, *t)) {
                 return None;
             }
-            if !f.contains(&u) && inside(tet, p) {
+            if !f.contains(&u) && barycentric_in(tet, p).iter().all(|b| *b > 1e-6) {
                 return None;
             }
         }
@@ -116,19 +116,6 @@ fn crosses(p: Vec3, q: Vec3, [a, b, c]: [Vec3; 3]) -> bool {
     let t = e2.dot(n) / det;
     let open = 1e-4;
     u > open && v > open && u + v < 1.0 - open && t > open && t < 1.0 - open
-}
-
-/// Whether `p` lies strictly inside the tet with corners `c` (positively oriented).
-fn inside(c: [Vec3; 4], p: Vec3) -> bool {
-    let volume = |a: Vec3, b: Vec3, d: Vec3, e: Vec3| (b - a).cross(d - a).dot(e - a);
-    let whole = volume(c[0], c[1], c[2], c[3]);
-    let parts = [
-        volume(p, c[1], c[2], c[3]),
-        volume(c[0], p, c[2], c[3]),
-        volume(c[0], c[1], p, c[3]),
-        volume(c[0], c[1], c[2], p),
-    ];
-    parts.iter().all(|v| *v > 1e-6 * whole)
 }
 
 #[cfg(test)]

@@ -536,8 +536,9 @@ fn ease_in(work: &Work, v: u32, star: &[u32], surface: Option<&Surface>) -> Vec3
     let corners = star.iter().flat_map(|&t| work.mesh.tets[t as usize]).map(|u| work.mesh.vertices[u as usize]);
     let mut step = corners.map(|c| c.distance(here)).sum::<f32>() / (3 * star.len()).max(1) as f32 * 0.2;
     // the sharpest tets first: a candidate no better than the best is told after a few
-    let mut star = star.to_vec();
-    star.sort_by(|&a, &b| sharpest(work.mesh.corners(b as usize)).total_cmp(&sharpest(work.mesh.corners(a as usize))));
+    let mut keyed: Vec<(f32, u32)> = star.iter().map(|&t| (sharpest(work.mesh.corners(t as usize)), t)).collect();
+    keyed.sort_by(|a, b| b.0.total_cmp(&a.0));
+    let star: Vec<u32> = keyed.into_iter().map(|(_, t)| t).collect();
     let mut best = (worst_with(work.mesh, &star, v, here), here);
     for _ in 0..4 {
         for _ in 0..4 {
