@@ -124,6 +124,11 @@ pub struct GuidedArgs {
     /// library's cross-sections; the plane along a layer is left free.
     #[arg(long)]
     pub layered: bool,
+    /// Match the three planes' 2D exemplars directly (Zhang et al.'s coordinate triples)
+    /// instead of a solid cube synthesized from them first: softer, but a single grooved
+    /// exemplar keeps its grooves longer (docs/guided.md; the way --layered and --mask go)
+    #[arg(long)]
+    pub planes: bool,
     /// Voxels along the longest side of the grid around the model (16 to 512); one
     /// exemplar pixel spans one voxel.
     #[arg(long, default_value_t = 128)]
@@ -191,10 +196,19 @@ pub fn run_guided(args: &GuidedArgs) -> Result<()> {
         args.layered.then(|| solid::depth_over(&g.depth, &domain)).transpose().map_err(|e| e.in_file(&args.spec))?;
     let rows = depth.as_ref().map(|d| solid::layer_rows(d, args.res)).transpose()?;
     let exemplars = load_exemplars(args, rows)?;
-    let side = exemplars.iter().map(|e| e.width().min(e.height())).min().unwrap_or(0);
+    let solid = !args.layered && args.mask.is_none() && !args.planes;
+    let side = if solid {
+        crate::guided::cube::SIDE
+    } else {
+        exemplars.iter().map(|e| e.width().min(e.height())).min().unwrap_or(0)
+    };
     let options = Options { layered: args.layered, coarse_n: args.coarse_n, n: args.n, ..Options::for_exemplar(side) };
-    let prepared = Exemplars::prepare([&exemplars[0], &exemplars[1], &exemplars[2]], &options)
-        .map_err(|e| e.in_file(&args.exemplar))?;
+    let prepared = if solid {
+        Exemplars::synthesized_cube(&exemplars, &options, args.seed)
+    } else {
+        Exemplars::prepare([&exemplars[0], &exemplars[1], &exemplars[2]], &options)
+    }
+    .map_err(|e| e.in_file(&args.exemplar))?;
     let frames = solid::frames_over(&g.tets, &g.field, &domain);
     let setup = Setup {
         exemplars: &prepared,
@@ -208,7 +222,7 @@ pub fn run_guided(args: &GuidedArgs) -> Result<()> {
     let ready = started.elapsed().as_secs_f64();
     let bar = super::fill::Bar::new();
     let outcome = match cut {
-        Some((point, normal)) => write_cut(args, &g, &setup, &domain, (point, normal), &bar),
+        Some((point, normal)) => write_cut(args, &g, &setup, &domain, (point, normal), &exemplars[0], &bar),
         None => write_solid(args, &g, &setup, &domain, &bar),
     };
     bar.0.finish_and_clear();
@@ -365,7 +379,7 @@ fn cached_level(folder: &Path, setup: &Setup, bar: &super::fill::Bar) -> Result<
     let level = solid::below_finest(setup)?;
     let key = synth::fingerprint(setup);
     let path = guided_cache::path(folder, key);
-    let slots = [0, 1, 2].map(|a| setup.exemplars.planes[a][level].centres.len());
+    let slots = setup.exemplars.slot_counts(level);
     let voxel = |slot| setup.voxel(level, slot);
     if let Some(found) = guided_cache::read(&path, key, setup.level_dims()[level], slots, voxel)? {
         return Ok(found);
@@ -387,12 +401,28 @@ fn write_cut(
     setup: &Setup,
     domain: &Domain,
     (point, normal): (Vec3, Vec3),
+    exemplar: &Image2d,
     bar: &super::fill::Bar,
 ) -> Result<(usize, usize, usize)> {
     let view = View::framing(g.surface.bounds(), point, normal, args.size)?;
     let from = args.cache.as_deref().map(|folder| cached_level(folder, setup, bar)).transpose()?;
     let (picture, out) = solid::cut(setup, domain, &g.tets, &view, from.as_ref().map(|(l, v)| (*l, v)), bar)?;
     io::write_image(&args.output, &picture)?;
+    if out.voxels > 0 {
+        let s = solid::cut_sharpness(&picture, exemplar)?;
+        let (g, l) = (crate::sharpness::GRADIENT_RANGE, crate::sharpness::LENGTH_RANGE);
+        eprintln!(
+            "sharpness against the exemplar: gradient ratio {:.2}, length ratio {:.2} (targets {}-{} and {}-{}; \
+             {:.2} voxels per pixel, fair at about 1)",
+            s.gradient_ratio,
+            s.length_ratio,
+            g.0,
+            g.1,
+            l.0,
+            l.1,
+            view.right.length() / domain.voxel
+        );
+    }
     Ok((out.voxels, out.corrections, whole(setup)))
 }
 

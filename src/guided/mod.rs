@@ -3,6 +3,7 @@
 //! on the tet mesh), and a solid texture synthesized along it on demand ([`synth`]: only
 //! the voxels a cut or the whole solid needs, [`region`]).
 
+pub mod cube;
 pub mod field;
 pub mod region;
 pub mod solid;

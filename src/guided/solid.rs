@@ -216,6 +216,38 @@ pub fn solid_volume(setup: &Setup, out: &Synthesized, alpha: &[f32]) -> Result<V
     Volume::from_data(dims, with_alpha(setup), data)
 }
 
+/// The sharpness yardstick ([`crate::sharpness`]) of a cut's largest centred square of
+/// opaque pixels against the exemplar's shown channels (a feature mask or depth left out):
+/// meaningful when a pixel spans about one voxel.
+pub fn cut_sharpness(picture: &Image2d, exemplar: &Image2d) -> Result<crate::sharpness::AxisSharpness> {
+    let shown: Vec<usize> =
+        (0..exemplar.channel_count()).filter(|&c| !synth::matched_only(&exemplar.channels()[c])).collect();
+    let mut colours = Vec::with_capacity(exemplar.width() * exemplar.height() * shown.len());
+    for y in 0..exemplar.height() {
+        for x in 0..exemplar.width() {
+            colours.extend(shown.iter().map(|&c| exemplar.pixel(x, y)[c]));
+        }
+    }
+    let names = shown.iter().map(|&c| exemplar.channels()[c].clone()).collect();
+    let exemplar = Image2d::from_data(exemplar.width(), exemplar.height(), names, colours)?;
+    crate::sharpness::compare(&[inside_square(picture)?], &exemplar, &shown)
+}
+
+/// The largest centred square of opaque pixels (alpha: the last channel), without alpha.
+fn inside_square(picture: &Image2d) -> Result<Image2d> {
+    let (w, h, c) = (picture.width(), picture.height(), picture.channel_count());
+    let (cx, cy) = (w / 2, h / 2);
+    let opaque = |r: usize| (cx - r..cx + r).all(|x| (cy - r..cy + r).all(|y| picture.pixel(x, y)[c - 1] > 0.5));
+    let r = (1..cx.min(cy)).take_while(|r| opaque(*r)).last().unwrap_or(1);
+    let mut data = Vec::with_capacity(4 * r * r * (c - 1));
+    for y in cy - r..cy + r {
+        for x in cx - r..cx + r {
+            data.extend_from_slice(&picture.pixel(x, y)[..c - 1]);
+        }
+    }
+    Image2d::from_data(2 * r, 2 * r, picture.channels()[..c - 1].to_vec(), data)
+}
+
 /// The exemplars' channels (alpha-free: [`super::synth::Exemplars::prepare`]) and alpha.
 fn with_alpha(setup: &Setup) -> Vec<Channel> {
     setup.exemplars.names.iter().cloned().chain([Channel::A]).collect()

@@ -27,6 +27,7 @@
 //! synthesized alone is bit-identical to the same voxels of the whole solid, on any number
 //! of threads.
 
+use super::cube::Cube;
 use super::field::{FrameGrid, ScalarGrid};
 use super::region::{Mask, Sparse};
 use super::triples::Triples;
@@ -115,7 +116,7 @@ pub const MAX_CHANNELS: usize = 5;
 pub const FEATURE: &str = "feature";
 
 /// Whether an exemplar channel is matched but not shown: a feature mask or the depth.
-fn matched_only(channel: &Channel) -> bool {
+pub fn matched_only(channel: &Channel) -> bool {
     *channel == Channel::Depth || *channel == Channel::Named(FEATURE.into())
 }
 
@@ -131,6 +132,9 @@ pub struct Exemplars {
     pub names: Vec<Channel>,
     /// The index of the Depth channel, if the exemplars carry one.
     pub depth: Option<usize>,
+    /// A solid exemplar instead of the planes: a voxel's slot is then its place in the
+    /// cube ([`super::cube`]); `planes` and `triples` are empty.
+    pub cube: Option<Arc<Cube>>,
 }
 
 impl Exemplars {
@@ -211,7 +215,42 @@ impl Exemplars {
                 crate::volume::channel_names(channels)
             )));
         }
-        Ok(Exemplars { planes, triples, names, depth })
+        Ok(Exemplars { planes, triples, names, depth, cube: None })
+    }
+
+    /// The solid exemplar of plain (not layered, unmasked) exemplars: a tiling cube of
+    /// [`super::cube::SIDE`] voxels synthesized from them ([`crate::synth::synthesize`]).
+    pub fn synthesized_cube(images: &[Image2d; 3], options: &Options, seed: u64) -> Result<Exemplars> {
+        let cube = Cube::synthesized(images, options.levels, seed)?;
+        Exemplars::of_cube(cube, images[0].channels().to_vec())
+    }
+
+    /// A solid exemplar, its channels named `names` (colours only).
+    pub fn of_cube(cube: Cube, names: Vec<Channel>) -> Result<Exemplars> {
+        if names.len() != cube.channels || names.iter().any(|c| matched_only(c) || *c == Channel::A) {
+            return Err(Error::invalid(format!(
+                "a solid exemplar shows colours only; channels {} do not fit its {}",
+                crate::volume::channel_names(&names),
+                cube.channels
+            )));
+        }
+        let none = Arc::new(Vec::new());
+        Ok(Exemplars {
+            planes: [none.clone(), none.clone(), none],
+            triples: Vec::new(),
+            names,
+            depth: None,
+            cube: Some(Arc::new(cube)),
+        })
+    }
+
+    /// Per plane, how many slots a voxel of `level` may hold there: the exemplar's centres,
+    /// or with a cube its side (a slot is then a place's coordinate).
+    pub fn slot_counts(&self, level: usize) -> [usize; 3] {
+        match &self.cube {
+            Some(cube) => [cube.levels[level].side; 3],
+            None => [0, 1, 2].map(|a| self.planes[a][level].centres.len()),
+        }
     }
 
     /// The channels a voxel shows (a feature mask and a Depth channel aside).
@@ -317,6 +356,10 @@ impl Setup<'_> {
     /// pixels.
     pub fn voxel(&self, level: usize, slot: [u32; 3]) -> Voxel {
         let mut colour = [0.0; MAX_CHANNELS];
+        if let Some(cube) = &self.exemplars.cube {
+            colour[..cube.channels].copy_from_slice(cube.at(level, slot.map(i64::from)));
+            return Voxel { slot, colour };
+        }
         let share = 1.0 / self.planes().len() as f32;
         for a in self.planes() {
             let ex = self.exemplar(a, level);
@@ -424,10 +467,13 @@ pub fn run(
 pub fn fingerprint(setup: &Setup) -> u64 {
     let mut h = crate::noise::mix64(0x5011_d7e8);
     let mut add = |x: u64| h = crate::noise::mix64(h ^ x);
-    for plane in &setup.exemplars.planes {
-        let finest = &plane[plane.len() - 1];
+    for finest in setup.exemplars.planes.iter().filter_map(|plane| plane.last()) {
         add(finest.width as u64);
         add(finest.height as u64);
+        finest.colours.iter().for_each(|c| add(u64::from(c.to_bits())));
+    }
+    if let Some(finest) = setup.exemplars.cube.as_ref().and_then(|c| c.levels.last()) {
+        add(finest.side as u64);
         finest.colours.iter().for_each(|c| add(u64::from(c.to_bits())));
     }
     if let Some(d) = setup.depth {
@@ -451,6 +497,9 @@ const BLOCK: usize = 8;
 /// The coarsest level's start: each plane's pixel follows the voxel's position in its
 /// frame from its block's corner, shifted by a random offset per block and plane.
 fn initial(setup: &Setup, v: [usize; 3]) -> Voxel {
+    if let Some(cube) = &setup.exemplars.cube {
+        return cube_initial(setup, cube, v);
+    }
     let frame = setup.frame(0, v);
     let block = v.map(|c| (c / BLOCK) as i64);
     let local = frame.transpose() * Vec3::from_array(v.map(|c| (c % BLOCK) as f32));
@@ -473,6 +522,10 @@ fn upsampled(setup: &Setup, level: usize, parents: &Sparse<Voxel>, v: [usize; 3]
     let parent = parents.at(p.map(|c| c as i64));
     let offset = Vec3::from_array([0, 1, 2].map(|a| (v[a] - 2 * p[a]) as f32));
     let local = setup.frame(level - 1, p).transpose() * offset;
+    if let Some(cube) = &setup.exemplars.cube {
+        let place = [0, 1, 2].map(|a| 2 * i64::from(parent.slot[a]) + local[a].round() as i64);
+        return setup.voxel(level, cube.wrapped(level, place));
+    }
     let slot = [0, 1, 2].map(|a| {
         let (coarse, fine) = (setup.exemplar(a, level - 1), setup.exemplar(a, level));
         let (pa, sa) = Axis::ALL[a].plane_axes();
@@ -487,6 +540,9 @@ fn upsampled(setup: &Setup, level: usize, parents: &Sparse<Voxel>, v: [usize; 3]
 
 /// One correction of voxel `v` of `level` from the previous version `before`.
 fn corrected(setup: &Setup, level: usize, pass: usize, before: &Sparse<Voxel>, v: [usize; 3]) -> Voxel {
+    if let Some(cube) = &setup.exemplars.cube {
+        return cube_corrected(setup, cube, level, pass, before, v);
+    }
     let frame = setup.frame(level, v);
     let here = Vec3::from_array(v.map(|c| c as f32));
     let at = |p: Vec3| before.at(nearest(p));
@@ -577,6 +633,101 @@ fn corrected(setup: &Setup, level: usize, pass: usize, before: &Sparse<Voxel>, v
         consider(triples.of(0, random)[0]);
         setup.voxel(level, best.1)
     })
+}
+
+/// The coarsest level's start with a solid exemplar: the voxel's position in its frame
+/// from its block's corner, plus a random place per block.
+fn cube_initial(setup: &Setup, cube: &Cube, v: [usize; 3]) -> Voxel {
+    let frame = setup.frame(0, v);
+    let block = v.map(|c| (c / BLOCK) as i64);
+    let local = frame.transpose() * Vec3::from_array(v.map(|c| (c % BLOCK) as f32));
+    let h = hash3(setup.seed, block[0], block[1], block[2]);
+    let place = [0, 1, 2].map(|a| ((h >> (16 * a)) & 0xffff) as i64 + local[a].round() as i64);
+    setup.voxel(0, cube.wrapped(0, place))
+}
+
+/// Most values of one plane's neighbourhood (11 x 11 of [`MAX_CHANNELS`]).
+const MOST: usize = 121 * MAX_CHANNELS;
+
+/// One correction of voxel `v` with a solid exemplar: its three n x n neighbourhoods in
+/// the planes of its frame against the cube's axis-aligned ones at each candidate place;
+/// candidates: each 3 x 3 in-plane neighbour's place moved back by its offset, the
+/// voxel's own and one random place; the least summed squared distance wins.
+fn cube_corrected(
+    setup: &Setup,
+    cube: &Cube,
+    level: usize,
+    pass: usize,
+    before: &Sparse<Voxel>,
+    v: [usize; 3],
+) -> Voxel {
+    let frame = setup.frame(level, v);
+    let here = Vec3::from_array(v.map(|c| c as f32));
+    let at = |p: Vec3| before.at(nearest(p));
+    let (n, ch) = (setup.options.n_at(level), cube.channels);
+    let h = (n / 2) as i64;
+    let mut queries = [[0.0f32; MOST]; 3];
+    for (a, query) in queries.iter_mut().enumerate() {
+        let (pa, sa) = Axis::ALL[a].plane_axes();
+        let (u, w) = (frame.col(pa), frame.col(sa));
+        for (k, (dx, dy)) in (-h..=h).flat_map(|dy| (-h..=h).map(move |dx| (dx, dy))).enumerate() {
+            let colour = at(here + u * dx as f32 + w * dy as f32).colour;
+            query[k * ch..(k + 1) * ch].copy_from_slice(&colour[..ch]);
+        }
+    }
+    // the summed distance at place `t`, or infinity once a partial sum passes `bound`
+    let cost = |t: [u32; 3], bound: f32| -> f32 {
+        let mut sum = 0.0;
+        for (a, query) in queries.iter().enumerate() {
+            let (pa, sa) = Axis::ALL[a].plane_axes();
+            for (k, (dx, dy)) in (-h..=h).flat_map(|dy| (-h..=h).map(move |dx| (dx, dy))).enumerate() {
+                let mut p = t.map(i64::from);
+                p[pa] += dx;
+                p[sa] += dy;
+                sum += crate::synth::exemplar::squared(&query[k * ch..(k + 1) * ch], cube.at(level, p));
+            }
+            if sum > bound {
+                return f32::INFINITY;
+            }
+        }
+        sum
+    };
+    let own = before.at(v.map(|c| c as i64)).slot;
+    let mut seen = [[0u32; 3]; 32];
+    let mut count = 0;
+    let mut best = (cost(own, f32::INFINITY), own);
+    let mut consider = |t: [u32; 3]| {
+        if t == own || seen[..count].contains(&t) {
+            return;
+        }
+        if count < seen.len() {
+            seen[count] = t;
+            count += 1;
+        }
+        let d = cost(t, best.0);
+        if d < best.0 || (d == best.0 && t < best.1) {
+            best = (d, t);
+        }
+    };
+    for a in 0..3 {
+        let (pa, sa) = Axis::ALL[a].plane_axes();
+        let (u, w) = (frame.col(pa), frame.col(sa));
+        for oy in -1i64..=1 {
+            for ox in -1i64..=1 {
+                if ox == 0 && oy == 0 {
+                    continue;
+                }
+                let mut p = at(here + u * ox as f32 + w * oy as f32).slot.map(i64::from);
+                p[pa] -= ox;
+                p[sa] -= oy;
+                consider(cube.wrapped(level, p));
+            }
+        }
+    }
+    let key = [v[0] as i64, v[1] as i64, v[2] as i64 + (((level * 64 + pass) as i64) << 32)];
+    let r = crate::noise::mix64(hash3(setup.seed, key[0], key[1], key[2]));
+    consider(cube.wrapped(level, [0, 1, 2].map(|a| ((r >> (20 * a)) & 0xfffff) as i64)));
+    setup.voxel(level, best.1)
 }
 
 /// The voxel nearest to `p` (halves round up): a float-to-integer conversion of a value
@@ -764,35 +915,92 @@ mod tests {
     fn a_cut_alone_equals_the_whole_solid_on_any_thread_count() {
         const SIDE: usize = 64;
         let (exemplars, frames) = world(SIDE);
-        let setup = setup(&exemplars, &frames, SIDE);
-        let mut request = Mask::empty([SIDE; 3]);
+        cut_equals_whole(&setup(&exemplars, &frames, SIDE));
+    }
+
+    /// The same with a solid exemplar.
+    #[test]
+    fn with_a_cube_a_cut_alone_equals_the_whole_solid_on_any_thread_count() {
+        const SIDE: usize = 48;
+        let frames = world(SIDE).1;
+        let exemplars = cube_exemplars();
+        cut_equals_whole(&Setup { exemplars: &exemplars, ..setup(&exemplars, &frames, SIDE) });
+    }
+
+    /// A slanted cut synthesized alone has the colours of the whole solid made on 1 thread;
+    /// the whole solid on 3 threads is the same; a cut from a kept coarse level too.
+    fn cut_equals_whole(setup: &Setup) {
+        let side = setup.dims[0];
+        let mut request = Mask::empty(setup.dims);
         let mut cut = Vec::new();
-        for y in 0..SIDE {
-            for x in 0..SIDE {
-                let v = [x, y, (20 + x / 3).min(SIDE - 1)];
+        for y in 0..side {
+            for x in 0..side {
+                let v = [x, y, (20 + x / 3).min(side - 1)];
                 let at = request.index(v);
                 request.on[at] = true;
                 cut.push(v);
             }
         }
-        let alone = run(&setup, &plan(&setup, &request, 0), None, &crate::progress::NoProgress).unwrap();
-        let full_mask = Mask::full([SIDE; 3]);
+        let alone = run(setup, &plan(setup, &request, 0), None, &crate::progress::NoProgress).unwrap();
+        let full_mask = Mask::full(setup.dims);
         let pool = |threads: usize| rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
         let whole =
-            pool(1).install(|| run(&setup, &plan(&setup, &full_mask, 0), None, &crate::progress::NoProgress).unwrap());
-        assert_eq!(colours(&setup, &alone, &cut), colours(&setup, &whole, &cut));
+            pool(1).install(|| run(setup, &plan(setup, &full_mask, 0), None, &crate::progress::NoProgress).unwrap());
+        assert_eq!(colours(setup, &alone, &cut), colours(setup, &whole, &cut));
         assert!(alone.voxels < whole.voxels, "{} voxels for the cut, {} for the whole", alone.voxels, whole.voxels);
-        let every: Vec<[usize; 3]> = (0..SIDE * SIDE * SIDE).map(|i| full_mask.voxel(i)).collect();
+        let every: Vec<[usize; 3]> = (0..side * side * side).map(|i| full_mask.voxel(i)).collect();
         let three =
-            pool(3).install(|| run(&setup, &plan(&setup, &full_mask, 0), None, &crate::progress::NoProgress).unwrap());
-        assert_eq!(colours(&setup, &whole, &every), colours(&setup, &three, &every));
+            pool(3).install(|| run(setup, &plan(setup, &full_mask, 0), None, &crate::progress::NoProgress).unwrap());
+        assert_eq!(colours(setup, &whole, &every), colours(setup, &three, &every));
         // a level taken over from an earlier whole run (a cache) gives the same cut
-        let mut coarse_masks = plan(&setup, &full_mask, 0);
+        let mut coarse_masks = plan(setup, &full_mask, 0);
         coarse_masks.truncate(1);
-        let coarse = run(&setup, &coarse_masks, None, &crate::progress::NoProgress).unwrap().values;
-        let resumed =
-            run(&setup, &plan(&setup, &request, 1), Some((0, &coarse)), &crate::progress::NoProgress).unwrap();
-        assert_eq!(colours(&setup, &resumed, &cut), colours(&setup, &whole, &cut));
+        let coarse = run(setup, &coarse_masks, None, &crate::progress::NoProgress).unwrap().values;
+        let resumed = run(setup, &plan(setup, &request, 1), Some((0, &coarse)), &crate::progress::NoProgress).unwrap();
+        assert_eq!(colours(setup, &resumed, &cut), colours(setup, &whole, &cut));
+    }
+
+    /// A tiling 32³ cube of sharp-edged blobs (gradient noise cut at 0) with a little noise, a solid exemplar of two
+    /// levels.
+    fn cube_exemplars() -> Exemplars {
+        let v = crate::volume::Volume::from_fn([32; 3], Channel::grey(), |x, y, z, o| {
+            let f = crate::noise::gradient(9, Vec3::new(x as f32, y as f32, z as f32) / 4.0, [8; 3]);
+            let n = (hash3(3, x as i64, y as i64, z as i64) % 100) as f32 / 1000.0;
+            o[0] = if f > 0.0 { 0.75 } else { 0.25 } + n;
+        })
+        .unwrap();
+        Exemplars::of_cube(Cube::new(&v, &[0], 2, 8).unwrap(), Channel::grey()).unwrap()
+    }
+
+    /// The central cut across x of the whole solid synthesized from `exemplars` along a field
+    /// turning 60°, and the cube's central slice across x: the solid's sharpness against it.
+    fn sharpness_against_the_cube(exemplars: &Exemplars) -> crate::sharpness::AxisSharpness {
+        const SIDE: usize = 48;
+        let frames = world(SIDE).1;
+        let setup = Setup { exemplars, ..setup(exemplars, &frames, SIDE) };
+        let out = run(&setup, &plan(&setup, &Mask::full([SIDE; 3]), 0), None, &crate::progress::NoProgress).unwrap();
+        let cut: Vec<f32> = (0..SIDE * SIDE).map(|i| out.colour(&setup, [SIDE / 2, i % SIDE, i / SIDE])[0]).collect();
+        let cut = Image2d::from_data(SIDE, SIDE, Channel::grey(), cut).unwrap();
+        crate::sharpness::compare(&[cut], &cube_slice(), &[0]).unwrap()
+    }
+
+    fn cube_slice() -> Image2d {
+        let cube = cube_exemplars().cube.unwrap();
+        let slice = (0..32 * 32).map(|i| cube.at(1, [16, (i % 32) as i64, (i / 32) as i64])[0]).collect();
+        Image2d::from_data(32, 32, Channel::grey(), slice).unwrap()
+    }
+
+    /// With a solid exemplar the solid's cuts keep the cube's sharpness and feature size
+    /// (the yardstick's targets); the same cube's central slice as the three planes'
+    /// exemplar, each voxel the mean of three pixels, gives soft cuts that miss them.
+    #[test]
+    fn with_a_cube_cuts_keep_its_sharpness() {
+        let cube = sharpness_against_the_cube(&cube_exemplars());
+        assert!(cube.in_range(), "{cube:?}");
+        let slice = cube_slice();
+        let planes = Exemplars::prepare([&slice, &slice, &slice], &options()).unwrap();
+        let soft = sharpness_against_the_cube(&planes);
+        assert!(!soft.in_range() && soft.gradient_ratio < cube.gradient_ratio, "{soft:?} against {cube:?}");
     }
 
     /// Every voxel is a mean of three exemplar pixels whose crossbars agree: the solid's

@@ -1,13 +1,15 @@
 //! Sketch-guided synthesis on a fill preview (the TUI's fill editor): the frame field the
 //! spec's strokes and depth give, drawn as streamlines on the preview's cut, and a guided
-//! cut synthesized along it from the exemplar's own central slices (layered, with the
-//! spec's depth, when the exemplar has a Depth channel).
+//! cut synthesized along it: from the exemplar volume itself as a solid exemplar, or from
+//! its central slices (layered, with the spec's depth, when the exemplar has a Depth
+//! channel; or when the volume is not a cube).
 
 use super::fill::load_built;
 use crate::error::{Error, Result};
 use crate::fill::FillPreview;
 use crate::fill::render::View;
 use crate::fill::spec::FillSpec;
+use crate::guided::cube::{self, Cube};
 use crate::guided::field::{FrameField, ScalarGrid, sketched_frames, solve, streamlines};
 use crate::guided::solid::{self, Domain};
 use crate::guided::synth::{Exemplars, Options, Setup};
@@ -76,13 +78,17 @@ pub fn picture(
         Overlay::Guided => {
             let volume = load_built(spec, &spec.exemplar)?;
             let domain = Domain::around(surface.bounds(), GUIDED_RES)?;
-            let (planes, depth) = match layered_slices(&volume, spec.axes, &depths, &domain)? {
-                Some((planes, depth)) => (planes, Some(depth)),
-                None => (central_slices(&volume)?, None),
+            let (exemplars, options, depth) = match layered_slices(&volume, spec.axes, &depths, &domain)? {
+                Some((planes, depth)) => {
+                    let side = planes.iter().map(|e| e.width().min(e.height())).min().unwrap_or(0);
+                    let options = Options { layered: true, ..Options::for_exemplar(side) };
+                    (Exemplars::prepare([&planes[0], &planes[1], &planes[2]], &options)?, options, Some(depth))
+                }
+                None => {
+                    let (exemplars, options) = plain_exemplars(&volume)?;
+                    (exemplars, options, None)
+                }
             };
-            let side = planes.iter().map(|e| e.width().min(e.height())).min().unwrap_or(0);
-            let options = Options { layered: depth.is_some(), ..Options::for_exemplar(side) };
-            let exemplars = Exemplars::prepare([&planes[0], &planes[1], &planes[2]], &options)?;
             let frames = solid::frames_over(mesh, &field, &domain);
             let setup = Setup {
                 exemplars: &exemplars,
@@ -105,6 +111,21 @@ pub fn picture(
         }
     };
     Ok(Picture { size: view.width, pixels })
+}
+
+/// The exemplars of a volume without layers: the volume itself as the solid exemplar when
+/// it is a cube that halves evenly down to the coarsest level, else its central slices.
+fn plain_exemplars(volume: &Volume) -> Result<(Exemplars, Options)> {
+    let options = Options::for_exemplar(volume.dims()[0]);
+    let keep = colour_channels(volume);
+    if let Ok(cube) = Cube::new(volume, &keep, options.levels, cube::SMALLEST) {
+        let names = [Channel::R, Channel::G, Channel::B][..keep.len()].to_vec();
+        return Ok((Exemplars::of_cube(cube, names)?, options));
+    }
+    let planes = central_slices(volume)?;
+    let side = planes.iter().map(|e| e.width().min(e.height())).min().unwrap_or(0);
+    let options = Options::for_exemplar(side);
+    Ok((Exemplars::prepare([&planes[0], &planes[1], &planes[2]], &options)?, options))
 }
 
 /// The exemplar volume's central slices across x, y and z as exemplars of the planes

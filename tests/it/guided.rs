@@ -102,13 +102,43 @@ fn a_guided_cut_is_synthesized_on_demand_and_cached() {
     assert_eq!(std::fs::read(&planted).unwrap(), b"my notes");
     assert!(!d.join("third.png").exists());
 
-    // an exemplar too small for a second level has nothing to cache: refused, not a crash
+    // matched as planes, an exemplar too small for a second level has nothing to cache:
+    // refused, not a crash; its solid cube has levels enough
     let small = at(d, "small.png");
     assert!(solidtex(&["draw", "kiwi", "--size", "24x24", "-o", &small]).status.success());
     let args = ["guided", &fruit, "--spec", &spec, "--exemplar", &small, "--res", "32", "--cut", "0,0,0,0,0,1"];
-    let run = solidtex(&[&args[..], &["--cache", &at(d, "cache2"), "-o", &at(d, "small_cut.png")]].concat());
+    let cache2 = at(d, "cache2");
+    let run = solidtex(&[&args[..], &["--planes", "--cache", &cache2, "-o", &at(d, "small_cut.png")]].concat());
     crate::support::assert_fails(&run, &["one level only", "--cache"]);
     assert!(!d.join("small_cut.png").exists());
+    let run = solidtex(&[&args[..], &["--cache", &cache2, "-o", &at(d, "small_cut.png")]].concat());
+    assert!(run.status.success(), "{}", stderr(&run));
+}
+
+/// A photo's guided cut is as sharp as the photo: the sharpness line `guided` prints for
+/// a cut (gradient and autocorrelation-length ratios against the exemplar) is within the
+/// yardstick's targets through the solid cube; matched as planes (`--planes`, each voxel
+/// the mean of three pixels) the same cut is soft and misses the gradient target.
+#[test]
+fn a_guided_cut_of_a_photo_is_as_sharp_as_the_photo() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (fruit, spec) = crate::fill::kiwi_fruit(d);
+    let ex = gravel();
+    let ratios = |extra: &[&str]| -> (f64, f64) {
+        let out = at(d, "cut.png");
+        let args = ["guided", &fruit, "--spec", &spec, "--exemplar", &ex, "--max-exemplar", "64", "--res", "64"];
+        let run = solidtex(&[&args[..], &["--cut", "0,0,0,0,0,1", "--size", "64", "-o", &out], extra].concat());
+        assert!(run.status.success(), "{}", stderr(&run));
+        let err = stderr(&run);
+        let line = err.lines().find(|l| l.starts_with("sharpness against the exemplar:")).expect("the sharpness line");
+        let numbers: Vec<f64> = line.split([' ', ',']).filter_map(|w| w.parse().ok()).collect();
+        (numbers[0], numbers[1])
+    };
+    let (gradient, length) = ratios(&[]);
+    assert!((0.8..=1.2).contains(&gradient) && (0.7..=1.3).contains(&length), "{gradient} {length}");
+    let (soft, _) = ratios(&["--planes"]);
+    assert!(soft < 0.8, "as planes: gradient ratio {soft}");
 }
 
 /// Without `--cut`, the whole solid is written: the exemplar's channels (one: the photo is

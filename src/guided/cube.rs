@@ -1,0 +1,130 @@
+//! A solid exemplar for guided synthesis: a cube of colours that tiles (made from the 2D
+//! exemplars by the project's synthesis, [`crate::synth::synthesize`]), kept at every
+//! pyramid level. A voxel then holds one place in the cube and shows the cube's colour
+//! there: its neighbourhoods in the three planes of its frame come from one consistent
+//! solid, so cuts keep the cube's sharpness, where a triple of 2D pixels shows the mean
+//! of three pixels that seldom agree (docs/guided.md, "Two exemplars").
+
+use crate::error::{Error, Result};
+use crate::volume::{Edge, Volume, downsample};
+
+/// Side of the cube synthesized from 2D exemplars: 64 voxels tile without visible repeats
+/// at the resolutions guided synthesis runs at, in about a second.
+pub const SIDE: usize = 64;
+
+/// Side of the cube's coarsest level at least.
+pub const SMALLEST: usize = 16;
+
+/// Channels a cube may hold.
+const MAX_CHANNELS: usize = super::synth::MAX_CHANNELS;
+
+/// One level of the cube.
+#[derive(Debug, Clone)]
+pub struct CubeLevel {
+    /// Voxels per side.
+    pub side: usize,
+    /// Colours, interleaved, x fastest.
+    pub colours: Vec<f32>,
+}
+
+/// The cube at every level, coarsest first.
+#[derive(Debug, Clone)]
+pub struct Cube {
+    /// Levels, coarsest first.
+    pub levels: Vec<CubeLevel>,
+    /// Channels per voxel.
+    pub channels: usize,
+}
+
+impl Cube {
+    /// The cube of `volume`'s channels `keep` at `levels` levels: a cube whose side halves
+    /// evenly down to the coarsest level, which holds at least `smallest` voxels a side.
+    pub fn new(volume: &Volume, keep: &[usize], levels: usize, smallest: usize) -> Result<Cube> {
+        let [w, h, d] = volume.dims();
+        let shrink = 1usize << (levels - 1);
+        if w != h || h != d || w % shrink != 0 || w / shrink < smallest {
+            return Err(Error::invalid(format!(
+                "a solid exemplar must be a cube whose side divides by {shrink} with at least {smallest} voxels a side \
+                 at its coarsest level ({levels} levels): {w}x{h}x{d} is not"
+            )));
+        }
+        if keep.is_empty() || keep.len() > MAX_CHANNELS || keep.iter().any(|&k| k >= volume.channel_count()) {
+            return Err(Error::invalid(format!(
+                "a solid exemplar shows 1 to {MAX_CHANNELS} of the volume's {} channels, not {keep:?}",
+                volume.channel_count()
+            )));
+        }
+        let colours = keep;
+        let mut volume = volume.clone();
+        let mut out = Vec::with_capacity(levels);
+        for level in 0..levels {
+            if level > 0 {
+                volume = downsample(&volume, Edge::Wrap)?;
+            }
+            let c = volume.channel_count();
+            let data = volume.data().chunks_exact(c).flat_map(|px| colours.iter().map(move |&k| px[k])).collect();
+            out.push(CubeLevel { side: volume.dims()[0], colours: data });
+        }
+        out.reverse();
+        Ok(Cube { levels: out, channels: colours.len() })
+    }
+
+    /// The cube synthesized from `images` (orthogonal to x, y, z) at [`SIDE`] voxels a side,
+    /// tiling, with `levels` levels.
+    pub fn synthesized(images: &[crate::volume::Image2d; 3], levels: usize, seed: u64) -> Result<Cube> {
+        let mut params = crate::synth::SynthParams { size: [SIDE; 3], ..Default::default() };
+        // as many levels (at most the default's) as a small exemplar holds neighbourhoods at
+        let side = images.iter().map(|e| e.width().min(e.height())).min().unwrap_or(0);
+        while params.levels > 1 && (side >> (params.levels - 1)) < params.neighbourhood + 2 {
+            params.levels -= 1;
+        }
+        let ex = crate::synth::Exemplars { x: &images[0], y: Some(&images[1]), z: Some(&images[2]) };
+        let volume = crate::synth::synthesize(ex, &params, seed, &crate::progress::NoProgress)?;
+        let keep: Vec<usize> = (0..volume.channel_count()).collect();
+        Cube::new(&volume, &keep, levels, SMALLEST)
+    }
+
+    /// The colour at place `p` of `level` (wrapped into the cube).
+    #[inline]
+    pub fn at(&self, level: usize, p: [i64; 3]) -> &[f32] {
+        let l = &self.levels[level];
+        let s = l.side as i64;
+        let [x, y, z] = p.map(|c| c.rem_euclid(s) as usize);
+        let i = x + l.side * (y + l.side * z);
+        &l.colours[i * self.channels..(i + 1) * self.channels]
+    }
+
+    /// `p` wrapped into the cube of `level`.
+    #[inline]
+    pub fn wrapped(&self, level: usize, p: [i64; 3]) -> [u32; 3] {
+        let s = self.levels[level].side as i64;
+        p.map(|c| c.rem_euclid(s) as u32)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::volume::Channel;
+
+    /// Levels halve the side, wrap around, and keep the channels asked for.
+    #[test]
+    fn levels_halve_and_places_wrap() {
+        let v = Volume::from_fn([16, 16, 16], vec![Channel::R, Channel::A], |x, y, z, o| {
+            o[0] = (x + 2 * y + 3 * z) as f32 / 100.0;
+            o[1] = 1.0;
+        })
+        .unwrap();
+        let cube = Cube::new(&v, &[0], 3, 4).unwrap();
+        assert_eq!(cube.levels.iter().map(|l| l.side).collect::<Vec<_>>(), [4, 8, 16]);
+        assert_eq!(cube.channels, 1);
+        assert_eq!(cube.at(2, [1, 2, 3]), [0.14]);
+        assert_eq!(cube.at(2, [17, -14, 19]), [0.14], "wrapped");
+        assert_eq!(cube.wrapped(2, [-1, 16, 5]), [15, 0, 5]);
+        let err = Cube::new(&v, &[0], 3, 5).unwrap_err().to_string();
+        assert!(err.contains("at least 5 voxels") && err.contains("16x16x16"), "{err}");
+        assert!(Cube::new(&v, &[2], 3, 4).unwrap_err().to_string().contains("[2]"));
+        let flat = Volume::from_fn([12, 12, 10], Channel::grey(), |_, _, _, o| o[0] = 0.5).unwrap();
+        assert!(Cube::new(&flat, &[0], 1, 4).unwrap_err().to_string().contains("12x12x10"));
+    }
+}
