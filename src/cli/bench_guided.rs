@@ -46,7 +46,8 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let image = crate::sections::draw("bark-skin", 128, 128, 1)?;
     let options = Options::for_exemplar(crate::guided::cube::SIDE);
     let started = Instant::now();
-    let exemplars = Exemplars::synthesized_cube(&[image.clone(), image.clone(), image.clone()], &options, 1)?;
+    let cube = crate::guided::cube::synthesize(&[image.clone(), image.clone(), image.clone()], 1)?;
+    let exemplars = Exemplars::of_volume(&cube, &options)?;
     let prepared = started.elapsed().as_secs_f64();
     let view = View::framing(fruit.bounds(), Vec3::ZERO, Vec3::Y, 256)?;
     let domain = Domain::around(fruit.bounds(), 256)?;

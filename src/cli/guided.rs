@@ -6,6 +6,7 @@ use super::commands::usage;
 use crate::error::{Error, Result};
 use crate::fill::render::View;
 use crate::fill::tets::TetMesh;
+use crate::guided::cube;
 use crate::guided::field::{FrameField, sketched_frames, solve, streamlines};
 use crate::guided::region::{Mask, Sparse};
 use crate::guided::solid::{self, Domain};
@@ -204,7 +205,7 @@ pub fn run_guided(args: &GuidedArgs) -> Result<()> {
     };
     let options = Options { layered: args.layered, coarse_n: args.coarse_n, n: args.n, ..Options::for_exemplar(side) };
     let prepared = if solid {
-        Exemplars::synthesized_cube(&exemplars, &options, args.seed)
+        cube_volume(args, &exemplars).and_then(|cube| Exemplars::of_volume(&cube, &options))
     } else {
         Exemplars::prepare([&exemplars[0], &exemplars[1], &exemplars[2]], &options)
     }
@@ -372,6 +373,24 @@ fn without_alpha(image: Image2d) -> Result<Image2d> {
     let data = image.data().chunks_exact(image.channel_count()).flat_map(|px| keep.iter().map(|&c| px[c])).collect();
     let names = keep.iter().map(|&c| image.channels()[c].clone()).collect();
     Image2d::from_data(image.width(), image.height(), names, data)
+}
+
+/// The solid cube of plain exemplars: synthesized, or read from the cache folder (and
+/// kept there when it was not).
+fn cube_volume(args: &GuidedArgs, images: &[Image2d; 3]) -> Result<crate::volume::Volume> {
+    let Some(folder) = &args.cache else {
+        return cube::synthesize(images, args.seed);
+    };
+    let key = cube::key(images, args.seed);
+    let path = guided_cache::cube_path(folder, key);
+    let channels = images[0].channel_count();
+    if let Some(colours) = guided_cache::read_cube(&path, key, cube::SIDE, channels)? {
+        return crate::volume::Volume::from_data([cube::SIDE; 3], images[0].channels().to_vec(), colours);
+    }
+    let volume = cube::synthesize(images, args.seed)?;
+    std::fs::create_dir_all(folder).map_err(|e| Error::io(folder, e))?;
+    guided_cache::write_cube(&path, key, cube::SIDE, channels, volume.data())?;
+    Ok(volume)
 }
 
 /// The coarse level from the cache folder, or computed and cached there.

@@ -6,7 +6,7 @@
 //! of three pixels that seldom agree (docs/guided.md, "Two exemplars").
 
 use crate::error::{Error, Result};
-use crate::volume::{Edge, Volume, downsample};
+use crate::volume::{Axis, Edge, Image2d, Volume, downsample};
 
 /// Side of the cube synthesized from 2D exemplars: 64 voxels tile without visible repeats
 /// at the resolutions guided synthesis runs at, in about a second.
@@ -69,21 +69,6 @@ impl Cube {
         Ok(Cube { levels: out, channels: colours.len() })
     }
 
-    /// The cube synthesized from `images` (orthogonal to x, y, z) at [`SIDE`] voxels a side,
-    /// tiling, with `levels` levels.
-    pub fn synthesized(images: &[crate::volume::Image2d; 3], levels: usize, seed: u64) -> Result<Cube> {
-        let mut params = crate::synth::SynthParams { size: [SIDE; 3], ..Default::default() };
-        // as many levels (at most the default's) as a small exemplar holds neighbourhoods at
-        let side = images.iter().map(|e| e.width().min(e.height())).min().unwrap_or(0);
-        while params.levels > 1 && (side >> (params.levels - 1)) < params.neighbourhood + 2 {
-            params.levels -= 1;
-        }
-        let ex = crate::synth::Exemplars { x: &images[0], y: Some(&images[1]), z: Some(&images[2]) };
-        let volume = crate::synth::synthesize(ex, &params, seed, &crate::progress::NoProgress)?;
-        let keep: Vec<usize> = (0..volume.channel_count()).collect();
-        Cube::new(&volume, &keep, levels, SMALLEST)
-    }
-
     /// The colour at place `p` of `level` (wrapped into the cube).
     #[inline]
     pub fn at(&self, level: usize, p: [i64; 3]) -> &[f32] {
@@ -94,12 +79,77 @@ impl Cube {
         &l.colours[i * self.channels..(i + 1) * self.channels]
     }
 
+    /// The summed squared distance from `query` (an n x n neighbourhood, rows along the
+    /// plane's second axis, channels interleaved) to the cube's neighbourhood in the plane
+    /// orthogonal to `axis` around place `t` of `level` (`n` at most 11, and below the side).
+    pub fn plane_distance(&self, level: usize, t: [u32; 3], axis: usize, n: usize, query: &[f32]) -> f32 {
+        let l = &self.levels[level];
+        let (side, ch, h) = (l.side, self.channels, n / 2);
+        let (pa, sa) = Axis::ALL[axis].plane_axes();
+        let stride = [1, side, side * side];
+        // t + d - h lifted by a side, back into [0, side)
+        let wrapped = |c: usize| {
+            if c >= 2 * side {
+                c - 2 * side
+            } else if c >= side {
+                c - side
+            } else {
+                c
+            }
+        };
+        let mut columns = [0usize; 11];
+        for (d, column) in columns.iter_mut().enumerate().take(n) {
+            *column = wrapped(t[pa] as usize + d + side - h) * stride[pa];
+        }
+        let base = t[axis] as usize * stride[axis];
+        let mut sum = 0.0;
+        for dy in 0..n {
+            let row = base + wrapped(t[sa] as usize + dy + side - h) * stride[sa];
+            for (dx, column) in columns.iter().enumerate().take(n) {
+                let at = (row + column) * ch;
+                let q = &query[(dy * n + dx) * ch..(dy * n + dx + 1) * ch];
+                for (a, b) in q.iter().zip(&l.colours[at..at + ch]) {
+                    sum += (a - b) * (a - b);
+                }
+            }
+        }
+        sum
+    }
+
     /// `p` wrapped into the cube of `level`.
     #[inline]
     pub fn wrapped(&self, level: usize, p: [i64; 3]) -> [u32; 3] {
         let s = self.levels[level].side as i64;
         p.map(|c| c.rem_euclid(s) as u32)
     }
+}
+
+/// The tiling volume of [`SIDE`]³ voxels synthesized from `images` (orthogonal to x, y,
+/// z; alpha-free) that becomes the cube.
+pub fn synthesize(images: &[Image2d; 3], seed: u64) -> Result<Volume> {
+    let mut params = crate::synth::SynthParams { size: [SIDE; 3], ..Default::default() };
+    // as many levels (at most the default's) as a small exemplar holds neighbourhoods at
+    let side = images.iter().map(|e| e.width().min(e.height())).min().unwrap_or(0);
+    while params.levels > 1 && (side >> (params.levels - 1)) < params.neighbourhood + 2 {
+        params.levels -= 1;
+    }
+    let ex = crate::synth::Exemplars { x: &images[0], y: Some(&images[1]), z: Some(&images[2]) };
+    crate::synth::synthesize(ex, &params, seed, &crate::progress::NoProgress)
+}
+
+/// A key of everything [`synthesize`] depends on: the images, the seed and the cube's side.
+pub fn key(images: &[Image2d; 3], seed: u64) -> u64 {
+    let mut h = crate::noise::mix64(0xc0be_5eed);
+    let mut add = |x: u64| h = crate::noise::mix64(h ^ x);
+    for image in images {
+        add(image.width() as u64);
+        add(image.height() as u64);
+        image.channels().iter().for_each(|c| c.to_string().bytes().for_each(|b| add(u64::from(b))));
+        image.data().iter().for_each(|c| add(u64::from(c.to_bits())));
+    }
+    add(SIDE as u64);
+    add(seed);
+    h
 }
 
 #[cfg(test)]
@@ -126,5 +176,37 @@ mod tests {
         assert!(Cube::new(&v, &[2], 3, 4).unwrap_err().to_string().contains("[2]"));
         let flat = Volume::from_fn([12, 12, 10], Channel::grey(), |_, _, _, o| o[0] = 0.5).unwrap();
         assert!(Cube::new(&flat, &[0], 1, 4).unwrap_err().to_string().contains("12x12x10"));
+    }
+
+    /// A plane's distance equals the sum over the neighbourhood read place by place with
+    /// `at`, across the cube's wrap too, for each of the three planes.
+    #[test]
+    fn a_plane_distance_reads_the_wrapped_neighbourhood() {
+        let v = Volume::from_fn([16, 16, 16], Channel::rgb(), |x, y, z, o| {
+            o[0] = (x * 7 % 5) as f32 / 4.0;
+            o[1] = (y * 3 % 7) as f32 / 6.0;
+            o[2] = ((x + z) % 3) as f32 / 2.0;
+        })
+        .unwrap();
+        let cube = Cube::new(&v, &[0, 1, 2], 1, 4).unwrap();
+        let n = 5;
+        let query: Vec<f32> = (0..n * n * 3).map(|i| (i % 11) as f32 / 10.0).collect();
+        for t in [[0u32, 15, 7], [14, 1, 0], [8, 8, 15]] {
+            for axis in 0..3 {
+                let (pa, sa) = Axis::ALL[axis].plane_axes();
+                let mut want = 0.0;
+                for dy in 0..n {
+                    for dx in 0..n {
+                        let mut p = t.map(i64::from);
+                        p[pa] += dx as i64 - 2;
+                        p[sa] += dy as i64 - 2;
+                        let q = &query[(dy * n + dx) * 3..][..3];
+                        want += q.iter().zip(cube.at(0, p)).map(|(a, b)| (a - b) * (a - b)).sum::<f32>();
+                    }
+                }
+                let got = cube.plane_distance(0, t, axis, n, &query);
+                assert!((got - want).abs() < 1e-4, "place {t:?}, axis {axis}: {got} against {want}");
+            }
+        }
     }
 }

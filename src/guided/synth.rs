@@ -218,11 +218,12 @@ impl Exemplars {
         Ok(Exemplars { planes, triples, names, depth, cube: None })
     }
 
-    /// The solid exemplar of plain (not layered, unmasked) exemplars: a tiling cube of
-    /// [`super::cube::SIDE`] voxels synthesized from them ([`crate::synth::synthesize`]).
-    pub fn synthesized_cube(images: &[Image2d; 3], options: &Options, seed: u64) -> Result<Exemplars> {
-        let cube = Cube::synthesized(images, options.levels, seed)?;
-        Exemplars::of_cube(cube, images[0].channels().to_vec())
+    /// A solid exemplar of `volume`'s channels but alpha ([`super::cube`]), at the levels of
+    /// `options`: e.g. the tiling cube [`super::cube::synthesize`] makes of plain exemplars.
+    pub fn of_volume(volume: &crate::volume::Volume, options: &Options) -> Result<Exemplars> {
+        let keep: Vec<usize> = (0..volume.channel_count()).filter(|&c| volume.channels()[c] != Channel::A).collect();
+        let cube = Cube::new(volume, &keep, options.levels, super::cube::SMALLEST)?;
+        Exemplars::of_cube(cube, keep.iter().map(|&c| volume.channels()[c].clone()).collect())
     }
 
     /// A solid exemplar, its channels named `names` (colours only).
@@ -679,13 +680,7 @@ fn cube_corrected(
     let cost = |t: [u32; 3], bound: f32| -> f32 {
         let mut sum = 0.0;
         for (a, query) in queries.iter().enumerate() {
-            let (pa, sa) = Axis::ALL[a].plane_axes();
-            for (k, (dx, dy)) in (-h..=h).flat_map(|dy| (-h..=h).map(move |dx| (dx, dy))).enumerate() {
-                let mut p = t.map(i64::from);
-                p[pa] += dx;
-                p[sa] += dy;
-                sum += crate::synth::exemplar::squared(&query[k * ch..(k + 1) * ch], cube.at(level, p));
-            }
+            sum += cube.plane_distance(level, t, a, n, query);
             if sum > bound {
                 return f32::INFINITY;
             }

@@ -7,7 +7,16 @@
 //!  per voxel, x fastest: its centre slot per plane, 3 x u32
 //! ```
 //!
-//! A file of that name that does not hold this key is not overwritten: the run stops and
+//! The solid cube synthesized from plain exemplars is kept beside it, under a key of the
+//! exemplars, seed and cube settings:
+//!
+//! ```text
+//!  file  DIR/guided-cube-<key as 16 hex digits>.cache
+//!  "solidtex guided cube 1\n"  key u64  side u32  channels u32   (little-endian)
+//!  per voxel, x fastest: its colours, channels x f32
+//! ```
+//!
+//! A file of either name that does not hold its key is not overwritten: the run stops and
 //! names it.
 
 use super::atomic;
@@ -20,6 +29,53 @@ use std::path::{Path, PathBuf};
 const MAGIC: &[u8] = b"solidtex guided cache 1\n";
 const HEADER: usize = 24 + 8 + 4 + 12;
 const PER_VOXEL: usize = 12;
+
+const CUBE_MAGIC: &[u8] = b"solidtex guided cube 1\n";
+const CUBE_HEADER: usize = 23 + 8 + 4 + 4;
+
+/// The cube file of `key` in `folder`.
+pub fn cube_path(folder: &Path, key: u64) -> PathBuf {
+    folder.join(format!("guided-cube-{key:016x}.cache"))
+}
+
+/// The cube's colours cached under `key` (`side`³ voxels of `channels`), if the file exists.
+pub fn read_cube(path: &Path, key: u64, side: usize, channels: usize) -> Result<Option<Vec<f32>>> {
+    if !path.exists() {
+        return Ok(None);
+    }
+    let count = side * side * side * channels;
+    let bytes = atomic::read_bytes_within(path, (CUBE_HEADER + 4 * count) as u64)?;
+    let word = |at: usize| u32::from_le_bytes(bytes[at..at + 4].try_into().expect("four bytes")) as usize;
+    let matches = bytes.len() == CUBE_HEADER + 4 * count
+        && bytes.starts_with(CUBE_MAGIC)
+        && u64::from_le_bytes(bytes[23..31].try_into().expect("eight bytes")) == key
+        && word(31) == side
+        && word(35) == channels;
+    if !matches {
+        return Err(Error::file(
+            path,
+            "is not the solid cube of these exemplars; solidtex does not overwrite it (move it away or give another \
+             --cache folder)",
+        ));
+    }
+    let colours: Vec<f32> =
+        bytes[CUBE_HEADER..].chunks_exact(4).map(|b| f32::from_le_bytes(b.try_into().expect("four bytes"))).collect();
+    if let Some(i) = colours.iter().position(|c| !c.is_finite()) {
+        return Err(Error::file(path, format!("value {i} is not a finite number; the cache is damaged")));
+    }
+    Ok(Some(colours))
+}
+
+/// Write the cube's colours (`side`³ voxels of `channels`) under `key`.
+pub fn write_cube(path: &Path, key: u64, side: usize, channels: usize, colours: &[f32]) -> Result<()> {
+    let mut bytes = Vec::with_capacity(CUBE_HEADER + 4 * colours.len());
+    bytes.extend_from_slice(CUBE_MAGIC);
+    bytes.extend_from_slice(&key.to_le_bytes());
+    bytes.extend_from_slice(&(side as u32).to_le_bytes());
+    bytes.extend_from_slice(&(channels as u32).to_le_bytes());
+    colours.iter().for_each(|c| bytes.extend_from_slice(&c.to_le_bytes()));
+    atomic::write_file(path, |w| w.write_all(&bytes).map_err(|e| Error::io(path, e)))
+}
 
 /// The cache file of `key` in `folder`.
 pub fn path(folder: &Path, key: u64) -> PathBuf {

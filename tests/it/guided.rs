@@ -93,14 +93,21 @@ fn a_guided_cut_is_synthesized_on_demand_and_cached() {
     assert!(run.status.success(), "{}", stderr(&run));
     assert_eq!(std::fs::read(&first).unwrap(), std::fs::read(&second).unwrap());
     assert_eq!(std::fs::read(&first).unwrap(), std::fs::read(&plain).unwrap(), "the cache changes nothing");
+    // the coarse level and the solid cube, each kept under its key
     let names = crate::support::listing(&d.join("cache"));
-    assert!(names.len() == 1 && names[0].starts_with("guided-"), "{names:?}");
-    let planted = d.join("cache").join(&names[0]);
-    std::fs::write(&planted, b"my notes").unwrap();
-    let third = at(d, "third.png");
-    crate::support::assert_fails(&cut(&third, true), &[&names[0], "does not overwrite"]);
-    assert_eq!(std::fs::read(&planted).unwrap(), b"my notes");
-    assert!(!d.join("third.png").exists());
+    assert_eq!(names.len(), 2, "{names:?}");
+    assert!(names.iter().all(|n| n.starts_with("guided-") && n.ends_with(".cache")), "{names:?}");
+    assert_eq!(names.iter().filter(|n| n.starts_with("guided-cube-")).count(), 1, "{names:?}");
+    for name in &names {
+        let planted = d.join("cache").join(name);
+        let kept = std::fs::read(&planted).unwrap();
+        std::fs::write(&planted, b"my notes").unwrap();
+        let third = at(d, "third.png");
+        crate::support::assert_fails(&cut(&third, true), &[name, "does not overwrite"]);
+        assert_eq!(std::fs::read(&planted).unwrap(), b"my notes");
+        assert!(!d.join("third.png").exists());
+        std::fs::write(&planted, kept).unwrap();
+    }
 
     // matched as planes, an exemplar too small for a second level has nothing to cache:
     // refused, not a crash; its solid cube has levels enough
