@@ -3,8 +3,7 @@
 //!
 //! Every voxel holds a coordinate triple: a pixel of each plane's exemplar (the planes
 //! orthogonal to its frame's x, y and z axes), whose crossbars agree ([`super::triples`]);
-//! its colour is the mean of the three, which are alike, so cuts keep the photo's
-//! sharpness and colours.
+//! its colour is the mean of the three, alike along their crossbars.
 //!
 //! ```text
 //!  coarsest level  pixels from the voxel's position in its frame, plus a random offset
@@ -18,9 +17,11 @@
 //!                  random one; the least summed PCA distance wins
 //! ```
 //!
-//! Cuts do not yet look like the photos: coherent triples make the solid a sum of three
-//! extrusions, and the corrections break them into small pieces (docs/guided.md, "Where
-//! it stands").
+//! With a solid exemplar ([`super::cube`]) a voxel holds one place in the cube instead:
+//! it starts, is upsampled and corrected the same way, its three neighbourhoods compared
+//! with the cube's at candidate places, and shows the cube's colour there, so cuts are as
+//! sharp as the cube's. The mean of a triple is soft on photos, whose three pixels seldom
+//! agree (docs/guided.md, "Two exemplars").
 //!
 //! A pass reads only the previous version of the voxels within its reach, so the voxels
 //! a request needs form a pyramid of masks ([`plan`]; [`super::region`]), and a cut
