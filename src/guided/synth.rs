@@ -917,7 +917,7 @@ mod tests {
     /// The same with a solid exemplar.
     #[test]
     fn with_a_cube_a_cut_alone_equals_the_whole_solid_on_any_thread_count() {
-        const SIDE: usize = 48;
+        const SIDE: usize = 64;
         let frames = world(SIDE).1;
         let exemplars = cube_exemplars();
         cut_equals_whole(&Setup { exemplars: &exemplars, ..setup(&exemplars, &frames, SIDE) });
