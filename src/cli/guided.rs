@@ -106,8 +106,12 @@ pub struct GuidedArgs {
     #[arg(long)]
     pub spec: PathBuf,
     /// The exemplar: the cross-section orthogonal to the frame's x axis (alone, all three).
-    #[arg(long)]
-    pub exemplar: PathBuf,
+    #[arg(long, required_unless_present = "solid")]
+    pub exemplar: Option<PathBuf>,
+    /// A solid exemplar instead: a volume (e.g. a built library exemplar) that is a cube
+    /// whose side halves evenly to at least 16 voxels, read along the field as it is
+    #[arg(long, conflicts_with_all = ["exemplar", "layered", "mask", "planes", "ey", "ez", "max_exemplar"])]
+    pub solid: Option<PathBuf>,
     /// Ey, Ez and shrinking (default: exemplars shrunk to 128 pixels).
     #[command(flatten)]
     pub others: super::synth::OtherExemplars,
@@ -186,7 +190,8 @@ pub fn run_guided(args: &GuidedArgs) -> Result<()> {
     let cut = checks().map_err(usage)?;
     io::check_folder(&args.output)?;
     let masks = [&args.mask, &args.ey_mask, &args.ez_mask].into_iter().flatten();
-    let inputs: Vec<&PathBuf> = [&args.mesh, &args.spec, &args.exemplar].into_iter().chain(masks).collect();
+    let given = [&args.exemplar, &args.solid].into_iter().flatten();
+    let inputs: Vec<&PathBuf> = [&args.mesh, &args.spec].into_iter().chain(given).chain(masks).collect();
     if inputs.iter().any(|p| io::atomic::canonical(p).is_some_and(|c| io::atomic::canonical(&args.output) == Some(c))) {
         return Err(usage(Error::file(&args.output, "is one of the inputs; give another output")));
     }
@@ -196,20 +201,13 @@ pub fn run_guided(args: &GuidedArgs) -> Result<()> {
     let depth =
         args.layered.then(|| solid::depth_over(&g.depth, &domain)).transpose().map_err(|e| e.in_file(&args.spec))?;
     let rows = depth.as_ref().map(|d| solid::layer_rows(d, args.res)).transpose()?;
-    let exemplars = load_exemplars(args, rows)?;
-    let solid = !args.layered && args.mask.is_none() && !args.planes;
-    let side = if solid {
-        crate::guided::cube::SIDE
-    } else {
-        exemplars.iter().map(|e| e.width().min(e.height())).min().unwrap_or(0)
+    let (prepared, options, exemplar) = match &args.solid {
+        Some(path) => solid_exemplar(args, path).map_err(|e| e.in_file(path))?,
+        None => {
+            let path = args.exemplar.as_ref().ok_or_else(|| usage(Error::invalid("give --exemplar or --solid")))?;
+            plane_exemplars(args, path, rows)?
+        }
     };
-    let options = Options { layered: args.layered, coarse_n: args.coarse_n, n: args.n, ..Options::for_exemplar(side) };
-    let prepared = if solid {
-        cube_volume(args, &exemplars).and_then(|cube| Exemplars::of_volume(&cube, &options))
-    } else {
-        Exemplars::prepare([&exemplars[0], &exemplars[1], &exemplars[2]], &options)
-    }
-    .map_err(|e| e.in_file(&args.exemplar))?;
     let frames = solid::frames_over(&g.tets, &g.field, &domain);
     let setup = Setup {
         exemplars: &prepared,
@@ -223,7 +221,7 @@ pub fn run_guided(args: &GuidedArgs) -> Result<()> {
     let ready = started.elapsed().as_secs_f64();
     let bar = super::fill::Bar::new();
     let outcome = match cut {
-        Some((point, normal)) => write_cut(args, &g, &setup, &domain, (point, normal), &exemplars[0], &bar),
+        Some((point, normal)) => write_cut(args, &g, &setup, &domain, (point, normal), &exemplar, &bar),
         None => write_solid(args, &g, &setup, &domain, &bar),
     };
     bar.0.finish_and_clear();
@@ -251,7 +249,7 @@ pub fn run_guided(args: &GuidedArgs) -> Result<()> {
 /// The exemplars per plane, alpha dropped (the solid's alpha is the model's coverage),
 /// with their feature masks and (layered, `rows`) scaled so that their rows span the
 /// model's depth in voxels, with a Depth channel.
-fn load_exemplars(args: &GuidedArgs, rows: Option<usize>) -> Result<[Image2d; 3]> {
+fn load_exemplars(args: &GuidedArgs, exemplar: &Path, rows: Option<usize>) -> Result<[Image2d; 3]> {
     let shrink = super::synth::OtherExemplars {
         ey: None,
         ez: None,
@@ -276,7 +274,7 @@ fn load_exemplars(args: &GuidedArgs, rows: Option<usize>) -> Result<[Image2d; 3]
             None => Ok(image),
         }
     };
-    let ex = load(&args.exemplar, args.mask.as_ref(), "exemplar")?;
+    let ex = load(exemplar, args.mask.as_ref(), "exemplar")?;
     let ey = args.others.ey.as_deref().map(|p| load(p, args.ey_mask.as_ref(), "Ey exemplar")).transpose()?;
     let ez = args.others.ez.as_deref().map(|p| load(p, args.ez_mask.as_ref(), "Ez exemplar")).transpose()?;
     let ey = ey.unwrap_or_else(|| ex.clone());
@@ -373,6 +371,35 @@ fn without_alpha(image: Image2d) -> Result<Image2d> {
     let data = image.data().chunks_exact(image.channel_count()).flat_map(|px| keep.iter().map(|&c| px[c])).collect();
     let names = keep.iter().map(|&c| image.channels()[c].clone()).collect();
     Image2d::from_data(image.width(), image.height(), names, data)
+}
+
+/// The prepared exemplars of `--exemplar` (and `--ey`, `--ez`, masks), their settings and
+/// the exemplar a cut's sharpness is measured against: plain exemplars through their solid
+/// cube, or (layered, masked, `--planes`) as planes.
+fn plane_exemplars(args: &GuidedArgs, path: &Path, rows: Option<usize>) -> Result<(Exemplars, Options, Image2d)> {
+    let exemplars = load_exemplars(args, path, rows)?;
+    let through_cube = !args.layered && args.mask.is_none() && !args.planes;
+    let side =
+        if through_cube { cube::SIDE } else { exemplars.iter().map(|e| e.width().min(e.height())).min().unwrap_or(0) };
+    let options = Options { layered: args.layered, coarse_n: args.coarse_n, n: args.n, ..Options::for_exemplar(side) };
+    let prepared = if through_cube {
+        cube_volume(args, &exemplars).and_then(|cube| Exemplars::of_volume(&cube, &options))
+    } else {
+        Exemplars::prepare([&exemplars[0], &exemplars[1], &exemplars[2]], &options)
+    }
+    .map_err(|e| e.in_file(path))?;
+    let [first, ..] = exemplars;
+    Ok((prepared, options, first))
+}
+
+/// The prepared solid exemplar of `--solid`, its settings, and its central slice across x
+/// (alpha left out) for a cut's sharpness.
+fn solid_exemplar(args: &GuidedArgs, path: &Path) -> Result<(Exemplars, Options, Image2d)> {
+    let volume = io::read_volume(path, io::budget_from_env()?)?;
+    let options = Options { coarse_n: args.coarse_n, n: args.n, ..Options::for_exemplar(volume.dims()[0]) };
+    let prepared = Exemplars::of_volume(&volume, &options)?;
+    let slice = without_alpha(volume.slice(crate::volume::Axis::X, volume.dims()[0] / 2)?)?;
+    Ok((prepared, options, slice))
 }
 
 /// The solid cube of plain exemplars: synthesized, or read from the cache folder (and

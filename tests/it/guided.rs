@@ -148,6 +148,40 @@ fn a_guided_cut_of_a_photo_is_as_sharp_as_the_photo() {
     assert!(soft < 0.8, "as planes: gradient ratio {soft}");
 }
 
+/// `--solid` reads a volume along the field as it is: every pixel of the cut inside the
+/// fruit has a colour of the volume; a volume that is not a cube halving evenly is refused
+/// by name, and `--solid` with `--layered` as a usage error.
+#[test]
+fn a_solid_exemplar_is_read_along_the_field() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (fruit, spec) = crate::fill::kiwi_fruit(d);
+    let marble = at(d, "marble.exr");
+    assert!(solidtex(&["make", "marble", "--size", "32", "-o", &marble]).status.success());
+    let out = at(d, "cut.png");
+    let base = ["guided", &fruit, "--spec", &spec, "--res", "48", "--cut", "0,0,0,0,1,0", "--size", "48"];
+    let run = solidtex(&[&base[..], &["--solid", &marble, "-o", &out]].concat());
+    assert!(run.status.success(), "{}", stderr(&run));
+    let volume = solidtex::io::read_volume(std::path::Path::new(&marble), 1 << 30).unwrap();
+    let byte = |v: f32| (v.clamp(0.0, 1.0) * 255.0).round() as u8;
+    let colours: std::collections::HashSet<[u8; 3]> =
+        volume.data().chunks_exact(volume.channel_count()).map(|p| [byte(p[0]), byte(p[1]), byte(p[2])]).collect();
+    let img = image::open(&out).unwrap().to_rgba8();
+    let inside: Vec<[u8; 3]> = img.pixels().filter(|p| p.0[3] == 255).map(|p| [p.0[0], p.0[1], p.0[2]]).collect();
+    assert!(inside.len() > 500, "{} pixels inside", inside.len());
+    let foreign = inside.iter().filter(|c| !colours.contains(*c)).count();
+    assert_eq!(foreign, 0, "{foreign} of {} pixels show a colour the volume lacks", inside.len());
+
+    let flat = at(d, "flat.exr");
+    assert!(solidtex(&["make", "marble", "--size", "32x32x24", "-o", &flat]).status.success());
+    let refused = at(d, "refused.png");
+    let run = solidtex(&[&base[..], &["--solid", &flat, "-o", &refused]].concat());
+    crate::support::assert_fails(&run, &["flat.exr", "cube", "32x32x24"]);
+    let run = solidtex(&[&base[..], &["--solid", &marble, "--layered", "-o", &refused]].concat());
+    crate::support::assert_usage(&run, &["--solid", "--layered"]);
+    assert!(!d.join("refused.png").exists());
+}
+
 /// Without `--cut`, the whole solid is written: the exemplar's channels (one: the photo is
 /// grey) and the fruit's coverage as alpha. Bad values, and a solid larger than the memory
 /// budget, are refused by name before any work.
