@@ -54,7 +54,6 @@ impl Cube {
                 volume.channel_count()
             )));
         }
-        let colours = keep;
         let mut volume = volume.clone();
         let mut out = Vec::with_capacity(levels);
         for level in 0..levels {
@@ -62,11 +61,11 @@ impl Cube {
                 volume = downsample(&volume, Edge::Wrap)?;
             }
             let c = volume.channel_count();
-            let data = volume.data().chunks_exact(c).flat_map(|px| colours.iter().map(move |&k| px[k])).collect();
+            let data = volume.data().chunks_exact(c).flat_map(|px| keep.iter().map(move |&k| px[k])).collect();
             out.push(CubeLevel { side: volume.dims()[0], colours: data });
         }
         out.reverse();
-        Ok(Cube { levels: out, channels: colours.len() })
+        Ok(Cube { levels: out, channels: keep.len() })
     }
 
     /// The colour at place `p` of `level` (wrapped into the cube).

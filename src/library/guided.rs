@@ -232,6 +232,24 @@ fn shrunk(image: Image2d, side: usize) -> Result<Image2d> {
 mod tests {
     use super::*;
 
+    /// A cubic volume is the solid exemplar itself (its colour channels, Depth left out);
+    /// one that is not a cube gives its central slices as planes.
+    #[test]
+    fn a_cubic_volume_is_its_own_solid_exemplar() {
+        let channels = vec![Channel::R, Channel::G, Channel::B, Channel::Depth];
+        let fill = |x: usize, y: usize, z: usize, o: &mut [f32]| {
+            o.copy_from_slice(&[x as f32 / 31.0, y as f32 / 31.0, 0.5, z as f32 / 31.0]);
+        };
+        let cubic = Volume::from_fn([32, 32, 32], channels.clone(), fill).unwrap();
+        let (exemplars, options) = plain_exemplars(&cubic).unwrap();
+        let cube = exemplars.cube.expect("a cube");
+        assert_eq!((cube.channels, options.levels), (3, 2));
+        assert_eq!(cube.at(1, [31, 2, 5]), [1.0, 2.0 / 31.0, 0.5]);
+        let long = Volume::from_fn([32, 32, 48], channels, fill).unwrap();
+        let (exemplars, _) = plain_exemplars(&long).unwrap();
+        assert!(exemplars.cube.is_none() && exemplars.planes[0].len() == 2, "planes of two levels");
+    }
+
     /// A volume layered along z (its Depth channel), striped along x and the same along y:
     /// the strokes' axis is y (the slowest), so the first slice is the one across y (its
     /// rows show the stripes), the second across x (its rows are even).
