@@ -454,19 +454,18 @@ fn write_cut(
     let from = args.cache.as_deref().map(|folder| cached_level(folder, setup, bar)).transpose()?;
     let (picture, out) = solid::cut(setup, domain, &g.tets, &view, from.as_ref().map(|(l, v)| (*l, v)), bar)?;
     io::write_image(&args.output, &picture)?;
-    if out.voxels > 0 {
+    let scale = view.right.length() / domain.voxel;
+    if out.voxels > 0 && (0.8..=1.25).contains(&scale) {
         let s = solid::cut_sharpness(&picture, exemplar)?;
         let (g, l) = (crate::sharpness::GRADIENT_RANGE, crate::sharpness::LENGTH_RANGE);
         eprintln!(
-            "sharpness against the exemplar: gradient ratio {:.2}, length ratio {:.2} (targets {}-{} and {}-{}; \
-             {:.2} voxels per pixel, fair at about 1)",
-            s.gradient_ratio,
-            s.length_ratio,
-            g.0,
-            g.1,
-            l.0,
-            l.1,
-            view.right.length() / domain.voxel
+            "sharpness against the exemplar: gradient ratio {:.2}, length ratio {:.2} (targets {}-{} and {}-{})",
+            s.gradient_ratio, s.length_ratio, g.0, g.1, l.0, l.1
+        );
+    } else if out.voxels > 0 {
+        eprintln!(
+            "sharpness against the exemplar: not measured, a pixel spans {scale:.2} voxels (--size {} gives about one)",
+            (args.size as f32 * scale).round()
         );
     }
     Ok((out.voxels, out.corrections, whole(setup)))
