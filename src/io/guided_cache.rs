@@ -44,19 +44,21 @@ pub fn read_cube(path: &Path, key: u64, side: usize, channels: usize) -> Result<
         return Ok(None);
     }
     let count = side * side * side * channels;
-    let bytes = atomic::read_bytes_within(path, (CUBE_HEADER + 4 * count) as u64)?;
+    let foreign = || {
+        Error::file(
+            path,
+            "is not the solid cube of these exemplars; solidtex does not overwrite it (move it away or give another \
+             --cache folder)",
+        )
+    };
+    let bytes = sized(path, CUBE_HEADER + 4 * count).ok_or_else(foreign)??;
     let word = |at: usize| u32::from_le_bytes(bytes[at..at + 4].try_into().expect("four bytes")) as usize;
-    let matches = bytes.len() == CUBE_HEADER + 4 * count
-        && bytes.starts_with(CUBE_MAGIC)
+    let matches = bytes.starts_with(CUBE_MAGIC)
         && u64::from_le_bytes(bytes[23..31].try_into().expect("eight bytes")) == key
         && word(31) == side
         && word(35) == channels;
     if !matches {
-        return Err(Error::file(
-            path,
-            "is not the solid cube of these exemplars; solidtex does not overwrite it (move it away or give another \
-             --cache folder)",
-        ));
+        return Err(foreign());
     }
     let colours: Vec<f32> =
         bytes[CUBE_HEADER..].chunks_exact(4).map(|b| f32::from_le_bytes(b.try_into().expect("four bytes"))).collect();
@@ -96,7 +98,6 @@ pub fn read(
         return Ok(None);
     }
     let count: usize = dims.iter().product();
-    let bytes = atomic::read_bytes_within(path, (HEADER + count * PER_VOXEL) as u64)?;
     let foreign = || {
         Error::file(
             path,
@@ -104,7 +105,8 @@ pub fn read(
              give another --cache folder)",
         )
     };
-    if bytes.len() != HEADER + count * PER_VOXEL || !bytes.starts_with(MAGIC) {
+    let bytes = sized(path, HEADER + count * PER_VOXEL).ok_or_else(foreign)??;
+    if !bytes.starts_with(MAGIC) {
         return Err(foreign());
     }
     let word = |at: usize| u32::from_le_bytes(bytes[at..at + 4].try_into().expect("four bytes"));
@@ -127,6 +129,16 @@ pub fn read(
     Ok(Some((level, Sparse::compute(&mask, |v| voxel(value(mask.index(v)))))))
 }
 
+/// The bytes of `path` if it holds exactly `size` of them (`None` when it holds another
+/// number: not the file asked for).
+fn sized(path: &Path, size: usize) -> Option<Result<Vec<u8>>> {
+    match std::fs::metadata(path) {
+        Ok(m) if m.len() != size as u64 => None,
+        Ok(_) => Some(atomic::read_bytes_within(path, size as u64)),
+        Err(e) => Some(Err(Error::io(path, e))),
+    }
+}
+
 /// Write `values` (the whole grid of `level`) under `key`.
 pub fn write(path: &Path, key: u64, level: usize, values: &Sparse<Voxel>) -> Result<()> {
     let dims = values.dims;
@@ -146,4 +158,34 @@ pub fn write(path: &Path, key: u64, level: usize, values: &Sparse<Voxel>) -> Res
         }
     }
     atomic::write_file(path, |w| w.write_all(&bytes).map_err(|e| Error::io(path, e)))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A cube reads back as written; a missing file is `None`; a file with another key,
+    /// side or channel count, a truncated one and one holding a NaN are refused by name.
+    #[test]
+    fn a_cube_reads_back_and_anything_else_is_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = cube_path(dir.path(), 7);
+        assert!(read_cube(&path, 7, 2, 3).unwrap().is_none());
+        let colours: Vec<f32> = (0..24).map(|i| i as f32 / 24.0).collect();
+        write_cube(&path, 7, 2, 3, &colours).unwrap();
+        assert_eq!(read_cube(&path, 7, 2, 3).unwrap().unwrap(), colours);
+        for (key, side, channels) in [(8, 2, 3), (7, 3, 3), (7, 2, 1)] {
+            let err = read_cube(&path, key, side, channels).unwrap_err().to_string();
+            assert!(err.contains("guided-cube-") && err.contains("does not overwrite"), "{err}");
+        }
+        let bytes = std::fs::read(&path).unwrap();
+        std::fs::write(&path, &bytes[..bytes.len() - 4]).unwrap();
+        assert!(read_cube(&path, 7, 2, 3).unwrap_err().to_string().contains("not the solid cube"));
+        let mut nan = bytes.clone();
+        let at = nan.len() - 4;
+        nan[at..].copy_from_slice(&f32::NAN.to_le_bytes());
+        std::fs::write(&path, &nan).unwrap();
+        let err = read_cube(&path, 7, 2, 3).unwrap_err().to_string();
+        assert!(err.contains("value 23") && err.contains("damaged"), "{err}");
+    }
 }
