@@ -15,7 +15,7 @@
 use super::model::LstModel;
 use super::render::Textures;
 use super::render::shade_point;
-use super::tets::TetMesh;
+use super::tets::{TetGrid, TetMesh};
 use super::view::{Displacement, Frame, Hit, MIDLEVEL, Shading, draw_triangle, facets, rasterize};
 use crate::error::{Error, Result};
 use crate::render::Rgb8;
@@ -250,87 +250,6 @@ fn surface(side: &Side, reach: f32) -> Vec<[Vec3; 4]> {
             [a - e, b - e, b + e, a + e]
         })
         .collect()
-}
-
-/// Tets binned on a grid of cells by their bounding boxes, to find the tet holding a point.
-struct TetGrid {
-    lo: Vec3,
-    cell: f32,
-    dims: [usize; 3],
-    offsets: Vec<u32>,
-    tets: Vec<u32>,
-}
-
-/// The most (cell, tet) entries a [`TetGrid`] holds; a model whose tets would need more
-/// (long thin tets across many cells) is refused.
-const MAX_GRID_ENTRIES: usize = 32_000_000;
-
-impl TetGrid {
-    fn new(mesh: &TetMesh) -> Result<TetGrid> {
-        let (lo, hi) =
-            mesh.vertices.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(a, b), p| (a.min(*p), b.max(*p)));
-        let volume = mesh.volume().max(1e-12) as f32;
-        let cell = (volume / mesh.tets.len().max(1) as f32).cbrt().max((hi - lo).max_element() / 128.0).max(1e-6);
-        let dims = ((hi - lo) / cell).ceil().as_uvec3().max(glam::UVec3::ONE).to_array().map(|d| d as usize);
-        let index = |p: Vec3| {
-            let c = ((p - lo) / cell).floor().max(Vec3::ZERO);
-            [0, 1, 2].map(|k| (c[k] as usize).min(dims[k] - 1))
-        };
-        let span = |t: usize| {
-            let c = mesh.corners(t);
-            let (lo, hi) = (
-                c.iter().copied().fold(Vec3::INFINITY, Vec3::min),
-                c.iter().copied().fold(Vec3::NEG_INFINITY, Vec3::max),
-            );
-            (index(lo), index(hi))
-        };
-        let entries = (0..mesh.tets.len())
-            .map(|t| {
-                let (a, b) = span(t);
-                (0..3).map(|k| b[k] - a[k] + 1).product::<usize>()
-            })
-            .fold(0usize, usize::saturating_add);
-        if entries > MAX_GRID_ENTRIES {
-            return Err(Error::invalid(format!(
-                "the model's tets are too long for a stroke cut ({entries} grid entries; at most {MAX_GRID_ENTRIES})"
-            )));
-        }
-        let mut pairs: Vec<(u32, u32)> = Vec::with_capacity(entries);
-        for t in 0..mesh.tets.len() {
-            let (a, b) = span(t);
-            for z in a[2]..=b[2] {
-                for y in a[1]..=b[1] {
-                    for x in a[0]..=b[0] {
-                        pairs.push(((x + dims[0] * (y + dims[1] * z)) as u32, t as u32));
-                    }
-                }
-            }
-        }
-        pairs.sort_unstable();
-        let mut offsets = vec![0u32; dims.iter().product::<usize>() + 1];
-        for (c, _) in &pairs {
-            offsets[*c as usize + 1] += 1;
-        }
-        for i in 1..offsets.len() {
-            offsets[i] += offsets[i - 1];
-        }
-        Ok(TetGrid { lo, cell, dims, offsets, tets: pairs.into_iter().map(|(_, t)| t).collect() })
-    }
-
-    /// The first tet (by index) holding `p`, if any.
-    fn locate(&self, mesh: &TetMesh, p: Vec3) -> Option<u32> {
-        let c = ((p - self.lo) / self.cell).floor();
-        if c.cmplt(Vec3::ZERO).any() {
-            return None;
-        }
-        let [x, y, z] = [c.x as usize, c.y as usize, c.z as usize];
-        if x >= self.dims[0] || y >= self.dims[1] || z >= self.dims[2] {
-            return None;
-        }
-        let i = x + self.dims[0] * (y + self.dims[1] * z);
-        let range = self.offsets[i] as usize..self.offsets[i + 1] as usize;
-        self.tets[range].iter().copied().find(|&t| mesh.barycentric(t as usize, p).iter().all(|w| *w >= -1e-5))
-    }
 }
 
 #[cfg(test)]

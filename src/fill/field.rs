@@ -17,7 +17,7 @@
 use super::mesher::closest::Surface;
 use super::patch::orthogonal;
 use super::solve::{Sparse, dense_solve, least_squares, least_squares_each};
-use super::tets::TetMesh;
+use super::tets::{TetGrid, TetMesh};
 use crate::TextureType;
 use crate::error::{Error, Result};
 use crate::mesh::Mesh;
@@ -218,8 +218,8 @@ impl Smoothing {
         let n = mesh.vertices.len();
         let mut a = self.rows.clone();
         let mut targets: Vec<[f64; K]> = vec![[0.0; K]; n];
-        for (p, value) in points {
-            let (t, bary) = locate(mesh, *p);
+        let places: Vec<Vec3> = points.iter().map(|(p, _)| *p).collect();
+        for ((_, value), (t, bary)) in points.iter().zip(locate_each(mesh, &places)) {
             a.push_row(mesh.tets[t].iter().zip(bary).map(|(&v, b)| (v as usize, CONSTRAINT_WEIGHT * b as f64)));
             targets.push(value.map(|x| CONSTRAINT_WEIGHT * x as f64));
         }
@@ -253,10 +253,37 @@ fn edge_spread(offsets: &[usize], ring: &[u32], depth: &[f32]) -> f64 {
 /// barycentric coordinates of `p` in it, clamped to the tet.
 pub fn locate(mesh: &TetMesh, p: Vec3) -> (usize, [f32; 4]) {
     let inside = (0..mesh.tets.len()).find(|&t| mesh.barycentric(t, p).iter().all(|b| *b >= -1e-5));
-    let t = inside.unwrap_or_else(|| {
-        let d = |t: usize| mesh.centroid(t).distance_squared(p);
-        (0..mesh.tets.len()).min_by(|&a, &b| d(a).total_cmp(&d(b))).unwrap_or(0)
-    });
+    clamped_in(mesh, inside.unwrap_or_else(|| nearest_centroid(mesh, p)), p)
+}
+
+/// The tet whose barycentre is nearest to `p` (the first of equals).
+fn nearest_centroid(mesh: &TetMesh, p: Vec3) -> usize {
+    let d = |t: usize| mesh.centroid(t).distance_squared(p);
+    (0..mesh.tets.len()).min_by(|&a, &b| d(a).total_cmp(&d(b))).unwrap_or(0)
+}
+
+/// [`nearest_centroid`] among barycentres computed once.
+fn nearest_of(centroids: &[Vec3], p: Vec3) -> usize {
+    let d = |t: usize| centroids[t].distance_squared(p);
+    (0..centroids.len()).min_by(|&a, &b| d(a).total_cmp(&d(b))).unwrap_or(0)
+}
+
+/// [`locate`] for many points, the same tets and coordinates: through a [`TetGrid`] (made
+/// once); a point no tet holds goes to the nearest barycentre.
+pub fn locate_each(mesh: &TetMesh, points: &[Vec3]) -> Vec<(usize, [f32; 4])> {
+    let Some(grid) = (if points.len() > 8 { TetGrid::new(mesh).ok() } else { None }) else {
+        return points.iter().map(|&p| locate(mesh, p)).collect();
+    };
+    let centroids: Vec<Vec3> = (0..mesh.tets.len()).map(|t| mesh.centroid(t)).collect();
+    // no tet holds a point the grid finds none for
+    points
+        .par_iter()
+        .map(|&p| clamped_in(mesh, grid.locate(mesh, p).map_or_else(|| nearest_of(&centroids, p), |t| t as usize), p))
+        .collect()
+}
+
+/// Tet `t` and the barycentric coordinates of `p` in it, clamped to the tet.
+fn clamped_in(mesh: &TetMesh, t: usize, p: Vec3) -> (usize, [f32; 4]) {
     let b = mesh.barycentric(t, p).map(|b| b.max(0.0));
     let sum: f32 = b.iter().sum::<f32>().max(1e-12);
     (t, b.map(|x| x / sum))
@@ -335,6 +362,30 @@ impl Rbf {
 mod tests {
     use super::*;
     use crate::fill::tets::cube_lattice;
+
+    /// Locating many points through the grid gives the tets and coordinates of trying every
+    /// tet: inside, on lattice corners, edges and faces (on cell borders, in several tets),
+    /// just outside and far outside, on a lattice moved off the origin.
+    #[test]
+    fn locating_each_point_through_the_grid_equals_trying_every_tet() {
+        let mut mesh = cube_lattice([5, 4, 3], 0.3);
+        mesh.vertices.iter_mut().for_each(|v| *v += Vec3::new(-0.71, 0.13, 2.0));
+        let mut points = Vec::new();
+        for i in 0..400 {
+            let h = |k: u64| (crate::noise::hash3(11, i, k as i64, 0) % 10_000) as f32 / 10_000.0;
+            let p = Vec3::new(-0.8 + 1.7 * h(0), 0.0 + 1.4 * h(1), 1.9 + 1.1 * h(2));
+            points.push(p);
+        }
+        points.extend(mesh.vertices.iter().copied());
+        for t in 0..mesh.tets.len() {
+            let c = mesh.corners(t);
+            points.push((c[0] + c[1]) / 2.0);
+            points.push((c[0] + c[1] + c[2]) / 3.0);
+        }
+        points.extend([Vec3::new(5.0, -3.0, 0.0), Vec3::new(-0.71 - 1e-6, 0.5, 2.3)]);
+        let one_by_one: Vec<(usize, [f32; 4])> = points.iter().map(|&p| locate(&mesh, p)).collect();
+        assert_eq!(locate_each(&mesh, &points), one_by_one);
+    }
 
     #[test]
     fn rbf_interpolates_a_radial_depth() {

@@ -11,6 +11,7 @@
 //!        1
 //! ```
 
+use crate::error::{Error, Result};
 use glam::{Mat3, Vec3};
 use rayon::prelude::*;
 
@@ -154,6 +155,95 @@ impl TetMesh {
 pub fn barycentric_in(c: [Vec3; 4], p: Vec3) -> [f32; 4] {
     let local = Mat3::from_cols(c[1] - c[0], c[2] - c[0], c[3] - c[0]).inverse() * (p - c[0]);
     [1.0 - local.x - local.y - local.z, local.x, local.y, local.z]
+}
+
+/// Tets binned on a grid of cells by their bounding boxes, to find the tet holding a point
+/// without trying every tet. Each box is padded a little, so that every tet whose
+/// barycentric coordinates of a point all reach -1e-5 is listed in the point's cell: the
+/// first such tet by index is the one a search through all tets finds.
+#[derive(Debug, Clone)]
+pub struct TetGrid {
+    lo: Vec3,
+    cell: f32,
+    dims: [usize; 3],
+    offsets: Vec<u32>,
+    tets: Vec<u32>,
+}
+
+/// The most (cell, tet) entries a [`TetGrid`] holds; a mesh whose tets would need more
+/// (long thin tets across many cells) is refused.
+const MAX_GRID_ENTRIES: usize = 32_000_000;
+
+impl TetGrid {
+    /// The grid of `mesh`'s tets: cells about one tet's volume, at most 128 along the
+    /// longest side of the mesh's box.
+    pub fn new(mesh: &TetMesh) -> Result<TetGrid> {
+        let (lo, hi) =
+            mesh.vertices.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(a, b), p| (a.min(*p), b.max(*p)));
+        let volume = mesh.volume().max(1e-12) as f32;
+        let cell = (volume / mesh.tets.len().max(1) as f32).cbrt().max((hi - lo).max_element() / 128.0).max(1e-6);
+        let dims = ((hi - lo) / cell).ceil().as_uvec3().max(glam::UVec3::ONE).to_array().map(|d| d as usize);
+        let grid = TetGrid { lo, cell, dims, offsets: Vec::new(), tets: Vec::new() };
+        let span = |t: usize| {
+            let c = mesh.corners(t);
+            let (a, b) = (
+                c.iter().copied().fold(Vec3::INFINITY, Vec3::min),
+                c.iter().copied().fold(Vec3::NEG_INFINITY, Vec3::max),
+            );
+            // a point the barycentric test accepts lies within 3e-5 diameters of the tet
+            let pad = Vec3::splat(1e-4 * (b - a).max_element() + 1e-6);
+            (grid.cell_of(a - pad), grid.cell_of(b + pad))
+        };
+        let entries = (0..mesh.tets.len())
+            .map(|t| {
+                let (a, b) = span(t);
+                (0..3).map(|k| b[k] - a[k] + 1).product::<usize>()
+            })
+            .fold(0usize, usize::saturating_add);
+        if entries > MAX_GRID_ENTRIES {
+            return Err(Error::invalid(format!(
+                "the model's tets are too long to locate points in ({entries} grid entries; at most {MAX_GRID_ENTRIES})"
+            )));
+        }
+        let mut pairs: Vec<(u32, u32)> = Vec::with_capacity(entries);
+        for t in 0..mesh.tets.len() {
+            let (a, b) = span(t);
+            for z in a[2]..=b[2] {
+                for y in a[1]..=b[1] {
+                    for x in a[0]..=b[0] {
+                        pairs.push(((x + dims[0] * (y + dims[1] * z)) as u32, t as u32));
+                    }
+                }
+            }
+        }
+        pairs.sort_unstable();
+        let mut offsets = vec![0u32; dims.iter().product::<usize>() + 1];
+        for (c, _) in &pairs {
+            offsets[*c as usize + 1] += 1;
+        }
+        for i in 1..offsets.len() {
+            offsets[i] += offsets[i - 1];
+        }
+        Ok(TetGrid { offsets, tets: pairs.into_iter().map(|(_, t)| t).collect(), ..grid })
+    }
+
+    /// The cell holding `p`, clamped into the grid (monotone in each coordinate, so a box's
+    /// corner cells span the cells of every point in it).
+    fn cell_of(&self, p: Vec3) -> [usize; 3] {
+        let c = ((p - self.lo) / self.cell).floor().max(Vec3::ZERO);
+        [0, 1, 2].map(|k| (c[k].min(u32::MAX as f32) as usize).min(self.dims[k] - 1))
+    }
+
+    /// The first tet (by index) holding `p` (barycentric coordinates all at least -1e-5).
+    pub fn locate(&self, mesh: &TetMesh, p: Vec3) -> Option<u32> {
+        if !p.is_finite() {
+            return None;
+        }
+        let [x, y, z] = self.cell_of(p);
+        let i = x + self.dims[0] * (y + self.dims[1] * z);
+        let range = self.offsets[i] as usize..self.offsets[i + 1] as usize;
+        self.tets[range].iter().copied().find(|&t| mesh.barycentric(t as usize, p).iter().all(|w| *w >= -1e-5))
+    }
 }
 
 /// A box of `cells` cubes of side `h` from the origin, each split into 6 tets around its

@@ -18,7 +18,7 @@
 //! and the four corners of a tet are flipped towards the first before blending.
 
 use crate::error::{Error, Result};
-use crate::fill::field::{Rbf, locate, smooth_at_vertices};
+use crate::fill::field::{Rbf, locate_each, smooth_at_vertices};
 use crate::fill::render::{View, field_cut};
 use crate::fill::tets::TetMesh;
 use crate::noise::mix64;
@@ -118,10 +118,11 @@ pub fn solve(mesh: &TetMesh, frames: &[FrameAt]) -> Result<FrameField> {
         return Err(Error::invalid("the frame field needs at least one sketched frame"));
     }
     let first = harmonic(mesh, frames)?;
+    let places: Vec<Vec3> = frames.iter().map(|(p, _)| *p).collect();
     let signed: Vec<FrameAt> = frames
         .iter()
-        .map(|&(p, q)| {
-            let (t, b) = locate(mesh, p);
+        .zip(locate_each(mesh, &places))
+        .map(|(&(p, q), (t, b))| {
             let here = first.blend(mesh.tets[t], b);
             (p, if Vec4::from(q).dot(here) < 0.0 { -q } else { q })
         })
