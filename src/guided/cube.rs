@@ -54,15 +54,17 @@ impl Cube {
                 volume.channel_count()
             )));
         }
-        let mut volume = volume.clone();
+        // the given volume is the finest level; only the coarser ones are made (no copy of it)
+        let mut shrunk: Option<Volume> = None;
         let mut out = Vec::with_capacity(levels);
         for level in 0..levels {
             if level > 0 {
-                volume = downsample(&volume, Edge::Wrap)?;
+                shrunk = Some(downsample(shrunk.as_ref().unwrap_or(volume), Edge::Wrap)?);
             }
-            let c = volume.channel_count();
-            let data = volume.data().chunks_exact(c).flat_map(|px| keep.iter().map(move |&k| px[k])).collect();
-            out.push(CubeLevel { side: volume.dims()[0], colours: data });
+            let v = shrunk.as_ref().unwrap_or(volume);
+            let c = v.channel_count();
+            let data = v.data().chunks_exact(c).flat_map(|px| keep.iter().map(move |&k| px[k])).collect();
+            out.push(CubeLevel { side: v.dims()[0], colours: data });
         }
         out.reverse();
         Ok(Cube { levels: out, channels: keep.len() })
