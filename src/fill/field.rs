@@ -253,16 +253,15 @@ fn edge_spread(offsets: &[usize], ring: &[u32], depth: &[f32]) -> f64 {
 /// barycentric coordinates of `p` in it, clamped to the tet.
 pub fn locate(mesh: &TetMesh, p: Vec3) -> (usize, [f32; 4]) {
     let inside = (0..mesh.tets.len()).find(|&t| mesh.barycentric(t, p).iter().all(|b| *b >= -1e-5));
-    clamped_in(mesh, inside.unwrap_or_else(|| nearest_centroid(mesh, p)), p)
+    clamped_in(mesh, inside.unwrap_or_else(|| nearest_of(&centroids(mesh), p)), p)
 }
 
-/// The tet whose barycentre is nearest to `p` (the first of equals).
-fn nearest_centroid(mesh: &TetMesh, p: Vec3) -> usize {
-    let d = |t: usize| mesh.centroid(t).distance_squared(p);
-    (0..mesh.tets.len()).min_by(|&a, &b| d(a).total_cmp(&d(b))).unwrap_or(0)
+/// Every tet's barycentre.
+fn centroids(mesh: &TetMesh) -> Vec<Vec3> {
+    (0..mesh.tets.len()).map(|t| mesh.centroid(t)).collect()
 }
 
-/// [`nearest_centroid`] among barycentres computed once.
+/// The tet whose barycentre (of `centroids`) is nearest to `p` (the first of equals).
 fn nearest_of(centroids: &[Vec3], p: Vec3) -> usize {
     let d = |t: usize| centroids[t].distance_squared(p);
     (0..centroids.len()).min_by(|&a, &b| d(a).total_cmp(&d(b))).unwrap_or(0)
@@ -274,7 +273,7 @@ pub fn locate_each(mesh: &TetMesh, points: &[Vec3]) -> Vec<(usize, [f32; 4])> {
     let Some(grid) = (if points.len() > 8 { TetGrid::new(mesh).ok() } else { None }) else {
         return points.iter().map(|&p| locate(mesh, p)).collect();
     };
-    let centroids: Vec<Vec3> = (0..mesh.tets.len()).map(|t| mesh.centroid(t)).collect();
+    let centroids = centroids(mesh);
     // no tet holds a point the grid finds none for
     points
         .par_iter()
