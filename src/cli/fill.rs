@@ -257,8 +257,10 @@ pub fn run_fill(args: &FillArgs) -> Result<()> {
         "  layers per tet {:.1}, tets per clump {:.0}, field angle mean {:.1}° p95 {:.1}°, uncovered {}",
         p.mean_layers, p.mean_clump, p.angle_mean, p.angle_p95, p.forced
     );
+    let [x, y, z] = distance.at;
     eprintln!(
-        "  surface within {:.2} tet edges (tets to mesh {:.3}, mesh to tets {:.3}, creases included)",
+        "  surface within {:.2} tet edges (tets to mesh {:.3}, mesh to tets {:.3}, creases included; farthest at \
+         {x:.4}, {y:.4}, {z:.4})",
         distance.in_edges(),
         distance.from_tets,
         distance.from_surface

@@ -42,6 +42,12 @@
 //!    smoothing move a group of vertices that share no tet at a time, in parallel (a greedy
 //!    colouring in vertex order), and given-up tets come back one at a time in index order,
 //!    so the result is the same on any thread count.
+//! 5. Three repairs where the boundary is still far from the surface: a cap tet on each
+//!    corner of the surface (three creases meeting) that no lattice vertex reaches, a
+//!    vertex where the diagonals of a flat pocket cross (a given-up tet left flat between
+//!    live tets on all sides: a slit through a thin part, see `pockets`), and, on the mesh
+//!    kept, a cap tet on each point of the surface farther than half an edge from the
+//!    boundary (the tip of a part thinner than the lattice).
 //!
 //! Why a lattice: it is pure Rust, deterministic, fast (linear in the tets), and its angles
 //! are bounded by construction, which the paste loop and the barycentric lookups need.
@@ -56,6 +62,7 @@ mod conform;
 mod features;
 mod inside;
 mod lattice;
+mod pockets;
 
 use super::tets::TetMesh;
 use crate::error::{Error, Result};
@@ -143,6 +150,9 @@ fn tetrahedralize_here(mesh: &Mesh, target_tets: usize) -> Result<TetMesh> {
             corrected
         };
     }
+    if let Some(tets) = best.as_mut() {
+        cap_tips(mesh, tets);
+    }
     best.ok_or_else(|| {
         Error::invalid(format!(
             "no tet is left inside the mesh at lattice spacing {h:.3e}: the solid is nowhere much thicker \
@@ -198,6 +208,8 @@ pub struct SurfaceDistance {
     pub from_surface: f32,
     /// The mean tet edge, the yardstick for both.
     pub mean_edge: f32,
+    /// Where the farther of the two lies (a point of the boundary or of the surface).
+    pub at: [f32; 3],
 }
 
 impl SurfaceDistance {
@@ -219,24 +231,44 @@ fn surface_distance_here(mesh: &Mesh, tets: &TetMesh) -> Result<SurfaceDistance>
     let faces = tets.boundary_faces(&tets.neighbours());
     let boundary = Mesh::new(tets.vertices.clone(), faces)?;
     let (to_mesh, to_tets) = (Surface::new(mesh, mean_edge), Surface::new(&boundary, mean_edge));
+    // the farthest point, the first of equally far ones
     let farthest = |points: Vec<Vec3>, onto: &Surface| {
-        points.par_iter().map(|p| onto.closest(*p).distance(*p)).reduce(|| 0.0, f32::max)
+        let distances: Vec<f32> = points.par_iter().map(|p| onto.closest(*p).distance(*p)).collect();
+        let far = (0..points.len()).fold(None, |best: Option<usize>, i| match best {
+            Some(b) if distances[b] >= distances[i] => Some(b),
+            _ => Some(i),
+        });
+        far.map_or((0.0, Vec3::ZERO), |i| (distances[i], points[i]))
     };
     let mut on_surface = triangle_samples(mesh);
     for [a, b] in features::creases(mesh) {
         let steps = (a.distance(b) / (mean_edge / 4.0)).ceil().max(1.0) as usize;
         on_surface.extend((0..=steps).map(|i| a.lerp(b, i as f32 / steps as f32)));
     }
-    Ok(SurfaceDistance {
-        from_tets: farthest(triangle_samples(&boundary), &to_mesh),
-        from_surface: farthest(on_surface, &to_tets),
-        mean_edge,
-    })
+    let (from_tets, on_tets) = farthest(triangle_samples(&boundary), &to_mesh);
+    let (from_surface, on_mesh) = farthest(on_surface, &to_tets);
+    let at = if from_tets >= from_surface { on_tets } else { on_mesh }.to_array();
+    Ok(SurfaceDistance { from_tets, from_surface, mean_edge, at })
 }
 
-/// The corners, edge midpoints and centre of every triangle of `mesh`.
+/// The corners, edge midpoints and centre of every triangle of `mesh`, each point once.
 fn triangle_samples(mesh: &Mesh) -> Vec<Vec3> {
-    mesh.triangles.iter().flat_map(|t| face_samples(t.map(|i| mesh.vertices[i as usize]))).collect()
+    let mut edges: Vec<(u32, u32)> = mesh
+        .triangles
+        .iter()
+        .flat_map(|&[a, b, c]| [(a, b), (b, c), (c, a)].map(|(u, v)| (u.min(v), u.max(v))))
+        .collect();
+    edges.sort_unstable();
+    edges.dedup();
+    let at = |v: u32| mesh.vertices[v as usize];
+    // the corners the triangles use (a tet mesh's boundary shares its vertex list)
+    let mut corners: Vec<u32> = edges.iter().flat_map(|&(a, b)| [a, b]).collect();
+    corners.sort_unstable();
+    corners.dedup();
+    let mut samples: Vec<Vec3> = corners.into_iter().map(at).collect();
+    samples.extend(edges.iter().map(|&(a, b)| (at(a) + at(b)) / 2.0));
+    samples.extend(mesh.triangles.iter().map(|t| t.iter().map(|&v| at(v)).sum::<Vec3>() / 3.0));
+    samples
 }
 
 /// The corners, edge midpoints and centre of a triangle: where its distance to a surface
@@ -274,7 +306,38 @@ fn at_spacing(mesh: &Mesh, h: f64) -> Result<TetMesh> {
     let (surface, features) = (Surface::new(mesh, h as f32), features::features(mesh));
     conform::conform(&mut tets, &surface, &features);
     caps::cap_far_corners(&mut tets, &surface, &features);
+    pockets::seal_flat_pockets(&mut tets);
     Ok(tets)
+}
+
+/// Caps the tips of parts thinner than the lattice that `tets` (made from `mesh`) stops
+/// short of.
+fn cap_tips(mesh: &Mesh, tets: &mut TetMesh) {
+    let far = far_from_boundary(mesh, tets);
+    if !far.is_empty() {
+        let surface = Surface::new(mesh, crate::fill::mean_edge(tets));
+        caps::cap_far_points(tets, &surface, &far);
+    }
+}
+
+/// How many of the surface's samples farthest from the boundary are tried as caps' tips at
+/// most (a part lost whole, far thinner than the lattice, has many).
+const TIPS: usize = 256;
+
+/// The samples of `mesh` (see [`triangle_samples`]) farther than [`caps::FAR`] from the
+/// boundary of `tets`, farthest first: the tip of a part thinner than the lattice, which no
+/// lattice vertex reaches.
+fn far_from_boundary(mesh: &Mesh, tets: &TetMesh) -> Vec<Vec3> {
+    let edge = crate::fill::mean_edge(tets);
+    let Ok(boundary) = Mesh::new(tets.vertices.clone(), tets.boundary_faces(&tets.neighbours())) else {
+        return Vec::new();
+    };
+    let onto = Surface::new(&boundary, edge);
+    let samples = triangle_samples(mesh);
+    let gaps: Vec<f32> = samples.par_iter().map(|p| onto.closest(*p).distance(*p)).collect();
+    let mut far: Vec<usize> = (0..samples.len()).filter(|&i| gaps[i] > caps::FAR * edge).collect();
+    far.sort_by(|&a, &b| gaps[b].total_cmp(&gaps[a]).then(a.cmp(&b)));
+    far.into_iter().take(TIPS).map(|i| samples[i]).collect()
 }
 
 /// The lattice spacing `h` that leaves about `target` tets: the `6 V / h³` lattice tets
@@ -557,6 +620,25 @@ mod tests {
         .unwrap();
         let d = surface_distance(&two, &tetrahedralize(&two, 2000).unwrap()).unwrap();
         assert!(d.from_surface > d.mean_edge, "{d:?}");
+        // and the place named is on the plate, not the cube beside it
+        assert!(d.at[0] <= 2.0 && d.at[2] <= 0.03 + 1e-6, "{d:?}");
+    }
+
+    #[test]
+    fn a_smooth_tip_thinner_than_the_lattice_is_reached() {
+        // a spindle (a sphere stretched 4 times along x, 0.3 across): no crease and no
+        // corner, and near its ends thinner than the lattice, whose boundary stops short
+        // of them without a cap (0.60, 0.74 and 0.58 edges from the surface)
+        let ball = sphere(Vec3::ZERO, 1.0, 5);
+        let spindle =
+            Mesh::new(ball.vertices.iter().map(|p| *p * Vec3::new(4.0, 0.3, 0.3)).collect(), ball.triangles).unwrap();
+        assert!(features::creases(&spindle).is_empty());
+        for target in [1000, 2000, 5000] {
+            let tets = tetrahedralize(&spindle, target).unwrap();
+            let d = surface_distance(&spindle, &tets).unwrap();
+            assert!(d.from_surface <= 0.5 * d.mean_edge, "{target} tets: {d:?}");
+            assert!(tets.min_dihedral_degrees() >= conform::MIN_DIHEDRAL);
+        }
     }
 
     #[test]

@@ -1,10 +1,10 @@
-//! Caps on spikes: where three or more creases of the surface meet at a corner that the tet
-//! mesh's boundary stays more than half a tet edge from (a spike thinner than the lattice,
-//! which no lattice vertex reaches), one tet is added from a boundary face below the corner
-//! to the corner itself. A tall three-sided cap keeps good angles (near right angles at its
-//! base, the spike's own at its sides), and it is added only where it keeps
-//! [`MIN_DIHEDRAL`], crosses no other part of the boundary and lies closer to the surface
-//! than the corner was to the boundary.
+//! Caps on spikes and tips: where a point of the surface lies more than half a tet edge from
+//! the tet mesh's boundary (a corner where three or more creases meet, or the smooth end of
+//! a part thinner than the lattice, which no lattice vertex reaches), one tet is added from
+//! a boundary face below the point to the point itself. A tall three-sided cap keeps good
+//! angles (near right angles at its base, the spike's own at its sides), and it is added
+//! only where it keeps [`MIN_DIHEDRAL`], crosses no other part of the boundary and lies
+//! closer to the surface than the point was to the boundary.
 
 use super::closest::Surface;
 use super::conform::MIN_DIHEDRAL;
@@ -14,25 +14,26 @@ use crate::fill::tets::{TetMesh, barycentric_in, min_dihedral};
 use crate::mesh::closest_on_triangle;
 use glam::Vec3;
 
-/// A corner farther than this from the boundary (in mean tet edges) is capped.
-const FAR: f32 = 0.5;
+/// A point farther than this from the boundary (in mean tet edges) is capped.
+pub(super) const FAR: f32 = 0.5;
 /// Boundary faces within this many mean tet edges of a corner are tried as a cap's base.
 const REACH: f32 = 2.5;
 
 /// Caps the corners of `features` that `mesh` leaves uncovered (see the module docs).
 pub(super) fn cap_far_corners(mesh: &mut TetMesh, surface: &Surface, features: &Features) {
-    if features.corners.is_empty() || mesh.tets.is_empty() {
+    cap_far_points(mesh, surface, &features.corners);
+}
+
+/// Caps the `points` (on the surface) that `mesh` leaves uncovered, in the order given.
+pub(super) fn cap_far_points(mesh: &mut TetMesh, surface: &Surface, points: &[Vec3]) {
+    if points.is_empty() || mesh.tets.is_empty() {
         return;
     }
     let edge = crate::fill::mean_edge(mesh);
-    // a corner with a tet corner that near is not far from the boundary either (or lies
+    // a point with a tet corner that near is not far from the boundary either (or lies
     // inside the tets, where no cap goes): most are, and need no boundary
-    let far: Vec<Vec3> = features
-        .corners
-        .iter()
-        .copied()
-        .filter(|c| mesh.vertices.iter().all(|v| v.distance(*c) > FAR * edge))
-        .collect();
+    let far: Vec<Vec3> =
+        points.iter().copied().filter(|c| mesh.vertices.iter().all(|v| v.distance(*c) > FAR * edge)).collect();
     if far.is_empty() {
         return;
     }
@@ -102,7 +103,7 @@ fn cap_reach(mesh: &TetMesh, faces: &[[u32; 3]], surface: &Surface, f: [u32; 3],
 
 /// Whether segment `p`-`q` passes through the inside of triangle `t` (touching at an end or
 /// along an edge does not count).
-fn crosses(p: Vec3, q: Vec3, [a, b, c]: [Vec3; 3]) -> bool {
+pub(super) fn crosses(p: Vec3, q: Vec3, [a, b, c]: [Vec3; 3]) -> bool {
     let (d, e1, e2) = (q - p, b - a, c - a);
     let h = d.cross(e2);
     let det = e1.dot(h);
