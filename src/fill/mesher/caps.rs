@@ -39,16 +39,18 @@ pub(super) fn cap_far_points(mesh: &mut TetMesh, surface: &Surface, points: &[Ve
     }
     let mut faces = mesh.boundary_faces(&mesh.neighbours());
     for corner in far {
-        let gap = distance_to(mesh, &faces, corner);
+        // a cap lies within REACH edges of its tip, so only the faces that near can cross it
+        let (gap, local) = nearby(mesh, &faces, corner, 1.01 * REACH * edge);
         if gap <= FAR * edge {
             continue;
         }
+        let local_faces: Vec<[u32; 3]> = local.iter().map(|&i| faces[i]).collect();
         let near = |f: &[u32; 3]| f.iter().all(|&v| mesh.vertices[v as usize].distance(corner) <= REACH * edge);
-        let best = faces
+        let best = local
             .iter()
-            .enumerate()
+            .zip(&local_faces)
             .filter(|(_, f)| near(f))
-            .filter_map(|(i, f)| cap_reach(mesh, &faces, surface, *f, corner).map(|d| (d, i)))
+            .filter_map(|(&i, f)| cap_reach(mesh, &local_faces, surface, *f, corner).map(|d| (d, i)))
             .filter(|(d, _)| *d < gap)
             .min_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
         let Some((_, i)) = best else { continue };
@@ -60,10 +62,19 @@ pub(super) fn cap_far_points(mesh: &mut TetMesh, surface: &Surface, points: &[Ve
     }
 }
 
-/// How far `p` lies from the boundary `faces` of `mesh`.
-fn distance_to(mesh: &TetMesh, faces: &[[u32; 3]], p: Vec3) -> f32 {
+/// How far `p` lies from the boundary `faces` of `mesh`, and the faces within `radius` of it.
+fn nearby(mesh: &TetMesh, faces: &[[u32; 3]], p: Vec3, radius: f32) -> (f32, Vec<usize>) {
     let corners = |f: &[u32; 3]| f.map(|v| mesh.vertices[v as usize]);
-    faces.iter().map(|f| closest_on_triangle(p, corners(f)).distance(p)).fold(f32::INFINITY, f32::min)
+    let mut gap = f32::INFINITY;
+    let mut within = Vec::new();
+    for (i, f) in faces.iter().enumerate() {
+        let d = closest_on_triangle(p, corners(f)).distance(p);
+        gap = gap.min(d);
+        if d <= radius {
+            within.push(i);
+        }
+    }
+    (gap, within)
 }
 
 /// For a cap from boundary face `f` (facing outwards) to `corner`: how far its three new
@@ -103,7 +114,7 @@ fn cap_reach(mesh: &TetMesh, faces: &[[u32; 3]], surface: &Surface, f: [u32; 3],
 
 /// Whether segment `p`-`q` passes through the inside of triangle `t` (touching at an end or
 /// along an edge does not count).
-pub(super) fn crosses(p: Vec3, q: Vec3, [a, b, c]: [Vec3; 3]) -> bool {
+fn crosses(p: Vec3, q: Vec3, [a, b, c]: [Vec3; 3]) -> bool {
     let (d, e1, e2) = (q - p, b - a, c - a);
     let h = d.cross(e2);
     let det = e1.dot(h);
