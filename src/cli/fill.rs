@@ -265,6 +265,13 @@ pub fn run_fill(args: &FillArgs) -> Result<()> {
         distance.from_tets,
         distance.from_surface
     );
+    if distance.in_edges() > STRAY_EDGES {
+        eprintln!(
+            "  over half a tet edge: a part or a gap there is thinner than the lattice; `solidtex cut {} --plane \
+             {x:.4},{y:.4},{z:.4},0,0,1` shows it",
+            args.output.display()
+        );
+    }
     if refined > 0 {
         eprintln!("  {refined} of the tets from refining near the depth axis, so its core is round");
     }
@@ -291,6 +298,10 @@ pub fn run_fill(args: &FillArgs) -> Result<()> {
     }
     Ok(())
 }
+
+/// How far (in mean tet edges) the tet mesh's boundary may stray from the surface before
+/// `fill` says where to look.
+const STRAY_EDGES: f32 = 0.5;
 
 /// Warn when the tet mesh lost part of the volume (a layer or limb thinner than the lattice
 /// spacing), with the tet count that keeps it.

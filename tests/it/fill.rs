@@ -826,19 +826,49 @@ fn a_tet_count_far_from_the_target_is_warned_about() {
     assert!(!near.contains("asked"), "{near}");
 }
 
-#[test]
-fn a_thin_part_the_tets_lose_is_warned_about_with_a_count_that_keeps_it() {
-    let dir = tempfile::tempdir().unwrap();
-    let d = dir.path();
-    // a cube and, beside it, a plate thinner than the lattice spacing at 3,000 tets
+/// A cube and, beside it from x = 1.5, a plate `thickness` thick, as an OBJ in `dir`.
+fn cube_and_plate(dir: &Path, thickness: f32) -> String {
     let cube = solidtex::mesh::shapes::cuboid(glam::Vec3::ZERO, glam::Vec3::ONE);
-    let plate = solidtex::mesh::shapes::cuboid(glam::Vec3::new(1.5, 0.0, 0.0), glam::Vec3::new(3.5, 2.0, 0.08));
+    let plate = solidtex::mesh::shapes::cuboid(glam::Vec3::new(1.5, 0.0, 0.0), glam::Vec3::new(3.5, 2.0, thickness));
     let offset = cube.vertices.len() as u32;
     let vertices = cube.vertices.iter().chain(&plate.vertices).copied().collect();
     let triangles =
         cube.triangles.iter().copied().chain(plate.triangles.iter().map(|t| t.map(|i| i + offset))).collect();
     let both = solidtex::mesh::Mesh::new(vertices, triangles).unwrap();
-    solidtex::io::mesh_file::write_obj(&d.join("parts.obj"), &both).unwrap();
+    solidtex::io::mesh_file::write_obj(&dir.join("parts.obj"), &both).unwrap();
+    at(dir, "parts.obj")
+}
+
+#[test]
+fn where_the_tets_stray_over_half_an_edge_from_the_surface_fill_says_where_to_cut() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // a plate far thinner than the lattice at 2,000 tets: it is lost, and its surface lies
+    // more than an edge from the tets
+    let mesh = cube_and_plate(d, 0.02);
+    let spec = spec(d, "marble.toml", "exemplar = \"marble\"\nscale = 1.0\n");
+    let out = at(d, "p.lst");
+    let run = solidtex(&["fill", &mesh, "--spec", &spec, "--tets", "2000", "-o", &out]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let said = stderr(&run);
+    let line = said.lines().find(|l| l.contains("over half a tet edge")).unwrap_or_else(|| panic!("{said}"));
+    assert!(line.contains(&format!("solidtex cut {out} --plane ")), "{line}");
+    let plane = line.split("--plane ").nth(1).and_then(|r| r.split(',').next()).unwrap_or_else(|| panic!("{line}"));
+    let x: f64 = plane.parse().unwrap();
+    assert!((1.5 - 1e-3..=3.5 + 1e-3).contains(&x), "the place named, x = {x}, is not on the plate: {line}");
+    // the cube alone strays nowhere that far
+    let cube = solidtex::mesh::shapes::cuboid(glam::Vec3::ZERO, glam::Vec3::ONE);
+    solidtex::io::mesh_file::write_obj(&d.join("cube.obj"), &cube).unwrap();
+    let run = solidtex(&["fill", &at(d, "cube.obj"), "--spec", &spec, "--tets", "2000", "-o", &out]);
+    assert!(run.status.success() && !stderr(&run).contains("over half"), "{}", stderr(&run));
+}
+
+#[test]
+fn a_thin_part_the_tets_lose_is_warned_about_with_a_count_that_keeps_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // a cube and, beside it, a plate thinner than the lattice spacing at 3,000 tets
+    cube_and_plate(d, 0.08);
     let spec = spec(d, "marble.toml", "exemplar = \"marble\"\n");
     let fill_with = |tets: &str| {
         let json = at(d, "p.json");
@@ -862,6 +892,10 @@ fn a_thin_part_the_tets_lose_is_warned_about_with_a_count_that_keeps_it() {
     let share = stats["volume_share"].as_f64().unwrap();
     assert!(share < 0.95, "the plate is kept at 3,000 tets: {share}");
     assert!(lost.contains("parts.obj") && lost.contains("% of the mesh's volume"), "{lost}");
+    // the farthest point of the two-sided distance is on the plate
+    let at: Vec<f64> =
+        stats["surface_distance"]["at"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
+    assert!(at[0] >= 1.5 - 1e-3 && at[2] <= 0.08 + 1e-3, "the farthest point {at:?} is not on the plate");
     let holding = stats["holding_tets"].as_u64().expect("a count that keeps the plate");
     assert!(lost.contains(&format!("--tets {holding}")), "{lost}");
     let (kept, stats) = fill_with(&holding.to_string());
