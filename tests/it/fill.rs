@@ -893,9 +893,10 @@ fn a_thin_part_the_tets_lose_is_warned_about_with_a_count_that_keeps_it() {
     assert!(share < 0.95, "the plate is kept at 3,000 tets: {share}");
     assert!(lost.contains("parts.obj") && lost.contains("% of the mesh's volume"), "{lost}");
     // the farthest point of the two-sided distance is on the plate
-    let at: Vec<f64> =
+    let farthest: Vec<f64> =
         stats["surface_distance"]["at"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
-    assert!(at[0] >= 1.5 - 1e-3 && at[2] <= 0.08 + 1e-3, "the farthest point {at:?} is not on the plate");
+    let on_plate = farthest[0] >= 1.5 - 1e-3 && farthest[2] <= 0.08 + 1e-3;
+    assert!(on_plate, "the farthest point {farthest:?} is not on the plate");
     let holding = stats["holding_tets"].as_u64().expect("a count that keeps the plate");
     assert!(lost.contains(&format!("--tets {holding}")), "{lost}");
     let (kept, stats) = fill_with(&holding.to_string());
