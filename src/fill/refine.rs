@@ -97,13 +97,14 @@ const MAX_PATH: usize = 64;
 /// Steps (path extensions and splits) one refinement may take before it is given up.
 const MAX_STEPS: usize = 4096;
 
-/// The tets that hold both `a` and `b`.
-fn tets_around(mesh: &TetMesh, around: &[Vec<u32>], (a, b): (u32, u32)) -> Vec<u32> {
+/// The tets that hold both `a` and `b` (`around`: the tets at each vertex, as
+/// [`vertex_tets`] gives them; a list may still name tets that no longer hold it).
+pub(crate) fn tets_around(mesh: &TetMesh, around: &[Vec<u32>], (a, b): (u32, u32)) -> Vec<u32> {
     around[a as usize].iter().copied().filter(|&t| mesh.tets[t as usize].contains(&b)).collect()
 }
 
 /// The tets around each vertex.
-fn vertex_tets(mesh: &TetMesh) -> Vec<Vec<u32>> {
+pub(crate) fn vertex_tets(mesh: &TetMesh) -> Vec<Vec<u32>> {
     let mut around = vec![Vec::new(); mesh.vertices.len()];
     for (t, tet) in mesh.tets.iter().enumerate() {
         tet.iter().for_each(|&v| around[v as usize].push(t as u32));

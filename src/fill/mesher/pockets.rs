@@ -16,7 +16,8 @@
 //! A pocket is sealed only where every new tet is positive with [`MIN_DIHEDRAL`] or more.
 
 use super::conform::MIN_DIHEDRAL;
-use crate::fill::tets::{FACES, NONE, TetMesh, min_dihedral};
+use crate::fill::refine::{tets_around, vertex_tets};
+use crate::fill::tets::{TetMesh, min_dihedral};
 use glam::Vec3;
 
 /// A pocket thinner than this (its volume over its longest edge cubed) is flat.
@@ -25,10 +26,7 @@ const FLAT: f32 = 1e-2;
 /// Seals the flat pockets of `mesh` (see the module docs); how many.
 pub(super) fn seal_flat_pockets(mesh: &mut TetMesh) -> usize {
     let faces = boundary_keys(mesh);
-    let mut around: Vec<Vec<u32>> = vec![Vec::new(); mesh.vertices.len()];
-    for (t, tet) in mesh.tets.iter().enumerate() {
-        tet.iter().for_each(|&v| around[v as usize].push(t as u32));
-    }
+    let mut around = vertex_tets(mesh);
     // a pocket next to one sealed already waits: the tets around it changed
     let mut changed = vec![false; mesh.tets.len()];
     let mut sealed = 0;
@@ -42,17 +40,8 @@ pub(super) fn seal_flat_pockets(mesh: &mut TetMesh) -> usize {
 
 /// The boundary faces of `mesh`, each as its sorted corners, sorted.
 fn boundary_keys(mesh: &TetMesh) -> Vec<[u32; 3]> {
-    let neighbours = mesh.neighbours();
-    let mut faces = Vec::new();
-    for (t, tet) in mesh.tets.iter().enumerate() {
-        for (k, face) in FACES.iter().enumerate() {
-            if neighbours[t][k] == NONE {
-                let mut key = face.map(|s| tet[s]);
-                key.sort_unstable();
-                faces.push(key);
-            }
-        }
-    }
+    let mut faces = mesh.boundary_faces(&mesh.neighbours());
+    faces.iter_mut().for_each(|f| f.sort_unstable());
     faces.sort_unstable();
     faces
 }
@@ -64,8 +53,10 @@ fn boundary_keys(mesh: &TetMesh) -> Vec<[u32; 3]> {
 fn seal(mesh: &mut TetMesh, around: &mut Vec<Vec<u32>>, changed: &mut Vec<bool>, pocket: [u32; 4]) -> bool {
     let ([p, r], [q, s]) = diagonals(mesh, pocket);
     let x = crossing(mesh, (p, r), (q, s));
-    let split: Vec<(u32, (u32, u32))> =
-        [(p, r), (q, s)].into_iter().flat_map(|e| holding(mesh, around, e).into_iter().map(move |t| (t, e))).collect();
+    let split: Vec<(u32, (u32, u32))> = [(p, r), (q, s)]
+        .into_iter()
+        .flat_map(|e| tets_around(mesh, around, e).into_iter().map(move |t| (t, e)))
+        .collect();
     if split.iter().any(|(t, _)| changed[*t as usize]) {
         return false;
     }
@@ -137,7 +128,7 @@ fn flat(mesh: &TetMesh, pocket: [u32; 4]) -> bool {
 fn diagonals(mesh: &TetMesh, [a, b, c, d]: [u32; 4]) -> ([u32; 2], [u32; 2]) {
     let pairs = [([a, b], [c, d]), ([a, c], [b, d]), ([a, d], [b, c])];
     let gap = |(e, f): &([u32; 2], [u32; 2])| {
-        let (p, q) = segments_closest(mesh, (e[0], e[1]), (f[0], f[1]));
+        let (p, q) = closest_points(mesh, (e[0], e[1]), (f[0], f[1]));
         p.distance(q)
     };
     let mut best = pairs[0];
@@ -149,34 +140,16 @@ fn diagonals(mesh: &TetMesh, [a, b, c, d]: [u32; 4]) -> ([u32; 2], [u32; 2]) {
     best
 }
 
+/// The closest points of two edges, one on each.
+fn closest_points(mesh: &TetMesh, (a, b): (u32, u32), (c, d): (u32, u32)) -> (Vec3, Vec3) {
+    let at = |v: u32| mesh.vertices[v as usize];
+    crate::mesh::closest_between_segments([at(a), at(b)], [at(c), at(d)])
+}
+
 /// Where two nearly crossing edges cross: halfway between their closest points.
 fn crossing(mesh: &TetMesh, e: (u32, u32), f: (u32, u32)) -> Vec3 {
-    let (p, q) = segments_closest(mesh, e, f);
+    let (p, q) = closest_points(mesh, e, f);
     (p + q) / 2.0
-}
-
-/// The closest points of two edges (segments).
-fn segments_closest(mesh: &TetMesh, (a, b): (u32, u32), (c, d): (u32, u32)) -> (Vec3, Vec3) {
-    let [p1, q1, p2, q2] = [a, b, c, d].map(|v| mesh.vertices[v as usize]);
-    let (d1, d2, r) = (q1 - p1, q2 - p2, p1 - p2);
-    let (aa, ee, f) = (d1.dot(d1), d2.dot(d2), d2.dot(r));
-    let (c1, b1) = (d1.dot(r), d1.dot(d2));
-    let denom = aa * ee - b1 * b1;
-    let mut s = if denom > f32::EPSILON * aa * ee { ((b1 * f - c1 * ee) / denom).clamp(0.0, 1.0) } else { 0.0 };
-    let mut t = (b1 * s + f) / ee.max(f32::MIN_POSITIVE);
-    if t < 0.0 {
-        t = 0.0;
-        s = (-c1 / aa.max(f32::MIN_POSITIVE)).clamp(0.0, 1.0);
-    } else if t > 1.0 {
-        t = 1.0;
-        s = ((b1 - c1) / aa.max(f32::MIN_POSITIVE)).clamp(0.0, 1.0);
-    }
-    (p1 + d1 * s, p2 + d2 * t)
-}
-
-/// The tets that hold both ends of edge `a`-`b`.
-fn holding(mesh: &TetMesh, around: &[Vec<u32>], (a, b): (u32, u32)) -> Vec<u32> {
-    around[a as usize].iter().copied().filter(|&t| mesh.tets[t as usize].contains(&b)).collect()
 }
 
 /// A tet split at a new vertex (`u32::MAX`) on its edge `a`-`b`: the half without `b`
