@@ -19,8 +19,9 @@ pub(super) struct Lattice {
     pub(super) origin: DVec3,
     pub(super) h: f64,
     pub(super) cubes: [usize; 3],
-    /// Whether each cube (by [`Lattice::cube_index`]) is split into eight; empty when none is.
-    pub(super) fine: Vec<bool>,
+    /// The cubes split into eight, as `i + nx (j + ny k)`, sorted: few, where a dense flag
+    /// per cube could take more memory than the tets where the box is mostly empty.
+    fine: Vec<usize>,
 }
 
 impl Lattice {
@@ -113,18 +114,18 @@ impl Lattice {
     /// tets around their centre instead (see [`Lattice::cube_tets`]), so that the tets
     /// meet face to face.
     pub(super) fn refine_near(&mut self, points: &[Vec3]) {
-        let [nx, ny, nz] = self.cubes;
-        if points.is_empty() {
-            return;
-        }
-        if self.fine.is_empty() {
-            self.fine = vec![false; nx * ny * nz];
-        }
         for p in points {
             let at = ((p.as_dvec3() - self.origin) / self.h).floor().to_array();
-            let [i, j, k] = [0, 1, 2].map(|a| at[a].clamp(0.0, (self.cubes[a] - 1) as f64) as usize);
-            self.fine[i + nx * (j + ny * k)] = true;
+            let cube = [0, 1, 2].map(|a| at[a].clamp(0.0, (self.cubes[a] - 1) as f64) as usize);
+            self.fine.push(self.cube_index(cube));
         }
+        self.fine.sort_unstable();
+        self.fine.dedup();
+    }
+
+    fn cube_index(&self, [i, j, k]: [usize; 3]) -> usize {
+        let [nx, ny, _] = self.cubes;
+        i + nx * (j + ny * k)
     }
 
     /// Whether the cube at `c` (which may lie off the lattice) is split into eight.
@@ -132,7 +133,7 @@ impl Lattice {
         let [nx, ny, nz] = self.cubes.map(|n| n as isize);
         let [i, j, k] = c;
         let inside = (0..nx).contains(&i) && (0..ny).contains(&j) && (0..nz).contains(&k);
-        inside && !self.fine.is_empty() && self.fine[(i + nx * (j + ny * k)) as usize]
+        inside && self.fine.binary_search(&((i + nx * (j + ny * k)) as usize)).is_ok()
     }
 
     /// Whether cube `c` is split the plain Kuhn way: neither it nor a cube sharing a face or
@@ -147,12 +148,21 @@ impl Lattice {
 
     /// The tets of the cubes not split the plain way whose centroids are inside, by cube.
     pub(super) fn cut_graded(&self, rays: &RayGrid) -> Vec<[u64; 4]> {
-        if self.fine.is_empty() {
-            return Vec::new();
-        }
         let [nx, ny, nz] = self.cubes;
-        let cubes: Vec<[usize; 3]> =
-            (0..nx * ny * nz).map(|n| [n % nx, n / nx % ny, n / nx / ny]).filter(|&c| !self.plain(c)).collect();
+        // the split cubes and the cubes around them, in index order
+        let mut cubes: Vec<[usize; 3]> = Vec::new();
+        for &n in &self.fine {
+            let [i, j, k] = [n % nx, n / nx % ny, n / nx / ny];
+            let span = |x: usize, n: usize| x.saturating_sub(1)..(x + 2).min(n);
+            for k in span(k, nz) {
+                for j in span(j, ny) {
+                    cubes.extend(span(i, nx).map(|i| [i, j, k]));
+                }
+            }
+        }
+        cubes.sort_unstable_by_key(|&c| self.cube_index(c));
+        cubes.dedup();
+        cubes.retain(|&c| !self.plain(c));
         let kept = cubes.par_iter().map(|&c| {
             let mut crossings = Vec::new();
             let tets = self.cube_tets(c).into_iter();
