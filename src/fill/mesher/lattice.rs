@@ -1,5 +1,7 @@
 //! The cube lattice, its Kuhn split into tets, and the cut: the tets whose centroids lie
-//! inside the mesh, as lattice vertex ids, and then as a compact tet mesh.
+//! inside the mesh, as lattice vertex ids, and then as a compact tet mesh. Some cubes may be
+//! split into eight, and the cubes beside them cut into fans around their centres, so that
+//! all tets still meet face to face (see [`Lattice::refine_near`]).
 
 use super::inside::RayGrid;
 use crate::error::{Error, Result};
@@ -230,7 +232,8 @@ impl Lattice {
                 .flat_map(|&[a, b]| [[[a, b], [a + 1, b], [a + 1, b + 1]], [[a, b], [a + 1, b + 1], [a, b + 1]]])
                 .collect();
         }
-        // the edge along `along` at the far (`up`) or near side of the other in-face axis
+        // whether the face's edge on the near or far (`up`) side along in-face axis `other`
+        // is split: one of the two other cubes around that edge is
         let split = |other: usize, up: bool| {
             let beside = step(c, other, up);
             self.is_fine(beside) || self.is_fine(step(across, other, up))
