@@ -257,12 +257,11 @@ pub fn surface_distance(mesh: &Mesh, tets: &TetMesh) -> Result<SurfaceDistance> 
 
 fn surface_distance_here(mesh: &Mesh, tets: &TetMesh) -> Result<SurfaceDistance> {
     let mean_edge = crate::fill::mean_edge(tets);
-    let faces = tets.boundary_faces(&tets.neighbours());
-    let boundary = Mesh::new(tets.vertices.clone(), faces)?;
+    let boundary = boundary_mesh(tets)?;
     let (to_mesh, to_tets) = (Surface::new(mesh, mean_edge), Surface::new(&boundary, mean_edge));
     // the farthest point, the first of equally far ones
     let farthest = |points: Vec<Vec3>, onto: &Surface| {
-        let distances: Vec<f32> = points.par_iter().map(|p| onto.closest(*p).distance(*p)).collect();
+        let distances = gaps(&points, onto);
         let far = (0..points.len()).fold(None, |best: Option<usize>, i| match best {
             Some(b) if distances[b] >= distances[i] => Some(b),
             _ => Some(i),
@@ -278,6 +277,16 @@ fn surface_distance_here(mesh: &Mesh, tets: &TetMesh) -> Result<SurfaceDistance>
     let (from_surface, on_mesh) = farthest(on_surface, &to_tets);
     let at = if from_tets >= from_surface { on_tets } else { on_mesh }.to_array();
     Ok(SurfaceDistance { from_tets, from_surface, mean_edge, at })
+}
+
+/// The boundary faces of `tets` as a mesh on its vertex list.
+fn boundary_mesh(tets: &TetMesh) -> Result<Mesh> {
+    Mesh::new(tets.vertices.clone(), tets.boundary_faces(&tets.neighbours()))
+}
+
+/// How far each point lies from `onto`.
+fn gaps(points: &[Vec3], onto: &Surface) -> Vec<f32> {
+    points.par_iter().map(|p| onto.closest(*p).distance(*p)).collect()
 }
 
 /// The corners, edge midpoints and centre of every triangle of `mesh`, each point once.
@@ -403,14 +412,14 @@ const REFINEMENTS: usize = 3;
 /// farther than `limit` from the other, and the largest distance of a sample from the other
 /// in mean tet edges.
 fn strays(surface: &Surface, mesh: &Mesh, tets: &TetMesh, limit: f32) -> (Vec<Vec3>, f32) {
-    let Ok(boundary) = Mesh::new(tets.vertices.clone(), tets.boundary_faces(&tets.neighbours())) else {
+    let Ok(boundary) = boundary_mesh(tets) else {
         return (Vec::new(), 0.0);
     };
     let edge = crate::fill::mean_edge(tets);
     let onto = Surface::new(&boundary, edge);
     let mut worst = 0.0f32;
     let mut far = |points: Vec<Vec3>, onto: &Surface| -> Vec<Vec3> {
-        let gaps: Vec<f32> = points.par_iter().map(|p| onto.closest(*p).distance(*p)).collect();
+        let gaps = gaps(&points, onto);
         worst = gaps.iter().fold(worst, |w, &g| w.max(g));
         points.into_iter().zip(gaps).filter(|&(_, g)| g > limit).map(|(p, _)| p).collect()
     };
@@ -438,12 +447,12 @@ const TIPS: usize = 256;
 /// lattice vertex reaches.
 fn far_from_boundary(mesh: &Mesh, tets: &TetMesh) -> Vec<Vec3> {
     let edge = crate::fill::mean_edge(tets);
-    let Ok(boundary) = Mesh::new(tets.vertices.clone(), tets.boundary_faces(&tets.neighbours())) else {
+    let Ok(boundary) = boundary_mesh(tets) else {
         return Vec::new();
     };
     let onto = Surface::new(&boundary, edge);
     let samples = triangle_samples(mesh);
-    let gaps: Vec<f32> = samples.par_iter().map(|p| onto.closest(*p).distance(*p)).collect();
+    let gaps = gaps(&samples, &onto);
     let mut far: Vec<usize> = (0..samples.len()).filter(|&i| gaps[i] > caps::FAR * edge).collect();
     far.sort_by(|&a, &b| gaps[b].total_cmp(&gaps[a]).then(a.cmp(&b)));
     far.into_iter().take(TIPS).map(|i| samples[i]).collect()

@@ -132,10 +132,8 @@ impl Lattice {
 
     /// Whether the cube at `c` (which may lie off the lattice) is split into eight.
     fn is_fine(&self, c: [isize; 3]) -> bool {
-        let [nx, ny, nz] = self.cubes.map(|n| n as isize);
-        let [i, j, k] = c;
-        let inside = (0..nx).contains(&i) && (0..ny).contains(&j) && (0..nz).contains(&k);
-        inside && self.fine.binary_search(&((i + nx * (j + ny * k)) as usize)).is_ok()
+        let inside = (0..3).all(|a| (0..self.cubes[a] as isize).contains(&c[a]));
+        inside && self.fine.binary_search(&self.cube_index(c.map(|x| x as usize))).is_ok()
     }
 
     /// Whether cube `c` is split the plain Kuhn way: neither it nor a cube sharing a face or
