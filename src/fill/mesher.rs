@@ -134,8 +134,9 @@ fn tetrahedralize_here(mesh: &Mesh, target_tets: usize) -> Result<TetMesh> {
     let mut best: Option<(TetMesh, f32)> = None;
     // The closest spacings tried that gave too many tets (finer) and too few (coarser).
     let (mut finer, mut coarser) = (0.0f64, f64::INFINITY);
+    let features = features::features(mesh);
     for attempt in 0..SPACING_TRIES {
-        let mut at = AtSpacing::new(mesh, h)?;
+        let mut at = AtSpacing::new(mesh, &features, h)?;
         let count = at.refined(|tets, worst| {
             let better = best.as_ref().is_none_or(|(b, w)| rank(tets.tets.len(), worst) < rank(b.tets.len(), *w));
             if better && !tets.tets.is_empty() {
@@ -343,15 +344,15 @@ struct AtSpacing<'a> {
     lattice: Lattice,
     rays: RayGrid,
     surface: Surface,
-    features: features::Features,
+    features: &'a features::Features,
 }
 
 impl<'a> AtSpacing<'a> {
-    fn new(mesh: &'a Mesh, h: f64) -> Result<AtSpacing<'a>> {
+    fn new(mesh: &'a Mesh, features: &'a features::Features, h: f64) -> Result<AtSpacing<'a>> {
         let lattice = Lattice::new(mesh.bounds(), h)?;
         let [_, ny, nz] = lattice.cubes;
         let rays = RayGrid::new(mesh, [lattice.origin.y, lattice.origin.z], h, [ny, nz]);
-        let (surface, features) = (Surface::new(mesh, h as f32), features::features(mesh));
+        let surface = Surface::new(mesh, h as f32);
         Ok(AtSpacing { mesh, lattice, rays, surface, features })
     }
 
@@ -360,8 +361,8 @@ impl<'a> AtSpacing<'a> {
         let mut kept = self.lattice.cut(&self.rays);
         kept.extend(self.lattice.cut_graded(&self.rays));
         let mut tets = self.lattice.compact(kept);
-        conform::conform(&mut tets, &self.surface, &self.features);
-        caps::cap_far_corners(&mut tets, &self.surface, &self.features);
+        conform::conform(&mut tets, &self.surface, self.features);
+        caps::cap_far_corners(&mut tets, &self.surface, self.features);
         pockets::seal_flat_pockets(&mut tets);
         tets
     }
