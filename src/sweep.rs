@@ -73,15 +73,13 @@ pub struct Sweep {
     pub displacement: Option<Image2d>,
 }
 
-/// Sweep `image` into a volume; `seed` drives the noise.
-pub fn sweep(image: &Image2d, params: &Sweep, seed: u64) -> Result<Volume> {
-    check(image, params)?;
+/// The dims and channels of the volume [`sweep`] makes of `image`.
+pub fn swept_shape(image: &Image2d, params: &Sweep) -> ([usize; 3], Vec<Channel>) {
     let (a, b) = params.axis.plane_axes();
     let mut dims = [0; 3];
     dims[params.axis.index()] = params.length;
     dims[a] = image.width();
     dims[b] = image.height();
-    let colour = colour_positions(image)?;
     let mut channels = image.channels().to_vec();
     if params.depth_axis.is_some() {
         channels.push(Channel::Depth);
@@ -89,6 +87,15 @@ pub fn sweep(image: &Image2d, params: &Sweep, seed: u64) -> Result<Volume> {
     if params.displacement.is_some() {
         channels.push(Channel::Displacement);
     }
+    (dims, channels)
+}
+
+/// Sweep `image` into a volume; `seed` drives the noise.
+pub fn sweep(image: &Image2d, params: &Sweep, seed: u64) -> Result<Volume> {
+    check(image, params)?;
+    let (a, b) = params.axis.plane_axes();
+    let (dims, channels) = swept_shape(image, params);
+    let colour = colour_positions(image)?;
     let n_in = image.channel_count();
     let relief_at = n_in + usize::from(params.depth_axis.is_some());
     let fields = params.noise.map(|n| NoiseFields::new(n, seed));

@@ -48,14 +48,13 @@ pub fn flipbook(
     padding: usize,
     pow2: bool,
 ) -> Result<()> {
-    if output.extension().and_then(|e| e.to_str()) != Some("png") {
-        return Err(Error::usage(format!("{}: the flipbook is a PNG; name it NAME.png", output.display())));
-    }
+    io::guard::png_output(output, &[file])?;
     let sidecar = output.with_extension("json");
-    io::check_output(output, &[file])?;
+    io::guard::not_an_input(&sidecar, &[file])?;
     if sidecar.is_dir() {
         return Err(Error::file(&sidecar, "is a folder; the flipbook's layout is written there"));
     }
+    io::guard::side_file(&sidecar, "the flipbook's layout goes there: move that file away or name another flipbook")?;
     let volume = load(file)?;
     let layout = io::flipbook::Layout::new(volume.dims(), columns, rows, padding, pow2).map_err(usage)?;
     let samples = io::flipbook::flipbook(&volume, &layout);
@@ -79,7 +78,7 @@ pub fn flipbook(
 /// `solidtex slice FILE --axis A --index N -o out.png`.
 pub fn slice(file: &Path, axis: &str, index: Option<usize>, output: &Path) -> Result<()> {
     let axis: Axis = axis.parse().map_err(usage)?;
-    io::check_folder(output)?;
+    io::guard::png_output(output, &[file])?;
     let volume = load(file)?;
     let index = index.unwrap_or(volume.dims()[axis.index()] / 2);
     let image = volume.slice(axis, index).map_err(|e| e.in_file(file))?;
@@ -91,7 +90,7 @@ pub fn slice(file: &Path, axis: &str, index: Option<usize>, output: &Path) -> Re
 
 /// `solidtex sheet FILE -o sheet.png`.
 pub fn sheet(file: &Path, output: &Path, title: Option<String>) -> Result<()> {
-    io::check_folder(output)?;
+    io::guard::png_output(output, &[file])?;
     let volume = load(file)?;
     let title = title.unwrap_or_else(|| file.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default());
     io::write_rgb8(output, &render::sheet(&volume, &title))?;

@@ -211,6 +211,10 @@ pub fn run_fill(args: &FillArgs) -> Result<()> {
         io::values::within("--tets", tets, lo, hi).map_err(usage)?;
     }
     lst_check(&args.output)?;
+    io::guard::not_an_input(&args.output, &[&args.mesh, &args.spec])?;
+    if let Some(json) = &args.json {
+        io::guard::file_output(json, &[&args.mesh, &args.spec, &args.output], &["json"], "the fill's figures as JSON")?;
+    }
     let mut spec = fill_spec::read_fill_spec(&args.spec)?;
     spec.tets = args.tets.unwrap_or(spec.tets);
     spec.seed = args.seed.unwrap_or(spec.seed);
@@ -347,6 +351,12 @@ fn seam_strength(loaded: &Loaded) -> Option<f64> {
     (!figures.is_empty()).then(|| figures.iter().sum::<f64>() / figures.len() as f64)
 }
 
+/// A PNG picture of `models` (and a skin): none of them.
+fn picture_output(output: &Path, models: &[PathBuf], skin: Option<&Path>) -> Result<()> {
+    let inputs: Vec<&Path> = models.iter().map(PathBuf::as_path).chain(skin).collect();
+    io::guard::png_output(output, &inputs)
+}
+
 fn lst_check(path: &Path) -> Result<()> {
     if path.extension().and_then(|e| e.to_str()) != Some("lst") {
         return Err(Error::usage(format!("{}: the model file must end in .lst", path.display())));
@@ -361,7 +371,7 @@ impl Bar {
     pub(super) fn new() -> Bar {
         let bar = ProgressBar::new(1000);
         bar.set_style(
-            ProgressStyle::with_template("{elapsed:>4} [{bar:40}] {percent:>3}% {msg}").expect("valid template"),
+            ProgressStyle::with_template("{elapsed:>4} [{bar:40}] {percent:>3}% (about {eta} left) {msg}").expect("valid template"),
         );
         Bar(bar)
     }
@@ -507,7 +517,7 @@ fn run_stroke_cut(args: &CutArgs) -> Result<()> {
     if args.models.len() > 1 {
         return Err(usage(Error::invalid("--stroke cuts one model; give one .lst")));
     }
-    io::check_folder(&args.output)?;
+    picture_output(&args.output, &args.models, None)?;
     let loaded = load_model(&args.models[0])?;
     let bounds = render::bounds(&[(&loaded.model, &loaded.textures)]);
     let keep = keep.unwrap_or((bounds.0 + bounds.1) / 2.0);
@@ -540,7 +550,7 @@ pub fn run_cut(args: &CutArgs) -> Result<()> {
     }
     let plane = cut_values(args).map_err(usage)?;
     let wanted = args.channel.as_deref().map(Channel::parse).transpose().map_err(usage)?;
-    io::check_folder(&args.output)?;
+    picture_output(&args.output, &args.models, None)?;
     let loaded = load_models(&args.models)?;
     let channel = match &wanted {
         None => None,
@@ -613,7 +623,7 @@ fn render_settings(args: &RenderArgs) -> Result<translucent::Settings> {
 /// Run `solidtex render`.
 pub fn run_render(args: &RenderArgs) -> Result<()> {
     let settings = render_settings(args).map_err(usage)?;
-    io::check_folder(&args.output)?;
+    picture_output(&args.output, &args.models, args.skin.as_deref())?;
     let loaded = load_models(&args.models)?;
     let wanted = matches!(args.density, None | Some(DensityFrom::Alpha));
     let channel: std::result::Result<Vec<Textures>, &Path> =
@@ -645,7 +655,10 @@ pub fn run_render(args: &RenderArgs) -> Result<()> {
         .zip(lookup.as_ref())
         .map(|(input, lookup)| translucent::SkinLayer { skin: input.skin(lookup), opacity: args.skin_opacity });
     let started = Instant::now();
-    let rendering = translucent::render(&pairs(&loaded), density, &settings, layer)?;
+    let bar = Bar::new();
+    let rendering = translucent::render_with(&pairs(&loaded), density, &settings, layer, &bar);
+    bar.0.finish_and_clear();
+    let rendering = rendering?;
     let seconds = started.elapsed().as_secs_f64();
     io::write_rgb8(&args.output, &rendering.picture)?;
     let name = format!("{from:?}").to_lowercase();
@@ -773,7 +786,7 @@ pub fn run_view(args: &ViewArgs) -> Result<()> {
         Ok(())
     };
     checks().map_err(usage)?;
-    io::check_folder(&args.output)?;
+    picture_output(&args.output, &args.models, args.skin.as_deref())?;
     if let [one] = args.models.as_slice()
         && one.extension().is_some_and(|e| e.eq_ignore_ascii_case("ply"))
     {

@@ -81,7 +81,7 @@ pub fn run(args: &FieldArgs) -> Result<()> {
         args.plane.as_deref().map(|text| super::fill::plane("--plane", text)).transpose()
     };
     let plane = checks().map_err(usage)?;
-    io::check_folder(&args.output)?;
+    io::guard::png_output(&args.output, &[&args.mesh, &args.spec])?;
     let g = guide(&args.mesh, &args.spec, args.tets)?;
     let bounds = g.surface.bounds();
     let (point, normal) = plane.unwrap_or(((bounds.0 + bounds.1) / 2.0, Vec3::Z));
@@ -188,12 +188,12 @@ pub fn run_guided(args: &GuidedArgs) -> Result<()> {
         args.cut.as_deref().map(|text| super::fill::plane("--cut", text)).transpose()
     };
     let cut = checks().map_err(usage)?;
-    io::check_folder(&args.output)?;
     let masks = [&args.mask, &args.ey_mask, &args.ez_mask].into_iter().flatten();
     let given = [&args.exemplar, &args.solid].into_iter().flatten();
-    let inputs: Vec<&PathBuf> = [&args.mesh, &args.spec].into_iter().chain(given).chain(masks).collect();
-    if inputs.iter().any(|p| io::atomic::canonical(p).is_some_and(|c| io::atomic::canonical(&args.output) == Some(c))) {
-        return Err(usage(Error::file(&args.output, "is one of the inputs; give another output")));
+    let inputs: Vec<&Path> = [&args.mesh, &args.spec].into_iter().chain(given).chain(masks).map(|p| p.as_path()).collect();
+    match cut {
+        Some(_) => io::guard::png_output(&args.output, &inputs)?,
+        None => io::check_output(&args.output, &inputs)?,
     }
     let started = Instant::now();
     let g = guide(&args.mesh, &args.spec, args.tets)?;

@@ -97,6 +97,8 @@ pub fn run_sweep(args: &SweepArgs) -> Result<()> {
     io::check_output(&args.output, &inputs)?;
     let params = sweep_params(args)?;
     let image = io::read_image(&args.image)?;
+    let (dims, channels) = sweep::swept_shape(&image, &params);
+    crate::volume::check_size(dims, channels.len(), io::budget_from_env()?)?;
     let volume = sweep::sweep(&image, &params, args.seed).map_err(|e| e.in_file(&args.image))?;
     write(&args.output, &volume)
 }
@@ -139,7 +141,7 @@ pub struct StampArgs {
 /// Run `solidtex stamp`.
 pub fn run_stamp(args: &StampArgs) -> Result<()> {
     let (placement, colour) = stamp_values(args).map_err(usage)?;
-    io::check_output(&args.output, &[&args.volume, &args.mesh])?;
+    io::check_edit_output(&args.output, &args.volume, &[&args.mesh])?;
     let mesh = read_seed(&args.mesh)?;
     let mut volume = load(&args.volume)?;
     let done = stamp::stamp(&mut volume, &mesh, &placement, colour).map_err(|e| about(e, &args.mesh, &args.volume))?;
@@ -209,7 +211,7 @@ pub fn region(text: Option<&str>, dims: [usize; 3]) -> Result<Region> {
 /// Run `solidtex scatter`.
 pub fn run_scatter(args: &ScatterArgs) -> Result<()> {
     let (colour, scale) = scatter_values(args).map_err(usage)?;
-    io::check_output(&args.output, &[&args.volume, &args.mesh])?;
+    io::check_edit_output(&args.output, &args.volume, &[&args.mesh])?;
     let mesh = read_seed(&args.mesh)?;
     let mut volume = load(&args.volume)?;
     let params = Scatter {
@@ -263,7 +265,7 @@ pub struct BlurArgs {
 /// Run `solidtex blur`.
 pub fn run_blur(args: &BlurArgs) -> Result<()> {
     let at = blur_values(args).map_err(usage)?;
-    io::check_output(&args.output, &[&args.volume])?;
+    io::check_edit_output(&args.output, &args.volume, &[])?;
     let mut volume = load(&args.volume)?;
     let changed = stamp::blur(&mut volume, at, args.radius, args.strength).map_err(|e| e.in_file(&args.volume))?;
     eprintln!("blurred {changed} voxels");
@@ -363,7 +365,10 @@ pub fn run_draw(args: &DrawArgs) -> Result<()> {
     if args.what == "cake" {
         return draw_cake(args);
     }
-    io::check_folder(&args.output)?;
+    let mesh_wanted = args.what == "seed" || args.what == "bubble" || crate::mesh::shapes::named(&args.what).is_some();
+    if mesh_wanted {
+        io::guard::file_output(&args.output, &[], &["obj", "stl", "ply"], "a mesh")?;
+    }
     if args.what == "seed" || args.what == "bubble" {
         let mesh = match args.what.as_str() {
             "seed" => crate::sections::seed_mesh(32, 32)?,
@@ -381,6 +386,7 @@ pub fn run_draw(args: &DrawArgs) -> Result<()> {
     let (w, h) = draw_size(&args.size).map_err(usage)?;
     let image = crate::sections::draw(&args.what, w, h, args.seed)
         .map_err(|e| Error::usage(format!("{e}, or seed, fruit, pipe, log, block, vase")))?;
+    io::guard::png_output(&args.output, &[])?;
     io::write_image(&args.output, &image)?;
     eprintln!("wrote {} ({w}x{h})", args.output.display());
     Ok(())

@@ -166,8 +166,8 @@ fn build_preset(path: &Path) -> Result<()> {
     let file = folder.join(format!("{stem}.exr"));
     match p.kind.as_str() {
         "splotch" => {
-            io::check_output(&file, &[path])?;
-            write_one(&file, mask::splotch(p.size, p.falloff, p.seed).map_err(fail)?)
+            beside_preset(&file, &[path])?;
+            write_one(&file, io::guard::seal_volume(mask::splotch(p.size, p.falloff, p.seed).map_err(fail)?))
         }
         "layered" => {
             let depth: Axis = p.depth_axis.as_deref().unwrap_or("z").parse().map_err(fail)?;
@@ -176,10 +176,17 @@ fn build_preset(path: &Path) -> Result<()> {
         }
         "mesh" => {
             let mesh = folder.join(p.mesh.as_deref().ok_or_else(|| Error::file(path, "mesh = \"FILE\" is missing"))?);
-            io::check_output(&file, &[path, &mesh])?;
+            beside_preset(&file, &[path, &mesh])?;
             let shape = io::mesh_file::read_mesh(&mesh)?.oriented();
-            write_one(&file, mask::from_mesh(&shape, p.size, p.falloff).map_err(fail)?)
+            write_one(&file, io::guard::seal_volume(mask::from_mesh(&shape, p.size, p.falloff).map_err(fail)?))
         }
         other => Err(Error::file(path, format!("kind = {other:?} is unknown; allowed: splotch, layered, mesh"))),
     }
+}
+
+/// The mask a preset writes beside itself replaces only a mask solidtex wrote there and
+/// nobody changed since.
+fn beside_preset(file: &Path, inputs: &[&Path]) -> Result<()> {
+    io::check_output(file, inputs)?;
+    io::guard::side_file(file, "the preset writes its mask there: move that file away or rename the preset")
 }

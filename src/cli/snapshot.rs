@@ -8,6 +8,9 @@ use std::path::Path;
 /// Run `solidtex snapshot VOLUME (-o NAME.snap | --check NAME.snap [--tolerance T])`.
 pub fn run(volume: &Path, output: Option<&Path>, check: Option<&Path>, tolerance: f64) -> Result<()> {
     io::values::within("--tolerance", tolerance, 0.0, 1.0e6).map_err(usage)?;
+    if let Some(out) = output {
+        io::guard::file_output(out, &[volume], &["snap"], "a text snapshot")?;
+    }
     let v = io::read_volume(volume, io::budget_from_env()?)?;
     match (output, check) {
         (Some(out), None) => {

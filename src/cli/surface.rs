@@ -92,22 +92,5 @@ fn guide(args: &SurfaceArgs, mesh: &crate::mesh::Mesh) -> Result<Guide> {
 
 /// The output must be a `.ply` in a folder solidtex may write, and none of the inputs.
 fn check_output(output: &Path, inputs: &[&Path]) -> Result<()> {
-    if !output.extension().is_some_and(|e| e.eq_ignore_ascii_case("ply")) {
-        return Err(Error::usage(format!(
-            "{}: the skin is written as a .ply; name a file ending in .ply",
-            output.display()
-        )));
-    }
-    io::check_folder(output)?;
-    if output.is_dir() {
-        return Err(Error::file(output, "is a folder; name a file to write"));
-    }
-    for input in inputs {
-        if let (Ok(a), Ok(b)) = (output.canonicalize(), input.canonicalize())
-            && a == b
-        {
-            return Err(Error::file(output, "is one of the inputs; write the skin to another file"));
-        }
-    }
-    Ok(())
+    io::guard::file_output(output, inputs, &["ply"], "the skin as a .ply")
 }

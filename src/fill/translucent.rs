@@ -87,6 +87,18 @@ pub fn render(
     settings: &Settings,
     skin: Option<SkinLayer>,
 ) -> Result<Rendering> {
+    render_with(models, density, settings, skin, &crate::progress::NoProgress)
+}
+
+/// [`render`], telling `progress` how many slices are composited and stopping when it is
+/// cancelled.
+pub fn render_with(
+    models: &[(&LstModel, &Textures)],
+    density: Density,
+    settings: &Settings,
+    skin: Option<SkinLayer>,
+    progress: &dyn crate::progress::Progress,
+) -> Result<Rendering> {
     check(models, density, settings)?;
     let (forward, frame) = frames(models, settings);
     let depth = (frame.far - frame.near) / settings.slices as f32;
@@ -128,6 +140,10 @@ pub fn render(
             }
         });
         done = k + 1;
+        progress.update("slices", done as f32 / settings.slices as f32);
+        if progress.cancelled() {
+            return Err(Error::Cancelled);
+        }
         if through.iter().all(|t| *t <= OPAQUE) {
             break;
         }

@@ -462,7 +462,12 @@ pub(super) fn draw_triangle(
     let lo = s[0].min(s[1]).min(s[2]).floor().max(Vec2::ZERO);
     let hi = (s[0].max(s[1]).max(s[2]).ceil() + 1.0).min(Vec2::splat(size as f32));
     for y in lo.y as usize..hi.y as usize {
-        for x in lo.x as usize..hi.x as usize {
+        // Only the pixels of the row near the triangle: a sliver across the picture costs
+        // its own pixels, not its box's.
+        let Some((from, to)) = row_span(s, area, y as f32 + 0.5) else { continue };
+        let from = from.floor().max(lo.x) as usize;
+        let to = to.ceil().min(hi.x).max(0.0) as usize;
+        for x in from..to {
             let q = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
             let b1 = (q - s[0]).perp_dot(s[2] - s[0]) / area;
             let b2 = (s[1] - s[0]).perp_dot(q - s[0]) / area;
@@ -477,6 +482,32 @@ pub(super) fn draw_triangle(
             }
         }
     }
+}
+
+/// The pixel centres `x` of the row at height `y` (pixel centre) where the barycentric
+/// weights of triangle `s` (signed `area`) may pass the inclusion test, as an interval
+/// `[from, to]` of x taken with a margin (the test itself decides each pixel); `None` when
+/// the row misses the triangle.
+fn row_span(s: [Vec2; 3], area: f32, y: f32) -> Option<(f32, f32)> {
+    // Each weight is linear along the row, w(x) = w(c) + slope (x - c), taken about the
+    // triangle's middle so the rounding stays that of the per-pixel test.
+    let c = (s[0].x + s[1].x + s[2].x) / 3.0;
+    let w1 = (Vec2::new(c, y) - s[0]).perp_dot(s[2] - s[0]) / area;
+    let w2 = (s[1] - s[0]).perp_dot(Vec2::new(c, y) - s[0]) / area;
+    let slopes = [-(s[2].y - s[1].y) / area, (s[2].y - s[0].y) / area, -(s[1].y - s[0].y) / area];
+    const MARGIN: f32 = 1e-2;
+    let (mut from, mut to) = (f32::NEG_INFINITY, f32::INFINITY);
+    for (w, slope) in [1.0 - w1 - w2, w1, w2].into_iter().zip(slopes) {
+        let edge = c + (-MARGIN - w) / slope;
+        if slope > 0.0 {
+            from = from.max(edge);
+        } else if slope < 0.0 {
+            to = to.min(edge);
+        } else if w < -MARGIN {
+            return None;
+        }
+    }
+    (from <= to).then_some((from - 2.0, to + 2.0))
 }
 
 #[cfg(test)]
@@ -515,6 +546,40 @@ mod tests {
         all.sort_unstable();
         all[all.len() * 98 / 100]
     }
+
+    /// Drawing a row only across the triangle's span sets exactly the pixels the test of
+    /// every pixel of its box sets: slivers across the picture, tiny, huge and far-off
+    /// triangles alike.
+    #[test]
+    fn row_spans_draw_the_pixels_the_whole_box_draws() {
+        use rand::{RngExt, SeedableRng};
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(5);
+        let size = 48;
+        let hit = |b: [f32; 3]| Some(Hit { depth: b[0], model: 0, tet: 0, point: Vec3::ZERO, normal: Vec3::Z });
+        for case in 0..3000 {
+            let reach = [2.0, 60.0, 4000.0][case % 3];
+            let s: [Vec2; 3] =
+                std::array::from_fn(|_| Vec2::new(rng.random_range(-reach..reach), rng.random_range(-reach..reach)) + 24.0);
+            let mut spans = vec![None; size * size];
+            draw_triangle(&mut spans, size, s, hit);
+            let area = (s[1] - s[0]).perp_dot(s[2] - s[0]);
+            let mut boxed: Vec<Option<Hit>> = vec![None; size * size];
+            if area.is_finite() && area.abs() >= 1e-12 {
+                for (i, slot) in boxed.iter_mut().enumerate() {
+                    let q = Vec2::new((i % size) as f32 + 0.5, (i / size) as f32 + 0.5);
+                    let b1 = (q - s[0]).perp_dot(s[2] - s[0]) / area;
+                    let b2 = (s[1] - s[0]).perp_dot(q - s[0]) / area;
+                    let b = [1.0 - b1 - b2, b1, b2];
+                    if b.iter().all(|w| *w >= -1e-4) {
+                        *slot = hit(b);
+                    }
+                }
+            }
+            let set = |v: &[Option<Hit>]| v.iter().map(Option::is_some).collect::<Vec<_>>();
+            assert_eq!(set(&spans), set(&boxed), "triangle {s:?}");
+        }
+    }
+
 
     #[test]
     fn displacement_moves_a_flat_face_along_its_normal_by_the_channel() {

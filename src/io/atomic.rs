@@ -6,9 +6,10 @@
 //!
 //! A folder (a PNG slice stack, a set of masks) is written as a whole the same way, and
 //! only where solidtex may write: a new or empty folder, or one holding just the files
-//! solidtex listed there before in [`FOLDER_LIST`]. The new folder takes the old one's
-//! place in one step, and only the files of that list are removed afterwards: solidtex
-//! never deletes a file it did not write.
+//! solidtex listed there before in [`FOLDER_LIST`], each with the blake3 hash of what it
+//! wrote, unchanged since. The new folder takes the old one's place in one step, and only
+//! the files of that list are removed afterwards: solidtex never deletes a file it did not
+//! write, nor one a person changed.
 //!
 //! Reads take regular files only (a pipe would block, a device never ends) and stop at a
 //! size cap that follows from the voxel budget.
@@ -176,16 +177,16 @@ pub fn writable_folder(path: &Path) -> Result<Option<Vec<String>>> {
         ));
     }
     let names = folder_names(path)?;
-    let listed = listed_names(path);
-    let foreign: Vec<&String> = names.iter().filter(|n| *n != FOLDER_LIST && !listed.contains(n)).collect();
-    if let Some(first) = foreign.first() {
+    let listed = listed_files(path);
+    let foreign: Vec<(&String, &str)> =
+        names.iter().filter(|n| *n != FOLDER_LIST).filter_map(|n| why_foreign(path, n, &listed).map(|w| (n, w))).collect();
+    if let Some((first, why)) = foreign.first() {
         return Err(Error::file(
             path,
             format!(
-                "holds {} file(s) solidtex did not write there (e.g. {first:?}); solidtex writes a folder output \
-                 only where the folder is new, empty, or holds what it wrote before (listed in {FOLDER_LIST}); \
-                 choose a new folder (a folder written by a solidtex older than that list must be removed by hand \
-                 once)",
+                "holds {} file(s) solidtex may not replace (e.g. {first:?}, which {why}); solidtex writes a folder \
+                 output only where the folder is new, empty, or holds what it wrote before, unchanged (listed with \
+                 their hashes in {FOLDER_LIST}); move those files away or choose a new folder",
                 foreign.len()
             ),
         ));
@@ -194,7 +195,7 @@ pub fn writable_folder(path: &Path) -> Result<Option<Vec<String>>> {
 }
 
 /// Whether the current working folder is `path` or lies inside it.
-fn holds_current_folder(path: &Path) -> bool {
+pub fn holds_current_folder(path: &Path) -> bool {
     match (fs::canonicalize(path), std::env::current_dir().and_then(fs::canonicalize)) {
         (Ok(folder), Ok(current)) => current.starts_with(folder),
         _ => false,
@@ -212,28 +213,58 @@ fn folder_names(path: &Path) -> Result<Vec<String>> {
     Ok(names)
 }
 
-/// The plain file names the folder's [`FOLDER_LIST`] names (none when it has no list).
-fn listed_names(path: &Path) -> Vec<String> {
+/// Why the file `name` of the folder `path` is not solidtex's to replace, given the list
+/// of what it wrote there (`None`: it is).
+fn why_foreign(path: &Path, name: &str, listed: &[(String, Option<String>)]) -> Option<&'static str> {
+    match listed.iter().find(|(n, _)| n == name) {
+        None => Some("solidtex did not write"),
+        Some((_, None)) => Some("an older solidtex listed without a content hash, so a change cannot be told"),
+        Some((_, Some(hash))) if file_hash(&path.join(name)).as_deref() == Some(hash) => None,
+        Some(_) => Some("was changed since solidtex wrote it"),
+    }
+}
+
+/// The blake3 hash (hex) of a regular file's content; `None` for anything else.
+pub fn file_hash(path: &Path) -> Option<String> {
+    if !fs::symlink_metadata(path).is_ok_and(|m| m.is_file()) {
+        return None;
+    }
+    let mut hasher = blake3::Hasher::new();
+    let file = File::open(path).ok()?;
+    hasher.update_reader(file).ok()?;
+    Some(hasher.finalize().to_hex().to_string())
+}
+
+/// The plain file names the folder's [`FOLDER_LIST`] names, each with the hash recorded
+/// for it (`None` in a list written before hashes were recorded).
+fn listed_files(path: &Path) -> Vec<(String, Option<String>)> {
     let list = path.join(FOLDER_LIST);
     let is_small_file = fs::symlink_metadata(&list).is_ok_and(|m| m.is_file() && m.len() <= TEXT_CAP);
     let text = if is_small_file { fs::read_to_string(&list).unwrap_or_default() } else { String::new() };
     text.lines()
         .map(str::trim)
-        .filter(|l| !l.is_empty() && !l.starts_with('#') && !l.contains('/') && *l != "." && *l != "..")
-        .filter(|l| fs::symlink_metadata(path.join(l)).is_ok_and(|m| m.is_file()))
-        .map(str::to_string)
+        .filter(|l| !l.is_empty() && !l.starts_with('#'))
+        .map(|l| match l.split_once("  ") {
+            Some((hash, name)) if hash.len() == 64 && hash.bytes().all(|b| b.is_ascii_hexdigit()) => {
+                (name.to_string(), Some(hash.to_string()))
+            }
+            _ => (l.to_string(), None),
+        })
+        .filter(|(name, _)| !name.contains('/') && name != "." && name != "..")
         .collect()
 }
 
-/// Write the [`FOLDER_LIST`] of a freshly written folder.
+/// Write the [`FOLDER_LIST`] of a freshly written folder: each file's hash and name.
 fn write_list(folder: &Path) -> Result<()> {
     let mut text = String::from(
-        "# Written by solidtex. It replaces the files listed here as a whole when it writes this\n\
-         # folder again, and refuses to write here while any other file is present.\n",
+        "# Written by solidtex: the files it wrote here, each after the blake3 hash of its content.\n\
+         # It replaces this folder as a whole when it writes it again, and refuses while any other\n\
+         # file is present or a listed file was changed.\n",
     );
     for name in folder_names(folder)?.into_iter().filter(|n| n != FOLDER_LIST) {
-        text.push_str(&name);
-        text.push('\n');
+        let path = folder.join(&name);
+        let hash = file_hash(&path).ok_or_else(|| Error::file(&path, "cannot be read back to record its hash"))?;
+        text.push_str(&format!("{hash}  {name}\n"));
     }
     fs::write(folder.join(FOLDER_LIST), text).map_err(|e| Error::io(folder.join(FOLDER_LIST), e))
 }

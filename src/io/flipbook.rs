@@ -115,7 +115,8 @@ pub fn flipbook(volume: &Volume, layout: &Layout) -> Vec<f32> {
     out
 }
 
-/// The sidecar: the layout, and what to enter in Unity and Unreal.
+/// The sidecar: the layout, and what to enter in Unity and Unreal; sealed, so a later run
+/// replaces it only while nobody changed it.
 pub fn sidecar(layout: &Layout, image: &str) -> String {
     // The engines' importers take the whole image as columns x rows slices, edge to edge.
     let engines_ready = layout.padding == 0
@@ -124,6 +125,7 @@ pub fn sidecar(layout: &Layout, image: &str) -> String {
         && layout.columns * layout.rows == layout.slices;
     let json = serde_json::json!({
         "format": "solidtex flipbook 1",
+        "written_by": super::guard::SEAL_MARK,
         "image": image,
         "layout": layout,
         "slice_order": "slice k (z = k) at column k % columns, row k / columns; row 0 at the top",
@@ -146,7 +148,7 @@ pub fn sidecar(layout: &Layout, image: &str) -> String {
              Unity's and Unreal's volume import need --padding 0, no --pow2, and columns x rows equal to the slices"
         },
     });
-    serde_json::to_string_pretty(&json).expect("a layout always serializes") + "\n"
+    super::guard::seal(&(serde_json::to_string_pretty(&json).expect("a layout always serializes") + "\n"))
 }
 
 #[cfg(test)]

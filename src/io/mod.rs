@@ -19,6 +19,8 @@ pub mod dds;
 mod exr_file;
 mod fields;
 pub mod fill_spec;
+pub mod guard;
+pub mod ledger;
 pub mod flipbook;
 pub mod guided_cache;
 mod kopf_vol;
@@ -84,15 +86,62 @@ impl Format {
     }
 }
 
-/// The voxel budget in bytes: `SOLIDTEX_MAX_BYTES` if set, else the default.
+/// The voxel budget in bytes: `SOLIDTEX_MAX_BYTES` if set (and not empty), else the
+/// default: 4 GiB, or less where the process may take less memory ([`memory_room`]).
 pub fn budget_from_env() -> Result<u64> {
     match std::env::var("SOLIDTEX_MAX_BYTES") {
-        Ok(text) => text
+        Ok(text) if !text.trim().is_empty() => text
             .trim()
             .parse::<u64>()
             .map_err(|_| Error::invalid(format!("SOLIDTEX_MAX_BYTES={text:?} is not a whole number of bytes"))),
-        Err(_) => Ok(crate::volume::DEFAULT_BUDGET_BYTES),
+        _ => Ok(default_budget(memory_room())),
     }
+}
+
+/// The default budget given the memory the process may still take: half of it less a
+/// reserve for the program itself (work holds its volume about twice over), at most 4 GiB.
+pub fn default_budget(room: Option<u64>) -> u64 {
+    const RESERVE: u64 = 256 << 20;
+    let cap = crate::volume::DEFAULT_BUDGET_BYTES;
+    room.map_or(cap, |room| (room.saturating_sub(RESERVE) / 2).min(cap))
+}
+
+/// The bytes the process may still take under its limits, if any is set: the address
+/// space limit (`ulimit -v`) less what is mapped already, and the control group's memory
+/// limit less what the group uses.
+pub fn memory_room() -> Option<u64> {
+    let address_space = address_space_room();
+    let group = cgroup_room();
+    match (address_space, group) {
+        (Some(a), Some(g)) => Some(a.min(g)),
+        (a, g) => a.or(g),
+    }
+}
+
+#[cfg(target_os = "linux")]
+fn address_space_room() -> Option<u64> {
+    let limit = rustix::process::getrlimit(rustix::process::Resource::As).current?;
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let mapped_kb: u64 =
+        status.lines().find_map(|l| l.strip_prefix("VmSize:"))?.trim().trim_end_matches("kB").trim().parse().ok()?;
+    Some(limit.saturating_sub(mapped_kb * 1024))
+}
+
+#[cfg(not(target_os = "linux"))]
+fn address_space_room() -> Option<u64> {
+    None
+}
+
+/// The control group's memory limit less its use: cgroup v2's `memory.max` ("max": none)
+/// and `memory.current`, or v1's `memory.limit_in_bytes` and `memory.usage_in_bytes`
+/// (where page cache counts as use, so the use is not taken off).
+fn cgroup_room() -> Option<u64> {
+    let read = |name: &str| -> Option<u64> { std::fs::read_to_string(format!("/sys/fs/cgroup/{name}")).ok()?.trim().parse().ok() };
+    if let Some(max) = read("memory.max") {
+        return Some(max.saturating_sub(read("memory.current").unwrap_or(0)));
+    }
+    // v1 says "no limit" with a number near 2^63.
+    read("memory/memory.limit_in_bytes").filter(|max| *max < 1 << 60)
 }
 
 /// Read a volume in the format its path names, within `budget` bytes.
@@ -118,18 +167,29 @@ pub fn read_volume(path: &Path, budget: u64) -> Result<Volume> {
     }
 }
 
-/// Check, before any work, that a command may write `output` given the files it reads:
-/// a file output's folder exists and the output is not a folder; a folder output is one
-/// solidtex may write ([`atomic::writable_folder`]) and holds none of the inputs.
+/// Check, before any work, that a command may write the volume `output` given the files it
+/// reads: a file output's folder exists, the output is not a folder and none of the inputs
+/// ([`guard`]); a folder output is one solidtex may write ([`atomic::writable_folder`]) and
+/// holds none of the inputs.
 pub fn check_output(output: &Path, inputs: &[&Path]) -> Result<()> {
     if Format::of(output)? != Format::PngStack {
         check_folder(output)?;
         if output.is_dir() {
             return Err(Error::file(output, "is a folder; name a file to write"));
         }
-        return Ok(());
+        return guard::not_an_input(output, inputs);
     }
     check_folder_output(output, inputs)
+}
+
+/// [`check_output`] for a command that edits the volume `edited` (`stamp`, `scatter`,
+/// `blur`): the output may be that volume, written atomically, but none of the `others`.
+pub fn check_edit_output(output: &Path, edited: &Path, others: &[&Path]) -> Result<()> {
+    check_output(output, others)?;
+    if Format::of(output)? == Format::PngStack {
+        check_folder_output(output, &[edited])?;
+    }
+    Ok(())
 }
 
 /// [`check_output`] for an output that is a folder whatever its name (a set of masks).
@@ -195,13 +255,18 @@ pub fn read_image(path: &Path) -> Result<Image2d> {
 pub fn read_image_fit(path: &Path, max_side: Option<usize>) -> Result<Image2d> {
     let budget = budget_from_env()?;
     let bytes = atomic::read_bytes_within(path, atomic::file_cap(budget))?;
-    let mut reader =
-        image::ImageReader::new(std::io::Cursor::new(bytes)).with_guessed_format().map_err(|e| Error::io(path, e))?;
+    check_image_memory(path, &bytes, budget)?;
+    let mut reader = image::ImageReader::new(std::io::Cursor::new(&bytes[..]))
+        .with_guessed_format()
+        .map_err(|e| Error::io(path, e))?;
     let mut limits = image::Limits::default();
     // The decoded pixels become f32 samples, four times the bytes of 8-bit ones.
     limits.max_alloc = Some(budget / 4);
     reader.limits(limits);
-    let decoded = reader.decode().map_err(|e| match e {
+    // A decoder may panic on a hostile file; that is a broken file, not a crash.
+    let decoded = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| reader.decode()))
+        .map_err(|_| Error::file(path, "cannot decode image: the decoder failed on this file (corrupt or hostile)"))?;
+    let decoded = decoded.map_err(|e| match e {
         image::ImageError::Limits(_) => Error::file(
             path,
             format!(
@@ -235,6 +300,33 @@ pub fn read_image_fit(path: &Path, max_side: Option<usize>) -> Result<Image2d> {
         ));
     }
     Ok(image)
+}
+
+/// Refuse an image whose decoding would need more than `budget` bytes at its peak, from
+/// its header alone: the decoded pixels, their f32 copy, and a shrunk copy of that.
+fn check_image_memory(path: &Path, bytes: &[u8], budget: u64) -> Result<()> {
+    use image::ImageDecoder;
+    let reader = image::ImageReader::new(std::io::Cursor::new(bytes)).with_guessed_format();
+    let Ok(Ok(decoder)) = reader.map(|r| r.into_decoder()) else {
+        // Not an image the header reader knows: the decoder says why.
+        return Ok(());
+    };
+    let (w, h) = decoder.dimensions();
+    let colour = decoder.color_type();
+    let pixels = w as u128 * h as u128;
+    let decoded = pixels * colour.bytes_per_pixel() as u128;
+    let samples = pixels * colour.channel_count() as u128 * 4;
+    let peak = decoded + 2 * samples;
+    if peak > budget as u128 {
+        return Err(Error::file(
+            path,
+            format!(
+                "image is too large: {w}x{h} pixels need about {peak} bytes to decode and convert, over the voxel \
+                 budget of {budget} bytes (raise it with SOLIDTEX_MAX_BYTES, or shrink the image)"
+            ),
+        ));
+    }
+    Ok(())
 }
 
 #[cfg(test)]

@@ -7,6 +7,7 @@ use super::cache::{self, Freshness, Record};
 use super::{files, recipe};
 use crate::error::{Error, Result};
 use crate::io;
+use crate::io::ledger::Ledger;
 use crate::io::manifest::{self, Entry, Source};
 use crate::progress::Progress;
 use rayon::prelude::*;
@@ -128,8 +129,11 @@ pub fn manifest_folder(manifest: &Path) -> &Path {
 /// report and returns one outcome per entry, in order.
 pub fn build(request: &Request, entries: &[Entry], observer: &dyn Observer) -> Result<Vec<Outcome>> {
     let output = request.output.as_path();
+    not_the_current_folder(output)?;
     let _lock = lock_output(output)?;
     remove_stale_temporaries(output);
+    let ledger = open_ledger(output)?;
+    ledger.claim(&REPORTS.map(String::from))?;
     let folder = manifest_folder(&request.manifest);
     let budget = io::budget_from_env()?;
     let refs: Vec<&Entry> = entries.iter().collect();
@@ -138,19 +142,48 @@ pub fn build(request: &Request, entries: &[Entry], observer: &dyn Observer) -> R
         let done: Vec<Outcome> = batch
             .par_iter()
             .map(|entry| {
-                let outcome = build_one(entry, folder, output, request.force, observer);
+                let outcome = build_one(entry, folder, (output, &ledger), request.force, observer);
                 observer.finished(&outcome);
                 outcome
             })
             .collect();
         outcomes.extend(done);
     }
-    write_report(output, &outcomes)?;
+    write_report(output, &ledger, &outcomes)?;
     Ok(outcomes)
 }
 
+/// The reports a build writes into its output folder.
+const REPORTS: [&str; 2] = ["report.md", "report.html"];
+
+/// The output folder's ledger of written files; a folder built before the ledger existed
+/// starts from its cache records and its reports.
+pub(crate) fn open_ledger(output: &Path) -> Result<Ledger> {
+    Ledger::open(output, || {
+        let records = std::fs::read_dir(output.join(files::CACHE)).into_iter().flatten().filter_map(|e| {
+            let name = e.ok()?.file_name().to_string_lossy().strip_suffix(".json")?.to_string();
+            cache::read_record(output, &name)
+        });
+        let mut seeds: Vec<(String, String)> =
+            records.flat_map(|r| r.files.into_iter().map(|f| (f.path, f.hash))).collect();
+        for (name, start) in REPORTS.iter().zip(REPORT_STARTS) {
+            let text = io::atomic::read_bytes_within(&output.join(name), io::atomic::TEXT_CAP).unwrap_or_default();
+            if let Some(hash) = text.starts_with(start.as_bytes()).then(|| blake3::hash(&text).to_hex().to_string()) {
+                seeds.push((name.to_string(), hash));
+            }
+        }
+        seeds
+    })
+}
+
+/// How each report begins (for folders built before the ledger).
+const REPORT_STARTS: [&str; 2] = [
+    "# Exemplar library\n\n| exemplar | size |",
+    "<!doctype html><meta charset=utf-8><title>Exemplar library</title>",
+];
+
 /// Build one entry; an error or a panic fails this entry only.
-fn build_one(entry: &Entry, folder: &Path, output: &Path, force: bool, observer: &dyn Observer) -> Outcome {
+fn build_one(entry: &Entry, folder: &Path, output: (&Path, &Ledger), force: bool, observer: &dyn Observer) -> Outcome {
     if observer.cancelled() {
         return Outcome::Cancelled(entry.name.clone());
     }
@@ -198,13 +231,22 @@ impl Progress for EntryProgress<'_> {
 }
 
 /// Make and write one entry, unless it is up to date. Nothing is written until its volume
-/// is made, so a cancelled or failed entry keeps its previous output.
-fn build_entry(entry: &Entry, folder: &Path, output: &Path, force: bool, observer: &dyn Observer) -> Result<Outcome> {
+/// is made, so a cancelled or failed entry keeps its previous output; a file in the way
+/// that solidtex did not write fails the entry before any work.
+fn build_entry(
+    entry: &Entry,
+    folder: &Path,
+    (output, ledger): (&Path, &Ledger),
+    force: bool,
+    observer: &dyn Observer,
+) -> Result<Outcome> {
     let started = Instant::now();
     let key = cache::key(entry, folder)?;
     if !force && let Freshness::UpToDate(record) = cache::freshness_against(entry, &key, output) {
         return Ok(Outcome::Cached(record));
     }
+    let outputs = files::outputs(entry);
+    ledger.claim(&outputs)?;
     let progress = EntryProgress { name: &entry.name, observer };
     let volume = recipe::make_with(entry, &progress)?;
     if progress.cancelled() {
@@ -213,6 +255,7 @@ fn build_entry(entry: &Entry, folder: &Path, output: &Path, force: bool, observe
     io::write_volume(&files::volume(output, &entry.name), &volume)?;
     io::write_rgb8(&output.join(files::sheet(&entry.name)), &crate::render::sheet(&volume, &entry.name))?;
     recipe::extras(entry, &volume, output)?;
+    ledger.record(&outputs)?;
     let classified =
         crate::classify::classify(&volume).map(|c| c.texture_type.to_string()).unwrap_or_else(|_| "-".into());
     let record = Record {
@@ -236,7 +279,10 @@ fn build_entry(entry: &Entry, folder: &Path, output: &Path, force: bool, observe
 pub fn merge(request: &Request, folders: &[PathBuf]) -> Result<Vec<Outcome>> {
     let entries = manifest::read_plan(&request.manifest)?.entries;
     let output = request.output.as_path();
+    not_the_current_folder(output)?;
     let _lock = lock_output(output)?;
+    let ledger = open_ledger(output)?;
+    ledger.claim(&REPORTS.map(String::from))?;
     let mut outcomes = Vec::new();
     for entry in &entries {
         let name = &entry.name;
@@ -245,15 +291,17 @@ pub fn merge(request: &Request, folders: &[PathBuf]) -> Result<Vec<Outcome>> {
             continue;
         };
         let mut names = files::outputs(entry);
+        ledger.claim(&names)?;
         names.push(files::record(name));
-        for file in names {
-            copy(&folder.join(&file), &output.join(&file))?;
+        for file in &names {
+            copy(&folder.join(file), &output.join(file))?;
         }
+        ledger.record(&names)?;
         let record = cache::read_record(output, name)
             .ok_or_else(|| Error::file(output.join(files::record(name)), "unreadable cache record"))?;
         outcomes.push(Outcome::Cached(record));
     }
-    write_report(output, &outcomes)?;
+    write_report(output, &ledger, &outcomes)?;
     Ok(outcomes)
 }
 
@@ -261,6 +309,18 @@ pub fn merge(request: &Request, folders: &[PathBuf]) -> Result<Vec<Outcome>> {
 pub fn shard_of(name: &str, n: u64) -> u64 {
     let hash = blake3::hash(name.as_bytes());
     u64::from_le_bytes(hash.as_bytes()[..8].try_into().expect("8 bytes")) % n
+}
+
+/// A build writes into a folder of its own, never the current folder or one above it (where
+/// a person's files are).
+fn not_the_current_folder(output: &Path) -> Result<()> {
+    if io::atomic::holds_current_folder(output) {
+        return Err(Error::file(
+            output,
+            "is the current folder (or holds it); build into a folder of its own, e.g. -o out",
+        ));
+    }
+    Ok(())
 }
 
 /// Create the output folder and its cache, and hold the build lock on it (released when
@@ -350,7 +410,7 @@ fn batches<'a>(entries: &[&'a Entry], budget: u64) -> Vec<Vec<&'a Entry>> {
 }
 
 /// `report.md` and `report.html`: one row per exemplar with its sheet.
-fn write_report(output: &Path, outcomes: &[Outcome]) -> Result<()> {
+fn write_report(output: &Path, ledger: &Ledger, outcomes: &[Outcome]) -> Result<()> {
     let mut md = String::from(
         "# Exemplar library\n\n| exemplar | size | declared | classified | build | sheet |\n|---|---|---|---|---|---|\n",
     );
@@ -377,8 +437,9 @@ fn write_report(output: &Path, outcomes: &[Outcome]) -> Result<()> {
         );
     }
     html += "</table>\n";
-    io::write_bytes(&output.join("report.md"), md.as_bytes())?;
-    io::write_bytes(&output.join("report.html"), html.as_bytes())
+    io::write_bytes(&output.join(REPORTS[0]), md.as_bytes())?;
+    io::write_bytes(&output.join(REPORTS[1]), html.as_bytes())?;
+    ledger.record(&REPORTS.map(String::from))
 }
 
 #[cfg(test)]

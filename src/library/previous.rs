@@ -116,6 +116,8 @@ pub fn restore(output: &Path, name: &str) -> Result<()> {
         }
     }
     cache::write_record(output, &old)?;
+    let paths: Vec<String> = old.files.iter().map(|f| f.path.clone()).collect();
+    super::build::open_ledger(output)?.record(&paths)?;
     drop_kept(output, name)
 }
 

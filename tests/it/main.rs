@@ -10,6 +10,7 @@ mod guided;
 mod handmade;
 mod library;
 mod masks;
+mod outputs;
 mod mesh;
 mod ranges;
 mod safety;

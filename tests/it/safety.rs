@@ -261,7 +261,7 @@ fn a_second_build_on_the_same_folder_stops_with_a_clear_message() {
 }
 
 #[test]
-fn a_truncated_output_is_rebuilt_not_reported_cached() {
+fn a_truncated_output_is_kept_and_said_never_reported_cached() {
     let dir = tempfile::tempdir().unwrap();
     let manifest = dir.path().join("lib.toml");
     std::fs::write(
@@ -274,6 +274,12 @@ fn a_truncated_output_is_rebuilt_not_reported_cached() {
     let exr = dir.path().join("out/m.exr");
     let whole = std::fs::read(&exr).unwrap();
     std::fs::write(&exr, &whole[..whole.len() / 2]).unwrap();
+    // changed since solidtex wrote it: kept, and said, never taken as cached
+    let again = solidtex(&["build", &m, "-o", &out]);
+    assert!(stderr(&again).contains("0 built, 0 cached, 1 failed"), "{}", stderr(&again));
+    assert!(stderr(&again).contains("m.exr") && stderr(&again).contains("changed since"), "{}", stderr(&again));
+    assert_eq!(std::fs::read(&exr).unwrap().len(), whole.len() / 2);
+    std::fs::remove_file(&exr).unwrap();
     let again = solidtex(&["build", &m, "-o", &out]);
     assert!(stderr(&again).contains("1 built, 0 cached"), "{}", stderr(&again));
     assert_eq!(std::fs::read(&exr).unwrap(), whole);

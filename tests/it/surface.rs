@@ -132,7 +132,7 @@ fn the_surface_command_writes_a_coloured_ply_and_refuses_bad_input() {
     );
     bad(&["surface", &mesh, "--exemplar", photo, "--direction", "0,0,0", "-o", &out], "must be a non-zero vector");
     bad(&["surface", &mesh, "--exemplar", photo, "--texel", "-1", "-o", &out], "must be a length greater than 0");
-    bad(&["surface", &mesh, "--exemplar", photo, "-o", &at(dir.path(), "skin.obj")], "written as a .ply");
+    bad(&["surface", &mesh, "--exemplar", photo, "-o", &at(dir.path(), "skin.obj")], "writes the skin as a .ply");
     bad(&["surface", &mesh, "--exemplar", &mesh, "-o", &out], "blob.obj");
     let small = at(dir.path(), "small.png");
     image::RgbImage::new(15, 40).save(&small).unwrap();
@@ -140,7 +140,7 @@ fn the_surface_command_writes_a_coloured_ply_and_refuses_bad_input() {
     let before = std::fs::read(&mesh).unwrap();
     let as_ply = at(dir.path(), "blob.ply");
     std::fs::copy(&mesh, &as_ply).unwrap();
-    bad(&["surface", &as_ply, "--exemplar", photo, "-o", &as_ply], "is one of the inputs");
+    bad(&["surface", &as_ply, "--exemplar", photo, "-o", &as_ply], "is the input");
     assert_eq!(std::fs::read(&mesh).unwrap(), before);
     let spec = at(dir.path(), "spec.toml");
     std::fs::write(&spec, "exemplar = \"kiwi\"\n").unwrap();
