@@ -2,6 +2,7 @@
 //! and wood (type 2-a). They need no input files, so a fresh clone has something
 //! real to build, look at and test against.
 
+use crate::progress::Progress;
 use crate::error::{Error, Result};
 use crate::noise::fbm;
 use crate::texture_type::TextureType;
@@ -74,29 +75,44 @@ impl FromStr for Recipe {
 
 /// Make the volume of `recipe` with `dims` from `seed`.
 pub fn generate(recipe: Recipe, dims: [usize; 3], seed: u64) -> Result<Volume> {
+    generate_with(recipe, dims, seed, &crate::progress::NoProgress)
+}
+
+/// [`generate`], telling `progress` the share of the volume made.
+pub fn generate_with(recipe: Recipe, dims: [usize; 3], seed: u64, progress: &dyn Progress) -> Result<Volume> {
     let size = Vec3::new(dims[0] as f32, dims[1] as f32, dims[2] as f32);
     let volume = match recipe {
         Recipe::Marble => {
-            Volume::from_fn(dims, Channel::rgb(), |x, y, z, o| o.copy_from_slice(&marble(seed, unit(x, y, z, size))))?
+            Volume::from_fn_par_with(
+                dims,
+                Channel::rgb(),
+                |x, y, z, o| o.copy_from_slice(&marble(seed, unit(x, y, z, size))),
+                progress,
+            )?
         }
         Recipe::Strata => {
             let mut channels = Channel::rgb();
             channels.push(Channel::Depth);
-            Volume::from_fn(dims, channels, |x, y, z, o| {
+            let paint = |x, y, z, o: &mut [f32]| {
                 o[..3].copy_from_slice(&strata(seed, unit(x, y, z, size)));
                 o[3] = if dims[2] > 1 { z as f32 / (dims[2] - 1) as f32 } else { 0.0 };
-            })?
+            };
+            Volume::from_fn_par_with(dims, channels, paint, progress)?
         }
-        Recipe::Wood => Volume::from_fn(dims, Channel::rgb(), |x, y, z, o| {
-            o.copy_from_slice(&wood(seed, unit(x, y, z, size), size))
-        })?,
+        Recipe::Wood => Volume::from_fn_par_with(
+            dims,
+            Channel::rgb(),
+            |x, y, z, o| o.copy_from_slice(&wood(seed, unit(x, y, z, size), size)),
+            progress,
+        )?,
         Recipe::Sponge | Recipe::Cream | Recipe::Chocolate => {
             let paint = match recipe {
                 Recipe::Sponge => sponge,
                 Recipe::Cream => cream,
                 _ => chocolate,
             };
-            Volume::from_fn(dims, Channel::rgb(), |x, y, z, o| o.copy_from_slice(&paint(seed, unit(x, y, z, size))))?
+            let fill = |x, y, z, o: &mut [f32]| o.copy_from_slice(&paint(seed, unit(x, y, z, size)));
+            Volume::from_fn_par_with(dims, Channel::rgb(), fill, progress)?
         }
     };
     let mut meta = Meta { texture_type: Some(recipe.texture_type()), provenance: Vec::new() };

@@ -104,7 +104,10 @@ pub fn make(recipe: &str, size: &str, seed: u64, output: &Path) -> Result<()> {
     let dims = parse_size(size)?;
     crate::volume::check_size(dims, 4, io::budget_from_env()?).map_err(usage)?;
     io::check_output(output, &[])?;
-    let volume = procedural::generate(recipe, dims, seed)?;
+    let bar = super::fill::Bar::new();
+    let volume = procedural::generate_with(recipe, dims, seed, &bar);
+    bar.0.finish_and_clear();
+    let volume = volume?;
     io::write_volume(output, &volume)?;
     eprintln!("wrote {}", output.display());
     Ok(())

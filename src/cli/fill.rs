@@ -86,7 +86,8 @@ pub struct CutArgs {
     #[arg(long, allow_hyphen_values = true, requires = "stroke")]
     pub keep: Option<String>,
     /// With --stroke: move the cut faces along their normal by SCALE x (Displacement -
-    /// 0.5), the exemplars' Displacement channel sampled inside (-1000 to 1000 model units).
+    /// 0.5), the exemplars' Displacement channel sampled inside (model units, at most the
+    /// model's size: the diagonal of its box).
     #[arg(long, allow_hyphen_values = true, requires = "stroke")]
     pub displacement: Option<f32>,
     /// With --stroke: where the 3D view looks from.
@@ -132,7 +133,8 @@ pub struct ViewArgs {
     #[arg(long)]
     pub flat: bool,
     /// Displacement mapping: move the surface along its normal by SCALE x (the exemplars'
-    /// Displacement channel - 0.5), in model units, -1000 to 1000.
+    /// Displacement channel - 0.5), in model units, at most the models' size (the diagonal
+    /// of their box).
     #[arg(long, allow_hyphen_values = true)]
     pub displacement: Option<f32>,
     /// A synthesized surface texture (`solidtex surface` on the mesh the model was filled
@@ -351,6 +353,22 @@ fn seam_strength(loaded: &Loaded) -> Option<f64> {
     (!figures.is_empty()).then(|| figures.iter().sum::<f64>() / figures.len() as f64)
 }
 
+/// Refuse a displacement `scale` that would move the surface farther than the models'
+/// size (the diagonal of their box): the picture is then noise and its triangles, each
+/// spread over the whole picture, take minutes to draw (exit 2).
+fn within_models(flag: &str, scale: f32, loaded: &[Loaded]) -> Result<()> {
+    let (lo, hi) = render::bounds(&pairs(loaded));
+    let size = lo.distance(hi);
+    if scale.abs() > size {
+        return Err(Error::usage(format!(
+            "{flag} {scale} moves the surface up to {:.3} model units, more than the models' size ({size:.3}, the \
+             diagonal of their box); allowed: -{size:.3} to {size:.3} (a relief is a few hundredths of it, e.g. 0.08)",
+            scale.abs() * 0.5
+        )));
+    }
+    Ok(())
+}
+
 /// A PNG picture of `models` (and a skin): none of them.
 fn picture_output(output: &Path, models: &[PathBuf], skin: Option<&Path>) -> Result<()> {
     let inputs: Vec<&Path> = models.iter().map(PathBuf::as_path).chain(skin).collect();
@@ -523,6 +541,9 @@ fn run_stroke_cut(args: &CutArgs) -> Result<()> {
     let keep = keep.unwrap_or((bounds.0 + bounds.1) / 2.0);
     let started = Instant::now();
     let camera = (args.camera.yaw, args.camera.pitch);
+    if let Some(scale) = args.displacement {
+        within_models("--displacement", scale, std::slice::from_ref(&loaded))?;
+    }
     let relief = match args.displacement {
         None => None,
         Some(scale) => Some((channel_textures(std::slice::from_ref(&loaded), &Channel::Displacement)?, scale)),
@@ -796,6 +817,9 @@ pub fn run_view(args: &ViewArgs) -> Result<()> {
     let started = Instant::now();
     let shading = if args.flat { Shading::Flat } else { Shading::Smooth { crease: args.crease } };
     let camera = (args.camera.yaw, args.camera.pitch);
+    if let Some(scale) = args.displacement {
+        within_models("--displacement", scale, &loaded)?;
+    }
     let relief = match args.displacement {
         None => None,
         Some(scale) => Some((channel_textures(&loaded, &Channel::Displacement)?, scale)),
@@ -805,8 +829,11 @@ pub fn run_view(args: &ViewArgs) -> Result<()> {
     let input = args.skin.as_deref().map(|path| SkinInput::read(path, &loaded, args.displacement)).transpose()?;
     let lookup = input.as_ref().map(SkinInput::lookup);
     let skin = input.as_ref().zip(lookup.as_ref()).map(|(input, lookup)| input.skin(lookup));
-    let (picture, triangles) =
-        crate::fill::view::surfaces(&pairs(&loaded), displacement, skin, camera, args.size, shading);
+    let bar = Bar::new();
+    let view = crate::fill::view::View { camera, size: args.size, shading };
+    let drawn = crate::fill::view::surfaces_with(&pairs(&loaded), displacement, skin, view, &bar);
+    bar.0.finish_and_clear();
+    let (picture, triangles) = drawn?;
     let note = args
         .displacement
         .map(|scale| format!("  displaced by {scale} x (Displacement - 0.5) along the normal, {triangles} triangles"));

@@ -11,6 +11,7 @@
 use super::model::LstModel;
 use super::render::{BACKGROUND, Textures, shade_point};
 use super::tets::FACES;
+use crate::error::Result;
 use crate::mesh::Mesh;
 use crate::render::{Rgb8, to_u8};
 use crate::surface::SkinLookup;
@@ -208,6 +209,32 @@ pub fn surfaces(
     size: usize,
     shading: Shading,
 ) -> (Rgb8, usize) {
+    let view = View { camera, size, shading };
+    surfaces_with(models, displacement, skin, view, &crate::progress::NoProgress)
+        .expect("work that is never cancelled ends")
+}
+
+/// Where a surface picture is seen from: camera (yaw, pitch degrees), side in pixels,
+/// shading.
+#[derive(Debug, Clone, Copy)]
+pub struct View {
+    /// Yaw and pitch in degrees.
+    pub camera: (f32, f32),
+    /// The picture's side in pixels.
+    pub size: usize,
+    /// Flat or smooth.
+    pub shading: Shading,
+}
+
+/// [`surfaces`], telling `progress` how many triangles are drawn and stopping when it is
+/// cancelled.
+pub fn surfaces_with(
+    models: &[(&LstModel, &Textures)],
+    displacement: Option<Displacement>,
+    skin: Option<Skin>,
+    View { camera, size, shading }: View,
+    progress: &dyn crate::progress::Progress,
+) -> Result<(Rgb8, usize)> {
     let meshes: Vec<&LstModel> = models.iter().map(|(m, _)| *m).collect();
     let frame = Frame::new(&meshes, camera, size);
     let mut all = Vec::new();
@@ -223,8 +250,16 @@ pub fn surfaces(
         }
         all.extend(facets);
     }
-    let hits = rasterize(&all, &frame, |_| true);
-    (frame.shade_with_skin(models, &hits, skin), all.len())
+    let mut hits = vec![None; frame.size * frame.size];
+    const CHUNK: usize = 1 << 16;
+    for (k, chunk) in all.chunks(CHUNK).enumerate() {
+        draw_facets(&mut hits, chunk, &frame, |_| true);
+        progress.update("triangles", ((k + 1) * CHUNK).min(all.len()) as f32 / all.len() as f32);
+        if progress.cancelled() {
+            return Err(crate::Error::Cancelled);
+        }
+    }
+    Ok((frame.shade_with_skin(models, &hits, skin), all.len()))
 }
 
 /// A skin (a mesh with an RGB colour per vertex, see [`crate::surface`]) seen from
@@ -428,12 +463,18 @@ fn displaced(
 /// The nearest front-facing facet at each pixel, among the points `keep` accepts.
 pub(super) fn rasterize(facets: &[Facet], frame: &Frame, keep: impl Fn(Vec3) -> bool) -> Vec<Option<Hit>> {
     let mut hits: Vec<Option<Hit>> = vec![None; frame.size * frame.size];
+    draw_facets(&mut hits, facets, frame, keep);
+    hits
+}
+
+/// Draws the facets facing the camera into `hits` where they are nearer.
+fn draw_facets(hits: &mut [Option<Hit>], facets: &[Facet], frame: &Frame, keep: impl Fn(Vec3) -> bool) {
     for f in facets {
         let flat = f.normal();
         if flat.dot(frame.forward) >= 0.0 {
             continue;
         }
-        draw_triangle(&mut hits, frame.size, f.shown.map(|p| frame.to_pixel(p)), |b| {
+        draw_triangle(hits, frame.size, f.shown.map(|p| frame.to_pixel(p)), |b| {
             let shown = at(f.shown, b);
             keep(shown).then(|| Hit {
                 depth: frame.forward.dot(shown),
@@ -444,7 +485,6 @@ pub(super) fn rasterize(facets: &[Facet], frame: &Frame, keep: impl Fn(Vec3) -> 
             })
         });
     }
-    hits
 }
 
 /// Writes the hits of a triangle (`s`: its corners in pixels; `hit_at`: the hit at

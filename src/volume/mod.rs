@@ -141,14 +141,28 @@ impl Volume {
         channels: Vec<Channel>,
         f: impl Fn(usize, usize, usize, &mut [f32]) + Sync,
     ) -> Result<Volume> {
+        Volume::from_fn_par_with(dims, channels, f, &crate::progress::NoProgress)
+    }
+
+    /// [`Volume::from_fn_par`], telling `progress` the share of z-slices filled.
+    pub fn from_fn_par_with(
+        dims: [usize; 3],
+        channels: Vec<Channel>,
+        f: impl Fn(usize, usize, usize, &mut [f32]) + Sync,
+        progress: &dyn crate::progress::Progress,
+    ) -> Result<Volume> {
         use rayon::prelude::*;
+        use std::sync::atomic::{AtomicUsize, Ordering};
         let mut volume = Volume::new(dims, channels)?;
         let n = volume.channels.len();
         let plane = dims[0] * dims[1];
+        let done = AtomicUsize::new(0);
         volume.data.par_chunks_mut(plane * n).enumerate().for_each(|(z, slice)| {
             for (i, voxel) in slice.chunks_exact_mut(n).enumerate() {
                 f(i % dims[0], i / dims[0], z, voxel);
             }
+            let slices = done.fetch_add(1, Ordering::Relaxed) + 1;
+            progress.update("slices", slices as f32 / dims[2] as f32);
         });
         Ok(volume)
     }

@@ -85,12 +85,13 @@ const fn file(name: &'static str, case: &'static str, seeds: fn(&Path) -> Vec<Fi
 
 type Reader = fn(&Path) -> solidtex::Result<()>;
 
-const TARGETS: [Target; 17] = [
+const TARGETS: [Target; 18] = [
     file("obj", "case.obj", obj_seeds, read_mesh),
     file("stl_binary", "case.stl", stl_binary_seeds, read_mesh),
     file("stl_ascii", "case.stl", stl_ascii_seeds, read_mesh),
     file("ply_ascii", "case.ply", ply_ascii_seeds, read_mesh),
     file("ply_binary", "case.ply", ply_binary_seeds, read_mesh),
+    file("ply_skin", "case.ply", ply_skin_seeds, read_skin),
     file("nrrd", "case.nrrd", nrrd_seeds, read_volume),
     file("vol", "case.vol", vol_seeds, read_volume),
     file("exr", "case.exr", exr_seeds, read_volume),
@@ -107,6 +108,10 @@ const TARGETS: [Target; 17] = [
 
 fn read_mesh(path: &Path) -> solidtex::Result<()> {
     mesh_file::read_mesh(path).map(drop)
+}
+
+fn read_skin(path: &Path) -> solidtex::Result<()> {
+    mesh_file::read_coloured_ply(path).map(drop)
 }
 
 fn read_volume(path: &Path) -> solidtex::Result<()> {
@@ -305,6 +310,19 @@ fn ply_ascii_seeds(dir: &Path) -> Vec<Files> {
 fn ply_binary_seeds(_: &Path) -> Vec<Files> {
     let [tetrahedron, cuboid] = <[Mesh; 2]>::try_from(meshes()).unwrap();
     vec![vec![(String::new(), binary_ply(&tetrahedron, false))], vec![(String::new(), binary_ply(&cuboid, true))]]
+}
+
+/// Skins as `surface` writes them: binary PLYs with a colour per vertex.
+fn ply_skin_seeds(dir: &Path) -> Vec<Files> {
+    let [tetrahedron, cuboid] = <[Mesh; 2]>::try_from(meshes()).unwrap();
+    let skin = |mesh: Mesh| {
+        let colours = (0..mesh.vertices.len()).map(|i| [i as f32 / 8.0 % 1.0, 0.5, 1.0]).collect();
+        mesh_file::ColouredMesh { mesh, colours }
+    };
+    vec![
+        written(dir, "small.ply", |p| mesh_file::write_coloured_ply(p, &skin(tetrahedron))),
+        written(dir, "box.ply", |p| mesh_file::write_coloured_ply(p, &skin(cuboid))),
+    ]
 }
 
 /// A little-endian binary PLY (the crate writes ASCII ones only); `wide` uses doubles,
@@ -1188,6 +1206,11 @@ fn ascii_ply_reader_survives_mutated_files() {
 #[test]
 fn binary_ply_reader_survives_mutated_files() {
     fuzz("ply_binary");
+}
+
+#[test]
+fn ply_skin_reader_survives_mutated_files() {
+    fuzz("ply_skin");
 }
 
 #[test]
