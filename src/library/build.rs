@@ -287,23 +287,12 @@ fn lock_output(output: &Path) -> Result<std::fs::File> {
     }
 }
 
-/// Remove the temporaries an interrupted build left (names solidtex gives them:
-/// `.NAME.solidtex-` + random letters + `.tmp`, files or folders). Only called under the
-/// build lock.
+/// Remove the temporaries an interrupted run left in the output folder and its cache
+/// (names solidtex gives them, files or folders), but none a running solidtex still writes
+/// (see [`io::atomic::remove_stale_temporaries`]).
 fn remove_stale_temporaries(output: &Path) {
     for folder in [output.to_path_buf(), output.join(files::CACHE)] {
-        let Ok(entries) = std::fs::read_dir(&folder) else { continue };
-        for path in entries.filter_map(|e| e.ok().map(|e| e.path())) {
-            let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-            if !io::atomic::is_temporary_name(&name) {
-                continue;
-            }
-            // A link is removed itself, never followed.
-            let _ = match std::fs::symlink_metadata(&path) {
-                Ok(m) if m.is_dir() => std::fs::remove_dir_all(&path),
-                _ => std::fs::remove_file(&path),
-            };
-        }
+        io::atomic::remove_stale_temporaries(&folder, None);
     }
 }
 
