@@ -268,6 +268,8 @@ pub fn shard_of(name: &str, n: u64) -> u64 {
 /// instead of removing the first one's temporaries.
 fn lock_output(output: &Path) -> Result<std::fs::File> {
     let cache = output.join(files::CACHE);
+    std::fs::create_dir_all(output).map_err(|e| Error::io(output, e))?;
+    check_cache_folder(&cache)?;
     std::fs::create_dir_all(&cache).map_err(|e| Error::io(output, e))?;
     let path = cache.join("build.lock");
     let file = std::fs::OpenOptions::new()
@@ -284,6 +286,24 @@ fn lock_output(output: &Path) -> Result<std::fs::File> {
              wait for it to finish or build into another folder with -o",
         )),
         Err(std::fs::TryLockError::Error(e)) => Err(Error::io(&path, e)),
+    }
+}
+
+/// Refuse a cache folder that is a symbolic link (solidtex would write and clean up where
+/// it points) or not a folder.
+fn check_cache_folder(cache: &Path) -> Result<()> {
+    match std::fs::symlink_metadata(cache) {
+        Ok(m) if m.file_type().is_symlink() => Err(Error::file(
+            cache,
+            "is a symbolic link; solidtex keeps its build cache only in a real folder (remove the link, or \
+             build into another folder with -o)",
+        )),
+        Ok(m) if !m.is_dir() => Err(Error::file(
+            cache,
+            "exists and is not a folder; solidtex keeps its build cache there (move it away, or build into \
+             another folder with -o)",
+        )),
+        _ => Ok(()),
     }
 }
 

@@ -326,3 +326,26 @@ fn cleaning_up_never_touches_what_a_user_made() {
         assert_eq!(std::fs::read_to_string(out.join(user)).unwrap(), "mine", "{user}");
     }
 }
+
+/// A build refuses an output folder whose `.cache` is a symbolic link (it would write and
+/// clean up where the link points) or a file, and leaves both as they were.
+#[cfg(unix)]
+#[test]
+fn a_linked_or_plain_file_cache_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let manifest = library(dir.path());
+    let out = dir.path().join("out");
+    let elsewhere = dir.path().join("elsewhere");
+    std::fs::create_dir_all(&out).unwrap();
+    std::fs::create_dir_all(&elsewhere).unwrap();
+    std::os::unix::fs::symlink(&elsewhere, out.join(".cache")).unwrap();
+    let run = solidtex(&["build", &manifest, "-o", &out.to_string_lossy()]);
+    crate::support::assert_fails(&run, &[".cache", "is a symbolic link"]);
+    assert_eq!(crate::support::listing(&elsewhere), Vec::<String>::new(), "nothing is written where it points");
+    assert_eq!(crate::support::listing(&out), [".cache"]);
+    std::fs::remove_file(out.join(".cache")).unwrap();
+    std::fs::write(out.join(".cache"), "mine").unwrap();
+    let run = solidtex(&["build", &manifest, "-o", &out.to_string_lossy()]);
+    crate::support::assert_fails(&run, &[".cache", "is not a folder"]);
+    assert_eq!(std::fs::read_to_string(out.join(".cache")).unwrap(), "mine");
+}
