@@ -349,3 +349,32 @@ fn a_linked_or_plain_file_cache_is_refused() {
     crate::support::assert_fails(&run, &[".cache", "is not a folder"]);
     assert_eq!(std::fs::read_to_string(out.join(".cache")).unwrap(), "mine");
 }
+
+/// An exemplar name longer than a file name may be is refused when the manifest is read,
+/// the message naming the field and the limit and showing the name clipped; a 1 MB name
+/// gives a short line.
+#[test]
+fn a_name_too_long_for_a_file_is_refused_at_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = at(dir.path(), "out");
+    for length in [201, 300, 1 << 20] {
+        let manifest = dir.path().join("long.toml");
+        let name = "n".repeat(length);
+        std::fs::write(
+            &manifest,
+            format!("[[exemplar]]\nname = \"{name}\"\nrecipe = \"procedural:marble\"\nsize = 8\n"),
+        )
+        .unwrap();
+        let run = solidtex(&["build", &manifest.to_string_lossy(), "-o", &out]);
+        let says = format!("({length} bytes) is too long: a name has at most 200 bytes");
+        crate::support::assert_fails(&run, &["long.toml", "exemplar[0]", "name = \"nnnn", &says]);
+        assert!(stderr(&run).len() < 400, "{}", stderr(&run));
+    }
+    assert!(!dir.path().join("out").exists());
+    let manifest = dir.path().join("ok.toml");
+    let name = "n".repeat(200);
+    std::fs::write(&manifest, format!("[[exemplar]]\nname = \"{name}\"\nrecipe = \"procedural:marble\"\nsize = 8\n"))
+        .unwrap();
+    let run = solidtex(&["build", &manifest.to_string_lossy(), "-o", &out]);
+    assert!(run.status.success(), "a name of 200 bytes is fine: {}", stderr(&run));
+}
