@@ -250,3 +250,16 @@ fn bench_refuses_an_only_that_matches_nothing() {
     let run = solidtex(&["bench", "--runs", "1", "--only", "no-such-workload"]);
     assert_usage(&run, &["--only \"no-such-workload\" matches no workload", "synth/64cube/128px-rgb"]);
 }
+
+/// A file name holding a NUL byte (possible in a manifest's TOML string, never on a command
+/// line) is named with the byte shown as `\0`, and the message says no file name may hold one.
+#[test]
+fn a_nul_byte_in_a_file_name_is_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let manifest = dir.path().join("nul.toml");
+    std::fs::write(&manifest, "[[exemplar]]\nname = \"a\"\nrecipe = \"load\"\nvolume = \"x\\u0000y.exr\"\n").unwrap();
+    let run = solidtex(&["build", &manifest.to_string_lossy(), "-o", &at(dir.path(), "out")]);
+    assert_eq!(run.status.code(), Some(1));
+    let says = "x\\0y.exr\" holds a NUL byte (shown as \\0); no file name may contain one";
+    assert!(crate::support::stderr(&run).contains(says), "{}", crate::support::stderr(&run));
+}
