@@ -84,9 +84,11 @@ impl Format {
     }
 }
 
-/// The voxel budget in bytes: `SOLIDTEX_MAX_BYTES` if set, else the default.
+/// The voxel budget in bytes: `SOLIDTEX_MAX_BYTES` if set (an empty value counts as unset),
+/// else the default.
 pub fn budget_from_env() -> Result<u64> {
-    match std::env::var("SOLIDTEX_MAX_BYTES") {
+    let unset_if_empty = |t: String| if t.trim().is_empty() { Err(std::env::VarError::NotPresent) } else { Ok(t) };
+    match std::env::var("SOLIDTEX_MAX_BYTES").and_then(unset_if_empty) {
         Ok(text) => text
             .trim()
             .parse::<u64>()
