@@ -6,7 +6,7 @@ use std::process::ExitCode;
 fn main() -> ExitCode {
     use solidtex::cli::Command;
     use std::path::Path;
-    let cli = solidtex::cli::Cli::parse();
+    let cli = solidtex::cli::Cli::parse_from(arguments());
     #[cfg(unix)]
     stop_cleanly_on_signals();
     // Two front ends: the terminal UI (no command, or `tui`) and every other command.
@@ -37,4 +37,18 @@ fn stop_cleanly_on_signals() {
             std::process::exit(128 + signal);
         }
     });
+}
+
+/// The command line, with `--help` or `-h` after `help` left out (`help --help` is read as
+/// `help help`): clap's own help subcommand takes no flags and would refuse them as a usage
+/// error.
+fn arguments() -> Vec<std::ffi::OsString> {
+    let mut args: Vec<std::ffi::OsString> = std::env::args_os().collect();
+    if args.get(1).is_some_and(|a| a == "help") {
+        args.retain(|a| a != "--help" && a != "-h");
+        if args.len() == 2 {
+            args.push("help".into());
+        }
+    }
+    args
 }
