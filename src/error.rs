@@ -51,6 +51,15 @@ pub enum Error {
     Cancelled,
 }
 
+/// For a path holding a NUL byte, which no file name may hold (so no file there can be read
+/// or written) and which a terminal does not show: the error to give instead, quoting the
+/// path with the byte as `\0`.
+fn nul_in_name(path: &std::path::Path) -> Option<Error> {
+    path.as_os_str().as_encoded_bytes().contains(&0).then(|| {
+        Error::Invalid(format!("the file name {path:?} holds a NUL byte (shown as \\0); no file name may contain one"))
+    })
+}
+
 /// The crate's result alias.
 pub type Result<T, E = Error> = std::result::Result<T, E>;
 
@@ -75,12 +84,14 @@ impl Error {
 
     /// An [`Error::File`] for `path` with `message`.
     pub fn file(path: impl Into<PathBuf>, message: impl Into<String>) -> Self {
-        Error::File { path: path.into(), message: message.into() }
+        let path = path.into();
+        nul_in_name(&path).unwrap_or(Error::File { path, message: message.into() })
     }
 
     /// An [`Error::Io`] for `path`.
     pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
-        Error::Io { path: path.into(), source }
+        let path = path.into();
+        nul_in_name(&path).unwrap_or(Error::Io { path, source })
     }
 
     /// Prefix the error with the file it came from, when it has none yet.

@@ -6,7 +6,9 @@ use std::process::ExitCode;
 fn main() -> ExitCode {
     use solidtex::cli::Command;
     use std::path::Path;
-    let cli = solidtex::cli::Cli::parse();
+    let cli = solidtex::cli::Cli::parse_from(arguments());
+    #[cfg(unix)]
+    stop_cleanly_on_signals();
     // Two front ends: the terminal UI (no command, or `tui`) and every other command.
     let result = match cli.command {
         None => solidtex::tui::run(Path::new("exemplars/library.toml"), Path::new("out")),
@@ -20,4 +22,33 @@ fn main() -> ExitCode {
             ExitCode::from(error.exit_code())
         }
     }
+}
+
+/// On SIGINT or SIGTERM, remove the temporary files and folders being written and exit with
+/// 128 plus the signal's number (130, 143), as a shell reports a command it stopped. The
+/// terminal UI reads Ctrl-C as a key in raw mode, so this does not reach it.
+#[cfg(unix)]
+fn stop_cleanly_on_signals() {
+    use signal_hook::consts::{SIGINT, SIGTERM};
+    let Ok(mut signals) = signal_hook::iterator::Signals::new([SIGINT, SIGTERM]) else { return };
+    std::thread::spawn(move || {
+        if let Some(signal) = signals.forever().next() {
+            solidtex::io::atomic::remove_live_temporaries();
+            std::process::exit(128 + signal);
+        }
+    });
+}
+
+/// The command line, with `--help` or `-h` after `help` left out (`help --help` is read as
+/// `help help`): clap's own help subcommand takes no flags and would refuse them as a usage
+/// error.
+fn arguments() -> Vec<std::ffi::OsString> {
+    let mut args: Vec<std::ffi::OsString> = std::env::args_os().collect();
+    if args.get(1).is_some_and(|a| a == "help") {
+        args.retain(|a| a != "--help" && a != "-h");
+        if args.len() == 2 {
+            args.push("help".into());
+        }
+    }
+    args
 }

@@ -2,9 +2,9 @@
 //! and wood (type 2-a). They need no input files, so a fresh clone has something
 //! real to build, look at and test against.
 
-use crate::progress::Progress;
 use crate::error::{Error, Result};
 use crate::noise::fbm;
+use crate::progress::Progress;
 use crate::texture_type::TextureType;
 use crate::volume::{Channel, Meta, Volume};
 use glam::Vec3;
@@ -82,14 +82,12 @@ pub fn generate(recipe: Recipe, dims: [usize; 3], seed: u64) -> Result<Volume> {
 pub fn generate_with(recipe: Recipe, dims: [usize; 3], seed: u64, progress: &dyn Progress) -> Result<Volume> {
     let size = Vec3::new(dims[0] as f32, dims[1] as f32, dims[2] as f32);
     let volume = match recipe {
-        Recipe::Marble => {
-            Volume::from_fn_par_with(
-                dims,
-                Channel::rgb(),
-                |x, y, z, o| o.copy_from_slice(&marble(seed, unit(x, y, z, size))),
-                progress,
-            )?
-        }
+        Recipe::Marble => Volume::from_fn_par_with(
+            dims,
+            Channel::rgb(),
+            |x, y, z, o| o.copy_from_slice(&marble(seed, unit(x, y, z, size))),
+            progress,
+        )?,
         Recipe::Strata => {
             let mut channels = Channel::rgb();
             channels.push(Channel::Depth);

@@ -389,7 +389,8 @@ impl Bar {
     pub(super) fn new() -> Bar {
         let bar = ProgressBar::new(1000);
         bar.set_style(
-            ProgressStyle::with_template("{elapsed:>4} [{bar:40}] {percent:>3}% (about {eta} left) {msg}").expect("valid template"),
+            ProgressStyle::with_template("{elapsed:>4} [{bar:40}] {percent:>3}% (about {eta} left) {msg}")
+                .expect("valid template"),
         );
         Bar(bar)
     }
@@ -645,6 +646,16 @@ fn render_settings(args: &RenderArgs) -> Result<translucent::Settings> {
 pub fn run_render(args: &RenderArgs) -> Result<()> {
     let settings = render_settings(args).map_err(usage)?;
     picture_output(&args.output, &args.models, args.skin.as_deref())?;
+    let (needed, budget) = (translucent::memory_needed(settings.size), io::budget_from_env()?);
+    if needed > budget {
+        return Err(Error::invalid(format!(
+            "--size {}: rendering needs about {} MB, more than the budget of {} MB; lower --size or raise the budget \
+             with SOLIDTEX_MAX_BYTES",
+            settings.size,
+            needed >> 20,
+            budget >> 20
+        )));
+    }
     let loaded = load_models(&args.models)?;
     let wanted = matches!(args.density, None | Some(DensityFrom::Alpha));
     let channel: std::result::Result<Vec<Textures>, &Path> =

@@ -11,7 +11,8 @@ use crate::guided::field::{FrameField, sketched_frames, solve, streamlines};
 use crate::guided::region::{Mask, Sparse};
 use crate::guided::solid::{self, Domain};
 use crate::guided::synth::{self, Exemplars, Options, Setup};
-use crate::io::{self, fill_spec, guided_cache, mesh_file};
+use crate::io::guided_cache::{self, Cached};
+use crate::io::{self, fill_spec, mesh_file};
 use crate::mesh::Mesh;
 use crate::volume::{Channel, Image2d};
 use glam::Vec3;
@@ -190,7 +191,8 @@ pub fn run_guided(args: &GuidedArgs) -> Result<()> {
     let cut = checks().map_err(usage)?;
     let masks = [&args.mask, &args.ey_mask, &args.ez_mask].into_iter().flatten();
     let given = [&args.exemplar, &args.solid].into_iter().flatten();
-    let inputs: Vec<&Path> = [&args.mesh, &args.spec].into_iter().chain(given).chain(masks).map(|p| p.as_path()).collect();
+    let inputs: Vec<&Path> =
+        [&args.mesh, &args.spec].into_iter().chain(given).chain(masks).map(|p| p.as_path()).collect();
     match cut {
         Some(_) => io::guard::png_output(&args.output, &inputs)?,
         None => io::check_output(&args.output, &inputs)?,
@@ -403,7 +405,7 @@ fn solid_exemplar(args: &GuidedArgs, path: &Path) -> Result<(Exemplars, Options,
 }
 
 /// The solid cube of plain exemplars: synthesized, or read from the cache folder (and
-/// kept there when it was not).
+/// kept there when it was not, or was damaged).
 fn cube_volume(args: &GuidedArgs, images: &[Image2d; 3]) -> Result<crate::volume::Volume> {
     let Some(folder) = &args.cache else {
         return cube::synthesize(images, args.seed);
@@ -411,29 +413,46 @@ fn cube_volume(args: &GuidedArgs, images: &[Image2d; 3]) -> Result<crate::volume
     let key = cube::key(images, args.seed);
     let path = guided_cache::cube_path(folder, key);
     let channels = images[0].channel_count();
-    if let Some(colours) = guided_cache::read_cube(&path, key, cube::SIDE, channels)? {
-        return crate::volume::Volume::from_data([cube::SIDE; 3], images[0].channels().to_vec(), colours);
-    }
+    let stale = match guided_cache::read_cube(&path, key, cube::SIDE, channels, cube::colour_range(images))? {
+        Cached::Good(colours) => {
+            return crate::volume::Volume::from_data([cube::SIDE; 3], images[0].channels().to_vec(), colours);
+        }
+        Cached::Stale(why) => Some(why),
+        Cached::Missing => None,
+    };
     let volume = cube::synthesize(images, args.seed)?;
     std::fs::create_dir_all(folder).map_err(|e| Error::io(folder, e))?;
     guided_cache::write_cube(&path, key, cube::SIDE, channels, volume.data())?;
+    warn_rebuilt(&path, stale);
     Ok(volume)
 }
 
-/// The coarse level from the cache folder, or computed and cached there.
+/// The coarse level from the cache folder, or computed and cached there (also when the
+/// cached file was damaged).
 fn cached_level(folder: &Path, setup: &Setup, bar: &super::fill::Bar) -> Result<(usize, Sparse<synth::Voxel>)> {
     let level = solid::below_finest(setup)?;
     let key = synth::fingerprint(setup);
     let path = guided_cache::path(folder, key);
     let slots = setup.exemplars.slot_counts(level);
     let voxel = |slot| setup.voxel(level, slot);
-    if let Some(found) = guided_cache::read(&path, key, setup.level_dims()[level], slots, voxel)? {
-        return Ok(found);
-    }
+    let stale = match guided_cache::read(&path, key, setup.level_dims()[level], slots, voxel)? {
+        Cached::Good(found) => return Ok(found),
+        Cached::Stale(why) => Some(why),
+        Cached::Missing => None,
+    };
     std::fs::create_dir_all(folder).map_err(|e| Error::io(folder, e))?;
     let (level, values) = solid::coarse_levels(setup, bar)?;
     guided_cache::write(&path, key, level, &values)?;
+    warn_rebuilt(&path, stale);
     Ok((level, values))
+}
+
+/// Tell that a cache file solidtex wrote, found unusable (`stale`: what was wrong), was
+/// written anew.
+fn warn_rebuilt(path: &Path, stale: Option<String>) {
+    if let Some(why) = stale {
+        eprintln!("warning: {} is {why}; rebuilt", path.display());
+    }
 }
 
 /// The voxel count of every level of the whole solid.

@@ -15,7 +15,7 @@ pub struct SurfaceArgs {
     /// The exemplar photo (PNG, JPEG, TIFF, EXR, HDR), at least 16x16 pixels.
     #[arg(long)]
     pub exemplar: PathBuf,
-    /// About how many points (vertices) the skin gets, 100 to 1000000.
+    /// About how many points (vertices) the skin gets, 100 to 500000.
     #[arg(long, default_value_t = 20_000)]
     pub points: usize,
     /// Take the texture's "up" from a fill spec's direction strokes (docs/fill.md).

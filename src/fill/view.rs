@@ -598,8 +598,9 @@ mod tests {
         let hit = |b: [f32; 3]| Some(Hit { depth: b[0], model: 0, tet: 0, point: Vec3::ZERO, normal: Vec3::Z });
         for case in 0..3000 {
             let reach = [2.0, 60.0, 4000.0][case % 3];
-            let s: [Vec2; 3] =
-                std::array::from_fn(|_| Vec2::new(rng.random_range(-reach..reach), rng.random_range(-reach..reach)) + 24.0);
+            let s: [Vec2; 3] = std::array::from_fn(|_| {
+                Vec2::new(rng.random_range(-reach..reach), rng.random_range(-reach..reach)) + 24.0
+            });
             let mut spans = vec![None; size * size];
             draw_triangle(&mut spans, size, s, hit);
             let area = (s[1] - s[0]).perp_dot(s[2] - s[0]);
@@ -619,7 +620,6 @@ mod tests {
             assert_eq!(set(&spans), set(&boxed), "triangle {s:?}");
         }
     }
-
 
     #[test]
     fn displacement_moves_a_flat_face_along_its_normal_by_the_channel() {

@@ -138,6 +138,17 @@ pub fn synthesize(images: &[Image2d; 3], seed: u64) -> Result<Volume> {
     crate::synth::synthesize(ex, &params, seed, &crate::progress::NoProgress)
 }
 
+/// The colours a cube synthesized from `images` can hold, generously: the exemplars' range
+/// (taken to cover 0 to 1 at least) widened by its span on either side, as synthesis mixes
+/// exemplar pixels and matches their spectrum, which may overshoot a little. A cached cube
+/// with a colour outside is damaged.
+pub fn colour_range(images: &[Image2d; 3]) -> (f32, f32) {
+    let all = images.iter().flat_map(|image| image.data().iter().copied());
+    let (lo, hi) = all.fold((0.0f32, 1.0f32), |(lo, hi), c| (lo.min(c), hi.max(c)));
+    let span = hi - lo;
+    (lo - span, hi + span)
+}
+
 /// A key of everything [`synthesize`] depends on: the images, the seed and the cube's side.
 pub fn key(images: &[Image2d; 3], seed: u64) -> u64 {
     let mut h = crate::noise::mix64(0xc0be_5eed);

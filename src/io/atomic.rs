@@ -18,6 +18,7 @@ use crate::error::{Error, Result};
 use std::fs::{self, File};
 use std::io::{BufWriter, Read, Write};
 use std::path::{Path, PathBuf};
+use std::sync::Mutex;
 
 /// The file in a folder solidtex wrote that lists the files it wrote there.
 pub const FOLDER_LIST: &str = "solidtex-folder.txt";
@@ -38,25 +39,188 @@ fn name_of(path: &Path) -> String {
     path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_else(|| "output".to_string())
 }
 
+/// The temporaries this process is writing, removed by [`remove_live_temporaries`] when it
+/// is stopped (Ctrl-C, SIGTERM).
+static LIVE: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+/// Attempts at a temporary that another run's clean-up keeps taking away.
+const ATTEMPTS: usize = 8;
+
+/// A temporary's entry in [`LIVE`] and its advisory lock, held while it is written: other
+/// runs' clean-up ([`remove_stale_temporaries`]) leaves a locked temporary alone.
+struct Live {
+    path: PathBuf,
+    _lock: File,
+}
+
+impl Live {
+    fn new(path: &Path, lock: File) -> Live {
+        live_paths().push(path.to_path_buf());
+        Live { path: path.to_path_buf(), _lock: lock }
+    }
+}
+
+impl Drop for Live {
+    fn drop(&mut self) {
+        live_paths().retain(|p| *p != self.path);
+    }
+}
+
+fn live_paths() -> std::sync::MutexGuard<'static, Vec<PathBuf>> {
+    LIVE.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
+}
+
+/// Remove the temporaries this process is writing: for a stop signal, just before the
+/// process exits. The registry stays locked for good after it, so no temporary made
+/// meanwhile is left out (a thread that makes one waits until the exit).
+pub fn remove_live_temporaries() {
+    let live = live_paths();
+    for path in live.iter() {
+        let _ = match fs::symlink_metadata(path) {
+            Ok(m) if m.is_dir() => fs::remove_dir_all(path),
+            Ok(_) => fs::remove_file(path),
+            Err(_) => Ok(()),
+        };
+    }
+    std::mem::forget(live);
+}
+
+/// Lock the new temporary at `path` through `handle` (an open handle of it) and confirm that
+/// `path` still names it: false when another run's clean-up took it before the lock (the
+/// caller makes another). A file system without locks leaves it unlocked.
+fn claim(path: &Path, handle: &File) -> bool {
+    match handle.try_lock() {
+        Ok(()) => is_same_file(path, handle),
+        Err(std::fs::TryLockError::WouldBlock) => false,
+        Err(std::fs::TryLockError::Error(_)) => true,
+    }
+}
+
+#[cfg(unix)]
+fn is_same_file(path: &Path, handle: &File) -> bool {
+    use std::os::unix::fs::MetadataExt;
+    match (fs::symlink_metadata(path), handle.metadata()) {
+        (Ok(named), Ok(held)) => (named.dev(), named.ino()) == (held.dev(), held.ino()),
+        _ => false,
+    }
+}
+
+#[cfg(not(unix))]
+fn is_same_file(path: &Path, _handle: &File) -> bool {
+    path.exists()
+}
+
+/// A temporary file being written: registered and locked until persisted or dropped
+/// (dropped, it is deleted).
+struct TempFile {
+    file: tempfile::NamedTempFile,
+    _live: Live,
+}
+
+/// A temporary folder being written: registered and locked until kept or dropped
+/// (dropped, it is deleted).
+struct TempFolder {
+    folder: tempfile::TempDir,
+    live: Live,
+}
+
+impl TempFolder {
+    /// Keep the folder (no longer deleted on drop nor on a stop signal).
+    fn keep(self) -> PathBuf {
+        let TempFolder { folder, live } = self;
+        let path = folder.keep();
+        drop(live);
+        path
+    }
+
+    fn path(&self) -> &Path {
+        self.folder.path()
+    }
+}
+
 /// A temporary file for `path`, named `.NAME.solidtex-` + six random letters + `.tmp`, created
 /// exclusively in the folder of `path`.
-fn temporary_file(path: &Path) -> Result<tempfile::NamedTempFile> {
+fn temporary_file(path: &Path) -> Result<TempFile> {
     let prefix = format!(".{}.solidtex-", name_of(path));
-    tempfile::Builder::new().prefix(&prefix).suffix(".tmp").tempfile_in(folder_of(path)).map_err(|e| Error::io(path, e))
+    for _ in 0..ATTEMPTS {
+        let builder = tempfile::Builder::new().prefix(&prefix).suffix(".tmp").tempfile_in(folder_of(path));
+        let file = builder.map_err(|e| Error::io(path, e))?;
+        let lock = file.as_file().try_clone().map_err(|e| Error::io(path, e))?;
+        if claim(file.path(), &lock) {
+            let live = Live::new(file.path(), lock);
+            return Ok(TempFile { file, _live: live });
+        }
+    }
+    Err(taken_away(path))
 }
 
 /// A temporary folder beside `path`, named like [`temporary_file`].
-fn temporary_folder(path: &Path) -> Result<tempfile::TempDir> {
+fn temporary_folder(path: &Path) -> Result<TempFolder> {
     let prefix = format!(".{}.solidtex-", name_of(path));
-    tempfile::Builder::new().prefix(&prefix).suffix(".tmp").tempdir_in(folder_of(path)).map_err(|e| Error::io(path, e))
+    for _ in 0..ATTEMPTS {
+        let builder = tempfile::Builder::new().prefix(&prefix).suffix(".tmp").tempdir_in(folder_of(path));
+        let folder = builder.map_err(|e| Error::io(path, e))?;
+        let lock = File::open(folder.path()).map_err(|e| Error::io(path, e))?;
+        if claim(folder.path(), &lock) {
+            let live = Live::new(folder.path(), lock);
+            return Ok(TempFolder { folder, live });
+        }
+    }
+    Err(taken_away(path))
+}
+
+fn taken_away(path: &Path) -> Error {
+    Error::file(
+        path,
+        format!(
+            "cannot write: each temporary made beside it was removed at once ({ATTEMPTS} attempts); is another program clearing that folder?"
+        ),
+    )
 }
 
 /// Whether a file name is one of solidtex's temporaries (left behind by a killed run).
 pub fn is_temporary_name(name: &str) -> bool {
-    // exactly the shape `temporary` and `temporary_folder` give: six random letters or digits
-    let Some(rest) = name.strip_prefix('.').and_then(|n| n.strip_suffix(".tmp")) else { return false };
-    let Some((stem, letters)) = rest.rsplit_once(".solidtex-") else { return false };
-    !stem.is_empty() && letters.len() == 6 && letters.bytes().all(|b| b.is_ascii_alphanumeric())
+    temporary_stem(name).is_some()
+}
+
+/// The output name a temporary's name was made for (`NAME` of `.NAME.solidtex-XXXXXX.tmp`).
+fn temporary_stem(name: &str) -> Option<&str> {
+    // exactly the shape `temporary_file` and `temporary_folder` give: six random letters or digits
+    let rest = name.strip_prefix('.')?.strip_suffix(".tmp")?;
+    let (stem, letters) = rest.rsplit_once(".solidtex-")?;
+    let shaped = !stem.is_empty() && letters.len() == 6 && letters.bytes().all(|b| b.is_ascii_alphanumeric());
+    shaped.then_some(stem)
+}
+
+/// Remove the temporaries in `folder` that stopped runs left (for the output named
+/// `output` only, when given): files and folders of [`is_temporary_name`]'s shape whose lock
+/// can be taken, so none that a running solidtex is writing. A link of that shape is
+/// removed itself (solidtex makes none), never followed.
+pub fn remove_stale_temporaries(folder: &Path, output: Option<&str>) {
+    let Ok(entries) = fs::read_dir(folder) else { return };
+    for entry in entries.filter_map(|e| e.ok()) {
+        let name = entry.file_name().to_string_lossy().into_owned();
+        let Some(stem) = temporary_stem(&name) else { continue };
+        if output.is_some_and(|o| o != stem) {
+            continue;
+        }
+        let path = entry.path();
+        let _ = match fs::symlink_metadata(&path) {
+            Ok(m) if m.file_type().is_symlink() => fs::remove_file(&path),
+            Ok(m) if m.is_dir() => remove_if_unlocked(&path, |p| fs::remove_dir_all(p)),
+            Ok(m) if m.is_file() => remove_if_unlocked(&path, |p| fs::remove_file(p)),
+            _ => Ok(()),
+        };
+    }
+}
+
+/// `remove` the temporary at `path` while holding its lock: no run is writing it.
+fn remove_if_unlocked(path: &Path, remove: fn(&Path) -> std::io::Result<()>) -> std::io::Result<()> {
+    let handle = File::open(path)?;
+    match handle.try_lock() {
+        Ok(()) => remove(path),
+        Err(_) => Ok(()),
+    }
 }
 
 /// Fail with a clear message unless the folder of `path` exists.
@@ -81,14 +245,15 @@ pub fn write_file(path: &Path, body: impl FnOnce(&mut BufWriter<File>) -> Result
             "is a folder; name a file to write (solidtex does not replace folders by files)",
         ));
     }
+    remove_stale_temporaries(folder_of(path), Some(&name_of(path)));
     let temp = temporary_file(path)?;
-    let file = temp.as_file().try_clone().map_err(|e| Error::io(path, e))?;
+    let file = temp.file.as_file().try_clone().map_err(|e| Error::io(path, e))?;
     let mut writer = BufWriter::new(file);
     body(&mut writer)?;
     writer.flush().map_err(|e| Error::io(path, e))?;
-    temp.as_file().sync_all().map_err(|e| Error::io(path, e))?;
-    set_mode(temp.path(), path)?;
-    temp.persist(path).map_err(|e| Error::io(path, e.error))?;
+    temp.file.as_file().sync_all().map_err(|e| Error::io(path, e))?;
+    set_mode(temp.file.path(), path)?;
+    temp.file.persist(path).map_err(|e| Error::io(path, e.error))?;
     Ok(())
 }
 
@@ -136,6 +301,7 @@ pub fn write_bytes(path: &Path, bytes: &[u8]) -> Result<()> {
 pub fn write_folder(path: &Path, body: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
     check_folder(path)?;
     let old = writable_folder(path)?;
+    remove_stale_temporaries(folder_of(path), Some(&name_of(path)));
     let temp = temporary_folder(path)?;
     body(temp.path())?;
     write_list(temp.path()).map_err(|e| e.in_file(path))?;
@@ -178,8 +344,11 @@ pub fn writable_folder(path: &Path) -> Result<Option<Vec<String>>> {
     }
     let names = folder_names(path)?;
     let listed = listed_files(path);
-    let foreign: Vec<(&String, &str)> =
-        names.iter().filter(|n| *n != FOLDER_LIST).filter_map(|n| why_foreign(path, n, &listed).map(|w| (n, w))).collect();
+    let foreign: Vec<(&String, &str)> = names
+        .iter()
+        .filter(|n| *n != FOLDER_LIST)
+        .filter_map(|n| why_foreign(path, n, &listed).map(|w| (n, w)))
+        .collect();
     if let Some((first, why)) = foreign.first() {
         return Err(Error::file(
             path,
@@ -406,7 +575,7 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let file = temporary_file(&dir.path().join("kiwi.exr")).unwrap();
         let folder = temporary_folder(&dir.path().join("kiwi_slices")).unwrap();
-        for made in [file.path(), folder.path()] {
+        for made in [file.file.path(), folder.path()] {
             let name = made.file_name().unwrap().to_string_lossy().into_owned();
             assert!(is_temporary_name(&name), "{name}");
         }
@@ -415,6 +584,55 @@ mod tests {
         {
             assert!(!is_temporary_name(user), "{user}");
         }
+    }
+
+    /// A temporary is listed and locked while written, and listed no more once persisted,
+    /// kept or dropped.
+    #[test]
+    fn temporaries_are_listed_while_written() {
+        let dir = tempfile::tempdir().unwrap();
+        let listed = |p: &Path| live_paths().iter().any(|l| l == p);
+        let file = temporary_file(&dir.path().join("a.exr")).unwrap();
+        let folder = temporary_folder(&dir.path().join("b")).unwrap();
+        let (file_path, folder_path) = (file.file.path().to_path_buf(), folder.path().to_path_buf());
+        assert!(listed(&file_path) && listed(&folder_path));
+        let other = File::open(&file_path).unwrap();
+        assert!(matches!(other.try_lock(), Err(std::fs::TryLockError::WouldBlock)), "the writer holds the lock");
+        file.file.persist(dir.path().join("a.exr")).unwrap();
+        drop(file._live);
+        let kept = folder.keep();
+        assert!(!listed(&file_path) && !listed(&folder_path) && kept.is_dir());
+        let dropped = temporary_file(&dir.path().join("c.exr")).unwrap();
+        let dropped_path = dropped.file.path().to_path_buf();
+        drop(dropped);
+        assert!(!listed(&dropped_path) && !dropped_path.exists());
+    }
+
+    /// The clean-up of stale temporaries removes those of the output asked for whose lock
+    /// is free (files and folders), and keeps one a running writer holds locked, those of
+    /// other outputs, and files a user named alike.
+    #[test]
+    fn only_unlocked_temporaries_of_the_output_are_removed() {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        let names = [".kiwi.exr.solidtex-aaaaaa.tmp", ".kiwi.exr.solidtex-bbbbbb.tmp", ".pear.exr.solidtex-cccccc.tmp"];
+        for name in names {
+            fs::write(d.join(name), "x").unwrap();
+        }
+        fs::create_dir(d.join(".kiwi.exr.solidtex-dddddd.tmp")).unwrap();
+        fs::write(d.join(".kiwi.exr.solidtex-dddddd.tmp/z0000.png"), "x").unwrap();
+        fs::write(d.join(".kiwi.exr.solidtex-draft.tmp"), "mine").unwrap();
+        let writer = File::open(d.join(names[1])).unwrap();
+        writer.lock().unwrap();
+        remove_stale_temporaries(d, Some("kiwi.exr"));
+        let left = folder_names(d).unwrap();
+        assert_eq!(
+            left,
+            [".kiwi.exr.solidtex-bbbbbb.tmp", ".kiwi.exr.solidtex-draft.tmp", ".pear.exr.solidtex-cccccc.tmp"]
+        );
+        drop(writer);
+        remove_stale_temporaries(d, None);
+        assert_eq!(folder_names(d).unwrap(), [".kiwi.exr.solidtex-draft.tmp"]);
     }
 
     /// A replaced file keeps its permissions, a new one gets the umask's; a document behind

@@ -99,15 +99,25 @@ fn encode(v: f32, format: DdsFormat) -> Vec<u8> {
     }
 }
 
+/// The name of a DDS file's pixel format, as its header gives it (e.g. `BC1_UNorm`).
+fn format_name(dds: &Dds) -> String {
+    match (dds.get_dxgi_format(), dds.get_d3d_format()) {
+        (Some(dxgi), _) => format!("{dxgi:?}"),
+        (None, Some(d3d)) => format!("{d3d:?} (a DX9 header)"),
+        (None, None) => "unknown to solidtex".to_string(),
+    }
+}
+
 fn parse(bytes: &[u8], budget: u64) -> Result<Volume> {
     let dds = Dds::read(bytes).map_err(|e| Error::invalid(format!("not a DDS file: {e}")))?;
     let format = match dds.get_dxgi_format() {
         Some(DxgiFormat::R8G8B8A8_UNorm) => DdsFormat::Rgba8,
         Some(DxgiFormat::R16G16B16A16_Float) => DdsFormat::Rgba16F,
         Some(DxgiFormat::R32G32B32A32_Float) => DdsFormat::Rgba32F,
-        other => {
+        _ => {
             return Err(Error::invalid(format!(
-                "pixel format {other:?} is not supported; allowed: uncompressed RGBA8, RGBA16F and RGBA32F with a DX10 header"
+                "pixel format {} is not supported; allowed: uncompressed RGBA8, RGBA16F and RGBA32F with a DX10 header",
+                format_name(&dds)
             )));
         }
     };
@@ -176,6 +186,16 @@ mod tests {
         let v = Volume::from_fn([2, 2, 2], Channel::grey(), |x, _, _, o| o[0] = x as f32).unwrap();
         let back = parse(&to_bytes(&v, DdsFormat::Rgba32F).unwrap(), u64::MAX).unwrap();
         assert_eq!(&back.data()[4..8], &[1.0, 1.0, 1.0, 1.0]);
+    }
+
+    /// A compressed format is refused by its plain name.
+    #[test]
+    fn another_pixel_format_is_named_plainly() {
+        let mut bytes = to_bytes(&sample(), DdsFormat::Rgba8).unwrap();
+        // the DX10 header's DXGI format, after the magic and the 124-byte header
+        bytes[128..132].copy_from_slice(&(DxgiFormat::BC1_UNorm as u32).to_le_bytes());
+        let err = parse(&bytes, u64::MAX).unwrap_err().to_string();
+        assert!(err.starts_with("pixel format BC1_UNorm is not supported; allowed:"), "{err}");
     }
 
     #[test]

@@ -88,8 +88,7 @@ pub fn seal(text: &str) -> String {
 }
 
 /// The placeholder a text puts where its seal goes (e.g. a JSON value or a comment).
-pub const SEAL_MARK: &str =
-    "solidtex-seal:0000000000000000000000000000000000000000000000000000000000000000";
+pub const SEAL_MARK: &str = "solidtex-seal:0000000000000000000000000000000000000000000000000000000000000000";
 
 /// Whether `bytes` hold a text sealed by [`seal`] and unchanged since.
 pub fn is_sealed(bytes: &[u8]) -> bool {
@@ -137,9 +136,7 @@ pub fn side_file(path: &Path, how: &str) -> Result<()> {
     }
     Err(Error::file(
         path,
-        format!(
-            "exists and was not written by solidtex, or was changed since; solidtex does not replace it ({how})"
-        ),
+        format!("exists and was not written by solidtex, or was changed since; solidtex does not replace it ({how})"),
     ))
 }
 

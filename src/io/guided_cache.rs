@@ -3,7 +3,8 @@
 //!
 //! ```text
 //!  file  DIR/guided-<key as 16 hex digits>.cache
-//!  "solidtex guided cache 1\n"  key u64  level u32  dims 3 x u32   (little-endian)
+//!  "solidtex guided cache 2\n"  key u64  level u32  dims 3 x u32   (little-endian)
+//!  checksum: blake3 of the header above and the body below, 32 bytes
 //!  per voxel, x fastest: its centre slot per plane, 3 x u32
 //! ```
 //!
@@ -12,71 +13,181 @@
 //!
 //! ```text
 //!  file  DIR/guided-cube-<key as 16 hex digits>.cache
-//!  "solidtex guided cube 1\n"  key u64  side u32  channels u32   (little-endian)
+//!  "solidtex guided cube 2\n"  key u64  side u32  channels u32   (little-endian)
+//!  checksum: blake3 of the header above and the body below, 32 bytes
 //!  per voxel, x fastest: its colours, channels x f32
 //! ```
 //!
 //! A file of either name that does not hold its key is not overwritten: the run stops and
-//! names it.
+//! names it. A file that holds its key (solidtex wrote it) but whose checksum, size or
+//! values are wrong, or that an older solidtex wrote (version 1, no checksum), is
+//! [`Cached::Stale`]: the caller rebuilds and rewrites it.
 
 use super::atomic;
 use crate::error::{Error, Result};
 use crate::guided::region::{Mask, Sparse};
 use crate::guided::synth::Voxel;
-use std::io::Write;
+use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 
-const MAGIC: &[u8] = b"solidtex guided cache 1\n";
+const MAGIC: &[u8] = b"solidtex guided cache 2\n";
+const OLD_MAGIC: &[u8] = b"solidtex guided cache 1\n";
 const HEADER: usize = 24 + 8 + 4 + 12;
 const PER_VOXEL: usize = 12;
 
-const CUBE_MAGIC: &[u8] = b"solidtex guided cube 1\n";
+const CUBE_MAGIC: &[u8] = b"solidtex guided cube 2\n";
+const OLD_CUBE_MAGIC: &[u8] = b"solidtex guided cube 1\n";
 const CUBE_HEADER: usize = 23 + 8 + 4 + 4;
+
+/// Bytes of the checksum that follows a header.
+const CHECKSUM: usize = 32;
+
+/// What a cache file at a key's name holds.
+#[derive(Debug, PartialEq)]
+pub enum Cached<T> {
+    /// There is no file.
+    Missing,
+    /// The file solidtex wrote under this key, intact.
+    Good(T),
+    /// A file solidtex wrote under this key that cannot be used (what is wrong, e.g.
+    /// "damaged (its checksum does not match its contents)"): rebuild and rewrite it.
+    Stale(String),
+}
+
+impl<T> Cached<T> {
+    /// `f` of a good file's contents; a missing or stale file stays so.
+    fn and_then<U>(self, f: impl FnOnce(T) -> Cached<U>) -> Cached<U> {
+        match self {
+            Cached::Missing => Cached::Missing,
+            Cached::Good(found) => f(found),
+            Cached::Stale(why) => Cached::Stale(why),
+        }
+    }
+}
+
+/// The bytes of a cache file whose `header` bytes `ours` accepts and whose checksum
+/// holds (`body` bytes follow the checksum); `None` when the file is not ours (another
+/// magic, key or size in its header).
+fn read_checked(
+    path: &Path,
+    header: usize,
+    body: usize,
+    ours: impl Fn(&[u8]) -> Option<Owner>,
+) -> Result<Option<Cached<Vec<u8>>>> {
+    let size = match std::fs::metadata(path) {
+        Ok(meta) => meta.len(),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(Some(Cached::Missing)),
+        Err(e) => return Err(Error::io(path, e)),
+    };
+    let file = atomic::open_regular(path, u64::MAX)?;
+    let mut head = Vec::with_capacity(header + CHECKSUM);
+    file.take((header + CHECKSUM) as u64).read_to_end(&mut head).map_err(|e| Error::io(path, e))?;
+    let Some(owner) = head.get(..header).and_then(&ours) else { return Ok(None) };
+    if owner == Owner::Older {
+        return Ok(Some(Cached::Stale("from an older solidtex (no checksum)".to_string())));
+    }
+    let expected = (header + CHECKSUM + body) as u64;
+    if size != expected {
+        return Ok(Some(damaged(format!("it holds {size} bytes, not {expected}"))));
+    }
+    let bytes = atomic::read_bytes_within(path, expected)?;
+    let (fields, rest) = bytes.split_at(header);
+    let (sum, content) = rest.split_at(CHECKSUM);
+    if checksum(fields, content) != sum {
+        return Ok(Some(damaged("its checksum does not match its contents".to_string())));
+    }
+    Ok(Some(Cached::Good(bytes)))
+}
+
+/// Who wrote a cache file whose header holds the key asked for.
+#[derive(Debug, PartialEq)]
+enum Owner {
+    /// This version of the format.
+    Current,
+    /// Version 1, without a checksum.
+    Older,
+}
+
+/// Which version of `magic` (this one, or the version-1 `old`) `header` starts with.
+fn owner(header: &[u8], magic: &[u8], old: &[u8]) -> Option<Owner> {
+    if header.starts_with(magic) {
+        Some(Owner::Current)
+    } else if header.starts_with(old) {
+        Some(Owner::Older)
+    } else {
+        None
+    }
+}
+
+fn damaged<T>(why: String) -> Cached<T> {
+    Cached::Stale(format!("damaged ({why})"))
+}
+
+/// The blake3 hash of a header's fields and the body.
+fn checksum(fields: &[u8], body: &[u8]) -> [u8; CHECKSUM] {
+    let mut hasher = blake3::Hasher::new();
+    hasher.update(fields);
+    hasher.update(body);
+    *hasher.finalize().as_bytes()
+}
+
+/// Write a header's `fields`, their checksum with `body`, and `body` to `path`.
+fn write_checked(path: &Path, fields: &[u8], body: &[u8]) -> Result<()> {
+    let sum = checksum(fields, body);
+    atomic::write_file(path, |w| {
+        [fields, &sum[..], body].iter().try_for_each(|part| w.write_all(part)).map_err(|e| Error::io(path, e))
+    })
+}
+
+fn le_u32(bytes: &[u8], at: usize) -> usize {
+    u32::from_le_bytes(bytes[at..at + 4].try_into().expect("four bytes")) as usize
+}
+
+fn le_u64(bytes: &[u8], at: usize) -> u64 {
+    u64::from_le_bytes(bytes[at..at + 8].try_into().expect("eight bytes"))
+}
 
 /// The cube file of `key` in `folder`.
 pub fn cube_path(folder: &Path, key: u64) -> PathBuf {
     folder.join(format!("guided-cube-{key:016x}.cache"))
 }
 
-/// The cube's colours cached under `key` (`side`³ voxels of `channels`), if the file exists.
-pub fn read_cube(path: &Path, key: u64, side: usize, channels: usize) -> Result<Option<Vec<f32>>> {
-    if !path.exists() {
-        return Ok(None);
-    }
-    let count = side * side * side * channels;
-    let foreign = || {
+/// The cube's colours cached under `key` (`side`³ voxels of `channels`, each colour
+/// within `range`), or an error naming the file when it is not solidtex's cube of `key`.
+pub fn read_cube(path: &Path, key: u64, side: usize, channels: usize, range: (f32, f32)) -> Result<Cached<Vec<f32>>> {
+    let ours = |h: &[u8]| {
+        let fits = le_u64(h, 23) == key && le_u32(h, 31) == side && le_u32(h, 35) == channels;
+        owner(h, CUBE_MAGIC, OLD_CUBE_MAGIC).filter(|_| fits)
+    };
+    let found = read_checked(path, CUBE_HEADER, 4 * side * side * side * channels, ours)?.ok_or_else(|| {
         Error::file(
             path,
             "is not the solid cube of these exemplars; solidtex does not overwrite it (move it away or give another \
              --cache folder)",
         )
-    };
-    let bytes = sized(path, CUBE_HEADER + 4 * count).ok_or_else(foreign)??;
-    let word = |at: usize| u32::from_le_bytes(bytes[at..at + 4].try_into().expect("four bytes")) as usize;
-    let matches = bytes.starts_with(CUBE_MAGIC)
-        && u64::from_le_bytes(bytes[23..31].try_into().expect("eight bytes")) == key
-        && word(31) == side
-        && word(35) == channels;
-    if !matches {
-        return Err(foreign());
-    }
+    })?;
+    Ok(found.and_then(|bytes| colours_within(&bytes[CUBE_HEADER + CHECKSUM..], range)))
+}
+
+/// The colours of a cube file's body, unless one lies outside `range`.
+fn colours_within(body: &[u8], range: (f32, f32)) -> Cached<Vec<f32>> {
     let colours: Vec<f32> =
-        bytes[CUBE_HEADER..].chunks_exact(4).map(|b| f32::from_le_bytes(b.try_into().expect("four bytes"))).collect();
-    if let Some(i) = colours.iter().position(|c| !c.is_finite()) {
-        return Err(Error::file(path, format!("value {i} is not a finite number; the cache is damaged")));
+        body.chunks_exact(4).map(|b| f32::from_le_bytes(b.try_into().expect("four bytes"))).collect();
+    match colours.iter().position(|c| !(range.0..=range.1).contains(c)) {
+        Some(i) => damaged(format!("value {i} is {}, outside {} to {}", colours[i], range.0, range.1)),
+        None => Cached::Good(colours),
     }
-    Ok(Some(colours))
 }
 
 /// Write the cube's colours (`side`³ voxels of `channels`) under `key`.
 pub fn write_cube(path: &Path, key: u64, side: usize, channels: usize, colours: &[f32]) -> Result<()> {
-    let mut bytes = Vec::with_capacity(CUBE_HEADER + 4 * colours.len());
-    bytes.extend_from_slice(CUBE_MAGIC);
-    bytes.extend_from_slice(&key.to_le_bytes());
-    bytes.extend_from_slice(&(side as u32).to_le_bytes());
-    bytes.extend_from_slice(&(channels as u32).to_le_bytes());
-    colours.iter().for_each(|c| bytes.extend_from_slice(&c.to_le_bytes()));
-    atomic::write_file(path, |w| w.write_all(&bytes).map_err(|e| Error::io(path, e)))
+    let mut fields = Vec::with_capacity(CUBE_HEADER);
+    fields.extend_from_slice(CUBE_MAGIC);
+    fields.extend_from_slice(&key.to_le_bytes());
+    fields.extend_from_slice(&(side as u32).to_le_bytes());
+    fields.extend_from_slice(&(channels as u32).to_le_bytes());
+    let body: Vec<u8> = colours.iter().flat_map(|c| c.to_le_bytes()).collect();
+    write_checked(path, &fields, &body)
 }
 
 /// The cache file of `key` in `folder`.
@@ -84,108 +195,160 @@ pub fn path(folder: &Path, key: u64) -> PathBuf {
     folder.join(format!("guided-{key:016x}.cache"))
 }
 
-/// The level cached under `key`, if the file exists: `(level, values)`. Every slot is
-/// checked against `slots[plane]` (the level's exemplar centre counts); `voxel` makes a
-/// voxel of its slots.
+/// The level cached under `key`: `(level, values)`, or an error naming the file when it is
+/// not solidtex's cache of `key`. Every slot is checked against `slots[plane]` (the level's
+/// exemplar centre counts); `voxel` makes a voxel of its slots.
 pub fn read(
     path: &Path,
     key: u64,
     dims: [usize; 3],
     slots: [usize; 3],
     voxel: impl Fn([u32; 3]) -> Voxel + Sync,
-) -> Result<Option<(usize, Sparse<Voxel>)>> {
-    if !path.exists() {
-        return Ok(None);
-    }
+) -> Result<Cached<(usize, Sparse<Voxel>)>> {
     let count: usize = dims.iter().product();
-    let foreign = || {
+    let ours = |h: &[u8]| {
+        let fits = le_u64(h, 24) == key && [36, 40, 44].map(|at| le_u32(h, at)) == dims;
+        owner(h, MAGIC, OLD_MAGIC).filter(|_| fits)
+    };
+    let found = read_checked(path, HEADER, count * PER_VOXEL, ours)?.ok_or_else(|| {
         Error::file(
             path,
             "is not the guided-synthesis cache of these inputs; solidtex does not overwrite it (move it away or \
              give another --cache folder)",
         )
-    };
-    let bytes = sized(path, HEADER + count * PER_VOXEL).ok_or_else(foreign)??;
-    if !bytes.starts_with(MAGIC) {
-        return Err(foreign());
-    }
-    let word = |at: usize| u32::from_le_bytes(bytes[at..at + 4].try_into().expect("four bytes"));
-    let stored_key = u64::from_le_bytes(bytes[24..32].try_into().expect("eight bytes"));
-    let stored_dims = [word(36), word(40), word(44)].map(|d| d as usize);
-    if stored_key != key || stored_dims != dims {
-        return Err(foreign());
-    }
-    let level = word(32) as usize;
-    let body = &bytes[HEADER..];
-    let value = |i: usize| {
-        let at = i * PER_VOXEL;
-        [0, 4, 8].map(|o| u32::from_le_bytes(body[at + o..at + o + 4].try_into().expect("four bytes")))
-    };
-    let bad = (0..count).map(value).position(|v| (0..3).any(|a| v[a] as usize >= slots[a]));
-    if let Some(i) = bad {
-        return Err(Error::file(path, format!("voxel {i} holds a pixel outside the exemplar; the cache is damaged")));
-    }
-    let mask = Mask::full(dims);
-    Ok(Some((level, Sparse::compute(&mask, |v| voxel(value(mask.index(v)))))))
-}
-
-/// The bytes of `path` if it holds exactly `size` of them (`None` when it holds another
-/// number: not the file asked for).
-fn sized(path: &Path, size: usize) -> Option<Result<Vec<u8>>> {
-    match std::fs::metadata(path) {
-        Ok(m) if m.len() != size as u64 => None,
-        Ok(_) => Some(atomic::read_bytes_within(path, size as u64)),
-        Err(e) => Some(Err(Error::io(path, e))),
-    }
+    })?;
+    Ok(found.and_then(|bytes| {
+        let level = le_u32(&bytes, 32);
+        let body = &bytes[HEADER + CHECKSUM..];
+        let value = |i: usize| [0, 4, 8].map(|o| le_u32(body, i * PER_VOXEL + o) as u32);
+        let bad = (0..count).map(value).position(|v| (0..3).any(|a| v[a] as usize >= slots[a]));
+        if let Some(i) = bad {
+            return damaged(format!("voxel {i} holds a pixel outside the exemplar"));
+        }
+        let mask = Mask::full(dims);
+        Cached::Good((level, Sparse::compute(&mask, |v| voxel(value(mask.index(v))))))
+    }))
 }
 
 /// Write `values` (the whole grid of `level`) under `key`.
 pub fn write(path: &Path, key: u64, level: usize, values: &Sparse<Voxel>) -> Result<()> {
     let dims = values.dims;
     let count: usize = dims.iter().product();
-    let mut bytes = Vec::with_capacity(HEADER + count * PER_VOXEL);
-    bytes.extend_from_slice(MAGIC);
-    bytes.extend_from_slice(&key.to_le_bytes());
-    bytes.extend_from_slice(&(level as u32).to_le_bytes());
+    let mut fields = Vec::with_capacity(HEADER);
+    fields.extend_from_slice(MAGIC);
+    fields.extend_from_slice(&key.to_le_bytes());
+    fields.extend_from_slice(&(level as u32).to_le_bytes());
     for d in dims {
-        bytes.extend_from_slice(&(d as u32).to_le_bytes());
+        fields.extend_from_slice(&(d as u32).to_le_bytes());
     }
     let mask = Mask::full(dims);
+    let mut body = Vec::with_capacity(count * PER_VOXEL);
     for i in 0..count {
         let v = values.at(mask.voxel(i).map(|c| c as i64));
         for s in v.slot {
-            bytes.extend_from_slice(&s.to_le_bytes());
+            body.extend_from_slice(&s.to_le_bytes());
         }
     }
-    atomic::write_file(path, |w| w.write_all(&bytes).map_err(|e| Error::io(path, e)))
+    write_checked(path, &fields, &body)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    /// A cube reads back as written; a missing file is `None`; a file with another key,
-    /// side or channel count, a truncated one and one holding a NaN are refused by name.
+    const RANGE: (f32, f32) = (-1.0, 2.0);
+
+    fn stale_why<T: std::fmt::Debug>(found: Cached<T>) -> String {
+        match found {
+            Cached::Stale(why) => why,
+            other => panic!("not stale: {other:?}"),
+        }
+    }
+
+    /// A cube reads back as written; a missing file is `Missing`; a file with another
+    /// key, side or channel count, or another magic, is refused by name.
     #[test]
-    fn a_cube_reads_back_and_anything_else_is_refused() {
+    fn a_cube_reads_back_and_a_foreign_file_is_refused() {
         let dir = tempfile::tempdir().unwrap();
         let path = cube_path(dir.path(), 7);
-        assert!(read_cube(&path, 7, 2, 3).unwrap().is_none());
+        assert_eq!(read_cube(&path, 7, 2, 3, RANGE).unwrap(), Cached::Missing);
         let colours: Vec<f32> = (0..24).map(|i| i as f32 / 24.0).collect();
         write_cube(&path, 7, 2, 3, &colours).unwrap();
-        assert_eq!(read_cube(&path, 7, 2, 3).unwrap().unwrap(), colours);
+        assert_eq!(read_cube(&path, 7, 2, 3, RANGE).unwrap(), Cached::Good(colours));
         for (key, side, channels) in [(8, 2, 3), (7, 3, 3), (7, 2, 1)] {
-            let err = read_cube(&path, key, side, channels).unwrap_err().to_string();
+            let err = read_cube(&path, key, side, channels, RANGE).unwrap_err().to_string();
             assert!(err.contains("guided-cube-") && err.contains("does not overwrite"), "{err}");
         }
-        let bytes = std::fs::read(&path).unwrap();
-        std::fs::write(&path, &bytes[..bytes.len() - 4]).unwrap();
-        assert!(read_cube(&path, 7, 2, 3).unwrap_err().to_string().contains("not the solid cube"));
-        let mut nan = bytes.clone();
-        let at = nan.len() - 4;
-        nan[at..].copy_from_slice(&f32::NAN.to_le_bytes());
-        std::fs::write(&path, &nan).unwrap();
-        let err = read_cube(&path, 7, 2, 3).unwrap_err().to_string();
-        assert!(err.contains("value 23") && err.contains("damaged"), "{err}");
+        std::fs::write(&path, b"my notes").unwrap();
+        assert!(read_cube(&path, 7, 2, 3, RANGE).unwrap_err().to_string().contains("not the solid cube"));
+    }
+
+    /// A cube file of the key whose samples were overwritten (zeros, -1e30, one flipped
+    /// bit), that was cut short, whose values lie outside the range, or that an older
+    /// solidtex wrote, is stale; writing it again makes it good.
+    #[test]
+    fn a_damaged_cube_is_stale_and_rewritten() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = cube_path(dir.path(), 7);
+        let colours: Vec<f32> = (0..24).map(|i| i as f32 / 24.0).collect();
+        write_cube(&path, 7, 2, 3, &colours).unwrap();
+        let good = std::fs::read(&path).unwrap();
+        let body = CUBE_HEADER + CHECKSUM;
+        let mut zeros = good.clone();
+        zeros[body..].fill(0);
+        let mut huge = good.clone();
+        huge[body + 8..body + 12].copy_from_slice(&(-1e30f32).to_le_bytes());
+        let mut flipped = good.clone();
+        flipped[body + 41] ^= 1;
+        for (bytes, why) in
+            [(zeros, "checksum"), (huge, "checksum"), (flipped, "checksum"), (good[..60].to_vec(), "bytes")]
+        {
+            std::fs::write(&path, bytes).unwrap();
+            let found = stale_why(read_cube(&path, 7, 2, 3, RANGE).unwrap());
+            assert!(found.starts_with("damaged (") && found.contains(why), "{found}");
+        }
+        for bad in [-1e30, f32::NAN, 2.5] {
+            let mut wild = colours.clone();
+            wild[5] = bad;
+            write_cube(&path, 7, 2, 3, &wild).unwrap();
+            let found = stale_why(read_cube(&path, 7, 2, 3, RANGE).unwrap());
+            assert!(found.contains("value 5") && found.contains("outside -1 to 2"), "{found}");
+        }
+        let mut old = good.clone();
+        old[..OLD_CUBE_MAGIC.len()].copy_from_slice(OLD_CUBE_MAGIC);
+        old.drain(CUBE_HEADER..body);
+        std::fs::write(&path, old).unwrap();
+        assert!(stale_why(read_cube(&path, 7, 2, 3, RANGE).unwrap()).contains("older solidtex"));
+        write_cube(&path, 7, 2, 3, &colours).unwrap();
+        assert_eq!(read_cube(&path, 7, 2, 3, RANGE).unwrap(), Cached::Good(colours));
+    }
+
+    /// A coarse level reads back as written; another key or grid is refused by name; a
+    /// flipped byte or a slot outside the exemplar makes it stale.
+    #[test]
+    fn a_level_reads_back_and_a_damaged_one_is_stale() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = path(dir.path(), 9);
+        let dims = [3, 2, 2];
+        let voxel = |slot: [u32; 3]| Voxel { slot, ..Voxel::default() };
+        let read = |key, dims, slots| read(&path, key, dims, slots, voxel);
+        assert!(matches!(read(9, dims, [20; 3]).unwrap(), Cached::Missing));
+        let mask = Mask::full(dims);
+        let values = Sparse::compute(&mask, |v| voxel([v[0] as u32, v[1] as u32 + 4, v[2] as u32 + 8]));
+        write(&path, 9, 2, &values).unwrap();
+        let Cached::Good((level, back)) = read(9, dims, [20; 3]).unwrap() else { panic!("not good") };
+        assert_eq!(level, 2);
+        assert!(
+            (0..12).all(|i| back.at(mask.voxel(i).map(|c| c as i64)) == values.at(mask.voxel(i).map(|c| c as i64)))
+        );
+        for (key, dims) in [(8, dims), (9, [2, 3, 2])] {
+            let err = read(key, dims, [20; 3]).unwrap_err().to_string();
+            assert!(err.contains("guided-") && err.contains("does not overwrite"), "{err}");
+        }
+        assert!(stale_why(read(9, dims, [20, 20, 9]).unwrap()).contains("outside the exemplar"));
+        let mut flipped = std::fs::read(&path).unwrap();
+        flipped[HEADER + CHECKSUM + 5] ^= 0x80;
+        std::fs::write(&path, flipped).unwrap();
+        assert!(stale_why(read(9, dims, [20; 3]).unwrap()).contains("checksum"));
     }
 }

@@ -255,7 +255,8 @@ pub fn parse_entry(text: &str, folder: &Path, name: &str) -> Result<Entry> {
     if let Some(entry) = entries.into_iter().find(|e| e.name == name) {
         return Ok(entry);
     }
-    let own = errors.iter().find(|e| e.contains(&format!("({name})")) || e.contains(&format!("{name:?}")));
+    let shown = shown_name(name);
+    let own = errors.iter().find(|e| e.contains(&format!("({shown})")) || e.contains(&format!("{name:?}")));
     let whole = errors.iter().find(|e| !e.contains("exemplar["));
     match own.or(whole) {
         Some(error) => Err(Error::invalid(error.clone())),
@@ -332,8 +333,8 @@ fn entry_error(text: &str, i: usize, name: &str, error: &Error) -> String {
     let field = leading_path(rest);
     let field_line = line_of(text, &format!("{path}.{field}")).or_else(|| line_of(text, &path));
     match field_line {
-        Some(at) if at != line => format!("line {line}: exemplar[{i}] ({name}), line {at}: {message}"),
-        _ => format!("line {line}: exemplar[{i}] ({name}): {message}"),
+        Some(at) if at != line => format!("line {line}: exemplar[{i}] ({}), line {at}: {message}", shown_name(name)),
+        _ => format!("line {line}: exemplar[{i}] ({}): {message}", shown_name(name)),
     }
 }
 
@@ -400,12 +401,29 @@ fn clip(text: &str, most: usize) -> String {
     }
 }
 
+/// The longest exemplar name in bytes: its files (`NAME.sheet.png`, `NAME_slices`) and their
+/// temporaries (`.NAME.sheet.png.solidtex-XXXXXX.tmp`) stay within the 255 bytes a file
+/// name may have.
+pub const MAX_NAME: usize = 200;
+
+/// An exemplar name as shown in a message: at most 40 characters.
+fn shown_name(name: &str) -> String {
+    clip(name, 40)
+}
+
 fn validate(raw: RawExemplar, folder: &Path) -> Result<Entry> {
     let ok_name = !raw.name.is_empty() && raw.name.chars().all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_');
     if !ok_name {
         return Err(Error::invalid(format!(
             "name = {:?} is not allowed: use ASCII letters, digits, '-' and '_'",
-            raw.name
+            shown_name(&raw.name)
+        )));
+    }
+    if raw.name.len() > MAX_NAME {
+        return Err(Error::invalid(format!(
+            "name = {:?} ({} bytes) is too long: a name has at most {MAX_NAME} bytes, as it becomes file names",
+            shown_name(&raw.name),
+            raw.name.len()
         )));
     }
     let dims = raw.size.as_ref().map(dims_of).transpose()?;

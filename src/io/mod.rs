@@ -19,11 +19,11 @@ pub mod dds;
 mod exr_file;
 mod fields;
 pub mod fill_spec;
-pub mod guard;
-pub mod ledger;
 pub mod flipbook;
+pub mod guard;
 pub mod guided_cache;
 mod kopf_vol;
+pub mod ledger;
 pub mod lst_file;
 pub mod manifest;
 pub mod mesh_file;
@@ -136,7 +136,9 @@ fn address_space_room() -> Option<u64> {
 /// and `memory.current`, or v1's `memory.limit_in_bytes` and `memory.usage_in_bytes`
 /// (where page cache counts as use, so the use is not taken off).
 fn cgroup_room() -> Option<u64> {
-    let read = |name: &str| -> Option<u64> { std::fs::read_to_string(format!("/sys/fs/cgroup/{name}")).ok()?.trim().parse().ok() };
+    let read = |name: &str| -> Option<u64> {
+        std::fs::read_to_string(format!("/sys/fs/cgroup/{name}")).ok()?.trim().parse().ok()
+    };
     if let Some(max) = read("memory.max") {
         return Some(max.saturating_sub(read("memory.current").unwrap_or(0)));
     }

@@ -177,10 +177,8 @@ pub(crate) fn open_ledger(output: &Path) -> Result<Ledger> {
 }
 
 /// How each report begins (for folders built before the ledger).
-const REPORT_STARTS: [&str; 2] = [
-    "# Exemplar library\n\n| exemplar | size |",
-    "<!doctype html><meta charset=utf-8><title>Exemplar library</title>",
-];
+const REPORT_STARTS: [&str; 2] =
+    ["# Exemplar library\n\n| exemplar | size |", "<!doctype html><meta charset=utf-8><title>Exemplar library</title>"];
 
 /// Build one entry; an error or a panic fails this entry only.
 fn build_one(entry: &Entry, folder: &Path, output: (&Path, &Ledger), force: bool, observer: &dyn Observer) -> Outcome {
@@ -328,6 +326,8 @@ fn not_the_current_folder(output: &Path) -> Result<()> {
 /// instead of removing the first one's temporaries.
 fn lock_output(output: &Path) -> Result<std::fs::File> {
     let cache = output.join(files::CACHE);
+    std::fs::create_dir_all(output).map_err(|e| Error::io(output, e))?;
+    check_cache_folder(&cache)?;
     std::fs::create_dir_all(&cache).map_err(|e| Error::io(output, e))?;
     let path = cache.join("build.lock");
     let file = std::fs::OpenOptions::new()
@@ -347,23 +347,30 @@ fn lock_output(output: &Path) -> Result<std::fs::File> {
     }
 }
 
-/// Remove the temporaries an interrupted build left (names solidtex gives them:
-/// `.NAME.solidtex-` + random letters + `.tmp`, files or folders). Only called under the
-/// build lock.
+/// Refuse a cache folder that is a symbolic link (solidtex would write and clean up where
+/// it points) or not a folder.
+fn check_cache_folder(cache: &Path) -> Result<()> {
+    match std::fs::symlink_metadata(cache) {
+        Ok(m) if m.file_type().is_symlink() => Err(Error::file(
+            cache,
+            "is a symbolic link; solidtex keeps its build cache only in a real folder (remove the link, or \
+             build into another folder with -o)",
+        )),
+        Ok(m) if !m.is_dir() => Err(Error::file(
+            cache,
+            "exists and is not a folder; solidtex keeps its build cache there (move it away, or build into \
+             another folder with -o)",
+        )),
+        _ => Ok(()),
+    }
+}
+
+/// Remove the temporaries an interrupted run left in the output folder and its cache
+/// (names solidtex gives them, files or folders), but none a running solidtex still writes
+/// (see [`io::atomic::remove_stale_temporaries`]).
 fn remove_stale_temporaries(output: &Path) {
     for folder in [output.to_path_buf(), output.join(files::CACHE)] {
-        let Ok(entries) = std::fs::read_dir(&folder) else { continue };
-        for path in entries.filter_map(|e| e.ok().map(|e| e.path())) {
-            let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-            if !io::atomic::is_temporary_name(&name) {
-                continue;
-            }
-            // A link is removed itself, never followed.
-            let _ = match std::fs::symlink_metadata(&path) {
-                Ok(m) if m.is_dir() => std::fs::remove_dir_all(&path),
-                _ => std::fs::remove_file(&path),
-            };
-        }
+        io::atomic::remove_stale_temporaries(&folder, None);
     }
 }
 

@@ -1,7 +1,7 @@
 //! Bad input: one test per kind of mistake. Each must fail with exit code 1, one
 //! clear line naming the file and the problem, and leave no output behind.
 
-use crate::support::{assert_fails, assert_usage, at, listing, random_volume, solidtex, solidtex_env};
+use crate::support::{assert_fails, assert_usage, at, listing, random_volume, solidtex, solidtex_env, stderr};
 use solidtex::io::{read_image, write_volume};
 use solidtex::volume::{Channel, Volume};
 use std::path::Path;
@@ -149,6 +149,9 @@ fn dims_over_the_voxel_budget() {
     let run = solidtex_env(&["make", "wood", "--size", "64", "-o", &out], &[("SOLIDTEX_MAX_BYTES", "100000")]);
     assert_fails(&run, &["64x64x64", "over the voxel budget of 100000 bytes"]);
     assert_eq!(listing(dir.path()), ["huge.nrrd"]);
+    // an empty value is unset: the default budget
+    let run = solidtex_env(&["make", "wood", "--size", "8", "-o", &out], &[("SOLIDTEX_MAX_BYTES", "")]);
+    assert!(run.status.success(), "{}", stderr(&run));
 }
 
 #[test]
@@ -249,4 +252,17 @@ fn synth_refuses_bad_exemplars_and_sizes_and_writes_nothing() {
 fn bench_refuses_an_only_that_matches_nothing() {
     let run = solidtex(&["bench", "--runs", "1", "--only", "no-such-workload"]);
     assert_usage(&run, &["--only \"no-such-workload\" matches no workload", "synth/64cube/128px-rgb"]);
+}
+
+/// A file name holding a NUL byte (possible in a manifest's TOML string, never on a command
+/// line) is named with the byte shown as `\0`, and the message says no file name may hold one.
+#[test]
+fn a_nul_byte_in_a_file_name_is_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let manifest = dir.path().join("nul.toml");
+    std::fs::write(&manifest, "[[exemplar]]\nname = \"a\"\nrecipe = \"load\"\nvolume = \"x\\u0000y.exr\"\n").unwrap();
+    let run = solidtex(&["build", &manifest.to_string_lossy(), "-o", &at(dir.path(), "out")]);
+    assert_eq!(run.status.code(), Some(1));
+    let says = "x\\0y.exr\" holds a NUL byte (shown as \\0); no file name may contain one";
+    assert!(stderr(&run).contains(says), "{}", stderr(&run));
 }

@@ -161,3 +161,16 @@ fn quality_of_a_label_volume_reports_phase_statistics() {
     let neither = solidtex(&["quality", &path.to_string_lossy()]);
     assert_eq!(neither.status.code(), Some(2), "no exemplar and no --labels is a usage error");
 }
+
+/// `help --help` and `help -h` print the help subcommand's own help and succeed, like
+/// `--help` anywhere else; `help synth --help` prints synth's.
+#[test]
+fn help_takes_its_own_help_flag() {
+    for args in [&["help", "--help"][..], &["help", "-h"], &["help", "synth", "--help"]] {
+        let run = solidtex(args);
+        assert_eq!(run.status.code(), Some(0), "{args:?}: {}", stderr(&run));
+        let out = String::from_utf8_lossy(&run.stdout).into_owned();
+        let usage = if args[1] == "synth" { "Usage: solidtex synth" } else { "Usage: solidtex help" };
+        assert!(out.contains(usage), "{args:?}: {out}");
+    }
+}

@@ -85,7 +85,7 @@ const fn file(name: &'static str, case: &'static str, seeds: fn(&Path) -> Vec<Fi
 
 type Reader = fn(&Path) -> solidtex::Result<()>;
 
-const TARGETS: [Target; 18] = [
+const TARGETS: [Target; 19] = [
     file("obj", "case.obj", obj_seeds, read_mesh),
     file("stl_binary", "case.stl", stl_binary_seeds, read_mesh),
     file("stl_ascii", "case.stl", stl_ascii_seeds, read_mesh),
@@ -102,12 +102,27 @@ const TARGETS: [Target; 18] = [
     file("manifest", "case.toml", manifest_seeds, read_manifest),
     file("fill_spec", "case.toml", fill_spec_seeds, read_fill_spec),
     file("lst", "case.lst", lst_seeds, read_lst),
+    file("guided_cube", "case.cache", guided_cube_seeds, read_guided_cube),
     file("snapshot", "case.snap", snapshot_seeds, read_snapshot),
     file("snapshot_check", "case.snap", snapshot_check_seeds, check_snapshot),
 ];
 
 fn read_mesh(path: &Path) -> solidtex::Result<()> {
     mesh_file::read_mesh(path).map(drop)
+}
+
+/// The key, side and channels of the guided cube seeds.
+const CUBE: (u64, usize, usize) = (7, 3, 3);
+
+fn read_guided_cube(path: &Path) -> solidtex::Result<()> {
+    io::guided_cache::read_cube(path, CUBE.0, CUBE.1, CUBE.2, (0.0, 1.0)).map(drop)
+}
+
+/// A guided-synthesis cube as `guided --cache` keeps it.
+fn guided_cube_seeds(dir: &Path) -> Vec<Files> {
+    let (key, side, channels) = CUBE;
+    let colours: Vec<f32> = (0..side * side * side * channels).map(|i| (i % 10) as f32 / 10.0).collect();
+    vec![written(dir, "cube.cache", |p| io::guided_cache::write_cube(p, key, side, channels, &colours))]
 }
 
 fn read_skin(path: &Path) -> solidtex::Result<()> {
@@ -1206,6 +1221,11 @@ fn ascii_ply_reader_survives_mutated_files() {
 #[test]
 fn binary_ply_reader_survives_mutated_files() {
     fuzz("ply_binary");
+}
+
+#[test]
+fn guided_cube_reader_survives_mutated_files() {
+    fuzz("guided_cube");
 }
 
 #[test]

@@ -39,8 +39,9 @@ fn gravel() -> String {
 
 /// `solidtex guided --cut` writes the cut through the fruit: transparent outside, opaque
 /// inside, textured (not flat); it reports the voxels it synthesized, far fewer than a
-/// whole solid; with `--cache` a second cut is the same picture, and a file at the cache's
-/// name that solidtex did not write there stops the run and stays as it was.
+/// whole solid; with `--cache` a second cut is the same picture, a file at the cache's
+/// name that solidtex did not write there stops the run and stays as it was, and a cache
+/// file of its own that was damaged is rebuilt with a warning.
 #[test]
 fn a_guided_cut_is_synthesized_on_demand_and_cached() {
     let dir = tempfile::tempdir().unwrap();
@@ -106,7 +107,18 @@ fn a_guided_cut_is_synthesized_on_demand_and_cached() {
         crate::support::assert_fails(&cut(&third, true), &[name, "does not overwrite"]);
         assert_eq!(std::fs::read(&planted).unwrap(), b"my notes");
         assert!(!d.join("third.png").exists());
-        std::fs::write(&planted, kept).unwrap();
+        // solidtex's own file with a sample overwritten: rebuilt with a warning, the cut unchanged
+        let mut damaged = kept.clone();
+        let at = damaged.len() - 7;
+        damaged[at..].fill(0);
+        std::fs::write(&planted, &damaged).unwrap();
+        let run = cut(&third, true);
+        assert!(run.status.success(), "{}", stderr(&run));
+        let warning = format!("{} is damaged (its checksum does not match its contents); rebuilt", planted.display());
+        assert!(stderr(&run).contains(&warning), "{}", stderr(&run));
+        assert_eq!(std::fs::read(&third).unwrap(), std::fs::read(&first).unwrap());
+        assert_eq!(std::fs::read(&planted).unwrap(), kept, "the cache is written anew");
+        std::fs::remove_file(&third).unwrap();
     }
 
     // matched as planes, an exemplar too small for a second level has nothing to cache:

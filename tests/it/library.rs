@@ -327,3 +327,55 @@ fn cleaning_up_never_touches_what_a_user_made() {
         assert_eq!(std::fs::read_to_string(out.join(user)).unwrap(), "mine", "{user}");
     }
 }
+
+/// A build refuses an output folder whose `.cache` is a symbolic link (it would write and
+/// clean up where the link points) or a file, and leaves both as they were.
+#[cfg(unix)]
+#[test]
+fn a_linked_or_plain_file_cache_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let manifest = library(dir.path());
+    let out = dir.path().join("out");
+    let elsewhere = dir.path().join("elsewhere");
+    std::fs::create_dir_all(&out).unwrap();
+    std::fs::create_dir_all(&elsewhere).unwrap();
+    std::os::unix::fs::symlink(&elsewhere, out.join(".cache")).unwrap();
+    let run = solidtex(&["build", &manifest, "-o", &out.to_string_lossy()]);
+    crate::support::assert_fails(&run, &[".cache", "is a symbolic link"]);
+    assert_eq!(crate::support::listing(&elsewhere), Vec::<String>::new(), "nothing is written where it points");
+    assert_eq!(crate::support::listing(&out), [".cache"]);
+    std::fs::remove_file(out.join(".cache")).unwrap();
+    std::fs::write(out.join(".cache"), "mine").unwrap();
+    let run = solidtex(&["build", &manifest, "-o", &out.to_string_lossy()]);
+    crate::support::assert_fails(&run, &[".cache", "is not a folder"]);
+    assert_eq!(std::fs::read_to_string(out.join(".cache")).unwrap(), "mine");
+}
+
+/// An exemplar name longer than a file name may be is refused when the manifest is read,
+/// the message naming the field and the limit and showing the name clipped; a 1 MB name
+/// gives a short line.
+#[test]
+fn a_name_too_long_for_a_file_is_refused_at_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = at(dir.path(), "out");
+    for length in [201, 300, 1 << 20] {
+        let manifest = dir.path().join("long.toml");
+        let name = "n".repeat(length);
+        std::fs::write(
+            &manifest,
+            format!("[[exemplar]]\nname = \"{name}\"\nrecipe = \"procedural:marble\"\nsize = 8\n"),
+        )
+        .unwrap();
+        let run = solidtex(&["build", &manifest.to_string_lossy(), "-o", &out]);
+        let says = format!("({length} bytes) is too long: a name has at most 200 bytes");
+        crate::support::assert_fails(&run, &["long.toml", "exemplar[0]", "name = \"nnnn", &says]);
+        assert!(stderr(&run).len() < 400, "{}", stderr(&run));
+    }
+    assert!(!dir.path().join("out").exists());
+    let manifest = dir.path().join("ok.toml");
+    let name = "n".repeat(200);
+    std::fs::write(&manifest, format!("[[exemplar]]\nname = \"{name}\"\nrecipe = \"procedural:marble\"\nsize = 8\n"))
+        .unwrap();
+    let run = solidtex(&["build", &manifest.to_string_lossy(), "-o", &out]);
+    assert!(run.status.success(), "a name of 200 bytes is fine: {}", stderr(&run));
+}

@@ -11,7 +11,11 @@ use std::process::{Command, Output};
 
 /// The bytes of every file in `dir`, to compare before and after a refused run.
 fn contents(dir: &Path) -> Vec<(String, Vec<u8>)> {
-    listing(dir).into_iter().filter(|n| dir.join(n).is_file()).map(|n| (n.clone(), std::fs::read(dir.join(n)).unwrap())).collect()
+    listing(dir)
+        .into_iter()
+        .filter(|n| dir.join(n).is_file())
+        .map(|n| (n.clone(), std::fs::read(dir.join(n)).unwrap()))
+        .collect()
 }
 
 /// Each writer named with one of its inputs as its output is refused (exit 2) before any
@@ -106,7 +110,10 @@ fn a_build_never_replaces_a_persons_file_in_its_folder() {
     assert_eq!(run.status.code(), Some(1), "{}", stderr(&run));
     assert!(stderr(&run).contains("b.exr") && stderr(&run).contains("not written by solidtex"), "{}", stderr(&run));
     assert_eq!(std::fs::read(out.join("b.exr")).unwrap(), b"my volume");
-    assert!(out.join("a.exr").is_file() && out.join("report.md").is_file(), "the other entry and the report are written");
+    assert!(
+        out.join("a.exr").is_file() && out.join("report.md").is_file(),
+        "the other entry and the report are written"
+    );
     std::fs::remove_file(out.join("b.exr")).unwrap();
     let run = solidtex(&["build", &lib, "-o", &at(dir.path(), "out"), "--force"]);
     assert!(run.status.success(), "solidtex replaces its own files: {}", stderr(&run));
@@ -121,7 +128,8 @@ fn a_build_never_replaces_a_persons_file_in_its_folder() {
 fn a_build_into_the_current_folder_is_refused() {
     let dir = tempfile::tempdir().unwrap();
     let lib = manifest(dir.path());
-    let run = Command::new(env!("CARGO_BIN_EXE_solidtex")).args(["build", &lib, "-o", "."]).current_dir(dir.path()).output();
+    let run =
+        Command::new(env!("CARGO_BIN_EXE_solidtex")).args(["build", &lib, "-o", "."]).current_dir(dir.path()).output();
     assert_fails(&run.unwrap(), &["current folder"]);
     assert_eq!(listing(dir.path()), ["lib.toml"]);
 }
@@ -134,7 +142,11 @@ fn side_files_and_edited_folder_files_are_kept() {
     let lib = manifest(dir.path());
     let cake = at(dir.path(), "cake");
     let draw = |d: &Path| {
-        Command::new(env!("CARGO_BIN_EXE_solidtex")).args(["draw", "cake", "-o", &cake, "--library", &lib]).current_dir(d).output().unwrap()
+        Command::new(env!("CARGO_BIN_EXE_solidtex"))
+            .args(["draw", "cake", "-o", &cake, "--library", &lib])
+            .current_dir(d)
+            .output()
+            .unwrap()
     };
     assert!(draw(dir.path()).status.success());
     assert!(draw(dir.path()).status.success(), "its own folder is replaced");
@@ -262,4 +274,32 @@ fn decompression_bombs_are_refused_not_aborted() {
     assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
     assert!(stderr(&out).contains("FAILED boom") && stderr(&out).contains("too large"), "{}", stderr(&out));
     assert!(dir.path().join("out/a.exr").is_file() && dir.path().join("out/report.md").is_file());
+}
+
+/// Under a 4 GB address-space limit, the largest values of each documented range are
+/// refused with a message naming the budget, or run, and never abort: `make`, `sweep`,
+/// `guided` and `render`.
+#[test]
+fn the_largest_options_never_abort_under_a_memory_cap() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let cap = 4_000_000;
+    let refused = |out: Output, says: &str| {
+        assert!(matches!(out.status.code(), Some(1 | 2)), "{}", stderr(&out));
+        assert!(stderr(&out).contains(says), "{}", stderr(&out));
+    };
+    refused(within(cap, &["make", "marble", "--size", "512", "-o", &at(d, "m.exr")]), "voxel budget");
+    let big = at(d, "big.png");
+    assert!(solidtex(&["draw", "kiwi", "--size", "2048x2048", "-o", &big]).status.success());
+    refused(within(cap, &["sweep", &big, "--length", "40", "-o", &at(d, "s.exr")]), "voxel budget");
+    let (fruit, spec) = crate::fill::kiwi_fruit(d);
+    let gravel = concat!(env!("CARGO_MANIFEST_DIR"), "/exemplars/gravel_photo.png");
+    let guided = ["guided", &fruit, "--spec", &spec, "--exemplar", gravel, "--res", "512", "-o", &at(d, "g.exr")];
+    refused(within(cap, &guided), "budget");
+    let model = at(d, "kiwi.lst");
+    assert!(solidtex(&["fill", &fruit, "--spec", &spec, "-o", &model]).status.success());
+    refused(within(cap, &["render", &model, "--size", "4096", "-o", &at(d, "r.png")]), "budget");
+    let run = within(cap, &["render", &model, "--size", "1024", "--slices", "16", "-o", &at(d, "r.png")]);
+    assert!(run.status.success(), "a render within the budget runs: {}", stderr(&run));
+    assert!(!d.join("m.exr").exists() && !d.join("s.exr").exists() && !d.join("g.exr").exists());
 }

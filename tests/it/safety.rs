@@ -336,3 +336,32 @@ fn an_exr_storing_more_channels_than_it_lists_is_refused() {
     std::fs::write(&rgba, bytes).unwrap();
     assert_fails(&solidtex(&["info", &rgba.to_string_lossy()]), &["rgba.exr", "lists 3 channel(s)", "stores 4"]);
 }
+
+/// A command stopped by SIGTERM or Ctrl-C (SIGINT) while it writes removes its temporary
+/// file and exits 143 or 130 (128 plus the signal), leaving no output behind.
+#[cfg(unix)]
+#[test]
+fn a_stopped_command_leaves_no_temporary() {
+    for (signal, code) in [("TERM", 143), ("INT", 130)] {
+        let dir = tempfile::tempdir().unwrap();
+        let output = at(dir.path(), "big.exr");
+        let mut child = Command::new(env!("CARGO_BIN_EXE_solidtex"))
+            .args(["make", "marble", "--size", "128", "-o", &output])
+            .stdin(Stdio::null())
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .unwrap();
+        let start = Instant::now();
+        let writing = |names: Vec<String>| names.iter().any(|n| n.starts_with(".big.exr.solidtex-"));
+        while !writing(listing(dir.path())) {
+            assert!(child.try_wait().unwrap().is_none(), "the command ended before it wrote");
+            assert!(start.elapsed() < Duration::from_secs(120), "no temporary appeared");
+            std::thread::sleep(Duration::from_millis(2));
+        }
+        let pid = child.id().to_string();
+        assert!(Command::new("kill").args([&format!("-{signal}"), &pid]).status().unwrap().success());
+        assert_eq!(child.wait().unwrap().code(), Some(code), "SIG{signal}");
+        assert_eq!(listing(dir.path()), Vec::<String>::new(), "SIG{signal}: nothing is left");
+    }
+}

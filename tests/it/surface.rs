@@ -130,6 +130,8 @@ fn the_surface_command_writes_a_coloured_ply_and_refuses_bad_input() {
         &["surface", &mesh, "--exemplar", photo, "--points", "50", "-o", &out],
         "points = 50 is out of range; allowed: 100 to 500000",
     );
+    let help = String::from_utf8(solidtex(&["surface", "--help"]).stdout).unwrap();
+    assert!(help.contains("skin gets, 100 to 500000"), "the help gives the range checked: {help}");
     bad(&["surface", &mesh, "--exemplar", photo, "--direction", "0,0,0", "-o", &out], "must be a non-zero vector");
     bad(&["surface", &mesh, "--exemplar", photo, "--texel", "-1", "-o", &out], "must be a length greater than 0");
     bad(&["surface", &mesh, "--exemplar", photo, "-o", &at(dir.path(), "skin.obj")], "writes the skin as a .ply");
