@@ -735,6 +735,38 @@ mod tests {
         assert!(matches!(failed, Message::Built(n, Err(e)) if n == "m" && e == "no image"));
     }
 
+    /// A photo that would decode past the memory budget (a 32,000² 1-bit PNG of 128 KB)
+    /// fails its entry with the reason, in this process, and the other entry builds: the UI
+    /// is never taken down.
+    #[test]
+    fn a_decompression_bomb_fails_its_entry_not_the_ui() {
+        let dir = tempfile::tempdir().unwrap();
+        let bomb = dir.path().join("bomb.png");
+        let mut encoder = png::Encoder::new(std::fs::File::create(&bomb).unwrap(), 32_000, 32_000);
+        encoder.set_color(png::ColorType::Grayscale);
+        encoder.set_depth(png::BitDepth::One);
+        let mut writer = encoder.write_header().unwrap();
+        let mut stream = writer.stream_writer().unwrap();
+        for _ in 0..32_000 {
+            std::io::Write::write_all(&mut stream, &[0u8; 4000]).unwrap();
+        }
+        stream.finish().unwrap();
+        let (manifest, out) = (dir.path().join("lib.toml"), dir.path().join("out"));
+        let text = "[[exemplar]]\nname = \"m\"\nrecipe = \"procedural:marble\"\nsize = 8\n\
+                    [[exemplar]]\nname = \"boom\"\nrecipe = \"synth\"\nimage = \"bomb.png\"\nsize = 8\n";
+        std::fs::write(&manifest, text).unwrap();
+        let (send, receive) = std::sync::mpsc::channel();
+        super::build(&manifest, &out, vec!["m".into(), "boom".into()], &send);
+        drop(send);
+        let built: Vec<Message> = receive.iter().filter(|m| matches!(m, Message::Built(..))).collect();
+        assert!(built.iter().any(|m| matches!(m, Message::Built(n, Ok(_)) if n == "m")));
+        let failed = built.iter().find_map(|m| match m {
+            Message::Built(n, Err(e)) if n == "boom" => Some(e.clone()),
+            _ => None,
+        });
+        assert!(failed.as_deref().is_some_and(|e| e.contains("bomb.png") && e.contains("too large")), "{failed:?}");
+    }
+
     /// `c` copies the selected entry into the manifest, `d` twice deletes it: the file keeps
     /// its comments and the other entries byte for byte, and the list follows.
     #[test]

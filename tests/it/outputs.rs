@@ -192,36 +192,6 @@ fn bomb(path: &Path, side: u32) {
     stream.finish().unwrap();
 }
 
-/// A PNG whose header claims a 32768² grey image and that holds no pixels at all.
-fn lying(path: &Path) {
-    let mut png = b"\x89PNG\r\n\x1a\n".to_vec();
-    let mut ihdr = 32768u32.to_be_bytes().repeat(2);
-    ihdr.extend_from_slice(&[8, 0, 0, 0, 0]);
-    chunk(&mut png, b"IHDR", &ihdr);
-    chunk(&mut png, b"IDAT", &[0x78, 0x9c, 0x03, 0x00, 0x00, 0x00, 0x00, 0x01]);
-    chunk(&mut png, b"IEND", &[]);
-    std::fs::write(path, png).unwrap();
-}
-
-fn chunk(out: &mut Vec<u8>, kind: &[u8], data: &[u8]) {
-    let mut crc_input = kind.to_vec();
-    crc_input.extend_from_slice(data);
-    out.extend_from_slice(&(data.len() as u32).to_be_bytes());
-    out.extend_from_slice(&crc_input);
-    out.extend_from_slice(&crc(&crc_input).to_be_bytes());
-}
-
-fn crc(bytes: &[u8]) -> u32 {
-    let mut c = 0xffff_ffffu32;
-    for b in bytes {
-        c ^= *b as u32;
-        for _ in 0..8 {
-            c = if c & 1 == 1 { (c >> 1) ^ 0xedb8_8320 } else { c >> 1 };
-        }
-    }
-    !c
-}
-
 /// Run `solidtex` under an address-space limit of `kb` kilobytes.
 fn within(kb: u64, args: &[&str]) -> Output {
     let quoted: Vec<String> = args.iter().map(|a| format!("'{a}'")).collect();
@@ -237,7 +207,7 @@ fn decompression_bombs_are_refused_not_aborted() {
     let dir = tempfile::tempdir().unwrap();
     bomb(&dir.path().join("b20k.png"), 20_000);
     bomb(&dir.path().join("b32k.png"), 32_000);
-    lying(&dir.path().join("giga.png"));
+    std::fs::write(dir.path().join("giga.png"), crate::safety::lying_png(32768, 32768)).unwrap();
     assert!(std::fs::metadata(dir.path().join("b20k.png")).unwrap().len() < 200_000);
     let d = |n: &str| at(dir.path(), n);
     write_volume(&dir.path().join("v.exr"), &random_volume([8, 8, 8], Channel::rgb(), 1)).unwrap();

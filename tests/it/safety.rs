@@ -161,7 +161,7 @@ fn chunk(out: &mut Vec<u8>, kind: &[u8], data: &[u8]) {
 }
 
 /// A tiny PNG whose header claims `width` x `height` grey pixels.
-fn lying_png(width: u32, height: u32) -> Vec<u8> {
+pub fn lying_png(width: u32, height: u32) -> Vec<u8> {
     let mut png = b"\x89PNG\r\n\x1a\n".to_vec();
     let mut ihdr = width.to_be_bytes().to_vec();
     ihdr.extend_from_slice(&height.to_be_bytes());
