@@ -47,6 +47,7 @@ pub mod guided;
 pub mod io;
 pub mod labels;
 pub mod library;
+pub mod lines;
 pub mod mask;
 pub mod mesh;
 pub mod noise;

@@ -85,6 +85,8 @@ pub struct Report {
     pub axes: Vec<AxisEnergy>,
     /// Sharpness and feature size per measured axis (see [`crate::sharpness`]).
     pub sharpness: Vec<crate::sharpness::AxisSharpness>,
+    /// Line structure per measured axis (see [`crate::lines`]).
+    pub lines: Vec<crate::lines::Lines>,
     /// One entry per exemplar channel.
     pub histograms: Vec<HistogramDistance>,
     /// For layered volumes.
@@ -98,10 +100,12 @@ pub fn assess(volume: &Volume, exemplars: [Option<&Image2d>; 3], layered: bool) 
     let picks = channel_positions(volume, first.channels())?;
     let mut axes = Vec::new();
     let mut sharpness = Vec::new();
+    let mut lines = Vec::new();
     let mut best = [Vec::new(), Vec::new(), Vec::new()];
     for axis in Axis::ALL {
         let Some(image) = exemplars[axis.index()] else { continue };
         sharpness.push(crate::sharpness::measure(volume, image, &picks, axis)?);
+        lines.push(crate::lines::measure(volume, image, &picks, axis)?);
         let measure = Measure::new(image, volume, &picks, layered)?;
         let (energy, matches) = measure.volume_energy(volume, axis);
         let random = measure.random_energy();
@@ -121,7 +125,7 @@ pub fn assess(volume: &Volume, exemplars: [Option<&Image2d>; 3], layered: bool) 
     }
     let histograms = histogram_distances(volume, first, &picks);
     let layered = layered.then(|| layered_quality(volume, &best)).transpose()?;
-    Ok(Report { axes, sharpness, histograms, layered })
+    Ok(Report { axes, sharpness, lines, histograms, layered })
 }
 
 /// The figures a designer reads at a glance (the cheap part of [`assess`]): per axis the

@@ -57,13 +57,15 @@ impl AxisSharpness {
 /// Measure the cuts of `volume` across `axis` against `exemplar`; `picks[c]` is the volume
 /// channel that holds exemplar channel `c`.
 pub fn measure(volume: &Volume, exemplar: &Image2d, picks: &[usize], axis: Axis) -> Result<AxisSharpness> {
-    let side = volume.dims()[axis.index()];
-    let cuts = (1..=3)
-        .map(|quarter| volume.slice(axis, (side * quarter / 4).min(side - 1)))
-        .collect::<Result<Vec<Image2d>>>()?;
-    let mut figures = compare(&cuts, exemplar, picks)?;
+    let mut figures = compare(&quarter_cuts(volume, axis)?, exemplar, picks)?;
     figures.axis = axis.to_string();
     Ok(figures)
+}
+
+/// The cuts across `axis` at 1/4, 1/2 and 3/4 of its side, where the figures are measured.
+pub fn quarter_cuts(volume: &Volume, axis: Axis) -> Result<Vec<Image2d>> {
+    let side = volume.dims()[axis.index()];
+    (1..=3).map(|quarter| volume.slice(axis, (side * quarter / 4).min(side - 1))).collect()
 }
 
 /// The same figures for plain images against `exemplar` (e.g. a surface texture resampled
@@ -102,7 +104,7 @@ pub fn compare(images: &[Image2d], exemplar: &Image2d, picks: &[usize]) -> Resul
 }
 
 /// `a / b`, with 0/0 = 1 and a/0 = infinity.
-fn ratio(a: f64, b: f64) -> f64 {
+pub(crate) fn ratio(a: f64, b: f64) -> f64 {
     if b > 0.0 {
         a / b
     } else if a > 0.0 {
@@ -123,7 +125,7 @@ pub(crate) struct Standard {
 }
 
 impl Standard {
-    fn of(image: &Image2d) -> Standard {
+    pub(crate) fn of(image: &Image2d) -> Standard {
         Standard::of_samples(image.data(), image.channel_count())
     }
 

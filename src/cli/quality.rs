@@ -86,6 +86,7 @@ fn table(r: &Report) -> String {
             if s.in_range() { "" } else { "  (outside the targets)" }
         );
     }
+    out += &lines_table(&r.lines);
     out += "histogram distance (L1 over 32 bins; 0 = equal, 2 = disjoint)\n";
     for h in &r.histograms {
         out += &format!("  {:<12} {:.4}\n", h.channel, h.distance);
@@ -137,4 +138,42 @@ fn labels(args: &QualityArgs, volume: &crate::Volume) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// The line structure rows of `quality` (docs/synthesis.md, "Line structure").
+fn lines_table(lines: &[crate::lines::Lines]) -> String {
+    let mut out = String::from(
+        "line structure of the cuts against the exemplar (cuts over exemplar; targets: pieces 0.7-1.3, top-3 share \
+         at least 0.8, line share 0.5-1.5)\n  axis  lines  pieces  top-3  share   exemplar: pieces/1000 px, top-3 \
+         share (window spread of pieces, top-3)\n",
+    );
+    for l in lines {
+        let p = &l.lines;
+        if !l.applies {
+            out += &format!(
+                "  {:<4}  no line structure to keep (the exemplar's longest {} lines hold {:.2} of its line pixels, \
+                 under {})\n",
+                l.axis,
+                p.name,
+                p.exemplar.top3_share,
+                crate::lines::APPLIES
+            );
+            continue;
+        }
+        out += &format!(
+            "  {:<4} {:>6} {:>7.2} {:>6.2} {:>6.2}   {:.2}, {:.2} ({:.2}-{:.2}, {:.2}-{:.2})\n",
+            l.axis,
+            p.name,
+            p.pieces_ratio,
+            p.top3_ratio,
+            p.share_ratio,
+            p.exemplar.pieces_per_1000,
+            p.exemplar.top3_share,
+            p.pieces_spread.0,
+            p.pieces_spread.1,
+            p.top3_spread.0,
+            p.top3_spread.1
+        );
+    }
+    out
 }
