@@ -423,6 +423,21 @@ fn listed_files(path: &Path) -> Vec<(String, Option<String>)> {
         .collect()
 }
 
+/// Give the [`FOLDER_LIST`] of `folder`, written by a solidtex that recorded names only,
+/// the hashes of its files when `known(name, hash)` vouches for every one (a build's
+/// records hold them); otherwise leave it as it is.
+pub fn upgrade_list(folder: &Path, known: impl Fn(&str, &str) -> bool) -> Result<()> {
+    let listed = listed_files(folder);
+    if listed.is_empty() || listed.iter().all(|(_, hash)| hash.is_some()) {
+        return Ok(());
+    }
+    let vouched = listed.iter().all(|(name, _)| file_hash(&folder.join(name)).is_none_or(|h| known(name, &h)));
+    if vouched && folder_names(folder)?.iter().all(|n| n == FOLDER_LIST || listed.iter().any(|(l, _)| l == n)) {
+        write_list(folder)?;
+    }
+    Ok(())
+}
+
 /// Write the [`FOLDER_LIST`] of a freshly written folder: each file's hash and name.
 fn write_list(folder: &Path) -> Result<()> {
     let mut text = String::from(

@@ -57,6 +57,10 @@ impl Ledger {
             let path = self.folder.join(name);
             let Ok(meta) = std::fs::symlink_metadata(&path) else { continue };
             if meta.is_dir() {
+                // a folder keeps its own list; one written before lists held hashes gets
+                // them where the ledger knows its files
+                let known = |file: &str, hash: &str| matches!(marks.get(&format!("{name}/{file}")), Some(Mark::Hash(h)) if hash.starts_with(h.as_str()));
+                atomic::upgrade_list(&path, known)?;
                 continue;
             }
             let ours = match marks.get(name) {

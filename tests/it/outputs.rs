@@ -275,3 +275,30 @@ fn the_largest_options_never_abort_under_a_memory_cap() {
     assert!(run.status.success(), "a render within the budget runs: {}", stderr(&run));
     assert!(!d.join("m.exr").exists() && !d.join("s.exr").exists() && !d.join("g.exr").exists());
 }
+
+/// A folder built before solidtex recorded hashes (folder lists of names only, no ledger)
+/// is taken over where the build's records vouch for its files, and its lists get hashes.
+#[test]
+fn a_build_folder_from_before_hashes_is_taken_over() {
+    let dir = tempfile::tempdir().unwrap();
+    let lib = dir.path().join("lib.toml");
+    std::fs::write(
+        &lib,
+        "[[exemplar]]\nname = \"a\"\nrecipe = \"procedural:marble\"\nsize = 8\nexports = [\"slices\"]\n",
+    )
+    .unwrap();
+    let (lib, out) = (lib.to_string_lossy().into_owned(), at(dir.path(), "out"));
+    assert!(solidtex(&["build", &lib, "-o", &out]).status.success());
+    let list = dir.path().join("out/a_slices/solidtex-folder.txt");
+    let names: String = std::fs::read_to_string(&list)
+        .unwrap()
+        .lines()
+        .filter(|l| !l.starts_with('#'))
+        .map(|l| format!("{}\n", l.split_once("  ").unwrap().1))
+        .collect();
+    std::fs::write(&list, format!("# Written by solidtex.\n{names}")).unwrap();
+    std::fs::remove_file(dir.path().join("out/.cache/written.txt")).unwrap();
+    let run = solidtex(&["build", &lib, "-o", &out, "--force"]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    assert!(std::fs::read_to_string(&list).unwrap().lines().any(|l| l.ends_with("  z0000.png")), "hashes again");
+}
