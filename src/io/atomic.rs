@@ -207,11 +207,33 @@ pub fn remove_stale_temporaries(folder: &Path, output: Option<&str>) {
         let path = entry.path();
         let _ = match fs::symlink_metadata(&path) {
             Ok(m) if m.file_type().is_symlink() => fs::remove_file(&path),
-            Ok(m) if m.is_dir() => remove_if_unlocked(&path, |p| fs::remove_dir_all(p)),
+            Ok(m) if m.is_dir() => remove_if_unlocked(&path, remove_stale_folder),
             Ok(m) if m.is_file() => remove_if_unlocked(&path, |p| fs::remove_file(p)),
             _ => Ok(()),
         };
     }
+}
+
+/// Remove a temporary folder a stopped run left. Without a [`FOLDER_LIST`] it is one
+/// solidtex was still filling, all its own. With one it may be a previous folder swapped out
+/// by a run stopped before clearing it, where files may have appeared meanwhile: only the
+/// files the list vouches for go, and the folder only if nothing else is left.
+fn remove_stale_folder(path: &Path) -> std::io::Result<()> {
+    if !path.join(FOLDER_LIST).is_file() {
+        return fs::remove_dir_all(path);
+    }
+    let listed = listed_files(path);
+    for entry in fs::read_dir(path)?.filter_map(|e| e.ok()) {
+        let name = entry.file_name().to_string_lossy().into_owned();
+        if name != FOLDER_LIST && why_foreign(path, &name, &listed).is_none() {
+            fs::remove_file(entry.path())?;
+        }
+    }
+    if fs::read_dir(path)?.count() == 1 {
+        fs::remove_file(path.join(FOLDER_LIST))?;
+        fs::remove_dir(path)?;
+    }
+    Ok(())
 }
 
 /// `remove` the temporary at `path` while holding its lock: no run is writing it.
@@ -648,6 +670,23 @@ mod tests {
         drop(writer);
         remove_stale_temporaries(d, None);
         assert_eq!(folder_names(d).unwrap(), [".kiwi.exr.solidtex-draft.tmp"]);
+    }
+
+    /// A stale temporary folder holding a previous folder (with its list) loses only the
+    /// files the list vouches for; a file that appeared in it, and so the folder, stay.
+    #[test]
+    fn a_stale_swapped_out_folder_keeps_what_its_list_does_not_vouch_for() {
+        let dir = tempfile::tempdir().unwrap();
+        let stale = dir.path().join(".s.solidtex-eeeeee.tmp");
+        fs::create_dir(&stale).unwrap();
+        fs::write(stale.join("z0000.png"), "slice").unwrap();
+        write_list(&stale).unwrap();
+        fs::write(stale.join("notes.txt"), "mine").unwrap();
+        remove_stale_temporaries(dir.path(), Some("s"));
+        assert_eq!(folder_names(&stale).unwrap(), ["notes.txt", FOLDER_LIST]);
+        fs::remove_file(stale.join("notes.txt")).unwrap();
+        remove_stale_temporaries(dir.path(), Some("s"));
+        assert!(!stale.exists(), "all vouched for: the folder goes");
     }
 
     /// A replaced file keeps its permissions, a new one gets the umask's; a document behind

@@ -187,11 +187,11 @@ pub fn check_output(output: &Path, inputs: &[&Path]) -> Result<()> {
 /// [`check_output`] for a command that edits the volume `edited` (`stamp`, `scatter`,
 /// `blur`): the output may be that volume, written atomically, but none of the `others`.
 pub fn check_edit_output(output: &Path, edited: &Path, others: &[&Path]) -> Result<()> {
-    check_output(output, others)?;
     if Format::of(output)? == Format::PngStack {
-        check_folder_output(output, &[edited])?;
+        let all: Vec<&Path> = others.iter().copied().chain([edited]).collect();
+        return check_folder_output(output, &all);
     }
-    Ok(())
+    check_output(output, others)
 }
 
 /// [`check_output`] for an output that is a folder whatever its name (a set of masks).
