@@ -54,8 +54,10 @@ struct Live {
 }
 
 impl Live {
-    fn new(path: &Path, lock: File) -> Live {
-        live_paths().push(path.to_path_buf());
+    /// Register `path` in `list`, the registry held locked since before the temporary was
+    /// made: a stop signal in between waits for it, then removes it too.
+    fn new(list: &mut Vec<PathBuf>, path: &Path, lock: File) -> Live {
+        list.push(path.to_path_buf());
         Live { path: path.to_path_buf(), _lock: lock }
     }
 }
@@ -143,11 +145,12 @@ impl TempFolder {
 fn temporary_file(path: &Path) -> Result<TempFile> {
     let prefix = format!(".{}.solidtex-", name_of(path));
     for _ in 0..ATTEMPTS {
+        let mut list = live_paths();
         let builder = tempfile::Builder::new().prefix(&prefix).suffix(".tmp").tempfile_in(folder_of(path));
         let file = builder.map_err(|e| Error::io(path, e))?;
         let lock = file.as_file().try_clone().map_err(|e| Error::io(path, e))?;
         if claim(file.path(), &lock) {
-            let live = Live::new(file.path(), lock);
+            let live = Live::new(&mut list, file.path(), lock);
             return Ok(TempFile { file, _live: live });
         }
     }
@@ -158,11 +161,12 @@ fn temporary_file(path: &Path) -> Result<TempFile> {
 fn temporary_folder(path: &Path) -> Result<TempFolder> {
     let prefix = format!(".{}.solidtex-", name_of(path));
     for _ in 0..ATTEMPTS {
+        let mut list = live_paths();
         let builder = tempfile::Builder::new().prefix(&prefix).suffix(".tmp").tempdir_in(folder_of(path));
         let folder = builder.map_err(|e| Error::io(path, e))?;
         let lock = File::open(folder.path()).map_err(|e| Error::io(path, e))?;
         if claim(folder.path(), &lock) {
-            let live = Live::new(folder.path(), lock);
+            let live = Live::new(&mut list, folder.path(), lock);
             return Ok(TempFolder { folder, live });
         }
     }
