@@ -1,46 +1,79 @@
 #!/usr/bin/env bash
-# Synthesis quality on the real images in ../shared/data/images (not part of the project).
-# Usage: bash docs/evaluate.sh [OUT_DIR]   (default out/eval). Prints one line per exemplar.
+# Synthesis quality on a folder of photos, against noise that has each photo's spectrum and
+# colours (`solidtex noise`), and on the two 3D truths with long features.
+# Usage: bash docs/evaluate.sh [IMAGES_DIR] [OUT_DIR]
+#   IMAGES_DIR  default ../shared/data/images (not part of the project); every *.png in it
+#   OUT_DIR     default out/eval; volumes and contact sheets go there
+# Photos whose name holds "strata" or "layered" are synthesized with --layered.
+# One line per photo and per control; `check` counts the figures `quality --check` finds
+# outside their bands (docs/synthesis.md, "Checking a volume").
 set -euo pipefail
 cd "$(dirname "$0")/.."
-data=../shared/data/images
-out=${1:-out/eval}
+data=${1:-../shared/data/images}
+out=${2:-out/eval}
+[ -d "$data" ] || { echo "evaluate.sh: no folder $data" >&2; exit 2; }
 mkdir -p "$out"
 cargo build --release --quiet
 bin=./target/release/solidtex
-row() { # name image mode
-  local name=$1 image=$data/$2 mode=$3 flags=""
-  [ "$mode" = layered ] && flags="--layered"
-  local size=64; [ "$mode" = layered ] && size=64x64x128
-  local started=$(date +%s.%N)
-  $bin synth "$image" $flags --max-exemplar 128 --size $size --seed 1 -o "$out/$name.exr" 2>/dev/null
-  local took=$(echo "$(date +%s.%N) - $started" | bc)
-  $bin sheet "$out/$name.exr" -o "$out/$name.sheet.png" --title "$name" 2>/dev/null
-  local q=$($bin quality "$out/$name.exr" --exemplar "$image" --max-exemplar 128 --json)
-  local extra=""
-  if [ "$mode" = layered ]; then
-    $bin synth "$image" $flags --no-anti-sweeping --max-exemplar 128 --size $size --seed 1 -o "$out/$name-norule.exr" 2>/dev/null
-    local q2=$($bin quality "$out/$name-norule.exr" --exemplar "$image" --max-exemplar 128 --json)
-    extra=$(python3 -c "import json,sys; a=json.loads(sys.argv[1]); b=json.loads(sys.argv[2]); print('sweep %.3f (rule off %.3f)' % (a['layered']['sweeping_index'], b['layered']['sweeping_index']))" "$q" "$q2")
-  fi
-  python3 -c "
-import json,sys
-r=json.loads(sys.argv[1])
-ratios=' '.join('%s %.2f' % (a['axis'], a['ratio']) for a in r['axes'])
-hist=max(h['distance'] for h in r['histograms'])
-grad=[a['gradient_ratio'] for a in r['sharpness']]
-length=[a['length_ratio'] for a in r['sharpness']]
-sharp='gradient %.2f-%.2f  length %.2f-%.2f' % (min(grad), max(grad), min(length), max(length))
-print('%-12s %6.2fs  ratio %s  hist %.3f  %s  %s' % (sys.argv[2], float(sys.argv[3]), ratios, hist, sharp, sys.argv[4]))
-" "$q" "$name" "$took" "$extra"
+summary() { # label json check-stderr seconds
+  python3 - "$@" <<'PY'
+import json, sys
+label, report, check, took = sys.argv[1], json.loads(sys.argv[2]), sys.argv[3], sys.argv[4]
+span = lambda v: '%.2f-%.2f' % (min(v), max(v))
+s = report['sharpness']
+lines = [l for l in report['lines'] if l['applies']]
+line = ('lines %s pieces %s top3 %s share %s' % (lines[0]['lines']['name'],
+        span([l['lines']['pieces_ratio'] for l in lines]), span([l['lines']['top3_ratio'] for l in lines]),
+        span([l['lines']['share_ratio'] for l in lines]))) if lines else 'no line structure'
+outside = check.split(' figure')[0].split()[-1] if 'outside' in check else '0'
+print('%-34s %6ss  gradient %s  length %s  %s  check %s' % (label, took, span([a['gradient_ratio'] for a in s]),
+      span([a['length_ratio'] for a in s]), line, outside))
+PY
 }
-row gravel skimage_gravel.png homogeneous
-row grass skimage_grass.png homogeneous
-row brick skimage_brick.png homogeneous
-row marble gimp_marble1.png homogeneous
-row granite gimp_granite1.png homogeneous
-row pebbles sh3d_pebbles.png homogeneous
-row coffee gimp_java_coffee_beans.png homogeneous
-row wood gimp_wood1.png homogeneous
-row strata stk_rockStrata_a_512.png layered
-row cliff stk_cliff_layered_512.png layered
+measure() { # label volume exemplar-args... ; prints the summary line
+  local label=$1 volume=$2 took=$3; shift 3
+  local json check
+  json=$($bin quality "$volume" "$@" --json --check 2>"$out/check.txt") || true
+  check=$(head -1 "$out/check.txt")
+  summary "$label" "$json" "$check" "$took"
+}
+for image in "$data"/*.png; do
+  name=$(basename "$image" .png)
+  flags="" size=64
+  case "$name" in *strata*|*layered*) flags="--layered"; size=64x64x128 ;; esac
+  started=$(date +%s.%N)
+  $bin synth "$image" $flags --max-exemplar 128 --size $size --seed 1 -o "$out/$name.exr" 2>/dev/null
+  took=$(printf '%.1f' "$(echo "$(date +%s.%N) - $started" | bc)")
+  $bin sheet "$out/$name.exr" -o "$out/$name.sheet.png" --title "$name" 2>/dev/null
+  measure "$name synth" "$out/$name.exr" "$took" --exemplar "$image" --max-exemplar 128
+  if [ -z "$flags" ]; then
+    $bin noise "$image" --max-exemplar 128 --size 64 --seed 1 -o "$out/$name.noise.exr" 2>/dev/null
+    measure "$name noise" "$out/$name.noise.exr" - --exemplar "$image" --max-exemplar 128
+  fi
+done
+# The truths: synthesis and noise from their central slices, measured against the slices
+# and, as label volumes, against the truth itself.
+for truth in foam:1 channels:3; do
+  name=${truth%:*} seed=${truth#*:}
+  $bin make "$name" --size 128 --seed "$seed" -o "$out/$name.truth.exr" 2>/dev/null
+  for axis in x y z; do $bin slice "$out/$name.truth.exr" --axis $axis -o "$out/$name-$axis.png" 2>/dev/null; done
+  slices=(--exemplar "$out/$name-x.png" --ey "$out/$name-y.png" --ez "$out/$name-z.png")
+  measure "$name truth" "$out/$name.truth.exr" - "${slices[@]}"
+  started=$(date +%s.%N)
+  $bin synth "$out/$name-x.png" --ey "$out/$name-y.png" --ez "$out/$name-z.png" --size 64 --seed 1 -o "$out/$name.exr" 2>/dev/null
+  took=$(printf '%.1f' "$(echo "$(date +%s.%N) - $started" | bc)")
+  $bin noise "$out/$name-x.png" --ey "$out/$name-y.png" --ez "$out/$name-z.png" --size 64 --seed 1 -o "$out/$name.noise.exr" 2>/dev/null
+  for kind in synth noise; do
+    volume="$out/$name.exr"; [ $kind = noise ] && volume="$out/$name.noise.exr"
+    measure "$name $kind" "$volume" "$([ $kind = synth ] && echo "$took" || echo -)" "${slices[@]}"
+    $bin quality "$volume" --labels --truth "$out/$name.truth.exr" --json 2>/dev/null | python3 -c "
+import json, sys
+r = json.load(sys.stdin)
+fmt = lambda v: '-' if v is None else '%.2f' % v
+for p, t in zip(r['ratios'], r['truth']['phases']):
+    print('    phase %.3f (share %.2f): share %.2f  pieces %.2f  correlation length %s' % (p['label'], t['share'],
+          p['share_ratio'], p['pieces_ratio'], ' / '.join(fmt(c) for c in p['correlation_ratio'])))
+"
+  done
+done
+rm -f "$out/check.txt"

@@ -1,6 +1,6 @@
-//! Two-point statistics along an axis: one routine for the ground-truth comparison of
-//! synthesis (normalized autocorrelation of grey values) and the materials statistics of
-//! label volumes (the two-point probability S2 of a phase).
+//! Two-point statistics along an axis: sums of lagged products, for the ground-truth
+//! comparison of synthesis (normalized autocorrelation of grey values). Label volumes count
+//! the same pairs on rows of bits ([`crate::labels`]), checked against this routine.
 
 use crate::volume::Axis;
 

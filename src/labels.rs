@@ -10,19 +10,36 @@
 //! - **interface per voxel**: faces between the phase and the others per voxel of the
 //!   volume, per axis and summed (the specific surface area in 1/voxel for interfaces that
 //!   follow the grid; for curved, randomly oriented ones the true area is about 2/3 of
-//!   the sum, given as `isotropic_surface`).
+//!   the sum, given as `isotropic_surface`);
+//! - **pieces**: face-connected (6-connected, no wrapping) groups of the phase's voxels, per
+//!   100,000 voxels, and how many of them hold only 1 or 2 voxels (specks);
+//! - **correlation length** along each axis: the first lag at which the normalized two-point
+//!   correlation `(S2(r) - phi^2) / (phi - phi^2)` falls to 1/e, interpolated between lags
+//!   (none when it stays above within [`CORRELATION_LAG`] voxels or the side).
+//!
+//! [`against_truth`] compares a volume with a 3D truth: the volume's values are first
+//! snapped to the nearest of the truth's labels (a synthesized volume holds blends), then
+//! each phase's figures are given as volume over truth.
 //!
 //! The phases are the distinct values of the first channel (at most [`MAX_PHASES`]).
 
-use crate::correlation::lagged_products;
 use crate::error::{Error, Result};
-use crate::volume::{Axis, Volume};
+use crate::sharpness::ratio;
+use crate::volume::Volume;
 use serde::Serialize;
 
 /// Most phases a label volume may have.
 pub const MAX_PHASES: usize = 16;
 /// Largest lag reported.
 pub const MAX_LAG: usize = 32;
+/// Largest lag searched for the correlation length.
+pub const CORRELATION_LAG: usize = 64;
+/// Against a truth: the band of the pieces ratio.
+pub const PIECES_BAND: (f64, f64) = (0.7, 1.3);
+/// Against a truth: the band of each axis' correlation-length ratio.
+pub const CORRELATION_BAND: (f64, f64) = (0.7, 1.3);
+/// Against a truth: the band of the share ratio.
+pub const SHARE_BAND: (f64, f64) = (0.8, 1.25);
 
 /// One phase's statistics.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -41,6 +58,13 @@ pub struct Phase {
     pub interface_per_voxel: f64,
     /// 2/3 of the sum: the surface per voxel of curved, randomly oriented interfaces.
     pub isotropic_surface: f64,
+    /// Face-connected pieces of the phase per 100,000 voxels.
+    pub pieces_per_100k: f64,
+    /// Pieces of 1 or 2 voxels.
+    pub specks: usize,
+    /// Per axis: the lag (voxels) at which the normalized two-point correlation falls to
+    /// 1/e; `None` when it does not within the lags searched.
+    pub correlation_length: [Option<f64>; 3],
 }
 
 /// The statistics of a label volume.
@@ -56,33 +80,161 @@ pub struct LabelStats {
 
 /// Measure the label volume `volume`.
 pub fn measure(volume: &Volume) -> Result<LabelStats> {
-    let labels: Vec<f32> = volume.data().iter().step_by(volume.channel_count()).copied().collect();
+    let labels = first_channel(volume);
+    let distinct = distinct_labels(&labels, volume.channels()[0].name())?;
+    Ok(measure_labels(&labels, volume.dims(), &distinct))
+}
+
+/// One phase of a volume against the same phase of a truth: volume over truth.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PhaseAgainstTruth {
+    /// The label.
+    pub label: f32,
+    /// Share, volume over truth.
+    pub share_ratio: f64,
+    /// Pieces per 100,000 voxels, volume over truth.
+    pub pieces_ratio: f64,
+    /// Per axis: correlation length, volume over truth (`None` when either has none).
+    pub correlation_ratio: [Option<f64>; 3],
+}
+
+/// A label volume compared with its truth.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct TruthComparison {
+    /// The volume's statistics, its values snapped to the truth's labels.
+    pub volume: LabelStats,
+    /// The truth's statistics.
+    pub truth: LabelStats,
+    /// Per truth phase, the ratios.
+    pub ratios: Vec<PhaseAgainstTruth>,
+}
+
+impl TruthComparison {
+    /// Every ratio outside its band, named; a correlation length the truth has and the
+    /// volume lacks (or the reverse) counts as outside.
+    pub fn outside_bands(&self) -> Vec<String> {
+        use crate::lines::within;
+        let mut out = Vec::new();
+        for r in &self.ratios {
+            let phase = format!("phase {}", r.label);
+            if !within(r.share_ratio, SHARE_BAND) {
+                out.push(format!(
+                    "{phase} share ratio {:.2} (allowed {}-{})",
+                    r.share_ratio, SHARE_BAND.0, SHARE_BAND.1
+                ));
+            }
+            if !within(r.pieces_ratio, PIECES_BAND) {
+                out.push(format!(
+                    "{phase} pieces ratio {:.2} (allowed {}-{})",
+                    r.pieces_ratio, PIECES_BAND.0, PIECES_BAND.1
+                ));
+            }
+            for (a, c) in r.correlation_ratio.iter().enumerate() {
+                let axis = ["x", "y", "z"][a];
+                match *c {
+                    Some(c) if within(c, CORRELATION_BAND) => {}
+                    Some(c) => out.push(format!(
+                        "{phase} {axis} correlation length ratio {c:.2} (allowed {}-{})",
+                        CORRELATION_BAND.0, CORRELATION_BAND.1
+                    )),
+                    None => {
+                        let has = |s: &LabelStats| {
+                            s.phases.iter().find(|p| p.label == r.label).and_then(|p| p.correlation_length[a])
+                        };
+                        if has(&self.truth).is_some() != has(&self.volume).is_some() {
+                            out.push(format!("{phase} {axis} correlation length: one of volume and truth has none"));
+                        }
+                    }
+                }
+            }
+        }
+        out
+    }
+}
+
+/// Compare `volume` with the label volume `truth`: the volume's first channel is snapped to
+/// the nearest of the truth's labels, both are measured, and each phase's figures are
+/// given as volume over truth.
+pub fn against_truth(volume: &Volume, truth: &Volume) -> Result<TruthComparison> {
+    let truth_labels = first_channel(truth);
+    let distinct = distinct_labels(&truth_labels, truth.channels()[0].name())?;
+    let truth_stats = measure_labels(&truth_labels, truth.dims(), &distinct);
+    let snapped: Vec<f32> = first_channel(volume).iter().map(|v| nearest(*v, &distinct)).collect();
+    let volume_stats = measure_labels(&snapped, volume.dims(), &distinct);
+    let ratios = truth_stats
+        .phases
+        .iter()
+        .zip(&volume_stats.phases)
+        .map(|(t, v)| PhaseAgainstTruth {
+            label: t.label,
+            share_ratio: ratio(v.share, t.share),
+            pieces_ratio: ratio(v.pieces_per_100k, t.pieces_per_100k),
+            correlation_ratio: [0, 1, 2].map(|a| Some(ratio(v.correlation_length[a]?, t.correlation_length[a]?))),
+        })
+        .collect();
+    Ok(TruthComparison { volume: volume_stats, truth: truth_stats, ratios })
+}
+
+fn first_channel(volume: &Volume) -> Vec<f32> {
+    volume.data().iter().step_by(volume.channel_count()).copied().collect()
+}
+
+/// The distinct values of `labels`, sorted; an error naming `channel` past [`MAX_PHASES`].
+fn distinct_labels(labels: &[f32], channel: &str) -> Result<Vec<f32>> {
     let mut distinct: Vec<f32> = Vec::new();
-    for v in &labels {
+    for v in labels {
         if !distinct.contains(v) {
             if distinct.len() == MAX_PHASES {
                 return Err(Error::invalid(format!(
-                    "channel {} has more than {MAX_PHASES} distinct values: a label volume holds a few phases",
-                    volume.channels()[0].name()
+                    "channel {channel} has more than {MAX_PHASES} distinct values: a label volume holds a few phases"
                 )));
             }
             distinct.push(*v);
         }
     }
     distinct.sort_by(f32::total_cmp);
-    let dims = volume.dims();
-    let lags = dims.map(|d| MAX_LAG.min(d.saturating_sub(1)));
-    let phases = distinct.iter().map(|&label| phase(&labels, dims, lags, label)).collect();
-    Ok(LabelStats { dims, lags, phases })
+    Ok(distinct)
 }
 
-fn phase(labels: &[f32], dims: [usize; 3], lags: [usize; 3], label: f32) -> Phase {
+/// The label nearest to `value` (the first of equals).
+fn nearest(value: f32, labels: &[f32]) -> f32 {
+    labels.iter().copied().min_by(|a, b| (a - value).abs().total_cmp(&(b - value).abs())).unwrap_or(value)
+}
+
+fn measure_labels(labels: &[f32], dims: [usize; 3], distinct: &[f32]) -> LabelStats {
+    let lags = dims.map(|d| MAX_LAG.min(d.saturating_sub(1)));
+    let pieces = pieces(labels, dims);
+    let phases = distinct
+        .iter()
+        .map(|&label| {
+            let sizes = pieces.iter().filter(|p| p.0 == label).map(|p| p.1);
+            phase(labels, dims, lags, label, sizes)
+        })
+        .collect();
+    LabelStats { dims, lags, phases }
+}
+
+fn phase(
+    labels: &[f32],
+    dims: [usize; 3],
+    lags: [usize; 3],
+    label: f32,
+    piece_sizes: impl Iterator<Item = usize>,
+) -> Phase {
     let indicator: Vec<f64> = labels.iter().map(|v| f64::from(u8::from(*v == label))).collect();
     let share = indicator.iter().sum::<f64>() / indicator.len() as f64;
-    let two_point = [0, 1, 2].map(|a| {
-        let products = lagged_products(&indicator, dims, Axis::ALL[a], None, lags[a]);
-        products.iter().map(|(sum, count)| sum / (*count).max(1) as f64).collect()
+    let correlation_lags = dims.map(|d| CORRELATION_LAG.min(d.saturating_sub(1)));
+    let s2 = [0, 1, 2].map(|a| two_point(labels, label, dims, a, correlation_lags[a].max(lags[a])));
+    let correlation_length = [0, 1, 2].map(|a| correlation_length(&s2[a], share));
+    let two_point = s2.map(|mut v| {
+        v.truncate(MAX_LAG + 1);
+        v
     });
+    let (mut count, mut specks) = (0usize, 0usize);
+    for size in piece_sizes {
+        count += 1;
+        specks += usize::from(size <= 2);
+    }
     let lineal_path = [0, 1, 2].map(|a| lineal(&indicator, dims, a, lags[a]));
     let voxels = indicator.len() as f64;
     let interface_per_axis = [0, 1, 2].map(|a| {
@@ -101,7 +253,99 @@ fn phase(labels: &[f32], dims: [usize; 3], lags: [usize; 3], label: f32) -> Phas
         interface_per_axis,
         interface_per_voxel,
         isotropic_surface: interface_per_voxel * 2.0 / 3.0,
+        pieces_per_100k: count as f64 * 1e5 / voxels,
+        specks,
+        correlation_length,
     }
+}
+
+/// `S2(r)` of the phase `label` along axis `a` for `r = 0..=max_lag`: each line along the
+/// axis as a row of bits, the pairs `r` apart counted by shifting the row onto itself.
+fn two_point(labels: &[f32], label: f32, dims: [usize; 3], a: usize, max_lag: usize) -> Vec<f64> {
+    let side = dims[a];
+    let words = side.div_ceil(64);
+    let stride = [1, dims[0], dims[0] * dims[1]][a];
+    let lines = labels.len() / side;
+    let mut bits = vec![0u64; lines * words];
+    for (line, start) in (0..labels.len()).filter(|&i| (i / stride).is_multiple_of(side)).enumerate() {
+        for k in 0..side {
+            if labels[start + k * stride] == label {
+                bits[line * words + k / 64] |= 1 << (k % 64);
+            }
+        }
+    }
+    (0..=max_lag)
+        .map(|r| {
+            let pairs: u64 = bits.chunks_exact(words).map(|row| overlap(row, r)).sum();
+            pairs as f64 / (lines * (side - r)).max(1) as f64
+        })
+        .collect()
+}
+
+/// How many bits `k` of `row` have bit `k + r` set too.
+fn overlap(row: &[u64], r: usize) -> u64 {
+    let (q, s) = (r / 64, r % 64);
+    (0..row.len())
+        .map(|w| {
+            let high = row.get(w + q).copied().unwrap_or(0);
+            let next = row.get(w + q + 1).copied().unwrap_or(0);
+            let shifted = if s == 0 { high } else { (high >> s) | (next << (64 - s)) };
+            u64::from((row[w] & shifted).count_ones())
+        })
+        .sum()
+}
+
+/// The first lag at which `(S2(r) - phi^2) / (phi - phi^2)` falls to 1/e, linearly
+/// interpolated between the lags around it.
+fn correlation_length(s2: &[f64], phi: f64) -> Option<f64> {
+    let variance = phi - phi * phi;
+    if variance <= 0.0 {
+        return None;
+    }
+    let target = (-1.0f64).exp();
+    let c: Vec<f64> = s2.iter().map(|v| (v - phi * phi) / variance).collect();
+    let r = c.iter().position(|v| *v <= target)?;
+    if r == 0 {
+        return Some(0.0);
+    }
+    Some(r as f64 - 1.0 + (c[r - 1] - target) / (c[r - 1] - c[r]))
+}
+
+/// The face-connected pieces of equal labels (no wrapping): `(label, voxels)` each.
+fn pieces(labels: &[f32], dims: [usize; 3]) -> Vec<(f32, usize)> {
+    let [nx, ny, nz] = dims;
+    let mut seen = vec![false; labels.len()];
+    let mut stack = Vec::new();
+    let mut found = Vec::new();
+    for start in 0..labels.len() {
+        if seen[start] {
+            continue;
+        }
+        let label = labels[start];
+        seen[start] = true;
+        stack.push(start);
+        let mut size = 0;
+        while let Some(i) = stack.pop() {
+            size += 1;
+            let (x, y, z) = (i % nx, (i / nx) % ny, i / (nx * ny));
+            let steps = [
+                (x > 0, i.wrapping_sub(1)),
+                (x + 1 < nx, i + 1),
+                (y > 0, i.wrapping_sub(nx)),
+                (y + 1 < ny, i + nx),
+                (z > 0, i.wrapping_sub(nx * ny)),
+                (z + 1 < nz, i + nx * ny),
+            ];
+            for (inside, j) in steps {
+                if inside && !seen[j] && labels[j] == label {
+                    seen[j] = true;
+                    stack.push(j);
+                }
+            }
+        }
+        found.push((label, size));
+    }
+    found
 }
 
 /// `L(r)` along axis `a`: windows of `r + 1` voxels wholly in the phase over all windows,
@@ -130,7 +374,7 @@ fn lineal(indicator: &[f64], dims: [usize; 3], a: usize, max_lag: usize) -> Vec<
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::volume::Channel;
+    use crate::volume::{Axis, Channel};
 
     fn labels(dims: [usize; 3], f: impl Fn(usize, usize, usize) -> f32) -> Volume {
         Volume::from_fn(dims, Channel::grey(), |x, y, z, o| o[0] = f(x, y, z)).unwrap()
@@ -172,6 +416,58 @@ mod tests {
         }
         assert_eq!(p.interface_per_axis[..2], [0.0, 0.0]);
         assert!((p.interface_per_axis[2] - 3.0 / 16.0).abs() < 1e-12, "3 interfaces in 16 layers");
+    }
+
+    /// Pieces are face-connected: the checkerboard's voxels are all single specks, the
+    /// slabs are whole pieces; correlation lengths follow the textbook profiles.
+    #[test]
+    fn pieces_specks_and_correlation_lengths() {
+        let board = measure(&labels([8, 8, 8], |x, y, z| ((x + y + z) % 2) as f32)).unwrap();
+        let p = &board.phases[1];
+        assert_eq!((p.pieces_per_100k, p.specks), (256.0 * 1e5 / 512.0, 256));
+        // C(0) = 1, C(1) = -1: 1/e is crossed at (1 - 1/e) / 2 of the first lag
+        let expected = (1.0 - (-1.0f64).exp()) / 2.0;
+        assert!(p.correlation_length.iter().all(|c| (c.unwrap() - expected).abs() < 1e-12), "{p:?}");
+        let slabs = measure(&labels([6, 5, 16], |_, _, z| ((z / 4) % 2) as f32)).unwrap();
+        let p = &slabs.phases[0];
+        assert_eq!((p.pieces_per_100k, p.specks), (2.0 * 1e5 / 480.0, 0));
+        assert_eq!(p.correlation_length[..2], [None, None], "along x and y nothing decorrelates");
+        let z = p.correlation_length[2].unwrap();
+        assert!(z > 1.0 && z < 4.0, "slabs 4 voxels thick decorrelate within a slab: {z}");
+    }
+
+    /// A blended copy of the truth snaps back to it: every ratio is 1; a volume of specks
+    /// has many times the truth's pieces and a shorter correlation.
+    #[test]
+    fn a_volume_is_snapped_to_the_truths_labels_and_compared() {
+        let truth = labels([6, 5, 16], |_, _, z| ((z / 4) % 2) as f32);
+        let blended = labels([6, 5, 16], |x, _, z| ((z / 4) % 2) as f32 * 0.9 + 0.05 * (x % 2) as f32);
+        let same = against_truth(&blended, &truth).unwrap();
+        for r in &same.ratios {
+            assert_eq!((r.share_ratio, r.pieces_ratio), (1.0, 1.0), "{r:?}");
+            assert_eq!(r.correlation_ratio[2], Some(1.0));
+        }
+        let specks = labels([6, 5, 16], |x, y, z| ((x + y + z) % 2) as f32);
+        let bad = against_truth(&specks, &truth).unwrap();
+        assert!(bad.ratios[0].pieces_ratio > 50.0, "{:?}", bad.ratios[0]);
+        assert!(bad.ratios[0].correlation_ratio[2].unwrap() < 0.5, "{:?}", bad.ratios[0]);
+    }
+
+    /// Counting pairs with shifted rows of bits gives the plain sum of products, also on
+    /// lines longer than one 64-bit word and lags past a word.
+    #[test]
+    fn bit_rows_count_the_same_pairs_as_products() {
+        let dims = [150, 3, 70];
+        let v = labels(dims, |x, y, z| (crate::noise::mix64((x + 150 * (y + 3 * z)) as u64) % 3) as f32);
+        let values = first_channel(&v);
+        let indicator: Vec<f64> = values.iter().map(|l| f64::from(u8::from(*l == 1.0))).collect();
+        for a in [0, 2] {
+            let plain = crate::correlation::lagged_products(&indicator, dims, Axis::ALL[a], None, 69);
+            let bits = two_point(&values, 1.0, dims, a, 69);
+            for (r, ((sum, count), s2)) in plain.iter().zip(&bits).enumerate() {
+                assert!((sum / *count as f64 - s2).abs() < 1e-12, "axis {a} lag {r}");
+            }
+        }
     }
 
     #[test]

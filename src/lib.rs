@@ -39,6 +39,7 @@
 
 pub mod classify;
 pub mod cli;
+pub mod controls;
 pub mod correlation;
 pub mod error;
 pub mod fill;

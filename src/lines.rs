@@ -31,6 +31,12 @@ const STRIDE: usize = 32;
 const PERCENTILE: f64 = 0.9;
 /// Least exemplar top-3 share for which the line figures apply.
 pub const APPLIES: f64 = 0.3;
+/// The band of the pieces ratio (cuts over exemplar).
+pub const PIECES_BAND: (f64, f64) = (0.7, 1.3);
+/// The least top-3 share ratio.
+pub const TOP3_LEAST: f64 = 0.8;
+/// The band of the line share ratio.
+pub const SHARE_BAND: (f64, f64) = (0.5, 1.5);
 
 /// Pooled line figures of a set of images.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -76,6 +82,42 @@ pub struct Lines {
     pub other: Polarity,
     /// Whether the exemplar's lines form long pieces (top-3 share at least [`APPLIES`]).
     pub applies: bool,
+}
+
+impl Lines {
+    /// The figures outside their bands, named (empty when the figures do not apply).
+    pub fn outside_bands(&self) -> Vec<String> {
+        let p = &self.lines;
+        if !self.applies {
+            return Vec::new();
+        }
+        let mut out = Vec::new();
+        let axis = &self.axis;
+        if !within(p.pieces_ratio, PIECES_BAND) {
+            out.push(format!(
+                "{axis} {} line pieces ratio {:.2} (allowed {}-{})",
+                p.name, p.pieces_ratio, PIECES_BAND.0, PIECES_BAND.1
+            ));
+        }
+        if p.top3_ratio < TOP3_LEAST {
+            out.push(format!(
+                "{axis} {} line top-3 share ratio {:.2} (allowed at least {TOP3_LEAST})",
+                p.name, p.top3_ratio
+            ));
+        }
+        if !within(p.share_ratio, SHARE_BAND) {
+            out.push(format!(
+                "{axis} {} line share ratio {:.2} (allowed {}-{})",
+                p.name, p.share_ratio, SHARE_BAND.0, SHARE_BAND.1
+            ));
+        }
+        out
+    }
+}
+
+/// Whether `value` lies in the closed band.
+pub(crate) fn within(value: f64, (low, high): (f64, f64)) -> bool {
+    value >= low && value <= high
 }
 
 /// The line figures of `cuts` against `exemplar`; `picks[c]` is the cut channel that holds

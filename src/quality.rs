@@ -141,6 +141,38 @@ pub struct Glance {
 
 /// The largest histogram distance a synthesized volume should show (per channel).
 pub const HISTOGRAM_TARGET: f64 = 0.05;
+/// The largest slice-energy ratio (volume over the exemplar's split halves).
+pub const ENERGY_TARGET: f64 = 1.5;
+
+impl Report {
+    /// Every figure outside its documented band (docs/synthesis.md, "Checking a volume"),
+    /// named with its value and the band. Figures without an exemplar baseline (the
+    /// layered depth and sweeping measures) are not checked.
+    pub fn outside_bands(&self) -> Vec<String> {
+        use crate::lines::within;
+        use crate::sharpness::{GRADIENT_RANGE as G, LENGTH_RANGE as L};
+        let mut out = Vec::new();
+        for a in self.axes.iter().filter(|a| a.ratio > ENERGY_TARGET) {
+            out.push(format!("{} slice energy ratio {:.2} (allowed at most {ENERGY_TARGET})", a.axis, a.ratio));
+        }
+        for s in &self.sharpness {
+            if !within(s.gradient_ratio, G) {
+                out.push(format!("{} gradient ratio {:.2} (allowed {}-{})", s.axis, s.gradient_ratio, G.0, G.1));
+            }
+            if !within(s.length_ratio, L) {
+                out.push(format!("{} length ratio {:.2} (allowed {}-{})", s.axis, s.length_ratio, L.0, L.1));
+            }
+        }
+        out.extend(self.lines.iter().flat_map(crate::lines::Lines::outside_bands));
+        for h in self.histograms.iter().filter(|h| h.distance > HISTOGRAM_TARGET) {
+            out.push(format!(
+                "{} histogram distance {:.3} (allowed at most {HISTOGRAM_TARGET})",
+                h.channel, h.distance
+            ));
+        }
+        out
+    }
+}
 
 impl Glance {
     /// Whether every ratio lies in its target range and the histograms are close.

@@ -271,29 +271,8 @@ mod tests {
             .collect()
     }
 
-    /// A separable Gaussian blur of every channel, clamped at the borders.
     fn blurred(volume: &Volume, sigma: f64) -> Volume {
-        let radius = (3.0 * sigma).ceil() as i64;
-        let kernel: Vec<f64> = (-radius..=radius).map(|i| (-(i * i) as f64 / (2.0 * sigma * sigma)).exp()).collect();
-        let total: f64 = kernel.iter().sum();
-        let dims = volume.dims();
-        let mut current = volume.clone();
-        for axis in 0..3 {
-            let source = current.clone();
-            current = Volume::from_fn(dims, volume.channels().to_vec(), |x, y, z, out| {
-                for (c, o) in out.iter_mut().enumerate() {
-                    let mut sum = 0.0;
-                    for (k, w) in kernel.iter().enumerate() {
-                        let mut p = [x as i64, y as i64, z as i64];
-                        p[axis] = (p[axis] + k as i64 - radius).clamp(0, dims[axis] as i64 - 1);
-                        sum += w * source.get(p[0] as usize, p[1] as usize, p[2] as usize, c) as f64;
-                    }
-                    *o = (sum / total) as f32;
-                }
-            })
-            .unwrap();
-        }
-        current
+        crate::controls::blurred(volume, sigma).unwrap()
     }
 
     #[test]
@@ -311,16 +290,7 @@ mod tests {
         for s in measure_all(&flat, &truth) {
             assert!(!s.in_range() && s.gradient_ratio == 0.0, "flat: {s:?}");
         }
-        let n = truth.channel_count();
-        let count = truth.voxel_count();
-        let mut data = truth.data().to_vec();
-        for i in (1..count).rev() {
-            let j = (mix64(i as u64) % (i as u64 + 1)) as usize;
-            for c in 0..n {
-                data.swap(i * n + c, j * n + c);
-            }
-        }
-        let shuffled = Volume::from_data(truth.dims(), truth.channels().to_vec(), data).unwrap();
+        let shuffled = crate::controls::shuffled(&truth, 0).unwrap();
         for s in measure_all(&shuffled, &truth) {
             assert!(s.gradient_ratio > GRADIENT_RANGE.1 && s.length_ratio < LENGTH_RANGE.0, "shuffled: {s:?}");
         }

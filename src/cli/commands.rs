@@ -88,6 +88,41 @@ pub fn slice(file: &Path, axis: &str, index: Option<usize>, output: &Path) -> Re
     Ok(())
 }
 
+/// `solidtex slice FILE --plane PX,PY,PZ,NX,NY,NZ -o out.png`: an oblique cut through P
+/// with normal N, as wide as the volume's longest side; the volume repeats past its faces.
+pub fn oblique_slice(file: &Path, plane: &str, output: &Path) -> Result<()> {
+    let numbers = parse_plane(plane)?;
+    io::guard::png_output(output, &[file])?;
+    let volume = load(file)?;
+    let side = volume.dims().into_iter().max().unwrap_or(1);
+    let (point, normal) = (glam::Vec3::from_slice(&numbers[..3]), glam::Vec3::from_slice(&numbers[3..]));
+    let cut = crate::volume::Plane::through(point, normal, side).map_err(usage)?;
+    let image = volume.plane_slice(&cut, side, side, crate::volume::Edge::Wrap)?;
+    let picture = render::picture(&image, ColourMap::for_channels(image.channels()), 1);
+    io::write_rgb8(output, &picture)?;
+    eprintln!("wrote {} ({side}x{side}, through {point} with normal {})", output.display(), normal.normalize());
+    Ok(())
+}
+
+/// `PX,PY,PZ,NX,NY,NZ`: six finite numbers, the normal not zero (usage errors).
+fn parse_plane(text: &str) -> Result<[f32; 6]> {
+    let bad = || {
+        Error::usage(format!(
+            "--plane {text:?}: give six numbers PX,PY,PZ,NX,NY,NZ (a point in voxels and a normal, e.g. 32,32,32,1,1,0)"
+        ))
+    };
+    let values: Vec<f32> =
+        text.split(',').map(|v| v.trim().parse::<f32>()).collect::<std::result::Result<_, _>>().map_err(|_| bad())?;
+    let numbers: [f32; 6] = values.try_into().map_err(|_| bad())?;
+    if numbers.iter().any(|v| !v.is_finite() || v.abs() > 1e6) {
+        return Err(bad());
+    }
+    if numbers[3..].iter().all(|v| *v == 0.0) {
+        return Err(Error::usage(format!("--plane {text:?}: the normal NX,NY,NZ must not be zero")));
+    }
+    Ok(numbers)
+}
+
 /// `solidtex sheet FILE -o sheet.png`.
 pub fn sheet(file: &Path, output: &Path, title: Option<String>) -> Result<()> {
     io::guard::png_output(output, &[file])?;

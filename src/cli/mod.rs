@@ -68,6 +68,11 @@ pub enum Command {
         /// Index along the axis, 0 to the volume's side minus 1 (default: the middle).
         #[arg(long)]
         index: Option<usize>,
+        /// An oblique cut instead: `PX,PY,PZ,NX,NY,NZ`, the plane through point P (voxels)
+        /// with normal N; as wide as the volume's longest side, trilinear, the volume
+        /// repeating past its faces.
+        #[arg(long, conflicts_with_all = ["axis", "index"], allow_hyphen_values = true)]
+        plane: Option<String>,
         /// The PNG to write.
         #[arg(short, long)]
         output: PathBuf,
@@ -106,7 +111,8 @@ pub enum Command {
     },
     /// Make a procedural volume: marble (type 0), strata (1-b) or wood (2-a).
     Make {
-        /// marble, strata or wood.
+        /// marble, strata, wood, sponge, cream, chocolate, or the label volumes foam and
+        /// channels (3D truths with long features for `quality --labels --truth`).
         recipe: String,
         /// Size: N for a cube, or XxYxZ; each side 1 to 512, within the voxel budget.
         #[arg(long, default_value = "64")]
@@ -120,8 +126,12 @@ pub enum Command {
     },
     /// Synthesize a solid texture from 2D exemplars (Kopf 2007; --layered for type 1-b).
     Synth(synth::SynthArgs),
-    /// Measure a volume against its exemplars: slice energy, histograms, layering.
+    /// Measure a volume against its exemplars: slice energy, sharpness, line structure,
+    /// histograms, layering; or a label volume against its 3D truth.
     Quality(quality::QualityArgs),
+    /// Make the control volume quality figures must fail: random-phase noise with the
+    /// exemplars' power spectra and exact colours.
+    Noise(quality::NoiseArgs),
     /// Time the synthesis workloads (median of several runs) on built-in exemplars.
     Bench(bench::BenchArgs),
     /// Sweep a 2D cross-section into a volume, with noise and a skin.
@@ -201,7 +211,10 @@ pub fn run(command: Command) -> crate::Result<()> {
     match command {
         Command::Info { file, json } => info::run(&file, json),
         Command::Convert { input, output, dds_format } => commands::convert(&input, &output, dds_format.as_deref()),
-        Command::Slice { file, axis, index, output } => commands::slice(&file, &axis, index, &output),
+        Command::Slice { file, axis, index, plane, output } => match plane {
+            Some(plane) => commands::oblique_slice(&file, &plane, &output),
+            None => commands::slice(&file, &axis, index, &output),
+        },
         Command::Sheet { file, output, title } => commands::sheet(&file, &output, title),
         Command::Flipbook { file, output, columns, rows, padding, pow2 } => {
             commands::flipbook(&file, &output, columns, rows, padding, pow2)
@@ -209,6 +222,7 @@ pub fn run(command: Command) -> crate::Result<()> {
         Command::Make { recipe, size, seed, output } => commands::make(&recipe, &size, seed, &output),
         Command::Synth(args) => synth::run(&args),
         Command::Quality(args) => quality::run(&args),
+        Command::Noise(args) => quality::noise(&args),
         Command::Bench(args) => bench::run(&args),
         Command::Build(args) => build::run(&args),
         Command::Tui { .. } => Err(crate::Error::usage("the terminal UI is started by the solidtex binary itself")),

@@ -17,6 +17,14 @@ pub struct QualityArgs {
     /// share, two-point probability S2 and lineal path per axis, and interface per voxel.
     #[arg(long, conflicts_with = "exemplar")]
     pub labels: bool,
+    /// With --labels: the 3D label volume the volume should match (its values are snapped
+    /// to the truth's labels first); prints each phase's figures as volume over truth.
+    #[arg(long, requires = "labels")]
+    pub truth: Option<PathBuf>,
+    /// Exit with status 1 when any figure is outside its band (docs/synthesis.md,
+    /// "Checking a volume"), naming each; with --labels it needs --truth.
+    #[arg(long)]
+    pub check: bool,
     /// Ey, Ez and shrinking.
     #[command(flatten)]
     pub others: super::synth::OtherExemplars,
@@ -49,7 +57,23 @@ pub fn run(args: &QualityArgs) -> Result<()> {
     } else {
         say!("{}", table(&report).trim_end());
     }
-    Ok(())
+    verdict(args.check, report.outside_bands())
+}
+
+/// With `--check`: an error (exit status 1) naming the figures outside their bands.
+fn verdict(check: bool, outside: Vec<String>) -> Result<()> {
+    if !check {
+        return Ok(());
+    }
+    if outside.is_empty() {
+        eprintln!("check: every figure is within its band");
+        return Ok(());
+    }
+    Err(crate::Error::invalid(format!(
+        "check: {} figure(s) outside their bands:\n  {}",
+        outside.len(),
+        outside.join("\n  ")
+    )))
 }
 
 fn table(r: &Report) -> String {
@@ -107,20 +131,50 @@ fn table(r: &Report) -> String {
     out
 }
 
-/// `quality VOLUME --labels`: the materials statistics of a label volume.
+/// `quality VOLUME --labels [--truth TRUTH]`: the materials statistics of a label volume,
+/// and with a truth each phase's figures as volume over truth.
 fn labels(args: &QualityArgs, volume: &crate::Volume) -> Result<()> {
-    let stats = crate::labels::measure(volume).map_err(|e| e.in_file(&args.volume))?;
-    if args.json {
-        say!("{}", serde_json::to_string_pretty(&stats).expect("statistics always serialize"));
+    let Some(truth_path) = &args.truth else {
+        if args.check {
+            return Err(crate::Error::usage(
+                "--check with --labels needs --truth TRUTH: without a truth no figure has a band",
+            ));
+        }
+        let stats = crate::labels::measure(volume).map_err(|e| e.in_file(&args.volume))?;
+        if args.json {
+            say!("{}", serde_json::to_string_pretty(&stats).expect("statistics always serialize"));
+        } else {
+            say!("{}", label_table(&stats).trim_end());
+        }
         return Ok(());
+    };
+    let truth = io::read_volume(truth_path, io::budget_from_env()?)?;
+    let comparison = crate::labels::against_truth(volume, &truth).map_err(|e| e.in_file(truth_path))?;
+    if args.json {
+        say!("{}", serde_json::to_string_pretty(&comparison).expect("statistics always serialize"));
+    } else {
+        say!("the volume, snapped to the truth's labels\n{}", label_table(&comparison.volume).trim_end());
+        say!("the truth\n{}", label_table(&comparison.truth).trim_end());
+        say!("{}", ratio_table(&comparison.ratios).trim_end());
     }
+    verdict(args.check, comparison.outside_bands())
+}
+
+fn label_table(stats: &crate::labels::LabelStats) -> String {
     let [x, y, z] = stats.dims;
-    say!("label volume {x}x{y}x{z}: {} phase(s)", stats.phases.len());
+    let mut out = format!("label volume {x}x{y}x{z}: {} phase(s)\n", stats.phases.len());
+    let length = |c: Option<f64>| c.map_or_else(|| "-".to_string(), |c| format!("{c:.1}"));
     for p in &stats.phases {
-        say!(
-            "phase {}: share {:.4}, interface {:.4} per voxel (x {:.4}, y {:.4}, z {:.4})",
+        out += &format!(
+            "phase {}: share {:.4}, pieces {:.1} per 100k voxels ({} of 1-2 voxels), correlation length x {} y {} z {}, \
+             interface {:.4} per voxel (x {:.4}, y {:.4}, z {:.4})\n",
             p.label,
             p.share,
+            p.pieces_per_100k,
+            p.specks,
+            length(p.correlation_length[0]),
+            length(p.correlation_length[1]),
+            length(p.correlation_length[2]),
             p.interface_per_voxel,
             p.interface_per_axis[0],
             p.interface_per_axis[1],
@@ -134,10 +188,31 @@ fn labels(args: &QualityArgs, volume: &crate::Volume) -> Result<()> {
                     .collect::<Vec<_>>()
                     .join(" ")
             };
-            say!("  {axis}: S2 at 1 2 4 8 16: {}   L: {}", at(&p.two_point[a]), at(&p.lineal_path[a]));
+            out += &format!("  {axis}: S2 at 1 2 4 8 16: {}   L: {}\n", at(&p.two_point[a]), at(&p.lineal_path[a]));
         }
     }
-    Ok(())
+    out
+}
+
+fn ratio_table(ratios: &[crate::labels::PhaseAgainstTruth]) -> String {
+    use crate::labels::{CORRELATION_BAND as C, PIECES_BAND as P, SHARE_BAND as S};
+    let mut out = format!(
+        "volume over truth (bands: share {}-{}, pieces {}-{}, correlation length {}-{})\n  phase      share  pieces  length x     y     z\n",
+        S.0, S.1, P.0, P.1, C.0, C.1
+    );
+    let length = |c: Option<f64>| c.map_or_else(|| "    -".to_string(), |c| format!("{c:>5.2}"));
+    for r in ratios {
+        out += &format!(
+            "  {:<8} {:>7.2} {:>7.2}    {} {} {}\n",
+            r.label,
+            r.share_ratio,
+            r.pieces_ratio,
+            length(r.correlation_ratio[0]),
+            length(r.correlation_ratio[1]),
+            length(r.correlation_ratio[2])
+        );
+    }
+    out
 }
 
 /// The line structure rows of `quality` (docs/synthesis.md, "Line structure").
@@ -176,4 +251,42 @@ fn lines_table(lines: &[crate::lines::Lines]) -> String {
         );
     }
     out
+}
+
+/// The arguments of `solidtex noise`.
+#[derive(Debug, clap::Args)]
+pub struct NoiseArgs {
+    /// The exemplar (Ex; alone, all three axes).
+    pub exemplar: PathBuf,
+    /// Ey, Ez and shrinking.
+    #[command(flatten)]
+    pub others: super::synth::OtherExemplars,
+    /// Size: N for a cube, or XxYxZ.
+    #[arg(long, default_value = "64")]
+    pub size: String,
+    /// Seed of the noise.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// The volume file to write.
+    #[arg(short, long)]
+    pub output: PathBuf,
+}
+
+/// Run `solidtex noise`: the control volume of `crate::controls::spectral_noise`.
+pub fn noise(args: &NoiseArgs) -> Result<()> {
+    args.others.check()?;
+    let dims = super::commands::parse_size(&args.size)?;
+    crate::volume::check_size(dims, 4, io::budget_from_env()?).map_err(super::commands::usage)?;
+    let mut inputs = vec![args.exemplar.as_path()];
+    inputs.extend(args.others.ey.as_deref());
+    inputs.extend(args.others.ez.as_deref());
+    io::check_output(&args.output, &inputs)?;
+    let ex = args.others.load(&args.exemplar, "exemplar")?;
+    let (ey, ez) = args.others.load_yz()?;
+    let ey_ref = ey.as_ref().unwrap_or(&ex);
+    let exemplars = [Some(&ex), Some(ey_ref), Some(ez.as_ref().unwrap_or(ey_ref))];
+    let volume = crate::controls::spectral_noise(exemplars, dims, args.seed).map_err(|e| e.in_file(&args.exemplar))?;
+    io::write_volume(&args.output, &volume)?;
+    eprintln!("wrote {} (random-phase noise with the exemplars' spectra and colours)", args.output.display());
+    Ok(())
 }

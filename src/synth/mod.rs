@@ -26,7 +26,7 @@ mod optimize;
 mod params;
 mod pca;
 mod search;
-mod spectrum;
+pub(crate) mod spectrum;
 
 pub use direction::{DIRECTIONAL, Direction, direction};
 pub(crate) use driver::image_pyramid;

@@ -19,3 +19,4 @@ mod support;
 mod surface;
 mod synth;
 mod tour;
+mod yardstick;

@@ -37,6 +37,8 @@ fn an_output_naming_an_input_is_refused_and_nothing_changes() {
         vec!["convert", "v.exr", "link.exr"],
         vec!["snapshot", "v.exr", "-o", "v.exr"],
         vec!["slice", "v.exr", "-o", "v.exr"],
+        vec!["slice", "v.exr", "--plane", "1,1,1,0,0,1", "-o", "v.exr"],
+        vec!["noise", "k.png", "--size", "8", "-o", "k.png"],
         vec!["sheet", "atlas.png", "-o", "atlas.png"],
         vec!["flipbook", "atlas.png", "-o", "atlas.png"],
         vec!["synth", "k.png", "--size", "8", "-o", "k.png"],

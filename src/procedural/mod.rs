@@ -11,6 +11,8 @@ use glam::Vec3;
 use std::fmt;
 use std::str::FromStr;
 
+pub mod truths;
+
 /// A procedural recipe.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Recipe {
@@ -26,12 +28,24 @@ pub enum Recipe {
     Cream,
     /// Chocolate glaze: dark brown with faint lighter streaks.
     Chocolate,
+    /// A 3D Voronoi foam: stones of twelve greys with thin dark joints (a label volume).
+    Foam,
+    /// Long sinuous sand channels with levees in mud along x (a label volume of three).
+    Channels,
 }
 
 impl Recipe {
     /// All recipes.
-    pub const ALL: [Recipe; 6] =
-        [Recipe::Marble, Recipe::Strata, Recipe::Wood, Recipe::Sponge, Recipe::Cream, Recipe::Chocolate];
+    pub const ALL: [Recipe; 8] = [
+        Recipe::Marble,
+        Recipe::Strata,
+        Recipe::Wood,
+        Recipe::Sponge,
+        Recipe::Cream,
+        Recipe::Chocolate,
+        Recipe::Foam,
+        Recipe::Channels,
+    ];
 
     /// The recipe's name in manifests.
     pub fn name(self) -> &'static str {
@@ -42,6 +56,8 @@ impl Recipe {
             Recipe::Sponge => "sponge",
             Recipe::Cream => "cream",
             Recipe::Chocolate => "chocolate",
+            Recipe::Foam => "foam",
+            Recipe::Channels => "channels",
         }
     }
 
@@ -51,7 +67,8 @@ impl Recipe {
             Recipe::Marble => TextureType::T0,
             Recipe::Strata => TextureType::T1b,
             Recipe::Wood => TextureType::T2a,
-            Recipe::Sponge | Recipe::Cream | Recipe::Chocolate => TextureType::T0,
+            Recipe::Sponge | Recipe::Cream | Recipe::Chocolate | Recipe::Foam => TextureType::T0,
+            Recipe::Channels => TextureType::T1a,
         }
     }
 }
@@ -111,6 +128,14 @@ pub fn generate_with(recipe: Recipe, dims: [usize; 3], seed: u64, progress: &dyn
             };
             let fill = |x, y, z, o: &mut [f32]| o.copy_from_slice(&paint(seed, unit(x, y, z, size)));
             Volume::from_fn_par_with(dims, Channel::rgb(), fill, progress)?
+        }
+        Recipe::Foam => {
+            let foam = truths::Foam::new(dims, seed);
+            Volume::from_fn_par_with(dims, Channel::rgb(), |x, y, z, o| o.fill(foam.label(dims, x, y, z)), progress)?
+        }
+        Recipe::Channels => {
+            let channels = truths::Channels::new(dims, seed);
+            Volume::from_fn_par_with(dims, Channel::rgb(), |x, y, z, o| o.fill(channels.label(x, y, z)), progress)?
         }
     };
     let mut meta = Meta { texture_type: Some(recipe.texture_type()), provenance: Vec::new() };
