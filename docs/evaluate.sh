@@ -8,10 +8,14 @@
 # One line per photo and per control; `check` counts the figures `quality --check` finds
 # outside their bands (docs/synthesis.md, "Checking a volume").
 set -euo pipefail
-cd "$(dirname "$0")/.."
-data=${1:-../shared/data/images}
-out=${2:-out/eval}
+root=$(cd "$(dirname "$0")/.." && pwd)
+data=$(realpath -m "${1:-$root/../shared/data/images}")
+out=$(realpath -m "${2:-$root/out/eval}")
 [ -d "$data" ] || { echo "evaluate.sh: no folder $data" >&2; exit 2; }
+shopt -s nullglob
+images=("$data"/*.png)
+[ ${#images[@]} -gt 0 ] || { echo "evaluate.sh: no PNG in $data" >&2; exit 2; }
+cd "$root"
 mkdir -p "$out"
 cargo build --release --quiet
 bin=./target/release/solidtex
@@ -34,10 +38,13 @@ measure() { # label volume exemplar-args... ; prints the summary line
   local label=$1 volume=$2 took=$3; shift 3
   local json check
   json=$($bin quality "$volume" "$@" --json --check 2>"$out/check.txt") || true
-  check=$(head -1 "$out/check.txt")
+  check=$(grep -E 'outside their bands \(|every figure is within' "$out/check.txt" || true)
+  if [ -z "$json" ] || [ -z "$check" ]; then
+    echo "evaluate.sh: quality failed on $volume:" >&2; cat "$out/check.txt" >&2; exit 1
+  fi
   summary "$label" "$json" "$check" "$took"
 }
-for image in "$data"/*.png; do
+for image in "${images[@]}"; do
   name=$(basename "$image" .png)
   flags="" size=64
   case "$name" in *strata*|*layered*) flags="--layered"; size=64x64x128 ;; esac

@@ -11,7 +11,7 @@
 //!   [`flat`]: one colour everywhere.
 
 use crate::error::{Error, Result};
-use crate::noise::mix64;
+use crate::noise::{mix64, unit};
 use crate::sharpness::Standard;
 use crate::synth::spectrum::{Target, match_spectrum};
 use crate::volume::{Image2d, Volume};
@@ -37,11 +37,12 @@ pub fn spectral_noise(exemplars: [Option<&Image2d>; 3], dims: [usize; 3], seed: 
     let targets: Vec<Option<Target>> =
         exemplars.iter().map(|e| e.map(|e| Target::of(e.data(), e.width(), e.height(), channels, &standard))).collect();
     let targets = [targets[0].as_ref(), targets[1].as_ref(), targets[2].as_ref()];
-    let volume = Volume::new(dims, first.channels().to_vec())?;
-    let mut data = volume.data().to_vec();
-    for (i, v) in data.iter_mut().enumerate() {
-        *v = (mix64(seed ^ mix64(i as u64)) >> 40) as f32 / (1u64 << 24) as f32;
-    }
+    let samples = dims
+        .iter()
+        .try_fold(channels, |n, d| n.checked_mul(*d))
+        .filter(|n| *n > 0)
+        .ok_or_else(|| Error::invalid(format!("spectral noise of {dims:?} voxels is empty or too large")))?;
+    let mut data: Vec<f32> = (0..samples).map(|i| unit(mix64(seed ^ mix64(i as u64)))).collect();
     for _ in 0..ROUNDS {
         match_spectrum(&mut data, dims, channels, &standard, &targets);
     }
@@ -63,9 +64,15 @@ fn ranks(values: &[f64]) -> Vec<usize> {
     order
 }
 
-/// `volume` with a separable Gaussian blur of `sigma` voxels on every channel, clamped at
-/// the borders.
+/// Largest blur, in voxels.
+pub const MOST_SIGMA: f64 = 64.0;
+
+/// `volume` with a separable Gaussian blur of `sigma` voxels (above 0, at most
+/// [`MOST_SIGMA`]) on every channel, clamped at the borders.
 pub fn blurred(volume: &Volume, sigma: f64) -> Result<Volume> {
+    if !(sigma > 0.0 && sigma <= MOST_SIGMA) {
+        return Err(Error::invalid(format!("blur sigma {sigma} is out of range; allowed above 0 up to {MOST_SIGMA}")));
+    }
     let radius = (3.0 * sigma).ceil() as i64;
     let kernel: Vec<f64> = (-radius..=radius).map(|i| (-(i * i) as f64 / (2.0 * sigma * sigma)).exp()).collect();
     let total: f64 = kernel.iter().sum();

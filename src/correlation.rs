@@ -4,6 +4,12 @@
 
 use crate::volume::Axis;
 
+/// The lag at which a falling correlation crosses 1/e, given its values `before` at
+/// `lag - 1` (above 1/e) and `at` at `lag` (at or below): linear between the two.
+pub fn e_folding(lag: usize, before: f64, at: f64) -> f64 {
+    (lag - 1) as f64 + (before - (-1.0f64).exp()) / (before - at)
+}
+
 /// For each lag `0..=max_lag`: the sum of `values(p) * values(p + lag along axis)` over the
 /// points `p` (all of the volume, or with `Some((other, index))` only the slice across
 /// `other` at `index`) whose partner lies inside the volume (no wrapping), and how many

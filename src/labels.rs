@@ -113,7 +113,7 @@ impl TruthComparison {
     /// Every ratio outside its band, named; a correlation length the truth has and the
     /// volume lacks (or the reverse) counts as outside.
     pub fn outside_bands(&self) -> Vec<String> {
-        use crate::lines::within;
+        use crate::sharpness::within;
         let mut out = Vec::new();
         for r in &self.ratios {
             let phase = format!("phase {}", r.label);
@@ -302,13 +302,12 @@ fn correlation_length(s2: &[f64], phi: f64) -> Option<f64> {
     if variance <= 0.0 {
         return None;
     }
-    let target = (-1.0f64).exp();
     let c: Vec<f64> = s2.iter().map(|v| (v - phi * phi) / variance).collect();
-    let r = c.iter().position(|v| *v <= target)?;
+    let r = c.iter().position(|v| *v <= (-1.0f64).exp())?;
     if r == 0 {
         return Some(0.0);
     }
-    Some(r as f64 - 1.0 + (c[r - 1] - target) / (c[r - 1] - c[r]))
+    Some(crate::correlation::e_folding(r, c[r - 1], c[r]))
 }
 
 /// The face-connected pieces of equal labels (no wrapping): `(label, voxels)` each.

@@ -17,7 +17,7 @@
 //! window-to-window spread of the pieces and top-3 figures is the baseline.
 
 use crate::error::{Error, Result};
-use crate::sharpness::{Standard, ratio};
+use crate::sharpness::{Standard, ratio, within};
 use crate::volume::Image2d;
 use serde::Serialize;
 
@@ -99,7 +99,7 @@ impl Lines {
                 p.name, p.pieces_ratio, PIECES_BAND.0, PIECES_BAND.1
             ));
         }
-        if p.top3_ratio < TOP3_LEAST {
+        if !within(p.top3_ratio, (TOP3_LEAST, f64::INFINITY)) {
             out.push(format!(
                 "{axis} {} line top-3 share ratio {:.2} (allowed at least {TOP3_LEAST})",
                 p.name, p.top3_ratio
@@ -113,11 +113,6 @@ impl Lines {
         }
         out
     }
-}
-
-/// Whether `value` lies in the closed band.
-pub(crate) fn within(value: f64, (low, high): (f64, f64)) -> bool {
-    value >= low && value <= high
 }
 
 /// The line figures of `cuts` against `exemplar`; `picks[c]` is the cut channel that holds

@@ -5,6 +5,7 @@ use std::process::ExitCode;
 
 fn main() -> ExitCode {
     use solidtex::cli::Command;
+    use std::io::Write;
     use std::path::Path;
     let cli = solidtex::cli::Cli::parse_from(arguments());
     #[cfg(unix)]
@@ -18,7 +19,8 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(error) => {
-            eprintln!("error: {}", solidtex::cli::clip(&error.to_string()));
+            // a closed error stream must not turn the exit code into a panic's
+            let _ = writeln!(std::io::stderr(), "error: {}", solidtex::cli::clip(&error.to_string()));
             ExitCode::from(error.exit_code())
         }
     }

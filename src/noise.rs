@@ -13,6 +13,11 @@ pub fn mix64(mut z: u64) -> u64 {
     z ^ (z >> 31)
 }
 
+/// A uniform number in [0, 1) from the top 24 bits of a hash.
+pub fn unit(h: u64) -> f32 {
+    (h >> 40) as f32 / (1u64 << 24) as f32
+}
+
 /// A hash of a seed and three integers.
 pub fn hash3(seed: u64, x: i64, y: i64, z: i64) -> u64 {
     let a = mix64(seed ^ 0x9e37_79b9_7f4a_7c15);

@@ -149,10 +149,9 @@ impl Report {
     /// named with its value and the band. Figures without an exemplar baseline (the
     /// layered depth and sweeping measures) are not checked.
     pub fn outside_bands(&self) -> Vec<String> {
-        use crate::lines::within;
-        use crate::sharpness::{GRADIENT_RANGE as G, LENGTH_RANGE as L};
+        use crate::sharpness::{GRADIENT_RANGE as G, LENGTH_RANGE as L, within};
         let mut out = Vec::new();
-        for a in self.axes.iter().filter(|a| a.ratio > ENERGY_TARGET) {
+        for a in self.axes.iter().filter(|a| !within(a.ratio, (0.0, ENERGY_TARGET))) {
             out.push(format!("{} slice energy ratio {:.2} (allowed at most {ENERGY_TARGET})", a.axis, a.ratio));
         }
         for s in &self.sharpness {
@@ -164,7 +163,7 @@ impl Report {
             }
         }
         out.extend(self.lines.iter().flat_map(crate::lines::Lines::outside_bands));
-        for h in self.histograms.iter().filter(|h| h.distance > HISTOGRAM_TARGET) {
+        for h in self.histograms.iter().filter(|h| !within(h.distance, (0.0, HISTOGRAM_TARGET))) {
             out.push(format!(
                 "{} histogram distance {:.3} (allowed at most {HISTOGRAM_TARGET})",
                 h.channel, h.distance
@@ -177,11 +176,9 @@ impl Report {
 impl Glance {
     /// Whether every ratio lies in its target range and the histograms are close.
     pub fn in_range(&self) -> bool {
-        let inside = |v: f64, (lo, hi): (f64, f64)| v >= lo && v <= hi;
-        self.axes
-            .iter()
-            .all(|&(_, g, l)| inside(g, crate::sharpness::GRADIENT_RANGE) && inside(l, crate::sharpness::LENGTH_RANGE))
-            && self.histogram <= HISTOGRAM_TARGET
+        use crate::sharpness::{GRADIENT_RANGE, LENGTH_RANGE, within};
+        self.axes.iter().all(|&(_, g, l)| within(g, GRADIENT_RANGE) && within(l, LENGTH_RANGE))
+            && within(self.histogram, (0.0, HISTOGRAM_TARGET))
     }
 
     /// One word for the list: `ok`, or the first thing wrong (`blurred`, `noisy`, `coarse`

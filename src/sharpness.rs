@@ -49,9 +49,13 @@ pub struct AxisSharpness {
 impl AxisSharpness {
     /// Whether the gradient and length ratios lie in their target ranges.
     pub fn in_range(&self) -> bool {
-        let inside = |v: f64, (lo, hi): (f64, f64)| v >= lo && v <= hi;
-        inside(self.gradient_ratio, GRADIENT_RANGE) && inside(self.length_ratio, LENGTH_RANGE)
+        within(self.gradient_ratio, GRADIENT_RANGE) && within(self.length_ratio, LENGTH_RANGE)
     }
+}
+
+/// Whether `value` lies in the closed band (never for NaN).
+pub(crate) fn within(value: f64, (low, high): (f64, f64)) -> bool {
+    value >= low && value <= high
 }
 
 /// Measure the cuts of `volume` across `axis` against `exemplar`; `picks[c]` is the volume
@@ -210,8 +214,7 @@ fn length(image: &Grey) -> f64 {
         for lag in 1..size {
             let r = lagged_sum(&centred, image.width, image.height, (step.0 * lag, step.1 * lag)) / energy;
             if r <= (-1.0f64).exp() {
-                let threshold = (-1.0f64).exp();
-                return (lag - 1) as f64 + (previous - threshold) / (previous - r);
+                return crate::correlation::e_folding(lag, previous, r);
             }
             previous = r;
         }

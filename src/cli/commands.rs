@@ -95,6 +95,12 @@ pub fn oblique_slice(file: &Path, plane: &str, output: &Path) -> Result<()> {
     io::guard::png_output(output, &[file])?;
     let volume = load(file)?;
     let side = volume.dims().into_iter().max().unwrap_or(1);
+    crate::volume::check_size([side, side, 1], volume.channel_count(), io::budget_from_env()?).map_err(|e| {
+        Error::invalid(format!(
+            "{}: an oblique cut {side} pixels wide (its longest side) does not fit: {e}",
+            file.display()
+        ))
+    })?;
     let (point, normal) = (glam::Vec3::from_slice(&numbers[..3]), glam::Vec3::from_slice(&numbers[3..]));
     let cut = crate::volume::Plane::through(point, normal, side).map_err(usage)?;
     let image = volume.plane_slice(&cut, side, side, crate::volume::Edge::Wrap)?;

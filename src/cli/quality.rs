@@ -3,6 +3,7 @@
 use crate::error::Result;
 use crate::io;
 use crate::quality::{self, Report};
+use std::io::Write;
 use std::path::PathBuf;
 
 /// The arguments of `solidtex quality`.
@@ -40,6 +41,11 @@ pub struct QualityArgs {
 /// Run `solidtex quality`.
 pub fn run(args: &QualityArgs) -> Result<()> {
     args.others.check()?;
+    if args.check && args.labels && args.truth.is_none() {
+        return Err(crate::Error::usage(
+            "--check with --labels needs --truth TRUTH: without a truth no figure has a band",
+        ));
+    }
     let volume = io::read_volume(&args.volume, io::budget_from_env()?)?;
     let Some(exemplar) = &args.exemplar else { return labels(args, &volume) };
     let ex = args.others.load(exemplar, "exemplar")?;
@@ -69,11 +75,13 @@ fn verdict(check: bool, outside: Vec<String>) -> Result<()> {
         eprintln!("check: every figure is within its band");
         return Ok(());
     }
-    Err(crate::Error::invalid(format!(
-        "check: {} figure(s) outside their bands:\n  {}",
-        outside.len(),
-        outside.join("\n  ")
-    )))
+    // a closed error stream must not turn the verdict into a panic
+    let mut err = std::io::stderr().lock();
+    let _ = writeln!(err, "check: outside their bands:");
+    for figure in &outside {
+        let _ = writeln!(err, "  {figure}");
+    }
+    Err(crate::Error::invalid(format!("check: {} figure(s) outside their bands (listed above)", outside.len())))
 }
 
 fn table(r: &Report) -> String {
@@ -135,11 +143,6 @@ fn table(r: &Report) -> String {
 /// and with a truth each phase's figures as volume over truth.
 fn labels(args: &QualityArgs, volume: &crate::Volume) -> Result<()> {
     let Some(truth_path) = &args.truth else {
-        if args.check {
-            return Err(crate::Error::usage(
-                "--check with --labels needs --truth TRUTH: without a truth no figure has a band",
-            ));
-        }
         let stats = crate::labels::measure(volume).map_err(|e| e.in_file(&args.volume))?;
         if args.json {
             say!("{}", serde_json::to_string_pretty(&stats).expect("statistics always serialize"));

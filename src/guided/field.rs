@@ -359,7 +359,7 @@ pub fn streamlines(mesh: &TetMesh, field: &FrameField, view: &View) -> Rgb8 {
     let (right, down) = (view.right.normalize(), view.down.normalize());
     let flow: Vec<Option<Vec2>> =
         axes.iter().map(|a| a.and_then(|a| Vec2::new(a.dot(right), a.dot(down)).try_normalize())).collect();
-    let noise: Vec<f32> = (0..w * h).map(|i| (mix64(i as u64) >> 40) as f32 / (1u64 << 24) as f32).collect();
+    let noise: Vec<f32> = (0..w * h).map(|i| crate::noise::unit(mix64(i as u64))).collect();
     let pixels: Vec<[u8; 3]> = (0..w * h)
         .into_par_iter()
         .map(|i| {

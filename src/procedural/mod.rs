@@ -131,7 +131,7 @@ pub fn generate_with(recipe: Recipe, dims: [usize; 3], seed: u64, progress: &dyn
         }
         Recipe::Foam => {
             let foam = truths::Foam::new(dims, seed);
-            Volume::from_fn_par_with(dims, Channel::rgb(), |x, y, z, o| o.fill(foam.label(dims, x, y, z)), progress)?
+            Volume::from_fn_par_with(dims, Channel::rgb(), |x, y, z, o| o.fill(foam.label(x, y, z)), progress)?
         }
         Recipe::Channels => {
             let channels = truths::Channels::new(dims, seed);

@@ -13,7 +13,7 @@
 //! Both hold exact label values in all three channels (grey), so `--labels` reads them;
 //! the values are whole multiples of 1/255, so slices saved as 8-bit PNGs keep them exactly.
 
-use crate::noise::hash3;
+use crate::noise::{hash3, unit};
 use glam::Vec3;
 
 /// How much farther the second-nearest site may be for a voxel to be joint (voxels).
@@ -29,13 +29,14 @@ pub const CHANNEL_LABELS: [f32; 3] = [64.0 / 255.0, 140.0 / 255.0, 217.0 / 255.0
 /// Foam cell spacing in voxels.
 const CELL: usize = 16;
 
-/// A uniform number in [0, 1) from a hash.
-fn unit_hash(h: u64) -> f32 {
-    (h >> 40) as f32 / (1u64 << 24) as f32
-}
+/// Where the grid of cells starts, in cells: not at 0, so that no central slice of a
+/// volume whose side is a multiple of the cell lies where the cells meet (joint faces
+/// gather near cell walls, and that slice would hold more joint than the volume).
+const GRID_SHIFT: f32 = 0.37;
 
 /// The foam's sites: one per cell of a grid, jittered within it.
 pub struct Foam {
+    dims: [usize; 3],
     cells: [usize; 3],
     seed: u64,
 }
@@ -43,7 +44,7 @@ pub struct Foam {
 impl Foam {
     /// The foam for a volume of `dims` voxels.
     pub fn new(dims: [usize; 3], seed: u64) -> Foam {
-        Foam { cells: dims.map(|d| (d as f32 / CELL as f32).round().max(1.0) as usize), seed }
+        Foam { dims, cells: dims.map(|d| (d as f32 / CELL as f32).round().max(1.0) as usize), seed }
     }
 
     /// The site of cell `c` (wrapped) in cell units, shifted by the whole periods wrapped.
@@ -51,18 +52,19 @@ impl Foam {
         let n = self.cells.map(|k| k as i64);
         let w = [0, 1, 2].map(|k| c[k].rem_euclid(n[k]));
         let h = hash3(self.seed, w[0], w[1], w[2]);
-        let jitter = Vec3::new(unit_hash(h), unit_hash(h.rotate_left(21)), unit_hash(h.rotate_left(42)));
-        (Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32) + 0.1 + 0.8 * jitter, h)
+        let jitter = Vec3::new(unit(h), unit(h.rotate_left(21)), unit(h.rotate_left(42)));
+        (Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32) + 0.05 + 0.9 * jitter, h)
     }
 
-    /// The label at voxel `(x, y, z)` of a volume of `dims`.
-    pub fn label(&self, dims: [usize; 3], x: usize, y: usize, z: usize) -> f32 {
+    /// The label at voxel `(x, y, z)`.
+    pub fn label(&self, x: usize, y: usize, z: usize) -> f32 {
+        let dims = self.dims;
         let scale = Vec3::new(
             dims[0] as f32 / self.cells[0] as f32,
             dims[1] as f32 / self.cells[1] as f32,
             dims[2] as f32 / self.cells[2] as f32,
         );
-        let p = Vec3::new(x as f32 + 0.5, y as f32 + 0.5, z as f32 + 0.5) / scale;
+        let p = Vec3::new(x as f32 + 0.5, y as f32 + 0.5, z as f32 + 0.5) / scale + GRID_SHIFT;
         let home = [p.x.floor() as i64, p.y.floor() as i64, p.z.floor() as i64];
         let (mut first, mut second, mut stone) = (f32::MAX, f32::MAX, 0u64);
         for dz in -1..=1 {
@@ -97,20 +99,31 @@ struct Course {
     width: (f32, f32, f32),
 }
 
-/// The channels of a volume.
+/// The channels of a volume, with each course's centre and half width at every x, and
+/// per z the courses that can reach it.
 pub struct Channels {
     dims: [usize; 3],
-    courses: Vec<Course>,
+    /// Per course, its centre line's y and z at the meander's and undulation's zero.
+    places: Vec<(f32, f32)>,
+    /// Per course, per x: the meander, the undulation and the half width there.
+    along: Vec<[f32; 3]>,
+    /// Per z, the courses whose levee can reach it.
+    near: Vec<Vec<usize>>,
 }
+
+/// The levee's outer edge, in half widths.
+const LEVEE: f32 = 1.45;
+/// A section's height over its width.
+const FLATNESS: f32 = 0.35;
 
 impl Channels {
     /// The channels for a volume of `dims` voxels: about one per 200 voxels of its x-section.
     pub fn new(dims: [usize; 3], seed: u64) -> Channels {
         let count = (dims[1] * dims[2] / 200).max(1);
         let side = |k: usize| dims[k] as f32;
-        let courses = (0..count as i64)
+        let courses: Vec<Course> = (0..count as i64)
             .map(|i| {
-                let r = |k: i64| unit_hash(hash3(seed, i, k, 7));
+                let r = |k: i64| unit(hash3(seed, i, k, 7));
                 let cycles = |k: i64, most: f32| (1.0 + (r(k) * most).floor()) / side(0);
                 Course {
                     y: r(0) * side(1),
@@ -125,24 +138,45 @@ impl Channels {
                 }
             })
             .collect();
-        Channels { dims, courses }
+        let along = courses
+            .iter()
+            .flat_map(|c| {
+                (0..dims[0]).map(move |x| {
+                    let px = x as f32 + 0.5;
+                    let wave = c.meander.0 * (c.meander.1 * px + c.meander.2).sin();
+                    let rise = c.undulation.0 * (std::f32::consts::TAU * px / side(0) + c.undulation.1).sin();
+                    let half_width = c.width.0 * (1.0 + 0.35 * (c.width.1 * px + c.width.2).sin());
+                    [wave, rise, half_width]
+                })
+            })
+            .collect();
+        let near = (0..dims[2])
+            .map(|z| {
+                let pz = z as f32 + 0.5;
+                let reach = |c: &Course| c.undulation.0 + LEVEE * FLATNESS * 1.35 * c.width.0 + 1.0;
+                (0..courses.len())
+                    .filter(|&i| wrapped(pz - courses[i].z, side(2)).abs() <= reach(&courses[i]))
+                    .collect()
+            })
+            .collect();
+        let places = courses.iter().map(|c| (c.y, c.z)).collect();
+        Channels { dims, places, along, near }
     }
 
     /// The label at voxel `(x, y, z)`.
     pub fn label(&self, x: usize, y: usize, z: usize) -> f32 {
-        let p = Vec3::new(x as f32 + 0.5, y as f32 + 0.5, z as f32 + 0.5);
+        let (py, pz) = (y as f32 + 0.5, z as f32 + 0.5);
         let mut inner = f32::MAX;
-        for c in &self.courses {
-            let wave = c.meander.0 * (c.meander.1 * p.x + c.meander.2).sin();
-            let rise = c.undulation.0 * (std::f32::consts::TAU * p.x / self.dims[0] as f32 + c.undulation.1).sin();
-            let half_width = c.width.0 * (1.0 + 0.35 * (c.width.1 * p.x + c.width.2).sin());
-            let dy = wrapped(p.y - c.y - wave, self.dims[1] as f32) / half_width;
-            let dz = wrapped(p.z - c.z - rise, self.dims[2] as f32) / (0.35 * half_width);
+        for &c in &self.near[z] {
+            let [wave, rise, half_width] = self.along[c * self.dims[0] + x];
+            let (cy, cz) = self.places[c];
+            let dy = wrapped(py - cy - wave, self.dims[1] as f32) / half_width;
+            let dz = wrapped(pz - cz - rise, self.dims[2] as f32) / (FLATNESS * half_width);
             inner = inner.min(dy.hypot(dz));
         }
         match inner {
             r if r < 1.0 => CHANNEL_LABELS[2],
-            r if r < 1.45 => CHANNEL_LABELS[1],
+            r if r < LEVEE => CHANNEL_LABELS[1],
             _ => CHANNEL_LABELS[0],
         }
     }

@@ -74,13 +74,18 @@ pub struct Plane {
 
 impl Plane {
     /// A plane through `centre` with unit normal `normal`, one voxel per pixel,
-    /// covering `size` x `size` pixels centred on `centre`.
+    /// covering `size` x `size` pixels centred on `centre`. Its image axes are those of the
+    /// axis slice across the axis nearest the normal, turned into the plane, so a normal
+    /// along an axis gives that axis' slice.
     pub fn through(centre: Vec3, normal: Vec3, size: usize) -> Result<Plane> {
         let n = normal
             .try_normalize()
             .ok_or_else(|| Error::invalid(format!("plane normal {normal} has zero length or is not finite")))?;
-        let u = n.any_orthonormal_vector();
-        let v = n.cross(u);
+        let nearest = (0..3).max_by(|&a, &b| n[a].abs().total_cmp(&n[b].abs())).unwrap_or(2);
+        let (pa, sa) = Axis::ALL[nearest].plane_axes();
+        let unit = |k: usize| Vec3::AXES[k];
+        let u = (unit(pa) - n * n.dot(unit(pa))).normalize();
+        let v = (unit(sa) - n * n.dot(unit(sa)) - u * u.dot(unit(sa))).normalize();
         let half = (size as f32 - 1.0) / 2.0;
         Ok(Plane { origin: centre - half * (u + v), u, v })
     }
@@ -195,5 +200,18 @@ mod tests {
             assert!((p - centre).dot(normal.normalize()).abs() < 1e-4);
         }
         assert!(Plane::through(centre, Vec3::ZERO, 3).is_err());
+    }
+
+    /// A normal along an axis (either way) gives that axis' slice, image axes and all.
+    #[test]
+    fn an_axis_normal_gives_the_axis_slice() {
+        let v =
+            Volume::from_fn([5; 3], Channel::rgb(), |x, y, z, o| o.copy_from_slice(&[x as f32, y as f32, z as f32]))
+                .unwrap();
+        for (axis, normal) in [(Axis::X, Vec3::X), (Axis::Y, Vec3::NEG_Y), (Axis::Z, Vec3::Z)] {
+            let plane = Plane::through(Vec3::splat(2.0), normal, 5).unwrap();
+            let s = v.plane_slice(&plane, 5, 5, Edge::Clamp).unwrap();
+            assert_eq!(s, v.slice(axis, 2).unwrap(), "{axis}");
+        }
     }
 }
