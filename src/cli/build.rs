@@ -66,7 +66,7 @@ pub fn run(args: &BuildArgs) -> Result<()> {
     let outcomes = if args.merge.is_empty() {
         let entries = build::select(&request)?;
         if let Some((k, n)) = shard {
-            eprintln!("shard {k} of {n}: {} exemplar(s)", entries.len());
+            tell!("shard {k} of {n}: {} exemplar(s)", entries.len());
         }
         let lines = Lines::new(entries.len());
         let outcomes = build::build(&request, &entries, &lines);
@@ -100,7 +100,7 @@ impl Lines {
     fn line(&self, text: String) {
         match &self.bar {
             Some(bar) => bar.println(text),
-            None => eprintln!("{text}"),
+            None => tell!("{text}"),
         }
     }
 
@@ -137,7 +137,7 @@ fn summarize(outcomes: &[Outcome], request: &Request) -> Result<()> {
     let built = count(|o| matches!(o, Outcome::Built(_)));
     let cached = count(|o| matches!(o, Outcome::Cached(_)));
     let failed: Vec<&str> = outcomes.iter().filter(|o| matches!(o, Outcome::Failed(..))).map(Outcome::name).collect();
-    eprintln!(
+    tell!(
         "{built} built, {cached} cached, {} failed; report: {}",
         failed.len(),
         request.output.join("report.html").display()

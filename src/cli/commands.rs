@@ -35,7 +35,7 @@ pub fn convert(input: &Path, output: &Path, dds_format: Option<&str>) -> Result<
         Some(format) => io::dds::write(output, &volume, format)?,
         None => io::write_volume(output, &volume)?,
     }
-    eprintln!("wrote {}", output.display());
+    tell!("wrote {}", output.display());
     Ok(())
 }
 
@@ -63,7 +63,7 @@ pub fn flipbook(
     io::write_image(output, &image)?;
     let name = output.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
     io::write_bytes(&sidecar, io::flipbook::sidecar(&layout, &name).as_bytes())?;
-    eprintln!(
+    tell!(
         "wrote {} ({}x{} pixels, {} columns x {} rows) and {}",
         output.display(),
         layout.width,
@@ -84,7 +84,7 @@ pub fn slice(file: &Path, axis: &str, index: Option<usize>, output: &Path) -> Re
     let image = volume.slice(axis, index).map_err(|e| e.in_file(file))?;
     let picture = render::picture(&image, ColourMap::for_channels(image.channels()), 1);
     io::write_rgb8(output, &picture)?;
-    eprintln!("wrote {} ({axis} = {index})", output.display());
+    tell!("wrote {} ({axis} = {index})", output.display());
     Ok(())
 }
 
@@ -106,7 +106,7 @@ pub fn oblique_slice(file: &Path, plane: &str, output: &Path) -> Result<()> {
     let image = volume.plane_slice(&cut, side, side, crate::volume::Edge::Wrap)?;
     let picture = render::picture(&image, ColourMap::for_channels(image.channels()), 1);
     io::write_rgb8(output, &picture)?;
-    eprintln!("wrote {} ({side}x{side}, through {point} with normal {})", output.display(), normal.normalize());
+    tell!("wrote {} ({side}x{side}, through {point} with normal {})", output.display(), normal.normalize());
     Ok(())
 }
 
@@ -135,7 +135,7 @@ pub fn sheet(file: &Path, output: &Path, title: Option<String>) -> Result<()> {
     let volume = load(file)?;
     let title = title.unwrap_or_else(|| file.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default());
     io::write_rgb8(output, &render::sheet(&volume, &title))?;
-    eprintln!("wrote {}", output.display());
+    tell!("wrote {}", output.display());
     Ok(())
 }
 
@@ -150,7 +150,7 @@ pub fn make(recipe: &str, size: &str, seed: u64, output: &Path) -> Result<()> {
     bar.0.finish_and_clear();
     let volume = volume?;
     io::write_volume(output, &volume)?;
-    eprintln!("wrote {}", output.display());
+    tell!("wrote {}", output.display());
     Ok(())
 }
 

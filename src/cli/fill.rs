@@ -230,7 +230,7 @@ pub fn run_fill(args: &FillArgs) -> Result<()> {
     let distance = mesher::surface_distance(&surface, &tets).map_err(|e| e.in_file(&args.mesh))?;
     let missing = library::fill::missing(&spec)?;
     if !missing.is_empty() {
-        eprintln!("building {} into {} first", missing.join(", "), spec.built.display());
+        tell!("building {} into {} first", missing.join(", "), spec.built.display());
         library::fill::build_first(&spec, missing, &super::build::Lines::new(0))?;
     }
     let resolved = library::fill::resolve(&spec, &args.output)?;
@@ -250,7 +250,7 @@ pub fn run_fill(args: &FillArgs) -> Result<()> {
     io::write_bytes(&args.output, &encoded)?;
     let bytes = encoded.len();
     let p = &report.paste;
-    eprintln!(
+    tell!(
         "filled {} ({} tets, min dihedral {:.1}°) with {} patches of '{}' (type {}) in {total:.2} s (mesh {meshed:.2} s)",
         args.mesh.display(),
         report.tets,
@@ -259,12 +259,16 @@ pub fn run_fill(args: &FillArgs) -> Result<()> {
         spec.exemplar,
         resolved.kind
     );
-    eprintln!(
+    tell!(
         "  layers per tet {:.1}, tets per clump {:.0}, field angle mean {:.1}° p95 {:.1}°, uncovered {}",
-        p.mean_layers, p.mean_clump, p.angle_mean, p.angle_p95, p.forced
+        p.mean_layers,
+        p.mean_clump,
+        p.angle_mean,
+        p.angle_p95,
+        p.forced
     );
     let [x, y, z] = distance.at;
-    eprintln!(
+    tell!(
         "  surface within {:.2} tet edges (tets to mesh {:.3}, mesh to tets {:.3}, creases included; farthest at \
          {x:.4}, {y:.4}, {z:.4})",
         distance.in_edges(),
@@ -272,31 +276,31 @@ pub fn run_fill(args: &FillArgs) -> Result<()> {
         distance.from_surface
     );
     if distance.in_edges() > STRAY_EDGES {
-        eprintln!(
+        tell!(
             "  over half a tet edge: a part or a gap there is thinner than the lattice; `solidtex cut {} --plane \
              {x:.4},{y:.4},{z:.4},0,0,1` shows it",
             args.output.display()
         );
     }
     if refined > 0 {
-        eprintln!("  {refined} of the tets from refining near the depth axis, so its core is round");
+        tell!("  {refined} of the tets from refining near the depth axis, so its core is round");
     }
     if report.raised_scale > 0 {
         let share = report.raised_scale as f64 / report.tets.max(1) as f64 * 100.0;
-        eprintln!(
+        tell!(
             "  texture scale raised to {} tet edges in {} tets ({share:.1} %), where the field asked for less",
             crate::fill::MIN_SCALE_EDGES,
             report.raised_scale
         );
     }
     for note in &report.ignored {
-        eprintln!("warning: {}: {note}", args.spec.display());
+        tell!("warning: {}: {note}", args.spec.display());
     }
-    eprintln!("wrote {} ({:.0} KB)", args.output.display(), bytes as f64 / 1024.0);
+    tell!("wrote {} ({:.0} KB)", args.output.display(), bytes as f64 / 1024.0);
     // A figure, not a result: if the volumes cannot be read it is left out.
     let seams = with_volumes(model, &args.output, job.masks).ok().and_then(|loaded| seam_strength(&loaded));
     if let Some(seams) = seams {
-        eprintln!("  seam strength {seams:.2} (colour step across patch borders over within, central cuts)");
+        tell!("  seam strength {seams:.2} (colour step across patch borders over within, central cuts)");
     }
     if let Some(path) = &args.json {
         let json = serde_json::json!({ "fill": report, "seconds": total, "mesh_seconds": meshed, "bytes": bytes, "type": resolved.kind.name(), "seam_strength": seams, "refined_tets": refined, "volume_share": held.share, "holding_tets": held.holding, "surface_distance": distance });
@@ -320,7 +324,7 @@ fn warn_if_lost(mesh: &Path, held: &mesher::VolumeCheck) {
         Some(n) => format!("--tets {n} (or tets = {n} in the spec) keeps it"),
         None => format!("no tet count up to {} keeps it; thicken the part", held.tried),
     };
-    eprintln!(
+    tell!(
         "warning: {}: the tet mesh holds {:.1} % of the mesh's volume: {lost:.1} % is in parts thinner than \
          the lattice spacing and will not be textured; {advice}",
         mesh.display(),
@@ -331,7 +335,7 @@ fn warn_if_lost(mesh: &Path, held: &mesher::VolumeCheck) {
 /// Warn when the tet mesh is more than 15 % off the count asked for.
 fn warn_if_far(mesh: &Path, got: usize, asked: usize) {
     if (got as f64 / asked as f64 - 1.0).abs() > 0.15 {
-        eprintln!(
+        tell!(
             "warning: {}: {got} tets for the {asked} asked; no lattice spacing comes closer on this shape \
              (a part about as thin as the spacing appears or vanishes as it changes)",
             mesh.display()
@@ -554,7 +558,7 @@ fn run_stroke_cut(args: &CutArgs) -> Result<()> {
         .map_err(|e| e.in_file(&args.models[0]))?;
     let ms = started.elapsed().as_secs_f64() * 1000.0;
     io::write_rgb8(&args.output, &carving.picture)?;
-    eprintln!(
+    tell!(
         "wrote {} ({size}x{size}, {} stroke cut(s), cut faces on {:.0} % of the picture{}) in {ms:.0} ms",
         args.output.display(),
         strokes.len(),
@@ -590,13 +594,13 @@ pub fn run_cut(args: &CutArgs) -> Result<()> {
     let ms = started.elapsed().as_secs_f64() * 1000.0;
     io::write_rgb8(&args.output, &cut.picture())?;
     let (shown, size) = (args.output.display(), args.size);
-    eprintln!("wrote {shown} ({size}x{size}, {:.0} % inside) in {ms:.1} ms", cut.inside_share() * 100.0);
+    tell!("wrote {shown} ({size}x{size}, {:.0} % inside) in {ms:.1} ms", cut.inside_share() * 100.0);
     if let Some(c) = &wanted {
         let inside = cut.pixels.iter().filter(|p| p[3] > 0.0).map(|p| p[0]);
         let (lo, hi) = inside.fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), v| (a.min(v), b.max(v)));
-        eprintln!("  channel {c}: {lo:.3} to {hi:.3} inside (shown 0 black to 1 white)");
+        tell!("  channel {c}: {lo:.3} to {hi:.3} inside (shown 0 black to 1 white)");
     } else if let Some(seams) = cut.seam_strength() {
-        eprintln!("  seam strength {seams:.2} (colour step across patch borders over within)");
+        tell!("  seam strength {seams:.2} (colour step across patch borders over within)");
     }
     Ok(())
 }
@@ -699,7 +703,7 @@ pub fn run_render(args: &RenderArgs) -> Result<()> {
     } else {
         ""
     };
-    eprintln!(
+    tell!(
         "wrote {} ({size}x{size}, {} slices, density {name}{why}) in {seconds:.2} s",
         args.output.display(),
         rendering.slices,
@@ -716,7 +720,7 @@ pub fn run_bake(args: &BakeArgs) -> Result<()> {
     let loaded = load_models(&args.models)?;
     let (shared, left_out) = shared_channels(&loaded);
     for c in &left_out {
-        eprintln!("warning: channel {c} is not in every exemplar the models use; it is left out of the bake");
+        tell!("warning: channel {c} is not in every exemplar the models use; it is left out of the bake");
     }
     let textures = shared.iter().map(|c| channel_textures(&loaded, c)).collect::<Result<Vec<_>>>()?;
     let carried: Vec<render::Carried> = shared
@@ -729,7 +733,7 @@ pub fn run_bake(args: &BakeArgs) -> Result<()> {
     io::write_volume(&args.output, &volume)?;
     let [x, y, z] = volume.dims();
     let names: Vec<&str> = volume.channels().iter().map(Channel::name).collect();
-    eprintln!(
+    tell!(
         "wrote {} ({x}x{y}x{z}, {}) in {:.2} s",
         args.output.display(),
         names.join(", "),
@@ -777,7 +781,7 @@ fn view_skin(args: &ViewArgs, path: &Path) -> Result<()> {
     let camera = (args.camera.yaw, args.camera.pitch);
     let picture = crate::fill::view::skin_picture(&skin.mesh, &skin.colours, camera, args.size);
     io::write_rgb8(&args.output, &picture)?;
-    eprintln!("wrote {} in {:.0} ms", args.output.display(), started.elapsed().as_secs_f64() * 1000.0);
+    tell!("wrote {} in {:.0} ms", args.output.display(), started.elapsed().as_secs_f64() * 1000.0);
     Ok(())
 }
 
@@ -850,9 +854,9 @@ pub fn run_view(args: &ViewArgs) -> Result<()> {
         .map(|scale| format!("  displaced by {scale} x (Displacement - 0.5) along the normal, {triangles} triangles"));
     let ms = started.elapsed().as_secs_f64() * 1000.0;
     io::write_rgb8(&args.output, &picture)?;
-    eprintln!("wrote {} in {ms:.0} ms", args.output.display());
+    tell!("wrote {} in {ms:.0} ms", args.output.display());
     if let Some(note) = note {
-        eprintln!("{note}");
+        tell!("{note}");
     }
     Ok(())
 }

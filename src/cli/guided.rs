@@ -88,7 +88,7 @@ pub fn run(args: &FieldArgs) -> Result<()> {
     let (point, normal) = plane.unwrap_or(((bounds.0 + bounds.1) / 2.0, Vec3::Z));
     let view = View::framing(bounds, point, normal, args.size)?;
     io::write_rgb8(&args.output, &streamlines(&g.tets, &g.field, &view))?;
-    eprintln!(
+    tell!(
         "wrote {} ({} tets, {} sketched frames; the field solved in {:.0} ms)",
         args.output.display(),
         g.tets.tets.len(),
@@ -229,9 +229,9 @@ pub fn run_guided(args: &GuidedArgs) -> Result<()> {
     bar.0.finish_and_clear();
     let (voxels, corrections, full) = outcome?;
     if voxels == 0 {
-        eprintln!("warning: the cut misses the model; the picture is transparent");
+        tell!("warning: the cut misses the model; the picture is transparent");
     }
-    eprintln!(
+    tell!(
         "wrote {}: {}x{}x{} grid, {} tets, field solved in {:.0} ms, set up in {ready:.2} s, synthesized in {:.2} s",
         args.output.display(),
         domain.dims[0],
@@ -241,7 +241,7 @@ pub fn run_guided(args: &GuidedArgs) -> Result<()> {
         g.solve_ms,
         started.elapsed().as_secs_f64() - ready
     );
-    eprintln!(
+    tell!(
         "voxels synthesized: {voxels} of the {full} a whole solid needs ({:.1} %), {corrections} corrections",
         100.0 * voxels as f64 / full.max(1) as f64
     );
@@ -337,7 +337,7 @@ fn fitted(image: Image2d, rows: usize, path: &Path) -> Result<Image2d> {
             ),
         ));
     }
-    eprintln!(
+    tell!(
         "layered: {} scaled from {}x{} to {width}x{rows} pixels, so that its rows span the model's depth \
          ({rows} voxels at this --res)",
         path.display(),
@@ -451,7 +451,7 @@ fn cached_level(folder: &Path, setup: &Setup, bar: &super::fill::Bar) -> Result<
 /// written anew.
 fn warn_rebuilt(path: &Path, stale: Option<String>) {
     if let Some(why) = stale {
-        eprintln!("warning: {} is {why}; rebuilt", path.display());
+        tell!("warning: {} is {why}; rebuilt", path.display());
     }
 }
 
@@ -477,12 +477,17 @@ fn write_cut(
     if out.voxels > 0 && (0.8..=1.25).contains(&scale) {
         let s = solid::cut_sharpness(&picture, exemplar)?;
         let (g, l) = (crate::sharpness::GRADIENT_RANGE, crate::sharpness::LENGTH_RANGE);
-        eprintln!(
+        tell!(
             "sharpness against the exemplar: gradient ratio {:.2}, length ratio {:.2} (targets {}-{} and {}-{})",
-            s.gradient_ratio, s.length_ratio, g.0, g.1, l.0, l.1
+            s.gradient_ratio,
+            s.length_ratio,
+            g.0,
+            g.1,
+            l.0,
+            l.1
         );
     } else if out.voxels > 0 {
-        eprintln!(
+        tell!(
             "sharpness against the exemplar: not measured, a pixel spans {scale:.2} voxels (--size {} gives about one)",
             (args.size as f32 * scale).round()
         );

@@ -106,7 +106,7 @@ pub fn run_sweep(args: &SweepArgs) -> Result<()> {
 fn write(path: &Path, volume: &Volume) -> Result<()> {
     io::write_volume(path, volume)?;
     let [x, y, z] = volume.dims();
-    eprintln!("wrote {} ({x}x{y}x{z})", path.display());
+    tell!("wrote {} ({x}x{y}x{z})", path.display());
     Ok(())
 }
 
@@ -145,7 +145,7 @@ pub fn run_stamp(args: &StampArgs) -> Result<()> {
     let mesh = read_seed(&args.mesh)?;
     let mut volume = load(&args.volume)?;
     let done = stamp::stamp(&mut volume, &mesh, &placement, colour).map_err(|e| about(e, &args.mesh, &args.volume))?;
-    eprintln!("stamped {} voxels ({:.1} voxels of volume)", done.voxels, done.volume);
+    tell!("stamped {} voxels ({:.1} voxels of volume)", done.voxels, done.volume);
     write(&args.output, &volume)
 }
 
@@ -224,13 +224,9 @@ pub fn run_scatter(args: &ScatterArgs) -> Result<()> {
     let done =
         stamp::scatter(&mut volume, &mesh, &params, args.seed).map_err(|e| about(e, &args.mesh, &args.volume))?;
     if done.placed.len() < args.count {
-        eprintln!(
-            "warning: placed {} of {} seeds: no room for the rest without overlaps",
-            done.placed.len(),
-            args.count
-        );
+        tell!("warning: placed {} of {} seeds: no room for the rest without overlaps", done.placed.len(), args.count);
     }
-    eprintln!("placed {} seeds ({} positions rejected)", done.placed.len(), done.rejected);
+    tell!("placed {} seeds ({} positions rejected)", done.placed.len(), done.rejected);
     write(&args.output, &volume)
 }
 
@@ -268,7 +264,7 @@ pub fn run_blur(args: &BlurArgs) -> Result<()> {
     io::check_edit_output(&args.output, &args.volume, &[])?;
     let mut volume = load(&args.volume)?;
     let changed = stamp::blur(&mut volume, at, args.radius, args.strength).map_err(|e| e.in_file(&args.volume))?;
-    eprintln!("blurred {changed} voxels");
+    tell!("blurred {changed} voxels");
     write(&args.output, &volume)
 }
 
@@ -338,14 +334,14 @@ fn draw_cake(args: &DrawArgs) -> Result<()> {
         Ok(())
     })?;
     let names: Vec<&str> = layers.iter().map(|l| l.name).collect();
-    eprintln!("wrote {} (layers {}, each a mesh and a fill spec)", args.output.display(), names.join(", "));
+    tell!("wrote {} (layers {}, each a mesh and a fill spec)", args.output.display(), names.join(", "));
     let dir = args.output.display();
-    eprintln!(
+    tell!(
         "  fill each:  for l in {}; do solidtex fill {dir}/$l.obj --spec {dir}/$l.toml -o {dir}/$l.lst; done",
         names.join(" ")
     );
     let models: Vec<String> = names.iter().map(|n| format!("{dir}/{n}.lst")).collect();
-    eprintln!("  then:       solidtex cut {} --plane 0,0.5,0,0,0,1 -o cake_cut.png", models.join(" "));
+    tell!("  then:       solidtex cut {} --plane 0,0.5,0,0,0,1 -o cake_cut.png", models.join(" "));
     Ok(())
 }
 
@@ -375,12 +371,12 @@ pub fn run_draw(args: &DrawArgs) -> Result<()> {
             _ => crate::mesh::shapes::ellipsoid(glam::Vec3::ONE, 8, 12),
         };
         io::mesh_file::write_mesh(&args.output, &mesh)?;
-        eprintln!("wrote {} ({} triangles)", args.output.display(), mesh.triangles.len());
+        tell!("wrote {} ({} triangles)", args.output.display(), mesh.triangles.len());
         return Ok(());
     }
     if let Some(mesh) = crate::mesh::shapes::named(&args.what) {
         io::mesh_file::write_mesh(&args.output, &mesh)?;
-        eprintln!("wrote {} ({} triangles)", args.output.display(), mesh.triangles.len());
+        tell!("wrote {} ({} triangles)", args.output.display(), mesh.triangles.len());
         return Ok(());
     }
     let (w, h) = draw_size(&args.size).map_err(usage)?;
@@ -388,6 +384,6 @@ pub fn run_draw(args: &DrawArgs) -> Result<()> {
         .map_err(|e| Error::usage(format!("{e}, or seed, fruit, pipe, log, block, vase")))?;
     io::guard::png_output(&args.output, &[])?;
     io::write_image(&args.output, &image)?;
-    eprintln!("wrote {} ({w}x{h})", args.output.display());
+    tell!("wrote {} ({w}x{h})", args.output.display());
     Ok(())
 }

@@ -99,7 +99,7 @@ pub fn run(command: &MaskCommand) -> Result<()> {
 }
 
 fn report(path: &Path, m: &MaskMeasures) {
-    eprintln!(
+    tell!(
         "wrote {}: opaque {:.1} %, fall-off {:.1} voxels, inscribed tetrahedron edge {:.1} voxels",
         path.display(),
         m.opaque_fraction * 100.0,

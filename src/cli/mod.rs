@@ -7,6 +7,12 @@ macro_rules! say {
     ($($arg:tt)*) => { $crate::cli::write_out(&format!($($arg)*)) };
 }
 
+/// `eprintln!` for notes, warnings and the files written: a closed error stream is ignored,
+/// so it cannot turn a command's result into a panic.
+macro_rules! tell {
+    ($($arg:tt)*) => { $crate::cli::write_err(&format!($($arg)*)) };
+}
+
 mod bench;
 mod bench_fill;
 mod bench_guided;
@@ -258,7 +264,7 @@ impl crate::progress::Progress for Stderr {
     fn update(&self, _stage: &str, _fraction: f32) {}
 
     fn warn(&self, message: &str) {
-        eprintln!("warning: {message}");
+        tell!("warning: {message}");
     }
 }
 
@@ -268,6 +274,12 @@ pub fn write_out(text: &str) {
     if writeln!(std::io::stdout().lock(), "{text}").is_err() {
         std::process::exit(0);
     }
+}
+
+/// One line on the error stream; a closed stream is ignored.
+pub fn write_err(text: &str) {
+    use std::io::Write;
+    let _ = writeln!(std::io::stderr().lock(), "{text}");
 }
 
 /// An error message cut to a readable length: input echoed in a message (a 4 MB line of a

@@ -3,7 +3,6 @@
 use crate::error::Result;
 use crate::io;
 use crate::quality::{self, Report};
-use std::io::Write;
 use std::path::PathBuf;
 
 /// The arguments of `solidtex quality`.
@@ -72,14 +71,12 @@ fn verdict(check: bool, outside: Vec<String>) -> Result<()> {
         return Ok(());
     }
     if outside.is_empty() {
-        eprintln!("check: every figure is within its band");
+        tell!("check: every figure is within its band");
         return Ok(());
     }
-    // a closed error stream must not turn the verdict into a panic
-    let mut err = std::io::stderr().lock();
-    let _ = writeln!(err, "check: outside their bands:");
+    tell!("check: outside their bands:");
     for figure in &outside {
-        let _ = writeln!(err, "  {figure}");
+        tell!("  {figure}");
     }
     Err(crate::Error::invalid(format!("check: {} figure(s) outside their bands (listed above)", outside.len())))
 }
@@ -290,6 +287,6 @@ pub fn noise(args: &NoiseArgs) -> Result<()> {
     let exemplars = [Some(&ex), Some(ey_ref), Some(ez.as_ref().unwrap_or(ey_ref))];
     let volume = crate::controls::spectral_noise(exemplars, dims, args.seed).map_err(|e| e.in_file(&args.exemplar))?;
     io::write_volume(&args.output, &volume)?;
-    eprintln!("wrote {} (random-phase noise with the exemplars' spectra and colours)", args.output.display());
+    tell!("wrote {} (random-phase noise with the exemplars' spectra and colours)", args.output.display());
     Ok(())
 }

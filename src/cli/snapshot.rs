@@ -15,12 +15,12 @@ pub fn run(volume: &Path, output: Option<&Path>, check: Option<&Path>, tolerance
     match (output, check) {
         (Some(out), None) => {
             io::snapshot_file::write(out, &v)?;
-            eprintln!("wrote {}", out.display());
+            tell!("wrote {}", out.display());
             Ok(())
         }
         (None, Some(snap)) => {
             io::snapshot_file::check(snap, &v, tolerance)?;
-            eprintln!("{} matches {}", volume.display(), snap.display());
+            tell!("{} matches {}", volume.display(), snap.display());
             Ok(())
         }
         _ => Err(Error::invalid("give either -o NAME.snap (write) or --check NAME.snap (compare)")),

@@ -54,7 +54,7 @@ pub fn run(args: &SurfaceArgs) -> Result<()> {
     mesh_file::write_coloured_ply(&args.output, &coloured)?;
     let hist = surface::histogram_distances(&skin.colours, &exemplar)?;
     let mesh_note = if mesh.boundary_edges() > 0 { " (open: its borders stay)" } else { "" };
-    eprintln!(
+    tell!(
         "wrote {}: {} points, {} triangles{mesh_note}, spacing {:.4}, {:.4} units per exemplar pixel, {} levels, in {seconds:.2} s",
         args.output.display(),
         skin.mesh.vertices.len(),
@@ -63,9 +63,11 @@ pub fn run(args: &SurfaceArgs) -> Result<()> {
         skin.texel,
         skin.levels
     );
-    eprintln!(
+    tell!(
         "histogram distance to the exemplar: R {:.3}  G {:.3}  B {:.3} (0 = equal, 2 = disjoint)",
-        hist[0], hist[1], hist[2]
+        hist[0],
+        hist[1],
+        hist[2]
     );
     Ok(())
 }

@@ -131,7 +131,7 @@ impl Progress for Bar {
         self.bar.set_message(stage.to_string());
         if self.verbose {
             self.bar.suspend(|| {
-                eprintln!("{:>8.3} s  {:>5.1} %  {stage}", self.started.elapsed().as_secs_f64(), fraction * 100.0)
+                tell!("{:>8.3} s  {:>5.1} %  {stage}", self.started.elapsed().as_secs_f64(), fraction * 100.0)
             });
         }
     }
@@ -166,7 +166,7 @@ fn check_values(args: &SynthArgs) -> Result<[usize; 3]> {
 fn warn_if_directional(image: &crate::volume::Image2d, path: &Path) {
     let d = synth::direction(image);
     if d.coherence > synth::DIRECTIONAL {
-        eprintln!(
+        tell!(
             "warning: {}: the features run one way (structure-tensor coherence {:.2}, along {:.0} degrees); \
              one image for all three axes will smear one cut. Give the other cross-sections with --ey/--ez, \
              or use --layered if the image is layers along its rows",
@@ -225,6 +225,6 @@ pub fn run(args: &SynthArgs) -> Result<()> {
     bar.bar.finish_and_clear();
     io::write_volume(&args.output, &volume)?;
     let [x, y, z] = volume.dims();
-    eprintln!("wrote {} ({x}x{y}x{z}) in {:.2} s", args.output.display(), started.elapsed().as_secs_f64());
+    tell!("wrote {} ({x}x{y}x{z}) in {:.2} s", args.output.display(), started.elapsed().as_secs_f64());
     Ok(())
 }

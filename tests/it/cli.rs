@@ -174,3 +174,24 @@ fn help_takes_its_own_help_flag() {
         assert!(out.contains(usage), "{args:?}: {out}");
     }
 }
+
+/// A closed error stream (a reader that went away) does not turn a command's notes or its
+/// error line into a panic: the command still writes its file and exits with its own code.
+#[test]
+fn a_closed_error_stream_keeps_the_exit_code() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = |args: &[&str]| {
+        let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_solidtex"))
+            .args(args)
+            .stdout(std::process::Stdio::null())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        drop(child.stderr.take());
+        child.wait().unwrap().code()
+    };
+    let out = at(dir.path(), "m.exr");
+    assert_eq!(run(&["make", "marble", "--size", "8", "-o", &out]), Some(0), "the note 'wrote ...' is dropped");
+    assert!(std::path::Path::new(&out).exists());
+    assert_eq!(run(&["info", &at(dir.path(), "missing.exr")]), Some(1), "the error line is dropped, the code kept");
+}
