@@ -164,15 +164,11 @@ fn check_values(args: &SynthArgs) -> Result<[usize; 3]> {
 /// Warn when one directional image is asked to make a homogeneous solid: the same grain
 /// in all three cut directions leaves one cut a smear.
 fn warn_if_directional(image: &crate::volume::Image2d, path: &Path) {
-    let d = synth::direction(image);
-    if d.coherence > synth::DIRECTIONAL {
+    if let Some(warning) = synth::directional_warning(image) {
         tell!(
-            "warning: {}: the features run one way (structure-tensor coherence {:.2}, along {:.0} degrees); \
-             one image for all three axes will smear one cut. Give the other cross-sections with --ey/--ez, \
-             or use --layered if the image is layers along its rows",
-            path.display(),
-            d.coherence,
-            d.angle_degrees
+            "warning: {}: {warning}. Give the other cross-sections with --ey/--ez, or use --layered if the image \
+             is layers along its rows",
+            path.display()
         );
     }
 }

@@ -93,6 +93,13 @@ fn synthesized(spec: &SynthSpec, size: [usize; 3], seed: u64, none: &dyn Progres
     } else {
         let ey = spec.ey.as_deref().map(read).transpose()?;
         let ez = spec.ez.as_deref().map(read).transpose()?;
+        if let (None, None, Some(warning)) = (&ey, &ez, synth::directional_warning(&ex)) {
+            none.warn(&format!(
+                "{}: {warning}. Give the other cross-sections (ey = \"...\", ez = \"...\"), or recipe = \"synth-layered\" if \
+                 the image is layers along its rows",
+                spec.image.display()
+            ));
+        }
         synth::synthesize(synth::Exemplars { x: &ex, y: ey.as_ref(), z: ez.as_ref() }, &params, seed, none)
     };
     volume.map_err(|e| e.in_file(&spec.image))

@@ -27,6 +27,20 @@ pub struct Direction {
     pub angle_degrees: f64,
 }
 
+/// What to tell a designer who asks for a homogeneous solid from one `image` whose
+/// features run one way (`None` when they do not): the coherence and the direction, and
+/// why one cut will smear. Front ends add how to give the other cross-sections.
+pub fn directional_warning(image: &Image2d) -> Option<String> {
+    let d = direction(image);
+    (d.coherence > DIRECTIONAL).then(|| {
+        format!(
+            "the features run one way (structure-tensor coherence {:.2}, along {:.0} degrees); one image for all \
+             three axes will smear one cut",
+            d.coherence, d.angle_degrees
+        )
+    })
+}
+
 /// Measure `image` (all its channels, averaged).
 pub fn direction(image: &Image2d) -> Direction {
     let (w, h, n) = (image.width(), image.height(), image.channel_count());

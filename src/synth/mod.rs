@@ -28,7 +28,7 @@ mod pca;
 mod search;
 pub(crate) mod spectrum;
 
-pub use direction::{DIRECTIONAL, Direction, direction};
+pub use direction::{DIRECTIONAL, Direction, direction, directional_warning};
 pub(crate) use driver::image_pyramid;
 pub use params::{LayeredParams, SynthParams};
 

@@ -379,3 +379,34 @@ fn a_name_too_long_for_a_file_is_refused_at_once() {
     let run = solidtex(&["build", &manifest.to_string_lossy(), "-o", &out]);
     assert!(run.status.success(), "a name of 200 bytes is fine: {}", stderr(&run));
 }
+
+/// One image whose features run one way, asked for a homogeneous solid, gets the directional
+/// warning in a build (on the error stream, named by entry) and in the editor's preview
+/// (for the terminal UI's status line); an image without a direction gets none.
+#[test]
+fn a_directional_photo_is_warned_about_in_builds_and_previews() {
+    let dir = tempfile::tempdir().unwrap();
+    let stripes = |period: usize| {
+        let data = (0..48 * 48).map(|i| if ((i % 48) / period).is_multiple_of(2) { 0.2 } else { 0.8 }).collect();
+        solidtex::volume::Image2d::from_data(48, 48, solidtex::Channel::grey(), data).unwrap()
+    };
+    solidtex::io::write_image(&dir.path().join("grain.png"), &stripes(3)).unwrap();
+    let checks =
+        (0..48 * 48usize).map(|i| if ((i % 48) / 3 + (i / 48) / 3).is_multiple_of(2) { 0.2 } else { 0.8 }).collect();
+    let checks = solidtex::volume::Image2d::from_data(48, 48, solidtex::Channel::grey(), checks).unwrap();
+    solidtex::io::write_image(&dir.path().join("checks.png"), &checks).unwrap();
+    let manifest = dir.path().join("lib.toml");
+    let entry = |name: &str, image: &str| {
+        format!("[[exemplar]]\nname = \"{name}\"\nrecipe = \"synth\"\nimage = \"{image}\"\nsize = 8\nlevels = 1\n")
+    };
+    let text = entry("grain", "grain.png") + &entry("checks", "checks.png");
+    std::fs::write(&manifest, &text).unwrap();
+    let run = solidtex(&["build", &manifest.to_string_lossy(), "-o", &at(dir.path(), "out")]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let err = stderr(&run);
+    assert!(err.contains("warning: grain:") && err.contains("features run one way"), "{err}");
+    assert!(err.contains("synth-layered"), "the advice names the manifest's keys: {err}");
+    assert!(!err.contains("warning: checks:"), "{err}");
+    let (_, warnings) = solidtex::library::recipe::preview(&manifest, "grain", &text).unwrap();
+    assert!(warnings.iter().any(|w| w.contains("features run one way")), "{warnings:?}");
+}
