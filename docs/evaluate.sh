@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # Synthesis quality on a folder of photos, against noise that has each photo's spectrum and
 # colours (`solidtex noise`), and on the two 3D truths with long features.
-# Usage: bash docs/evaluate.sh [IMAGES_DIR] [OUT_DIR]
+# Usage: [SYNTH_FLAGS=...] bash docs/evaluate.sh [IMAGES_DIR] [OUT_DIR]
 #   IMAGES_DIR  default ../shared/data/images (not part of the project); every *.png in it
 #   OUT_DIR     default out/eval; volumes and contact sheets go there
+#   SYNTH_FLAGS given to every synth run, e.g. "--core coordinates"
 # Photos whose name holds "strata" or "layered" are synthesized with --layered.
 # One line per photo and per control; `check` counts the figures `quality --check` finds
 # outside their bands (docs/synthesis.md, "Checking a volume").
@@ -19,6 +20,7 @@ cd "$root"
 mkdir -p "$out"
 cargo build --release --quiet
 bin=./target/release/solidtex
+read -r -a extra <<< "${SYNTH_FLAGS:-}"
 summary() { # label json check-stderr seconds
   python3 - "$@" <<'PY'
 import json, sys
@@ -49,7 +51,7 @@ for image in "${images[@]}"; do
   flags="" size=64
   case "$name" in *strata*|*layered*) flags="--layered"; size=64x64x128 ;; esac
   started=$(date +%s.%N)
-  $bin synth "$image" $flags --max-exemplar 128 --size $size --seed 1 -o "$out/$name.exr" 2>/dev/null
+  $bin synth "$image" $flags ${extra[@]+"${extra[@]}"} --max-exemplar 128 --size $size --seed 1 -o "$out/$name.exr" 2>/dev/null
   took=$(printf '%.1f' "$(echo "$(date +%s.%N) - $started" | bc)")
   $bin sheet "$out/$name.exr" -o "$out/$name.sheet.png" --title "$name" 2>/dev/null
   measure "$name synth" "$out/$name.exr" "$took" --exemplar "$image" --max-exemplar 128
@@ -67,7 +69,8 @@ for truth in foam:1 channels:3; do
   slices=(--exemplar "$out/$name-x.png" --ey "$out/$name-y.png" --ez "$out/$name-z.png")
   measure "$name truth" "$out/$name.truth.exr" - "${slices[@]}"
   started=$(date +%s.%N)
-  $bin synth "$out/$name-x.png" --ey "$out/$name-y.png" --ez "$out/$name-z.png" --size 64 --seed 1 -o "$out/$name.exr" 2>/dev/null
+  $bin synth "$out/$name-x.png" --ey "$out/$name-y.png" --ez "$out/$name-z.png" ${extra[@]+"${extra[@]}"} --size 64 --seed 1 \
+    -o "$out/$name.exr" 2>/dev/null
   took=$(printf '%.1f' "$(echo "$(date +%s.%N) - $started" | bc)")
   $bin noise "$out/$name-x.png" --ey "$out/$name-y.png" --ez "$out/$name-z.png" --size 64 --seed 1 -o "$out/$name.noise.exr" 2>/dev/null
   for kind in synth noise; do

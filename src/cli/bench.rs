@@ -4,7 +4,7 @@
 use crate::error::{Error, Result};
 use crate::procedural::{Recipe, generate};
 use crate::progress::NoProgress;
-use crate::synth::{Exemplars, LayeredParams, SynthParams, synthesize, synthesize_layered};
+use crate::synth::{Core, Exemplars, LayeredParams, SynthParams, synthesize, synthesize_layered};
 use crate::volume::{Axis, Channel, Image2d};
 use std::time::Instant;
 
@@ -31,12 +31,16 @@ struct Workload {
     name: &'static str,
     size: [usize; 3],
     layered: bool,
+    core: Core,
 }
 
-const WORKLOADS: [Workload; 3] = [
-    Workload { name: "synth/64cube/128px-rgb", size: [64; 3], layered: false },
-    Workload { name: "layered/64x64x128/128px-rgb", size: [64, 64, 128], layered: true },
-    Workload { name: "synth/128cube/128px-rgb", size: [128; 3], layered: false },
+const WORKLOADS: [Workload; 6] = [
+    Workload { name: "synth/64cube/128px-rgb", size: [64; 3], layered: false, core: Core::Blend },
+    Workload { name: "layered/64x64x128/128px-rgb", size: [64, 64, 128], layered: true, core: Core::Blend },
+    Workload { name: "synth/128cube/128px-rgb", size: [128; 3], layered: false, core: Core::Blend },
+    Workload { name: "synth-coords/64cube/128px-rgb", size: [64; 3], layered: false, core: Core::Coordinates },
+    Workload { name: "layered-coords/64x64x128/128px", size: [64, 64, 128], layered: true, core: Core::Coordinates },
+    Workload { name: "synth-coords/128cube/128px-rgb", size: [128; 3], layered: false, core: Core::Coordinates },
 ];
 
 /// Run `solidtex bench`.
@@ -121,7 +125,7 @@ fn hand_made() -> Result<Vec<(&'static str, Work)>> {
     Ok(HAND_MADE.into_iter().zip([stamp_one, scatter, sweep]).collect())
 }
 
-/// The synthesis workloads: homogeneous 64³ and 128³, layered 64x64x128.
+/// The synthesis workloads: homogeneous 64³ and 128³, layered 64x64x128, by each core.
 fn synthesis(args: &BenchArgs) -> Result<()> {
     let works: Vec<&Workload> =
         WORKLOADS.iter().filter(|w| args.only.as_ref().is_none_or(|o| w.name.contains(o.as_str()))).collect();
@@ -134,7 +138,7 @@ fn synthesis(args: &BenchArgs) -> Result<()> {
     for w in works {
         let mut times = Vec::new();
         for run in 0..args.runs.max(1) {
-            let params = SynthParams { size: w.size, ..SynthParams::default() };
+            let params = SynthParams { size: w.size, core: w.core, ..SynthParams::default() };
             let started = Instant::now();
             if w.layered {
                 synthesize_layered(&strata, None, &params, &LayeredParams::default(), run as u64, &NoProgress)?;

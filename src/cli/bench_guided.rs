@@ -10,10 +10,10 @@ use crate::error::Result;
 use crate::fill::render::View;
 use crate::fill::tets::TetMesh;
 use crate::guided::field::{FrameField, sketched_frames, solve};
-use crate::guided::region::Mask;
 use crate::guided::solid::{self, Domain};
-use crate::guided::synth::{self, Exemplars, Options, Setup};
 use crate::progress::NoProgress;
+use crate::synth::coords::{self as synth, Exemplars, Options, Setup};
+use crate::synth::region::Mask;
 use crate::volume::Image2d;
 use glam::Vec3;
 use std::time::Instant;
@@ -44,15 +44,23 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     }
     let (fruit, tets, field) = fruit()?;
     let image = crate::sections::draw("bark-skin", 128, 128, 1)?;
-    let options = Options::for_exemplar(crate::guided::cube::SIDE);
+    let options = Options::for_exemplar(crate::synth::cube::SIDE);
     let started = Instant::now();
-    let cube = crate::guided::cube::synthesize(&[image.clone(), image.clone(), image.clone()], 1)?;
+    let cube = crate::synth::cube::synthesize(&[image.clone(), image.clone(), image.clone()], 1)?;
     let exemplars = Exemplars::of_volume(&cube, &options)?;
     let prepared = started.elapsed().as_secs_f64();
     let view = View::framing(fruit.bounds(), Vec3::ZERO, Vec3::Y, 256)?;
     let domain = Domain::around(fruit.bounds(), 256)?;
     let frames = solid::frames_over(&tets, &field, &domain);
-    let setup = Setup { exemplars: &exemplars, frames: &frames, depth: None, dims: domain.dims, seed: 1, options };
+    let setup = Setup {
+        exemplars: &exemplars,
+        frames: Some(&frames),
+        wrap: [false; 3],
+        depth: None,
+        dims: domain.dims,
+        seed: 1,
+        options,
+    };
     let whole: usize = setup.level_dims().iter().map(|d| d.iter().product::<usize>()).sum();
     timed_then(
         args,
@@ -73,7 +81,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     }
     let domain = Domain::around(fruit.bounds(), 128)?;
     let frames = solid::frames_over(&tets, &field, &domain);
-    let setup = Setup { dims: domain.dims, frames: &frames, ..setup };
+    let setup = Setup { dims: domain.dims, frames: Some(&frames), ..setup };
     timed(args, SOLID, || {
         let out = synth::run(&setup, &synth::plan(&setup, &Mask::full(domain.dims), 0), None, &NoProgress)?;
         Ok(format!("{} voxels, {} corrections", out.voxels, out.corrections))

@@ -6,14 +6,14 @@ use super::commands::usage;
 use crate::error::{Error, Result};
 use crate::fill::render::View;
 use crate::fill::tets::TetMesh;
-use crate::guided::cube;
 use crate::guided::field::{FrameField, sketched_frames, solve, streamlines};
-use crate::guided::region::{Mask, Sparse};
 use crate::guided::solid::{self, Domain};
-use crate::guided::synth::{self, Exemplars, Options, Setup};
 use crate::io::guided_cache::{self, Cached};
 use crate::io::{self, fill_spec, mesh_file};
 use crate::mesh::Mesh;
+use crate::synth::coords::{self as synth, Exemplars, Options, Setup};
+use crate::synth::cube;
+use crate::synth::region::{Mask, Sparse};
 use crate::volume::{Channel, Image2d};
 use glam::Vec3;
 use std::path::{Path, PathBuf};
@@ -213,7 +213,8 @@ pub fn run_guided(args: &GuidedArgs) -> Result<()> {
     let frames = solid::frames_over(&g.tets, &g.field, &domain);
     let setup = Setup {
         exemplars: &prepared,
-        frames: &frames,
+        frames: Some(&frames),
+        wrap: [false; 3],
         depth: depth.as_ref(),
         dims: domain.dims,
         seed: args.seed,
@@ -388,6 +389,7 @@ fn plane_exemplars(args: &GuidedArgs, path: &Path, rows: Option<usize>) -> Resul
         cube_volume(args, &exemplars).and_then(|cube| Exemplars::of_volume(&cube, &options))
     } else {
         Exemplars::prepare([&exemplars[0], &exemplars[1], &exemplars[2]], &options)
+            .and_then(|prepared| prepared.refuse_alpha().map(|_| prepared))
     }
     .map_err(|e| e.in_file(path))?;
     let [first, ..] = exemplars;

@@ -72,6 +72,12 @@ pub struct SynthArgs {
     /// pixels, and refine it: its coarse layout stays, the exemplar's look comes in.
     #[arg(long)]
     pub start: Option<PathBuf>,
+    /// The synthesis core: `blend` blends matched colours and matches the photo's
+    /// histogram and spectrum (Kopf 2007); `coordinates` copies exemplar pixels in coherent
+    /// patches, each voxel one pixel (joints and channels stay more connected, labels stay
+    /// labels; slower). A --start volume is always refined by `blend`.
+    #[arg(long, default_value = "blend", value_parser = ["blend", "coordinates"])]
+    pub core: String,
     /// Output size: N for a cube, or XxYxZ; each side 1 to 512, within the voxel budget.
     #[arg(long, default_value = "64")]
     pub size: String,
@@ -91,7 +97,7 @@ pub struct SynthArgs {
     /// Stop a level when the mean match distance improves by less than this share (0 to 1).
     #[arg(long, default_value_t = 0.01)]
     pub tolerance: f32,
-    /// Histogram matching strength, 0 (off) to 10.
+    /// Histogram matching strength, 0 (off) to 10 (the blend core).
     #[arg(long, default_value_t = 1.0)]
     pub histogram: f32,
     /// How much the best-matching neighbourhoods dominate the blend, 0 to 16: a prediction
@@ -181,6 +187,7 @@ pub fn run(args: &SynthArgs) -> Result<()> {
     io::check_output(&args.output, &inputs)?;
     let budget = io::budget_from_env()?;
     let params = SynthParams {
+        core: if args.core == "coordinates" { synth::Core::Coordinates } else { synth::Core::Blend },
         size,
         levels: args.levels,
         max_iterations: args.iterations,

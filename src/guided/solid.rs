@@ -2,13 +2,13 @@
 //! voxels a cut needs, the cut's picture and the whole solid as a volume.
 
 use super::field::{FrameField, FrameGrid, ScalarGrid};
-use super::region::{Mask, Sparse};
-use super::synth::{self, Setup, Synthesized, Voxel};
 use crate::error::{Error, Result};
 use crate::fill::render::View;
 use crate::fill::render::field_cut;
 use crate::fill::tets::TetMesh;
 use crate::progress::Progress;
+use crate::synth::coords::{self as synth, Setup, Synthesized, Voxel};
+use crate::synth::region::{Mask, Sparse};
 use crate::volume::{Channel, Image2d, Volume};
 use glam::Vec3;
 
@@ -248,7 +248,7 @@ fn inside_square(picture: &Image2d) -> Result<Image2d> {
     Image2d::from_data(2 * r, 2 * r, picture.channels()[..c - 1].to_vec(), data)
 }
 
-/// The exemplars' channels (alpha-free: [`super::synth::Exemplars::prepare`]) and alpha.
+/// The exemplars' channels (alpha-free: [`crate::synth::coords::Exemplars::prepare`]) and alpha.
 fn with_alpha(setup: &Setup) -> Vec<Channel> {
     setup.exemplars.names.iter().cloned().chain([Channel::A]).collect()
 }

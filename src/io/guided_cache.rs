@@ -25,8 +25,8 @@
 
 use super::atomic;
 use crate::error::{Error, Result};
-use crate::guided::region::{Mask, Sparse};
-use crate::guided::synth::Voxel;
+use crate::synth::coords::Voxel;
+use crate::synth::region::{Mask, Sparse};
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 

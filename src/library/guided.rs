@@ -9,12 +9,12 @@ use crate::error::{Error, Result};
 use crate::fill::FillPreview;
 use crate::fill::render::View;
 use crate::fill::spec::FillSpec;
-use crate::guided::cube::{self, Cube};
 use crate::guided::field::{FrameField, ScalarGrid, sketched_frames, solve, streamlines};
 use crate::guided::solid::{self, Domain};
-use crate::guided::synth::{Exemplars, Options, Setup};
 use crate::mesh::Mesh;
 use crate::progress::Progress;
+use crate::synth::coords::{Exemplars, Options, Setup};
+use crate::synth::cube::{self, Cube};
 use crate::volume::{Axis, Channel, Image2d, Volume};
 use glam::Vec3;
 
@@ -92,7 +92,8 @@ pub fn picture(
             let frames = solid::frames_over(mesh, &field, &domain);
             let setup = Setup {
                 exemplars: &exemplars,
-                frames: &frames,
+                frames: Some(&frames),
+                wrap: [false; 3],
                 depth: depth.as_ref(),
                 dims: domain.dims,
                 seed: spec.seed,

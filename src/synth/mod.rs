@@ -16,21 +16,27 @@
 //! voxel, axis), and every pass computes each voxel from the previous state only, so
 //! the output is bit-identical on any number of threads.
 
+pub mod coords;
+pub mod cube;
 mod depth;
 mod direction;
 mod driver;
+pub mod edges;
 pub(crate) mod exemplar;
 mod grid;
 pub(crate) mod knn;
 mod optimize;
 mod params;
 mod pca;
+pub mod region;
 mod search;
 pub(crate) mod spectrum;
+pub mod triples;
+mod whole;
 
 pub use direction::{DIRECTIONAL, Direction, direction, directional_warning};
 pub(crate) use driver::image_pyramid;
-pub use params::{LayeredParams, SynthParams};
+pub use params::{Core, LayeredParams, SynthParams};
 
 use crate::error::{Error, Result};
 use crate::progress::Progress;
@@ -57,16 +63,20 @@ pub fn synthesize(ex: Exemplars, params: &SynthParams, seed: u64, progress: &dyn
     let ez = ex.z.unwrap_or(ey);
     let images = [ex.x, ey, ez];
     check_exemplars(&images, &["Ex", "Ey", "Ez"], params)?;
-    let weights = vec![1.0; ex.x.channel_count()];
-    let start = start_samples(params, ex.x.channels(), false)?;
-    let job = Job {
-        images: [Some(ex.x), Some(ey), Some(ez)],
-        weights,
-        init: Init::Random,
-        anti_sweeping: false,
-        start: start.as_deref(),
+    let data = if blends(params) {
+        let weights = vec![1.0; ex.x.channel_count()];
+        let start = start_samples(params, ex.x.channels(), false)?;
+        let job = Job {
+            images: [Some(ex.x), Some(ey), Some(ez)],
+            weights,
+            init: Init::Random,
+            anti_sweeping: false,
+            start: start.as_deref(),
+        };
+        driver::run(&job, params, seed, progress)?
+    } else {
+        whole::synthesize(images, false, params, seed, progress)?
     };
-    let data = driver::run(&job, params, seed, progress)?;
     let kind = match (ex.y, ex.z) {
         (None, None) => TextureType::T0,
         (_, None) => TextureType::T1a,
@@ -89,18 +99,27 @@ pub fn synthesize_layered(
 ) -> Result<Volume> {
     check_exemplars(&[exemplar], &["exemplar"], params)?;
     let with_depth = add_depth(exemplar, depth)?;
-    let mut weights = vec![1.0; exemplar.channel_count()];
-    weights.push(layered.depth_weight);
-    let start = start_samples(params, exemplar.channels(), true)?;
-    let job = Job {
-        images: [Some(&with_depth), Some(&with_depth), None],
-        weights,
-        init: Init::ByDepth,
-        anti_sweeping: layered.anti_sweeping,
-        start: start.as_deref(),
+    let data = if blends(params) {
+        let mut weights = vec![1.0; exemplar.channel_count()];
+        weights.push(layered.depth_weight);
+        let start = start_samples(params, exemplar.channels(), true)?;
+        let job = Job {
+            images: [Some(&with_depth), Some(&with_depth), None],
+            weights,
+            init: Init::ByDepth,
+            anti_sweeping: layered.anti_sweeping,
+            start: start.as_deref(),
+        };
+        driver::run(&job, params, seed, progress)?
+    } else {
+        whole::synthesize([&with_depth; 3], true, params, seed, progress)?
     };
-    let data = driver::run(&job, params, seed, progress)?;
     finish(params, with_depth.channels().to_vec(), data, TextureType::T1b, "synth-layered", seed)
+}
+
+/// Whether the blend core runs: asked for, or to refine a start volume.
+fn blends(params: &SynthParams) -> bool {
+    params.core == Core::Blend || params.start.is_some()
 }
 
 fn finish(
@@ -115,6 +134,7 @@ fn finish(
     meta.set("recipe", recipe);
     meta.set("seed", seed.to_string());
     meta.set("levels", params.levels.to_string());
+    meta.set("core", if blends(params) { Core::Blend } else { Core::Coordinates }.to_string());
     Ok(Volume::from_data(params.size, channels, data)?.with_meta(meta))
 }
 

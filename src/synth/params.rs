@@ -2,9 +2,32 @@
 
 use crate::error::{Error, Result};
 
+/// Which synthesis core runs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Core {
+    /// Kopf et al. 2007: matches' colours blended, then histogram and spectrum matched;
+    /// the only core that refines a start volume.
+    #[default]
+    Blend,
+    /// Exemplar coordinates copied in coherent patches, each voxel one exemplar pixel
+    /// ([`super::coords`]): lines and outlines stay connected, labels stay labels.
+    Coordinates,
+}
+
+impl std::fmt::Display for Core {
+    fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        f.write_str(match self {
+            Core::Coordinates => "coordinates",
+            Core::Blend => "blend",
+        })
+    }
+}
+
 /// Parameters shared by homogeneous and layered synthesis.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SynthParams {
+    /// The core (blend; with a start volume always blend).
+    pub core: Core,
     /// Output size in voxels (any size, not only powers of two).
     pub size: [usize; 3],
     /// Pyramid levels (3 by default; 1 synthesizes at full size only).
@@ -52,6 +75,7 @@ pub struct SynthParams {
 impl Default for SynthParams {
     fn default() -> Self {
         SynthParams {
+            core: Core::Blend,
             size: [64, 64, 64],
             levels: 3,
             neighbourhood: 8,

@@ -136,8 +136,9 @@ fn a_guided_cut_is_synthesized_on_demand_and_cached() {
 
 /// A photo's guided cut is as sharp as the photo: the sharpness line `guided` prints for
 /// a cut (gradient and autocorrelation-length ratios against the exemplar) is within the
-/// yardstick's targets through the solid cube; matched as planes (`--planes`, each voxel
-/// the mean of three pixels) the same cut is soft and misses the gradient target.
+/// yardstick's targets through the solid cube; matched as planes (`--planes`) each voxel
+/// shows one of its three pixels, and the cut keeps a gradient ratio of 0.81 (the mean of
+/// the three gave 0.64 on the gravel at a larger size: soft).
 #[test]
 fn a_guided_cut_of_a_photo_is_as_sharp_as_the_photo() {
     let dir = tempfile::tempdir().unwrap();
@@ -156,8 +157,8 @@ fn a_guided_cut_of_a_photo_is_as_sharp_as_the_photo() {
     };
     let (gradient, length) = ratios(&[]);
     assert!((0.8..=1.2).contains(&gradient) && (0.7..=1.3).contains(&length), "{gradient} {length}");
-    let (soft, _) = ratios(&["--planes"]);
-    assert!(soft < 0.8, "as planes: gradient ratio {soft}");
+    let (planes, _) = ratios(&["--planes"]);
+    assert!(planes >= 0.78, "as planes: gradient ratio {planes}");
 }
 
 /// `--solid` reads a volume along the field as it is: every pixel of the cut inside the

@@ -3,6 +3,7 @@
 mod bad_input;
 mod classify;
 mod cli;
+mod coordinates;
 mod fill;
 mod formats;
 mod fuzz;

@@ -126,6 +126,16 @@ pub struct Sparse<T> {
 impl<T: Copy + Default + Send + Sync> Sparse<T> {
     /// A store for the voxels of `mask`, each computed by `value` (in parallel, by brick).
     pub fn compute(mask: &Mask, value: impl Fn([usize; 3]) -> T + Sync) -> Sparse<T> {
+        Sparse::compute_unless(mask, &|| false, value)
+    }
+
+    /// [`Sparse::compute`], asking `stop` before each brick: once it says yes, the bricks
+    /// not yet begun keep `T::default()` (the caller throws the store away).
+    pub fn compute_unless(
+        mask: &Mask,
+        stop: &(dyn Fn() -> bool + Sync),
+        value: impl Fn([usize; 3]) -> T + Sync,
+    ) -> Sparse<T> {
         let bricks = mask.dims.map(|d| d.div_ceil(BRICK));
         let mut table = vec![u32::MAX; bricks.iter().product()];
         let mut stored = Vec::new();
@@ -141,6 +151,9 @@ impl<T: Copy + Default + Send + Sync> Sparse<T> {
         let cube = BRICK * BRICK * BRICK;
         let mut values = vec![T::default(); stored.len() * cube];
         values.par_chunks_mut(cube).zip(&stored).for_each(|(chunk, b)| {
+            if stop() {
+                return;
+            }
             for (k, out) in chunk.iter_mut().enumerate() {
                 let v =
                     [b[0] * BRICK + k % BRICK, b[1] * BRICK + (k / BRICK) % BRICK, b[2] * BRICK + k / (BRICK * BRICK)];

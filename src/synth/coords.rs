@@ -1,9 +1,16 @@
-//! Solid texture synthesis along a frame field, on demand (Zhang et al. 2011, §4–5, after
-//! the deterministic synthesis of Dong et al. 2008).
+//! The project's synthesis core: solid texture synthesis by exemplar coordinates (Dong et
+//! al. 2008), along a frame field and on demand (Zhang et al. 2011, §4–5). `synth`,
+//! layered synthesis and `guided` all run it; without a frame field the frames are the
+//! grid's axes.
 //!
 //! Every voxel holds a coordinate triple: a pixel of each plane's exemplar (the planes
-//! orthogonal to its frame's x, y and z axes), whose crossbars agree ([`super::triples`]);
-//! its colour is the mean of the three, alike along their crossbars.
+//! orthogonal to its frame's x, y and z axes), whose crossbars agree ([`super::triples`]).
+//! It shows **one** exemplar pixel, never a blend: after a correction, the pixel of the
+//! triple member whose neighbourhood agrees best with the voxel's neighbours in its plane
+//! (before the first correction, plane x's). A cut through the solid is then made of
+//! exemplar pixels copied in coherent patches, so its edges are as sharp as the photo's
+//! and a label image stays labels; the mean of three pixels that seldom agree on a photo
+//! was soft (docs/guided.md, "Two exemplars").
 //!
 //! ```text
 //!  coarsest level  pixels from the voxel's position in its frame, plus a random offset
@@ -29,10 +36,10 @@
 //! of threads.
 
 use super::cube::Cube;
-use super::field::{FrameGrid, ScalarGrid};
 use super::region::{Mask, Sparse};
 use super::triples::Triples;
 use crate::error::{Error, Result};
+use crate::guided::field::{FrameGrid, ScalarGrid};
 use crate::noise::hash3;
 use crate::progress::Progress;
 use crate::synth::exemplar::{PrepareOptions, Prepared};
@@ -105,12 +112,12 @@ impl Options {
 pub struct Voxel {
     /// Centre slot per plane.
     pub slot: [u32; 3],
-    /// Its colour: the mean of the three pixels (the first channels; see [`MAX_CHANNELS`]).
+    /// Its colour: one of the three pixels (the first channels; see [`MAX_CHANNELS`]).
     pub colour: [f32; MAX_CHANNELS],
 }
 
-/// Most exemplar channels (colour, a feature mask, depth).
-pub const MAX_CHANNELS: usize = 5;
+/// Most exemplar channels (colour with alpha, a feature mask, depth).
+pub const MAX_CHANNELS: usize = 6;
 
 /// The name of an exemplar channel holding a feature mask (Zhang et al. 2011, Fig. 16):
 /// matched with the colours, so structures the mask marks are kept whole, but not shown.
@@ -147,14 +154,8 @@ impl Exemplars {
         let channels = images[0].channels();
         if channels.len() > MAX_CHANNELS {
             return Err(Error::invalid(format!(
-                "the exemplar has {} channels ({}); guided synthesis takes at most {MAX_CHANNELS}",
+                "the exemplar has {} channels ({}); synthesis takes at most {MAX_CHANNELS}",
                 channels.len(),
-                crate::volume::channel_names(channels)
-            )));
-        }
-        if channels.contains(&Channel::A) {
-            return Err(Error::invalid(format!(
-                "the exemplar has channels {}; drop its alpha channel (the solid's alpha is the model's coverage)",
                 crate::volume::channel_names(channels)
             )));
         }
@@ -217,6 +218,18 @@ impl Exemplars {
             )));
         }
         Ok(Exemplars { planes, triples, names, depth, cube: None })
+    }
+
+    /// An error unless the exemplars are free of alpha: a guided solid's alpha is the
+    /// model's coverage.
+    pub fn refuse_alpha(&self) -> Result<()> {
+        if !self.names.contains(&Channel::A) {
+            return Ok(());
+        }
+        Err(Error::invalid(format!(
+            "the exemplar has channels {}; drop its alpha channel (the solid's alpha is the model's coverage)",
+            crate::volume::channel_names(&self.names)
+        )))
     }
 
     /// A solid exemplar of `volume`'s channels but alpha ([`super::cube`]), at the levels of
@@ -314,8 +327,12 @@ fn weights(image: &Image2d) -> Vec<f32> {
 pub struct Setup<'a> {
     /// The prepared exemplars.
     pub exemplars: &'a Exemplars,
-    /// The frame field, in the finest level's voxel coordinates (voxel v's centre at v).
-    pub frames: &'a FrameGrid,
+    /// The frame field, in the finest level's voxel coordinates (voxel v's centre at v);
+    /// `None`: every frame is the grid's axes.
+    pub frames: Option<&'a FrameGrid>,
+    /// Per axis, whether neighbourhoods wrap around the grid (the solid then tiles along
+    /// it), else they are clamped to it.
+    pub wrap: [bool; 3],
     /// The model's depth in the same coordinates: with exemplars carrying a Depth channel,
     /// a neighbourhood's depth is the model's there, so rows land at their depth.
     pub depth: Option<&'a ScalarGrid>,
@@ -341,8 +358,21 @@ impl Setup<'_> {
 
     /// The frame at voxel `v` of `level`.
     fn frame(&self, level: usize, v: [usize; 3]) -> Mat3 {
+        let Some(frames) = self.frames else { return Mat3::IDENTITY };
         let scale = (1usize << (self.options.levels - 1 - level)) as f32;
-        self.frames.at(Vec3::new(v[0] as f32, v[1] as f32, v[2] as f32) * scale)
+        frames.at(Vec3::new(v[0] as f32, v[1] as f32, v[2] as f32) * scale)
+    }
+
+    /// The value of `values` at the voxel nearest to `p`, wrapped or clamped per axis.
+    #[inline]
+    fn read(&self, values: &Sparse<Voxel>, p: Vec3) -> Voxel {
+        let mut v = nearest(p);
+        for (a, c) in v.iter_mut().enumerate() {
+            if self.wrap[a] {
+                *c = c.rem_euclid(values.dims[a] as i64);
+            }
+        }
+        values.at(v)
     }
 
     fn exemplar(&self, plane: usize, level: usize) -> &Prepared {
@@ -354,8 +384,9 @@ impl Setup<'_> {
         if self.options.layered { 0..2 } else { 0..3 }
     }
 
-    /// The voxel of `level` holding `slot`: its colour is the mean of its matched planes'
-    /// pixels.
+    /// The voxel of `level` holding `slot` before its corrections (initialized,
+    /// upsampled, read from a cache): the mean of its matched planes' pixels, which
+    /// favours no plane (or the cube's colour). Corrections show one pixel.
     pub fn voxel(&self, level: usize, slot: [u32; 3]) -> Voxel {
         let mut colour = [0.0; MAX_CHANNELS];
         if let Some(cube) = &self.exemplars.cube {
@@ -370,6 +401,15 @@ impl Setup<'_> {
                 *o += c * share;
             }
         }
+        Voxel { slot, colour }
+    }
+
+    /// The voxel of `level` holding `slot`, showing plane `a`'s pixel.
+    fn showing(&self, level: usize, slot: [u32; 3], a: usize) -> Voxel {
+        let mut colour = [0.0; MAX_CHANNELS];
+        let ex = self.exemplar(a, level);
+        let p = ex.centres[slot[a] as usize] as usize;
+        colour[..ex.channels].copy_from_slice(&ex.colours[p * ex.channels..(p + 1) * ex.channels]);
         Voxel { slot, colour }
     }
 }
@@ -438,6 +478,7 @@ pub fn run(
         if progress.cancelled() {
             return Err(Error::Cancelled);
         }
+        let stop = || progress.cancelled();
         let mut current = match made.as_ref().or(from.map(|(_, values)| values)) {
             None => Sparse::compute(&versions[0], |v| initial(setup, v)),
             Some(p) => Sparse::compute(&versions[0], |v| upsampled(setup, level, p, v)),
@@ -445,14 +486,17 @@ pub fn run(
         voxels += versions[0].count();
         done += versions[0].count() as f64;
         for (pass, mask) in versions.iter().enumerate().skip(1) {
+            let before = &current;
+            current = Sparse::compute_unless(mask, &stop, |v| corrected(setup, level, pass, before, v));
             if progress.cancelled() {
                 return Err(Error::Cancelled);
             }
-            let before = &current;
-            current = Sparse::compute(mask, |v| corrected(setup, level, pass, before, v));
             corrections += mask.count();
             done += mask.count() as f64;
             progress.update(&format!("level {}/{levels}, pass {pass}", level + 1), (done / total) as f32);
+        }
+        if versions.last().is_some_and(|m| m.on.iter().all(|on| *on)) {
+            show_level(setup, level, &current, progress);
         }
         made = Some(current);
     }
@@ -462,6 +506,19 @@ pub fn run(
         (None, None) => return Err(Error::invalid("guided synthesis was asked for no level")),
     };
     Ok(Synthesized { values, finest: levels - 1, voxels, corrections })
+}
+
+/// Hand a whole level's shown colours to `progress` (e.g. a preview of the levels).
+fn show_level(setup: &Setup, level: usize, values: &Sparse<Voxel>, progress: &dyn Progress) {
+    let channels = setup.exemplars.channels();
+    let mask = Mask::full(values.dims);
+    let data: Vec<f32> = (0..mask.on.len())
+        .flat_map(|i| {
+            let colour = values.at(mask.voxel(i).map(|c| c as i64)).colour;
+            colour.into_iter().take(channels)
+        })
+        .collect();
+    progress.level_done(level + 1, setup.options.levels, values.dims, channels, &data);
 }
 
 /// A key of everything a synthesis depends on (exemplars, field, grid, seed, settings):
@@ -481,10 +538,13 @@ pub fn fingerprint(setup: &Setup) -> u64 {
     if let Some(d) = setup.depth {
         d.values.iter().chain(&d.lo.to_array()).chain([d.step].iter()).for_each(|c| add(u64::from(c.to_bits())));
     }
-    let f = setup.frames;
-    f.lo.to_array().iter().chain([f.step].iter()).for_each(|c| add(u64::from(c.to_bits())));
-    f.dims.iter().chain(&setup.dims).for_each(|d| add(*d as u64));
-    f.corners.iter().flat_map(|q| q.to_array()).for_each(|c| add(u64::from(c.to_bits())));
+    if let Some(f) = setup.frames {
+        f.lo.to_array().iter().chain([f.step].iter()).for_each(|c| add(u64::from(c.to_bits())));
+        f.dims.iter().for_each(|d| add(*d as u64));
+        f.corners.iter().flat_map(|q| q.to_array()).for_each(|c| add(u64::from(c.to_bits())));
+    }
+    setup.dims.iter().for_each(|d| add(*d as u64));
+    setup.wrap.iter().for_each(|w| add(u64::from(*w)));
     let o = setup.options;
     [o.levels, o.n, o.coarse_n, o.coarse_passes, o.passes, o.k, o.max_dims, usize::from(o.layered)]
         .iter()
@@ -547,7 +607,7 @@ fn corrected(setup: &Setup, level: usize, pass: usize, before: &Sparse<Voxel>, v
     }
     let frame = setup.frame(level, v);
     let here = Vec3::from_array(v.map(|c| c as f32));
-    let at = |p: Vec3| before.at(nearest(p));
+    let at = |p: Vec3| setup.read(before, p);
     let channels = setup.exemplar(0, level).channels;
     let scale = (1usize << (setup.options.levels - 1 - level)) as f32;
     let depth = setup.exemplars.depth.zip(setup.depth);
@@ -633,7 +693,42 @@ fn corrected(setup: &Setup, level: usize, pass: usize, before: &Sparse<Voxel>, v
         let key = [v[0] as i64, v[1] as i64, v[2] as i64 + (((level * 64 + pass) as i64) << 32)];
         let random = setup.exemplar(0, level).random_slot(hash3(setup.seed, key[0], key[1], key[2]));
         consider(triples.of(0, random)[0]);
-        setup.voxel(level, best.1)
+        // the member whose neighbourhood fits best is the one shown
+        let t = best.1;
+        let mut fit = |a: usize| {
+            distances[a].get_or(t[a], || {
+                crate::synth::exemplar::squared(&queries[a], setup.exemplar(a, level).projection(t[a] as usize))
+            })
+        };
+        let shown = setup.planes().min_by(|&a, &b| fit(a).total_cmp(&fit(b))).unwrap_or(0);
+        setup.showing(level, t, shown)
+    })
+}
+
+/// One round of settling a label solid: every voxel of `values` (the finest level, whole
+/// grid) shows, of its own triple's pixels, the one most of its six face neighbours
+/// show (its current pixel on a tie). Thin sheets keep their colour (most of a sheet
+/// voxel's neighbours lie in the sheet), a lone voxel of another label takes its
+/// surroundings' when its triple holds it, and nothing is blended.
+pub fn settled(setup: &Setup, values: &Sparse<Voxel>) -> Sparse<Voxel> {
+    let level = setup.options.levels - 1;
+    let shown = setup.exemplars.channels();
+    let mask = Mask::full(values.dims);
+    Sparse::compute(&mask, |v| {
+        let here = values.at(v.map(|c| c as i64));
+        let p = Vec3::from_array(v.map(|c| c as f32));
+        let around =
+            [Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z].map(|d| setup.read(values, p + d).colour);
+        let votes = |c: &[f32; MAX_CHANNELS]| around.iter().filter(|n| n[..shown] == c[..shown]).count();
+        let mut best = (votes(&here.colour), here);
+        for a in setup.planes() {
+            let candidate = setup.showing(level, here.slot, a);
+            let count = votes(&candidate.colour);
+            if count > best.0 {
+                best = (count, candidate);
+            }
+        }
+        best.1
     })
 }
 
@@ -665,7 +760,7 @@ fn cube_corrected(
 ) -> Voxel {
     let frame = setup.frame(level, v);
     let here = Vec3::from_array(v.map(|c| c as f32));
-    let at = |p: Vec3| before.at(nearest(p));
+    let at = |p: Vec3| setup.read(before, p);
     let (n, ch) = (setup.options.n_at(level), cube.channels);
     let h = (n / 2) as i64;
     let mut queries = [[0.0f32; MOST]; 3];
@@ -862,6 +957,44 @@ mod tests {
     use crate::guided::field::{FrameField, solve};
     use glam::Quat;
 
+    /// Progress that counts its polls and the levels it was shown, and asks to stop after
+    /// `stop_after` polls.
+    #[derive(Default)]
+    struct Watch {
+        polls: std::sync::atomic::AtomicUsize,
+        levels: std::sync::Mutex<Vec<(usize, [usize; 3], usize)>>,
+        stop_after: usize,
+    }
+
+    impl crate::progress::Progress for Watch {
+        fn update(&self, _: &str, _: f32) {}
+        fn cancelled(&self) -> bool {
+            self.polls.fetch_add(1, std::sync::atomic::Ordering::Relaxed) >= self.stop_after
+        }
+        fn level_done(&self, level: usize, _: usize, dims: [usize; 3], channels: usize, data: &[f32]) {
+            assert_eq!(data.len(), dims.iter().product::<usize>() * channels);
+            self.levels.lock().unwrap().push((level, dims, channels));
+        }
+    }
+
+    /// A whole run shows every level; a cancel is seen per brick of a pass (not once per
+    /// pass), and the run stops with `Cancelled`.
+    #[test]
+    fn a_run_shows_its_levels_and_stops_within_a_pass() {
+        let (exemplars, frames) = world(32);
+        let setup = setup(&exemplars, &frames, 32);
+        let masks = plan(&setup, &Mask::full([32; 3]), 0);
+        let watch = Watch { stop_after: usize::MAX, ..Watch::default() };
+        run(&setup, &masks, None, &watch).unwrap();
+        assert_eq!(*watch.levels.lock().unwrap(), [(1, [16; 3], 3), (2, [32; 3], 3)]);
+        let polls = watch.polls.into_inner();
+        // 2 passes over 2³ bricks and 2 over 4³ bricks, each brick asking once
+        assert!(polls >= 2 * 8 + 2 * 64, "{polls} polls");
+        let watch = Watch { stop_after: 20, ..Watch::default() };
+        assert!(matches!(run(&setup, &masks, None, &watch), Err(Error::Cancelled)));
+        assert!(watch.levels.lock().unwrap().len() <= 1);
+    }
+
     #[test]
     fn the_reach_covers_a_turned_neighbourhood() {
         let o = Options { n: 5, ..Options::default() };
@@ -898,7 +1031,15 @@ mod tests {
     }
 
     fn setup<'a>(exemplars: &'a Exemplars, frames: &'a FrameGrid, side: usize) -> Setup<'a> {
-        Setup { exemplars, frames, depth: None, dims: [side; 3], seed: 5, options: options() }
+        Setup {
+            exemplars,
+            frames: Some(frames),
+            wrap: [false; 3],
+            depth: None,
+            dims: [side; 3],
+            seed: 5,
+            options: options(),
+        }
     }
 
     fn colours(setup: &Setup, out: &Synthesized, voxels: &[[usize; 3]]) -> Vec<f32> {
@@ -987,22 +1128,22 @@ mod tests {
     }
 
     /// With a solid exemplar the solid's cuts keep the cube's sharpness and feature size
-    /// (the yardstick's targets); the same cube's central slice as the three planes'
-    /// exemplar, each voxel the mean of three pixels, gives soft cuts that miss them.
+    /// (the yardstick's targets); with the cube's central slice as the three planes'
+    /// exemplar too, as each voxel shows one pixel (a mean of three was soft).
     #[test]
-    fn with_a_cube_cuts_keep_its_sharpness() {
+    fn cuts_keep_the_exemplars_sharpness() {
         let cube = sharpness_against_the_cube(&cube_exemplars());
         assert!(cube.in_range(), "{cube:?}");
         let slice = cube_slice();
         let planes = Exemplars::prepare([&slice, &slice, &slice], &options()).unwrap();
-        let soft = sharpness_against_the_cube(&planes);
-        assert!(!soft.in_range() && soft.gradient_ratio < cube.gradient_ratio, "{soft:?} against {cube:?}");
+        let sharp = sharpness_against_the_cube(&planes);
+        assert!(sharp.in_range(), "{sharp:?}");
     }
 
-    /// Every voxel is a mean of three exemplar pixels whose crossbars agree: the solid's
-    /// colours stay within the exemplar's range, and it is not flat.
+    /// Every voxel shows one exemplar pixel, never a blend: the solid's colours are the
+    /// exemplar's, and it is not flat.
     #[test]
-    fn the_solid_is_made_of_exemplar_colours() {
+    fn the_solid_is_made_of_exemplar_pixels() {
         let (exemplars, frames) = world(32);
         let setup = setup(&exemplars, &frames, 32);
         let out = run(&setup, &plan(&setup, &Mask::full([32; 3]), 0), None, &crate::progress::NoProgress).unwrap();
@@ -1012,6 +1153,10 @@ mod tests {
         };
         let all: Vec<[usize; 3]> = (0..32 * 32 * 32).map(|i| Mask::full([32; 3]).voxel(i)).collect();
         let solid = colours(&setup, &out, &all);
+        let pixels: Vec<&[f32]> = image.chunks_exact(3).collect();
+        for colour in solid.chunks_exact(3) {
+            assert!(pixels.contains(&colour), "{colour:?} is no pixel of the exemplar");
+        }
         for c in 0..3 {
             let ((lo, hi), (slo, shi)) = (range(c, image), range(c, &solid));
             assert!(slo >= lo - 1e-6 && shi <= hi + 1e-6, "channel {c}: solid {slo}..{shi}, exemplar {lo}..{hi}");
@@ -1055,7 +1200,15 @@ mod tests {
         let exemplars = Exemplars::prepare([&image, &image, &image], &options).unwrap();
         assert_eq!(exemplars.channels(), 2, "the Depth channel is matched, not shown");
         let run_with = |depth: Option<&crate::guided::field::ScalarGrid>| {
-            let setup = Setup { exemplars: &exemplars, frames: &frames, depth, dims: [32; 3], seed: 2, options };
+            let setup = Setup {
+                exemplars: &exemplars,
+                frames: Some(&frames),
+                wrap: [false; 3],
+                depth,
+                dims: [32; 3],
+                seed: 2,
+                options,
+            };
             let out = run(&setup, &plan(&setup, &Mask::full([32; 3]), 0), None, &crate::progress::NoProgress).unwrap();
             // how far each voxel's red is from what its depth asks for (1 - depth)
             let mut error = 0.0;
@@ -1093,8 +1246,15 @@ mod tests {
         let image = Image2d::from_data(w, h, names, data).unwrap();
         let (options, frames, depth) = layered_along_x();
         let exemplars = Exemplars::prepare([&image, &image, &image], &options).unwrap();
-        let setup =
-            Setup { exemplars: &exemplars, frames: &frames, depth: Some(&depth), dims: [32; 3], seed: 4, options };
+        let setup = Setup {
+            exemplars: &exemplars,
+            frames: Some(&frames),
+            wrap: [false; 3],
+            depth: Some(&depth),
+            dims: [32; 3],
+            seed: 4,
+            options,
+        };
         let out = run(&setup, &plan(&setup, &Mask::full([32; 3]), 0), None, &crate::progress::NoProgress).unwrap();
         // the share of the voxels of layer x (depth (x + 0.5) / 32) showing `colour`
         let share = |x: usize, colour: [f32; 3]| {

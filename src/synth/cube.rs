@@ -16,7 +16,7 @@ pub const SIDE: usize = 64;
 pub const SMALLEST: usize = 16;
 
 /// Channels a cube may hold.
-const MAX_CHANNELS: usize = super::synth::MAX_CHANNELS;
+const MAX_CHANNELS: usize = super::coords::MAX_CHANNELS;
 
 /// One level of the cube.
 #[derive(Debug, Clone)]
