@@ -97,7 +97,8 @@ pub struct SynthArgs {
     /// Stop a level when the mean match distance improves by less than this share (0 to 1).
     #[arg(long, default_value_t = 0.01)]
     pub tolerance: f32,
-    /// Histogram matching strength, 0 (off) to 10 (the blend core).
+    /// Histogram matching strength, 0 (off) to 10; with `--core coordinates`, how much dearer
+    /// candidates are in colours the solid holds too much of (1: four times the excess).
     #[arg(long, default_value_t = 1.0)]
     pub histogram: f32,
     /// How much the best-matching neighbourhoods dominate the blend, 0 to 16: a prediction

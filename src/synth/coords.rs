@@ -36,6 +36,7 @@
 //! of threads.
 
 use super::cube::Cube;
+use super::occupancy::Balance;
 use super::region::{Mask, Sparse};
 use super::triples::Triples;
 use crate::error::{Error, Result};
@@ -68,11 +69,25 @@ pub struct Options {
     /// cross-sections; only the two planes holding z are matched and coloured (the plane
     /// along a layer is free, as in layered synthesis, thesis §4.2).
     pub layered: bool,
+    /// How strongly candidates in colours the solid holds too much of are passed over
+    /// ([`super::occupancy`]); 0: not at all. Only runs over the whole grid weigh it (a
+    /// cut on demand must equal the same voxels of the whole solid).
+    pub histogram: f32,
 }
 
 impl Default for Options {
     fn default() -> Options {
-        Options { levels: 4, n: 5, coarse_n: 5, coarse_passes: 4, passes: 2, k: 4, max_dims: 16, layered: false }
+        Options {
+            levels: 4,
+            n: 5,
+            coarse_n: 5,
+            coarse_passes: 4,
+            passes: 2,
+            k: 4,
+            max_dims: 16,
+            layered: false,
+            histogram: 0.0,
+        }
     }
 }
 
@@ -485,9 +500,15 @@ pub fn run(
         };
         voxels += versions[0].count();
         done += versions[0].count() as f64;
+        let mut balance = balance_at(setup, level, versions);
         for (pass, mask) in versions.iter().enumerate().skip(1) {
-            let before = &current;
-            current = Sparse::compute_unless(mask, &stop, |v| corrected(setup, level, pass, before, v));
+            current = match balance.as_mut() {
+                None => {
+                    let before = &current;
+                    Sparse::compute_unless(mask, &stop, |v| corrected(setup, level, pass, before, v, None))
+                }
+                Some(b) => balanced_pass(setup, level, pass, current, mask, b, &stop),
+            };
             if progress.cancelled() {
                 return Err(Error::Cancelled);
             }
@@ -506,6 +527,61 @@ pub fn run(
         (None, None) => return Err(Error::invalid("guided synthesis was asked for no level")),
     };
     Ok(Synthesized { values, finest: levels - 1, voxels, corrections })
+}
+
+/// The colour balance of `level` when its options ask for one and every version covers
+/// the whole grid.
+fn balance_at(setup: &Setup, level: usize, versions: &[Mask]) -> Option<Balance> {
+    let whole = versions.iter().all(|m| m.on.iter().all(|on| *on));
+    if setup.options.histogram <= 0.0 || setup.exemplars.cube.is_some() || !whole {
+        return None;
+    }
+    let planes: Vec<&Prepared> = setup.planes().map(|a| setup.exemplar(a, level)).collect();
+    let all = [0, 1, 2].map(|a| setup.exemplar(a, level));
+    Some(Balance::new(&planes, all, setup.exemplars.channels(), setup.options.histogram))
+}
+
+/// One pass over the whole grid with the colour balance: in eight sub-passes, one per
+/// parity class of the voxel coordinates, each class corrected from the state the classes
+/// before it left and weighed by the counts of that state, so not every voxel reacts to
+/// the same over-used colour at once.
+fn balanced_pass(
+    setup: &Setup,
+    level: usize,
+    pass: usize,
+    mut state: Sparse<Voxel>,
+    mask: &Mask,
+    balance: &mut Balance,
+    stop: &(dyn Fn() -> bool + Sync),
+) -> Sparse<Voxel> {
+    for class in 0..8 {
+        balance.measure(&bin_counts(setup, balance, &state));
+        let (before, b) = (&state, &*balance);
+        let in_class = |v: [usize; 3]| (v[0] & 1) | (v[1] & 1) << 1 | (v[2] & 1) << 2 == class;
+        state = Sparse::compute_unless(mask, stop, |v| {
+            if in_class(v) { corrected(setup, level, pass, before, v, Some(b)) } else { before.at(v.map(|c| c as i64)) }
+        });
+    }
+    state
+}
+
+/// How many voxels of `values` (a whole grid) show a colour of each bin.
+fn bin_counts(setup: &Setup, balance: &Balance, values: &Sparse<Voxel>) -> Vec<u64> {
+    use rayon::prelude::*;
+    let mask = Mask::full(values.dims);
+    let shown = setup.exemplars.channels();
+    let bins = balance.bins();
+    (0..mask.on.len())
+        .into_par_iter()
+        .fold(
+            || vec![0u64; bins.count],
+            |mut counts, i| {
+                let colour = values.at(mask.voxel(i).map(|c| c as i64)).colour;
+                counts[bins.of_colour(&colour[..shown])] += 1;
+                counts
+            },
+        )
+        .reduce(|| vec![0u64; bins.count], |a, b| a.iter().zip(&b).map(|(x, y)| x + y).collect())
 }
 
 /// Hand a whole level's shown colours to `progress` (e.g. a preview of the levels).
@@ -600,8 +676,16 @@ fn upsampled(setup: &Setup, level: usize, parents: &Sparse<Voxel>, v: [usize; 3]
     setup.voxel(level, slot)
 }
 
-/// One correction of voxel `v` of `level` from the previous version `before`.
-fn corrected(setup: &Setup, level: usize, pass: usize, before: &Sparse<Voxel>, v: [usize; 3]) -> Voxel {
+/// One correction of voxel `v` of `level` from the previous version `before`, candidates
+/// weighed by `balance` if given.
+fn corrected(
+    setup: &Setup,
+    level: usize,
+    pass: usize,
+    before: &Sparse<Voxel>,
+    v: [usize; 3],
+    balance: Option<&Balance>,
+) -> Voxel {
     if let Some(cube) = &setup.exemplars.cube {
         return cube_corrected(setup, cube, level, pass, before, v);
     }
@@ -641,11 +725,12 @@ fn corrected(setup: &Setup, level: usize, pass: usize, before: &Sparse<Voxel>, v
         // the summed distance of triple `t`, or infinity once a partial sum passes `bound`
         // (distances are not negative: such a triple cannot win)
         let mut cost = |t: [u32; 3], bound: f32| -> f32 {
+            let factor = balance.map_or(1.0, |b| b.factor(t, setup.planes()));
             let mut sum = 0.0;
             for a in setup.planes() {
                 sum += distances[a].get_or(t[a], || {
                     crate::synth::exemplar::squared(&queries[a], setup.exemplar(a, level).projection(t[a] as usize))
-                });
+                }) * factor;
                 if sum > bound {
                     return f32::INFINITY;
                 }
@@ -1027,7 +1112,17 @@ mod tests {
 
     /// Two levels, a wider neighbourhood at the coarsest (so each level has its own reach).
     fn options() -> Options {
-        Options { levels: 2, n: 5, coarse_n: 7, coarse_passes: 2, passes: 2, k: 3, max_dims: 8, layered: false }
+        Options {
+            levels: 2,
+            n: 5,
+            coarse_n: 7,
+            coarse_passes: 2,
+            passes: 2,
+            k: 3,
+            max_dims: 8,
+            layered: false,
+            histogram: 0.0,
+        }
     }
 
     fn setup<'a>(exemplars: &'a Exemplars, frames: &'a FrameGrid, side: usize) -> Setup<'a> {
@@ -1167,8 +1262,17 @@ mod tests {
     /// Layered settings, frames whose z runs along x and a depth rising from 0 to 1 along x,
     /// over a 32³ grid.
     fn layered_along_x() -> (Options, FrameGrid, crate::guided::field::ScalarGrid) {
-        let options =
-            Options { levels: 2, n: 5, coarse_n: 5, coarse_passes: 2, passes: 2, k: 3, max_dims: 8, layered: true };
+        let options = Options {
+            levels: 2,
+            n: 5,
+            coarse_n: 5,
+            coarse_passes: 2,
+            passes: 2,
+            k: 3,
+            max_dims: 8,
+            layered: true,
+            histogram: 0.0,
+        };
         let z_along_x = Quat::from_rotation_y(std::f32::consts::FRAC_PI_2);
         assert!((z_along_x * Vec3::Z).distance(Vec3::X) < 1e-6);
         let q = glam::Vec4::from(z_along_x);
@@ -1300,6 +1404,7 @@ mod tests {
                 k: 3,
                 max_dims: 8,
                 layered: false,
+                histogram: 0.0,
             };
             let exemplars = Exemplars::prepare([&image, &image, &image], &options).unwrap();
             assert_eq!(exemplars.channels(), 3, "the mask is not shown");

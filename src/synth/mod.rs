@@ -25,6 +25,7 @@ pub mod edges;
 pub(crate) mod exemplar;
 mod grid;
 pub(crate) mod knn;
+pub mod occupancy;
 mod optimize;
 mod params;
 mod pca;
