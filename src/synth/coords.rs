@@ -1262,17 +1262,7 @@ mod tests {
     /// Layered settings, frames whose z runs along x and a depth rising from 0 to 1 along x,
     /// over a 32³ grid.
     fn layered_along_x() -> (Options, FrameGrid, crate::guided::field::ScalarGrid) {
-        let options = Options {
-            levels: 2,
-            n: 5,
-            coarse_n: 5,
-            coarse_passes: 2,
-            passes: 2,
-            k: 3,
-            max_dims: 8,
-            layered: true,
-            histogram: 0.0,
-        };
+        let options = Options { coarse_n: 5, layered: true, ..options() };
         let z_along_x = Quat::from_rotation_y(std::f32::consts::FRAC_PI_2);
         assert!((z_along_x * Vec3::Z).distance(Vec3::X) < 1e-6);
         let q = glam::Vec4::from(z_along_x);
@@ -1395,17 +1385,7 @@ mod tests {
         let (_, frames) = world(32);
         let agreement = |masked: bool| {
             let image = image(masked);
-            let options = Options {
-                levels: 2,
-                n: 5,
-                coarse_n: 5,
-                coarse_passes: 2,
-                passes: 2,
-                k: 3,
-                max_dims: 8,
-                layered: false,
-                histogram: 0.0,
-            };
+            let options = Options { coarse_n: 5, ..options() };
             let exemplars = Exemplars::prepare([&image, &image, &image], &options).unwrap();
             assert_eq!(exemplars.channels(), 3, "the mask is not shown");
             let setup = setup(&exemplars, &frames, 32);

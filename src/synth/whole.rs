@@ -1,5 +1,5 @@
 //! A whole solid on the grid's own axes by the coordinate core ([`super::coords`]): the
-//! homogeneous and layered synthesis of `synth` and the library.
+//! homogeneous and layered synthesis of `synth --core coordinates`.
 //!
 //! ```text
 //!  exemplars   each with a feature channel of its distance to its own edges ([`super::edges`])
@@ -26,9 +26,9 @@ use glam::Vec3;
 /// Side of the neighbourhoods the core matches (odd: centred on the voxel).
 const N: usize = 5;
 
-/// Rounds of settling a label solid ([`coords::settled`]): two halve the pieces per phase
-/// on the channels truth (6.2, 8.3, 11.8 times the truth's to 3.1, 4.4, 8.4); six remove
-/// almost no more.
+/// Rounds of settling a label solid ([`coords::settled`]): two about halve the pieces per
+/// phase on the channels truth (6.2, 8.3, 11.8 times the truth's to 3.1, 4.4, 8.4, with an
+/// earlier form of the colour balance); six remove almost no more.
 const SETTLE_ROUNDS: usize = 2;
 
 /// Whether `image`'s shown channels hold at most [`super::edges::MOST_LABELS`] colours.

@@ -4,7 +4,6 @@
 
 use crate::support::{assert_usage, solidtex};
 use solidtex::labels;
-use solidtex::noise;
 use solidtex::procedural::{Recipe, generate};
 use solidtex::progress::NoProgress;
 use solidtex::synth::{Core, Exemplars, LayeredParams, SynthParams, synthesize, synthesize_layered};
@@ -68,9 +67,7 @@ fn homogeneous_and_layered_runs_are_bit_identical_on_1_and_2_threads() {
 fn the_command_line_takes_a_core_and_refuses_others() {
     let dir = tempfile::tempdir().unwrap();
     let photo = dir.path().join("spots.png");
-    let cell = |i: usize| noise::hash3(2, (i % 40 / 4) as i64, (i / 160) as i64, 0) % 10 < 4;
-    let data = (0..40 * 40).map(|i| if cell(i) { 0.9 } else { 0.1 }).collect();
-    solidtex::io::write_image(&photo, &Image2d::from_data(40, 40, Channel::grey(), data).unwrap()).unwrap();
+    solidtex::io::write_image(&photo, &crate::support::spots(0.4, 2)).unwrap();
     let out = dir.path().join("v.exr");
     let (p, o) = (photo.to_string_lossy().into_owned(), out.to_string_lossy().into_owned());
     let ok = solidtex(&["synth", &p, "--size", "16", "--levels", "2", "--core", "coordinates", "-o", &o]);
@@ -86,28 +83,17 @@ fn the_command_line_takes_a_core_and_refuses_others() {
     assert!(crate::support::stderr(&bad).contains("possible values: blend, coordinates"));
 }
 
-/// Grey spots on a ground: a share `white` of the 40x40 pixels (whole 4x4 cells) is 0.9.
-fn spots(white: f64, seed: u64) -> Image2d {
-    let cell = |x: usize, y: usize| noise::hash3(seed, (x / 4) as i64, (y / 4) as i64, 0) % 1000;
-    let data = (0..40 * 40).map(|i| if (cell(i % 40, i / 40) as f64) < white * 1000.0 { 0.9 } else { 0.1 }).collect();
-    Image2d::from_data(40, 40, Channel::grey(), data).unwrap()
-}
-
-fn white_share(samples: &[f32]) -> f64 {
-    samples.iter().filter(|v| **v > 0.5).count() as f64 / samples.len() as f64
-}
-
 /// Three exemplars with 20, 40 and 60 % white (mean 0.407): without the balance the
 /// solid drifts to the dark majority (0.370); with it (`--histogram 1`) it moves back
 /// (0.378; 0.386 and 0.392 at 2 and 4) and lands within 3 points.
 #[test]
 fn the_balance_holds_the_colour_distribution() {
-    let images = [spots(0.2, 1), spots(0.4, 2), spots(0.6, 3)];
-    let expected = images.iter().map(|i| white_share(i.data())).sum::<f64>() / 3.0;
+    let images = [(0.2, 1), (0.4, 2), (0.6, 3)].map(|(white, seed)| crate::support::spots(white, seed));
+    let expected = images.iter().map(|i| crate::support::white_share(i.data())).sum::<f64>() / 3.0;
     let ex = Exemplars { x: &images[0], y: Some(&images[1]), z: Some(&images[2]) };
     let share = |strength: f32| {
         let params = SynthParams { levels: 2, max_iterations: 2, histogram_strength: strength, ..coordinates([32; 3]) };
-        white_share(synthesize(ex, &params, 5, &NoProgress).unwrap().data())
+        crate::support::white_share(synthesize(ex, &params, 5, &NoProgress).unwrap().data())
     };
     let (on, off) = (share(1.0), share(0.0));
     assert!((on - expected).abs() <= 0.03, "with the balance {on:.3}, the exemplars' mean {expected:.3}");

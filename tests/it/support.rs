@@ -69,3 +69,16 @@ pub fn listing(folder: &Path) -> Vec<String> {
 pub fn at(dir: &Path, name: &str) -> String {
     dir.join(name).to_string_lossy().into_owned()
 }
+
+/// Grey spots on a ground: a share `white` of the 40x40 pixels (whole 4x4 cells, picked by
+/// hash) is 0.9, the rest 0.1.
+pub fn spots(white: f64, seed: u64) -> solidtex::volume::Image2d {
+    let cell = |x: usize, y: usize| solidtex::noise::hash3(seed, (x / 4) as i64, (y / 4) as i64, 0) % 1000;
+    let data = (0..40 * 40).map(|i| if (cell(i % 40, i / 40) as f64) < white * 1000.0 { 0.9 } else { 0.1 }).collect();
+    solidtex::volume::Image2d::from_data(40, 40, Channel::grey(), data).unwrap()
+}
+
+/// The share of `samples` above one half.
+pub fn white_share(samples: &[f32]) -> f64 {
+    samples.iter().filter(|v| **v > 0.5).count() as f64 / samples.len() as f64
+}

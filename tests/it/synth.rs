@@ -276,25 +276,13 @@ fn the_quality_baseline_skips_the_copies_of_a_tiled_exemplar() {
     assert_eq!(report.axes[0].exemplar_with_copies, None);
 }
 
-/// Grey spots on a ground: a share `white` of the 40x40 pixels (whole 4x4 cells, picked by
-/// hash) is 0.9, the rest 0.1.
-fn spots(white: f64, seed: u64) -> Image2d {
-    let cell = |x: usize, y: usize| noise::hash3(seed, (x / 4) as i64, (y / 4) as i64, 0) % 1000;
-    let data = (0..40 * 40).map(|i| if (cell(i % 40, i / 40) as f64) < white * 1000.0 { 0.9 } else { 0.1 }).collect();
-    Image2d::from_data(40, 40, Channel::grey(), data).unwrap()
-}
-
-fn share_above_half(samples: &[f32]) -> f64 {
-    samples.iter().filter(|v| **v > 0.5).count() as f64 / samples.len() as f64
-}
-
 #[test]
 fn every_exemplar_counts_for_the_colour_distribution() {
-    let images = [spots(0.2, 1), spots(0.4, 2), spots(0.6, 3)];
-    let expected = images.iter().map(|i| share_above_half(i.data())).sum::<f64>() / 3.0;
+    let images = [(0.2, 1), (0.4, 2), (0.6, 3)].map(|(white, seed)| crate::support::spots(white, seed));
+    let expected = images.iter().map(|i| crate::support::white_share(i.data())).sum::<f64>() / 3.0;
     let ex = Exemplars { x: &images[0], y: Some(&images[1]), z: Some(&images[2]) };
     let v = synthesize(ex, &small([16, 16, 16]), 5, &NoProgress).unwrap();
-    let share = share_above_half(v.data());
+    let share = crate::support::white_share(v.data());
     assert!((share - expected).abs() <= 0.02, "volume share {share:.3}, mean of the exemplars' {expected:.3}");
 }
 
