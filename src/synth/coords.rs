@@ -586,15 +586,26 @@ fn bin_counts(setup: &Setup, balance: &Balance, values: &Sparse<Voxel>) -> Vec<u
 
 /// Hand a whole level's shown colours to `progress` (e.g. a preview of the levels).
 fn show_level(setup: &Setup, level: usize, values: &Sparse<Voxel>, progress: &dyn Progress) {
-    let channels = setup.exemplars.channels();
+    if let Ok(data) = samples(setup, values, false) {
+        progress.level_done(level + 1, setup.options.levels, values.dims, setup.exemplars.channels(), &data);
+    }
+}
+
+/// The shown colours of `values` over its whole grid, x fastest, each voxel followed by
+/// its pixel's depth when `with_depth` and the exemplars carry a Depth channel.
+pub fn samples(setup: &Setup, values: &Sparse<Voxel>, with_depth: bool) -> Result<Vec<f32>> {
+    let shown = setup.exemplars.channels();
+    let depth = setup.exemplars.depth.filter(|_| with_depth);
     let mask = Mask::full(values.dims);
-    let data: Vec<f32> = (0..mask.on.len())
-        .flat_map(|i| {
-            let colour = values.at(mask.voxel(i).map(|c| c as i64)).colour;
-            colour.into_iter().take(channels)
-        })
-        .collect();
-    progress.level_done(level + 1, setup.options.levels, values.dims, channels, &data);
+    let mut data = Vec::new();
+    data.try_reserve_exact(mask.on.len() * (shown + usize::from(depth.is_some())))
+        .map_err(|_| Error::invalid("not enough memory for the solid's samples"))?;
+    for i in 0..mask.on.len() {
+        let colour = values.at(mask.voxel(i).map(|c| c as i64)).colour;
+        data.extend_from_slice(&colour[..shown]);
+        data.extend(depth.map(|d| colour[d]));
+    }
+    Ok(data)
 }
 
 /// A key of everything a synthesis depends on (exemplars, field, grid, seed, settings):

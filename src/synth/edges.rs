@@ -29,8 +29,8 @@ pub const MOST_LABELS: usize = 16;
 /// after the colours (before a Depth channel).
 pub fn with_edge_distance(image: &Image2d) -> Result<Image2d> {
     let (w, h, c) = (image.width(), image.height(), image.channel_count());
-    let shown: Vec<usize> = (0..c).filter(|&k| !matched_only(&image.channels()[k])).collect();
-    let edges = if is_labels(image, &shown) { label_edges(image, &shown) } else { gradient_edges(image, &shown) };
+    let shown = shown_channels(image);
+    let edges = if is_labels(image) { label_edges(image, &shown) } else { gradient_edges(image, &shown) };
     let distance = distance_to(&edges, w, h);
     let at = shown.len();
     let mut names = image.channels().to_vec();
@@ -44,20 +44,30 @@ pub fn with_edge_distance(image: &Image2d) -> Result<Image2d> {
     Image2d::from_data(w, h, names, data)
 }
 
-/// Whether the `shown` channels of `image` take at most [`MOST_LABELS`] distinct values.
-pub fn is_labels(image: &Image2d, shown: &[usize]) -> bool {
-    let c = image.channel_count();
-    let mut seen: Vec<Vec<u32>> = Vec::new();
-    for pixel in image.data().chunks_exact(c) {
-        let key: Vec<u32> = shown.iter().map(|&k| pixel[k].to_bits()).collect();
+/// The channels of `image` a voxel shows (a feature mask and a Depth channel aside).
+fn shown_channels(image: &Image2d) -> Vec<usize> {
+    (0..image.channel_count()).filter(|&k| !matched_only(&image.channels()[k])).collect()
+}
+
+/// Whether the shown channels of `image` take at most [`MOST_LABELS`] distinct colours.
+pub fn is_labels(image: &Image2d) -> bool {
+    label_colours(image.data().chunks_exact(image.channel_count()), &shown_channels(image)).is_some()
+}
+
+/// The distinct colours of `pixels` over their `shown` channels, in order of first
+/// appearance, if there are at most [`MOST_LABELS`]: a label image's labels.
+pub fn label_colours<'a>(pixels: impl Iterator<Item = &'a [f32]>, shown: &[usize]) -> Option<Vec<Vec<f32>>> {
+    let mut seen: Vec<Vec<f32>> = Vec::new();
+    for pixel in pixels {
+        let key: Vec<f32> = shown.iter().map(|&k| pixel[k]).collect();
         if !seen.contains(&key) {
             if seen.len() == MOST_LABELS {
-                return false;
+                return None;
             }
             seen.push(key);
         }
     }
-    true
+    Some(seen)
 }
 
 /// Pixels whose right or lower neighbour has another label.
@@ -158,7 +168,7 @@ mod tests {
         // 40 grey levels (exact in binary), one sharp step at column 20 of 40
         let data = (0..40 * 8).map(|i| (i % 40) as f32 / 1024.0 + if i % 40 < 20 { 0.25 } else { 0.75 }).collect();
         let image = Image2d::from_data(40, 8, vec![Channel::R], data).unwrap();
-        assert!(!is_labels(&image, &[0]));
+        assert!(!is_labels(&image));
         let out = with_edge_distance(&image).unwrap();
         let d = |x: usize| out.pixel(x, 4)[1] * REACH;
         assert_eq!((d(19), d(20)), (0.0, 0.0));

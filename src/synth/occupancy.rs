@@ -17,14 +17,13 @@
 //! did nothing, strong ones swung the solid from one colour to another. Eight sub-passes,
 //! each seeing the counts the ones before it left, approach the target steadily.
 
-use super::coords::MAX_CHANNELS;
 use super::exemplar::Prepared;
 
 /// How colours fall into bins.
 #[derive(Debug, Clone)]
 pub struct Bins {
     /// A label exemplar's colours (empty for a photo).
-    labels: Vec<[f32; MAX_CHANNELS]>,
+    labels: Vec<Vec<f32>>,
     /// Per shown channel, the low end and the step.
     steps: Vec<(f32, f32)>,
     /// Steps per channel.
@@ -37,18 +36,8 @@ impl Bins {
     /// The bins of the exemplars' pixels, over their first `shown` channels.
     pub fn of(exemplars: &[&Prepared], shown: usize) -> Bins {
         let pixels = || exemplars.iter().flat_map(|e| e.colours.chunks_exact(e.channels));
-        let mut labels: Vec<[f32; MAX_CHANNELS]> = Vec::new();
-        for p in pixels() {
-            let mut key = [0.0; MAX_CHANNELS];
-            key[..shown].copy_from_slice(&p[..shown]);
-            if !labels.contains(&key) {
-                labels.push(key);
-                if labels.len() > super::edges::MOST_LABELS {
-                    break;
-                }
-            }
-        }
-        if labels.len() <= super::edges::MOST_LABELS {
+        let channels: Vec<usize> = (0..shown).collect();
+        if let Some(labels) = super::edges::label_colours(pixels(), &channels) {
             let count = labels.len();
             return Bins { labels, steps: Vec::new(), per_channel: 0, count };
         }
@@ -69,7 +58,7 @@ impl Bins {
     /// The bin of `colour` (its first shown channels): the nearest label, or its steps.
     pub fn of_colour(&self, colour: &[f32]) -> usize {
         if !self.labels.is_empty() {
-            let apart = |l: &[f32; MAX_CHANNELS]| l.iter().zip(colour).map(|(a, b)| (a - b) * (a - b)).sum::<f32>();
+            let apart = |l: &Vec<f32>| l.iter().zip(colour).map(|(a, b)| (a - b) * (a - b)).sum::<f32>();
             return (0..self.labels.len())
                 .min_by(|&a, &b| apart(&self.labels[a]).total_cmp(&apart(&self.labels[b])))
                 .unwrap_or(0);

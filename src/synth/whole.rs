@@ -17,7 +17,7 @@ use super::coords::{self, Exemplars, Options, Setup};
 use super::edges::with_edge_distance;
 use super::params::SynthParams;
 use super::region::Mask;
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::guided::field::ScalarGrid;
 use crate::progress::Progress;
 use crate::volume::Image2d;
@@ -30,13 +30,6 @@ const N: usize = 5;
 /// phase on the channels truth (6.2, 8.3, 11.8 times the truth's to 3.1, 4.4, 8.4, with an
 /// earlier form of the colour balance); six remove almost no more.
 const SETTLE_ROUNDS: usize = 2;
-
-/// Whether `image`'s shown channels hold at most [`super::edges::MOST_LABELS`] colours.
-fn is_labels(image: &Image2d) -> bool {
-    let shown: Vec<usize> =
-        (0..image.channel_count()).filter(|&c| !coords::matched_only(&image.channels()[c])).collect();
-    super::edges::is_labels(image, &shown)
-}
 
 /// The colour balance's strength at `--histogram 1` ([`super::occupancy`]): on three
 /// spot exemplars (20, 40, 60 % white) the solid's mean grey was 0.319 without it, 0.344,
@@ -80,25 +73,12 @@ pub fn synthesize(
     let wrap = [params.tileable, params.tileable, params.tileable && !layered];
     let setup = Setup { exemplars: &exemplars, frames: None, wrap, depth: depth.as_ref(), dims, seed, options };
     let mut out = coords::run(&setup, &coords::plan(&setup, &Mask::full(dims), 0), None, progress)?;
-    if images.iter().all(|image| is_labels(image)) {
+    if images.iter().all(|image| super::edges::is_labels(image)) {
         for _ in 0..SETTLE_ROUNDS {
             out.values = coords::settled(&setup, &out.values);
         }
     }
-    let shown = exemplars.channels();
-    let per = shown + usize::from(layered);
-    let count: usize = dims.iter().product();
-    let mut data = Vec::new();
-    data.try_reserve_exact(count * per).map_err(|_| Error::invalid("not enough memory for the solid's samples"))?;
-    let mask = Mask::full(dims);
-    for i in 0..count {
-        let colour = out.values.at(mask.voxel(i).map(|c| c as i64)).colour;
-        data.extend_from_slice(&colour[..shown]);
-        if let Some(d) = exemplars.depth {
-            data.push(colour[d]);
-        }
-    }
-    Ok(data)
+    coords::samples(&setup, &out.values, true)
 }
 
 /// The depth `z / (Z - 1)` over a grid `z_dim` voxels deep (finest voxel coordinates).
