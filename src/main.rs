@@ -26,15 +26,17 @@ fn main() -> ExitCode {
     }
 }
 
-/// On SIGINT or SIGTERM, remove the temporary files and folders being written and exit with
-/// 128 plus the signal's number (130, 143), as a shell reports a command it stopped. The
-/// terminal UI reads Ctrl-C as a key in raw mode, so this does not reach it.
+/// On SIGINT, SIGTERM or SIGHUP, give the terminal back if the UI holds it, remove the
+/// temporary files and folders being written and exit with 128 plus the signal's number
+/// (130, 143, 129), as a shell reports a command it stopped. The terminal UI reads Ctrl-C
+/// as a key in raw mode, so SIGINT reaches it only from `kill`.
 #[cfg(unix)]
 fn stop_cleanly_on_signals() {
-    use signal_hook::consts::{SIGINT, SIGTERM};
-    let Ok(mut signals) = signal_hook::iterator::Signals::new([SIGINT, SIGTERM]) else { return };
+    use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
+    let Ok(mut signals) = signal_hook::iterator::Signals::new([SIGINT, SIGTERM, SIGHUP]) else { return };
     std::thread::spawn(move || {
         if let Some(signal) = signals.forever().next() {
+            solidtex::tui::restore_terminal();
             solidtex::io::atomic::remove_live_temporaries();
             std::process::exit(128 + signal);
         }

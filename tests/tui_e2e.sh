@@ -19,8 +19,12 @@ session=solidtex-e2e-$$
 cleanup() { tmux kill-session -t "$session" 2>/dev/null || true; rm -rf "$out"; }
 trap cleanup EXIT
 screen() { tmux capture-pane -t "$session" -p; }
-wait_for() { # text, seconds
-  for _ in $(seq 1 $(( $2 * 10 ))); do screen | grep -q "$1" && return 0; sleep 0.1; done
+wait_for() { # text, seconds (also found when the status line wraps it)
+  for _ in $(seq 1 $(( $2 * 10 ))); do
+    screen | grep -q "$1" && return 0
+    screen | sed 's/ *? help  q quit$//' | tr '\n' ' ' | tr -s ' ' | grep -q "$1" && return 0
+    sleep 0.1
+  done
   echo "tui e2e: never saw '$1'; the screen was:"; screen; exit 1
 }
 press() { # text, seconds, keys...: send the keys, then wait for the screen they lead to
@@ -209,4 +213,84 @@ press "previous build again" 10 d
 tmux send-keys -t "$session" q
 sleep 0.5
 if tmux has-session -t "$session" 2>/dev/null; then echo "tui e2e: q did not quit"; exit 1; fi
+# l. Work is never lost (80x24): outside edits survive an editor save, a deletion is undone
+# onto the file as it reads now, a failed rebuild keeps the last good volume, `b` keeps the
+# report's other rows, the fill preview asks before dropping constraints and loads a written
+# spec back, a panicking build leaves the UI running, the terminal is restored after q and
+# after SIGTERM, and a read-only manifest is saved under another name.
+lib="$out/safe/library.toml"
+cp -r exemplars "$out/safe"
+cp "$out/safe/kiwi_section.png" "$out/safe/tile.png"
+printf '\n[[exemplar]]\nname = "tile"\nrecipe = "sweep"\nimage = "tile.png"\nlength = 16\naxis = "x"\ndepth_axis = "z"\n' >> "$lib"
+tmux new-session -d -s "$session" -x 80 -y 24 bash --norc
+tmux send-keys -t "$session" "SOLIDTEX_TEST_PANIC=strata $bin tui $lib -o $out/safe-built" Enter
+wait_for "solidtex library" 10
+press "recipe: marble" 10 e
+wait_for "size = 64" 10
+sed -i 's/^# out\/NAME.exr (the volume)/# out\/NAME.exr (the volume; noted outside)/; /^name = "wood"/,/^seed/{s/^seed = 3/seed = 44/}' "$lib"
+printf '\n[[exemplar]]\nname = "outside"\nrecipe = "procedural:wood"\nsize = 16\n' >> "$lib"
+wait_for "changed on disk: Ctrl-R reloads" 5
+press "recipe: marble \[modified\]" 5 Down Down Enter BSpace BSpace 3 2 Enter
+press "with the file's other changes kept" 10 s
+sed -n '/^name = "marble"/,/^seed/p' "$lib" | grep -q '^size = 32' || { echo "tui e2e: the editor's change was not saved"; cat "$lib"; exit 1; }
+grep -q 'noted outside' "$lib" && grep -q '^name = "outside"' "$lib" && sed -n '/^name = "wood"/,/^seed/p' "$lib" | grep -q '^seed = 44' || { echo "tui e2e: the save lost an outside edit"; cat "$lib"; exit 1; }
+# the entry changed on disk too: asked, both shown, mine kept
+press "recipe: marble \[modified\]" 5 Down Enter BSpace 9 Enter
+sed -i '/^name = "marble"/,/^seed/{s/^seed = 3/seed = 5/}' "$lib"
+press "m keeps yours, t takes the file's" 10 s
+press "yours (m keeps it)" 5 b
+press "saved" 10 m
+sed -n '/^name = "marble"/,/^seed/p' "$lib" | grep -q '^seed = 9' || { echo "tui e2e: m did not keep mine"; cat "$lib"; exit 1; }
+press "solidtex library" 5 Escape
+# delete an entry, edit the file outside, u: the entry is back and the outside edit stays
+press "d again deletes strata" 5 Down d
+press "deleted strata" 10 d
+sed -i 's/^size = 16$/size = 20/' "$lib"
+press "undid the deletion of strata" 10 u
+grep -q '^name = "strata"' "$lib" && grep -q '^size = 20' "$lib" || { echo "tui e2e: undo lost strata or the outside edit"; cat "$lib"; exit 1; }
+# a panicking build: the entry fails with the reason, the UI goes on
+press "strata failed: internal error" 60 Up Up Up Up Up Up Down b
+press "built marble" 60 Up b
+# a failed rebuild keeps the last good volume; b on one entry keeps the other rows
+n=$(grep -c '^name = ' "$lib")
+press "built tile" 120 $(for _ in $(seq 1 13); do printf 'Down '; done) b
+[ "$(grep -c '^| ' "$out/safe-built/report.md")" -eq $((n + 1)) ] && grep -q '^| marble | .*earlier build' "$out/safe-built/report.md" || { echo "tui e2e: b on one entry dropped report rows"; cat "$out/safe-built/report.md"; exit 1; }
+rm "$out/safe/tile.png"
+press "its earlier build stays" 60 b
+press "tile (earlier build: the latest failed)" 10 Enter
+press "solidtex library" 5 Escape
+# the fill preview asks before dropping a depth point; type 0 says it ignores it
+press "fill preview: marble" 10 $(for _ in $(seq 1 20); do printf 'Up '; done) Enter f
+wait_for "tets, [0-9]* patches" 120
+press "but .depth. is not used by type" 5 d
+press "unsaved fill constraints: w writes them" 5 q
+press "esc again leaves without saving" 5 Escape
+press "q again quits without saving" 5 C-c
+press "marble.fill.toml" 10 w
+press "undone" 5 u
+press "unsaved fill constraints" 5 Escape
+press "choose a fill spec" 5 o
+wait_for "marble.fill.toml" 5
+press "loaded 1 stroke(s), 1 depth point(s)" 10 Down Enter
+press "back to marble" 5 Escape
+press "solidtex library" 5 Escape
+tmux send-keys -t "$session" q
+sleep 1
+tmux send-keys -t "$session" "stty -a | tr ' ' '\n' | grep -x -e -icanon -e icanon -e -echo -e echo | tr '\n' ' '; echo END" Enter
+press "icanon echo END" 10
+# SIGTERM: the terminal comes back too
+tmux send-keys -t "$session" "clear; chmod a-w $lib; $bin tui $lib -o $out/safe-built" Enter
+wait_for "(read-only)" 10
+press "recipe: marble" 10 e
+wait_for "size = 32" 10
+press "recipe: marble \[modified\]" 5 Down Down Enter BSpace BSpace 1 6 Enter
+press "is read-only" 10 s
+press "save as: .*library-2.toml" 5 S
+press "saved as .*library-2.toml" 10 Enter
+sed -n '/^name = "marble"/,/^seed/p' "$out/safe/library-2.toml" | grep -q '^size = 16' && sed -n '/^name = "marble"/,/^seed/p' "$lib" | grep -q '^size = 32' || { echo "tui e2e: save-as wrote the wrong file"; exit 1; }
+pkill -TERM -f "tui $lib" || true
+sleep 1
+tmux send-keys -t "$session" "stty -a | tr ' ' '\n' | grep -x -e -icanon -e icanon -e -echo -e echo | tr '\n' ' '; echo END" Enter
+press "icanon echo END" 10
+tmux kill-session -t "$session"
 echo "e2e: 1 passed, 0 failed"

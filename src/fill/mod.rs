@@ -47,6 +47,8 @@ pub struct FillPreview {
     pub spec: spec::FillSpec,
     /// The drawn shape it fills (`fruit`, `block`).
     pub shape: String,
+    /// The texture type it was filled as.
+    pub kind: TextureType,
 }
 
 impl std::fmt::Debug for FillPreview {

@@ -310,11 +310,24 @@ fn umask() -> u32 {
 }
 
 /// Write a document the user edits in place (a manifest) atomically: through a symbolic
-/// link to the file it names, keeping that file's permissions.
+/// link to the file it names, keeping that file's permissions. A read-only document (no
+/// write permission for anyone) is refused, whoever runs solidtex: its owner protected it.
 pub fn write_document(path: &Path, bytes: &[u8]) -> Result<()> {
     let linked = fs::symlink_metadata(path).is_ok_and(|m| m.file_type().is_symlink());
     let target = if linked { fs::canonicalize(path).map_err(|e| Error::io(path, e))? } else { path.to_path_buf() };
+    if read_only(&target) {
+        return Err(Error::file(
+            path,
+            "is read-only: solidtex does not replace a file you protected (make it writable, e.g. chmod u+w, \
+             or save under another name)",
+        ));
+    }
     write_bytes(&target, bytes)
+}
+
+/// Whether `path` exists with no write permission for anyone.
+pub fn read_only(path: &Path) -> bool {
+    fs::metadata(path).is_ok_and(|m| m.permissions().readonly())
 }
 
 /// Write `bytes` to `path` atomically.

@@ -149,8 +149,39 @@ pub fn build(request: &Request, entries: &[Entry], observer: &dyn Observer) -> R
             .collect();
         outcomes.extend(done);
     }
-    write_report(output, &ledger, &outcomes)?;
+    write_report(output, &ledger, &report_rows(request, &outcomes))?;
     Ok(outcomes)
+}
+
+/// One row of the library report.
+enum Row<'a> {
+    /// How this build ended for the entry.
+    Now(&'a Outcome),
+    /// Not asked this time: its last build's record.
+    Earlier(Box<Record>),
+    /// Not asked this time and never built.
+    NotBuilt(String),
+}
+
+/// The report's rows: every valid entry of the manifest in order, this build's outcome for
+/// those it built, the last build's record for the others (a build of one entry keeps the
+/// other rows).
+fn report_rows<'a>(request: &Request, outcomes: &'a [Outcome]) -> Vec<Row<'a>> {
+    let text = io::read_text(&request.manifest, "manifest").unwrap_or_default();
+    let (entries, _) = manifest::parse_plan_lenient(&text, manifest_folder(&request.manifest));
+    let mut rows: Vec<Row> = entries
+        .iter()
+        .map(|e| match outcomes.iter().find(|o| o.name() == e.name) {
+            Some(o) => Row::Now(o),
+            None => match cache::read_record(&request.output, &e.name) {
+                Some(record) => Row::Earlier(Box::new(record)),
+                None => Row::NotBuilt(e.name.clone()),
+            },
+        })
+        .collect();
+    let listed = |o: &Outcome| entries.iter().any(|e| e.name == o.name());
+    rows.extend(outcomes.iter().filter(|o| !listed(o)).map(Row::Now));
+    rows
 }
 
 /// The reports a build writes into its output folder.
@@ -243,6 +274,10 @@ fn build_entry(
     if !force && let Freshness::UpToDate(record) = cache::freshness_against(entry, &key, output) {
         return Ok(Outcome::Cached(record));
     }
+    // Tests of the front ends name an entry here to see a build panic and be caught.
+    if std::env::var_os("SOLIDTEX_TEST_PANIC").is_some_and(|n| n == entry.name.as_str()) {
+        panic!("SOLIDTEX_TEST_PANIC names {}", entry.name);
+    }
     let outputs = files::outputs(entry);
     ledger.claim(&outputs)?;
     let progress = EntryProgress { name: &entry.name, observer };
@@ -299,7 +334,7 @@ pub fn merge(request: &Request, folders: &[PathBuf]) -> Result<Vec<Outcome>> {
             .ok_or_else(|| Error::file(output.join(files::record(name)), "unreadable cache record"))?;
         outcomes.push(Outcome::Cached(record));
     }
-    write_report(output, &ledger, &outcomes)?;
+    write_report(output, &ledger, &outcomes.iter().map(Row::Now).collect::<Vec<_>>())?;
     Ok(outcomes)
 }
 
@@ -417,7 +452,7 @@ fn batches<'a>(entries: &[&'a Entry], budget: u64) -> Vec<Vec<&'a Entry>> {
 }
 
 /// `report.md` and `report.html`: one row per exemplar with its sheet.
-fn write_report(output: &Path, ledger: &Ledger, outcomes: &[Outcome]) -> Result<()> {
+fn write_report(output: &Path, ledger: &Ledger, rows: &[Row]) -> Result<()> {
     let mut md = String::from(
         "# Exemplar library\n\n| exemplar | size | declared | classified | build | sheet |\n|---|---|---|---|---|---|\n",
     );
@@ -426,17 +461,27 @@ fn write_report(output: &Path, ledger: &Ledger, outcomes: &[Outcome]) -> Result<
          <style>body{font-family:sans-serif;background:#222;color:#eee}td,th{padding:4px 10px}img{width:280px}</style>\
          <h1>Exemplar library</h1><table><tr><th>exemplar<th>size<th>declared<th>classified<th>build<th>sheet\n",
     );
-    for o in outcomes {
-        let (size, declared, classified, build) = match o {
-            Outcome::Built(r) | Outcome::Cached(r) => {
-                let when = if matches!(o, Outcome::Built(_)) { format!("{:.2} s", r.seconds) } else { "cached".into() };
-                let [x, y, z] = r.dims;
-                (format!("{x}x{y}x{z}"), r.declared.clone().unwrap_or("-".into()), r.classified.clone(), when)
-            }
-            Outcome::Failed(_, why) => ("-".into(), "-".into(), "-".into(), format!("failed: {why}")),
-            Outcome::Cancelled(_) => ("-".into(), "-".into(), "-".into(), "cancelled".into()),
+    for row in rows {
+        let recorded = |r: &Record, when: String| {
+            let [x, y, z] = r.dims;
+            (
+                r.name.clone(),
+                format!("{x}x{y}x{z}"),
+                r.declared.clone().unwrap_or("-".into()),
+                r.classified.clone(),
+                when,
+            )
         };
-        let (name, sheet) = (o.name(), files::sheet(o.name()));
+        let none = |name: &str, why: String| (name.to_string(), "-".into(), "-".into(), "-".into(), why);
+        let (name, size, declared, classified, build) = match row {
+            Row::Now(Outcome::Built(r)) => recorded(r, format!("{:.2} s", r.seconds)),
+            Row::Now(Outcome::Cached(r)) => recorded(r, "cached".into()),
+            Row::Earlier(r) => recorded(r, "earlier build".into()),
+            Row::Now(Outcome::Failed(name, why)) => none(name, format!("failed: {why}")),
+            Row::Now(Outcome::Cancelled(name)) => none(name, "cancelled".into()),
+            Row::NotBuilt(name) => none(name, "not built".into()),
+        };
+        let sheet = files::sheet(&name);
         md += &format!("| {name} | {size} | {declared} | {classified} | {build} | ![{name}]({sheet}) |\n");
         html += &format!(
             "<tr><td>{name}<td>{size}<td>{declared}<td>{classified}<td>{}<td><img src=\"{sheet}\" alt=\"{name}\">\n",

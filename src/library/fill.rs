@@ -195,5 +195,13 @@ pub fn preview_with(spec: &FillSpec, shape: &str, progress: &dyn crate::progress
         report.paste.patches,
         started.elapsed().as_secs_f64()
     );
-    Ok(FillPreview { model, textures, summary, depth: report.depth, spec: spec.clone(), shape: shape.to_string() })
+    Ok(FillPreview {
+        model,
+        textures,
+        summary,
+        depth: report.depth,
+        spec: spec.clone(),
+        shape: shape.to_string(),
+        kind: probe.kind,
+    })
 }

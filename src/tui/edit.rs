@@ -353,9 +353,173 @@ fn step_table(step: &super::model::StampStep, file: &str) -> toml_edit::Table {
     t
 }
 
+/// The bytes of exemplar `name`'s block in `text`: from its `[[exemplar]]` header through
+/// its last line that is not blank or a comment, its steps included (the comments above the
+/// next entry belong to that one). None when the text does not parse or has no entry, or
+/// two, of that name.
+fn block(text: &str, name: &str) -> Option<std::ops::Range<usize>> {
+    let doc = toml_edit::Document::parse(text).ok()?;
+    let list = doc.get("exemplar")?.as_array_of_tables()?;
+    let mut found = list.iter().filter(|t| t.get("name").and_then(Item::as_str) == Some(name));
+    let start = found.next()?.span()?.start;
+    if found.next().is_some() {
+        return None;
+    }
+    // Every top-level header: the entries' and any other table's.
+    let headers = doc.iter().flat_map(|(_, item)| match item {
+        Item::Table(t) => t.span().into_iter().collect::<Vec<_>>(),
+        Item::ArrayOfTables(a) => a.iter().filter_map(toml_edit::Table::span).collect(),
+        _ => Vec::new(),
+    });
+    let end = headers.map(|s| s.start).filter(|s| *s > start).min().unwrap_or(text.len());
+    let mut last = start;
+    let mut at = start;
+    for line in text[start..end].split_inclusive('\n') {
+        at += line.len();
+        let t = line.trim();
+        if !t.is_empty() && !t.starts_with('#') {
+            last = at;
+        }
+    }
+    Some(start..last)
+}
+
+/// `target` with exemplar `name`'s block taken from `source` (appended when `target` has
+/// no such entry); None when `source` has none. The designer's "keep mine" when both
+/// changed the entry.
+pub fn with_entry_of(source: &str, target: &str, name: &str) -> Option<String> {
+    let piece = &source[block(source, name)?];
+    Some(match block(target, name) {
+        Some(range) => format!("{}{piece}{}", &target[..range.start], &target[range.end..]),
+        None if target.is_empty() || target.ends_with("\n\n") => format!("{target}{piece}\n"),
+        None if target.ends_with('\n') => format!("{target}\n{piece}\n"),
+        None => format!("{target}\n\n{piece}\n"),
+    })
+}
+
+/// The editor's text `mine` (edits of exemplar `name` made on `base`) applied to `theirs`,
+/// the manifest as it reads now: their changes elsewhere are kept and the entry is mine.
+/// None when both changed the entry (the designer chooses).
+pub fn rebase(base: &str, mine: &str, theirs: &str, name: &str) -> Option<String> {
+    if theirs == base {
+        return Some(mine.to_string());
+    }
+    let piece = |t: &str| block(t, name).map(|r| t[r].to_string());
+    let (before, mine_piece, theirs_piece) = (piece(base), piece(mine), piece(theirs));
+    if mine_piece == before {
+        Some(theirs.to_string())
+    } else if theirs_piece == before {
+        with_entry_of(mine, theirs, name)
+    } else {
+        None
+    }
+}
+
+/// What deleting an entry removed, to put it back where it was (see [`restore`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Removed {
+    /// The entry's name.
+    pub name: String,
+    /// The bytes removed: the entry, its steps and the comments above it.
+    pub chunk: String,
+    /// The entry before it (None: it was the first).
+    pub after: Option<String>,
+    /// The bytes between the end of that entry (or the file's start) and the chunk.
+    pub gap: String,
+}
+
+/// What turned `old` into `new` by deleting exemplar `name`.
+pub fn removed(old: &str, new: &str, name: &str) -> Removed {
+    let prefix = old.bytes().zip(new.bytes()).take_while(|(a, b)| a == b).count();
+    let room = new.len() - prefix;
+    let suffix = old.bytes().rev().zip(new.bytes().rev()).take(room).take_while(|(a, b)| a == b).count();
+    let (mut start, mut end) = (prefix, old.len() - suffix);
+    // The same removal can sit anywhere along a run of repeated bytes: slide it as far up
+    // as it goes, then down to the first place where it starts a line of text (a header or
+    // a comment), so it goes back whole.
+    let bytes = old.as_bytes();
+    while start > 0 && bytes[start - 1] == bytes[end - 1] {
+        (start, end) = (start - 1, end - 1);
+    }
+    let starts_line = |i: usize| (i == 0 || bytes[i - 1] == b'\n') && bytes[i] != b'\n';
+    while end < old.len() && bytes[start] == bytes[end] && !starts_line(start) {
+        (start, end) = (start + 1, end + 1);
+    }
+    let names = super::entry_names_of(old);
+    let after = names.iter().position(|n| n == name).and_then(|i| i.checked_sub(1)).map(|i| names[i].clone());
+    let anchor = after.as_deref().and_then(|a| block(old, a)).map_or(0, |r| r.end).min(start);
+    Removed { name: name.to_string(), chunk: old[start..end].to_string(), after, gap: old[anchor..start].to_string() }
+}
+
+/// `text` with a deleted entry put back after the entry it followed (at the end when that
+/// one is gone): the inverse of a deletion, applied to the manifest as it reads now.
+/// Refused when an entry of that name is there again.
+pub fn restore(text: &str, removed: &Removed) -> Result<String, String> {
+    if block(text, &removed.name).is_some() || super::entry_names_of(text).contains(&removed.name) {
+        return Err(format!("the manifest has an exemplar named {:?} again; nothing restored", removed.name));
+    }
+    let anchor = match &removed.after {
+        Some(after) => block(text, after).map(|r| r.end),
+        None => Some(0),
+    };
+    // Before the first entry when the file's top changed; at the end when the entry it
+    // followed is gone.
+    let first = || super::entry_names_of(text).first().and_then(|n| block(text, n)).map_or(text.len(), |r| r.start);
+    let at = match anchor {
+        Some(at) if text[at..].starts_with(&removed.gap) => at + removed.gap.len(),
+        Some(_) if removed.after.is_none() => first(),
+        Some(at) => at,
+        None if text.is_empty() || text.ends_with('\n') => text.len(),
+        None => return Ok(format!("{text}\n{}", removed.chunk)),
+    };
+    Ok(format!("{}{}{}", &text[..at], removed.chunk, &text[at..]))
+}
+
+/// Exemplar `name` as `text` has it (for showing two versions side by side).
+pub fn entry_text(text: &str, name: &str) -> Option<String> {
+    block(text, name).map(|r| text[r].to_string())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// An edit of entry a is applied to the file as another program left it: their new
+    /// comment, their change to b and their new entry stay, and a is the editor's; when
+    /// both changed a, there is no silent merge.
+    #[test]
+    fn an_edit_is_applied_to_the_file_as_changed_outside() {
+        let mine = set(TEXT, "a", "size", "32").unwrap();
+        let mine = append_blur(&mine, "a", [4.0, 4.0, 4.0], 2.0).unwrap();
+        let theirs = format!(
+            "{}\n# added by hand\n[[exemplar]]\nname = \"c\"\nrecipe = \"procedural:wood\"\nsize = 16\n",
+            TEXT.replace("# the library", "# the library, notes").replace("size = 32", "size = 48")
+        );
+        let merged = rebase(TEXT, &mine, &theirs, "a").unwrap();
+        assert!(merged.starts_with("# the library, notes"), "{merged}");
+        let size = |name: &str| fields(&merged, name).unwrap().into_iter().find(|f| f.key == "size").unwrap().value;
+        assert_eq!((size("a"), size("b"), size("c")), ("32".to_string(), "48".to_string(), "16".to_string()));
+        assert!(fields(&merged, "a").unwrap().iter().any(|f| f.key == "steps[0].blur"), "{merged}");
+        assert!(merged.contains("# added by hand") && merged.contains("name = \"a\"   # first"), "{merged}");
+        assert_eq!(rebase(TEXT, &mine, TEXT, "a").as_deref(), Some(mine.as_str()), "nothing changed outside");
+        assert_eq!(rebase(TEXT, TEXT, &theirs, "a").as_deref(), Some(theirs.as_str()), "nothing changed here");
+        let both = TEXT.replace("size = 64", "size = 128");
+        assert_eq!(rebase(TEXT, &mine, &both, "a"), None, "both changed a");
+        let kept = with_entry_of(&mine, &both, "a").unwrap();
+        assert_eq!(entry_text(&kept, "a"), entry_text(&mine, "a"));
+        assert_eq!(entry_text(&kept, "b"), entry_text(&both, "b"));
+        let gone = delete(TEXT, "a").unwrap();
+        for name in ["a", "b"] {
+            let deleted = delete(TEXT, name).unwrap();
+            let what = removed(TEXT, &deleted, name);
+            assert_eq!(restore(&deleted, &what).unwrap(), TEXT, "{name} is back byte for byte");
+            let changed = deleted.replace("# the library", "# the library, notes");
+            assert_eq!(restore(&changed, &what).unwrap(), TEXT.replace("# the library", "# the library, notes"));
+            assert!(restore(TEXT, &what).unwrap_err().contains("again"));
+        }
+        let back = with_entry_of(&mine, &gone, "a").unwrap();
+        assert_eq!(entry_text(&back, "a"), entry_text(&mine, "a"), "an entry deleted outside comes back at the end");
+    }
 
     const TEXT: &str = "# the library\n\n[[exemplar]]\nname = \"a\"   # first\nrecipe = \"procedural:marble\"\nsize = 64\n\n[[exemplar]]\nname = \"b\"\nrecipe = \"procedural:strata\"\nsize = 32\n  [[exemplar.steps]]\n  blur = \"1,1,1\"\n  radius = 2\n";
 

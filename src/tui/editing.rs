@@ -17,11 +17,17 @@ pub fn open_editor(model: &mut Model) -> Vec<Effect> {
     vec![Effect::ReadManifest]
 }
 
-/// The manifest text arrived.
+/// The manifest text arrived: the first time, or again after Ctrl-R (then the editor's
+/// edits of its entry are applied to the new text, or the designer chooses).
 pub fn editor_ready(model: &mut Model, result: Result<String, String>) -> Vec<Effect> {
     let Screen::Editor(editor) = &mut model.screen else { return Vec::new() };
     match result {
+        Ok(theirs) if editor.text.is_some() => {
+            model.outside = false;
+            rebased(model, theirs, false)
+        }
         Ok(text) => {
+            model.outside = false;
             editor.saved = text.clone();
             editor.text = Some(text);
             preview(editor)
@@ -229,6 +235,11 @@ pub fn input(model: &mut Model, request: tui_input::InputRequest) {
 /// Esc while typing: drop the value. Returns false when there was nothing to cancel.
 pub fn cancel(model: &mut Model) -> bool {
     match &mut model.screen {
+        Screen::Editor(editor) if editor.conflict.is_some() => {
+            editor.conflict = None;
+            model.status = "not saved: the entry differs on disk (s asks again, Ctrl-R reads the file)".into();
+            true
+        }
         Screen::Editor(editor) if editor.input.is_some() || editor.error.is_some() => {
             editor.input = None;
             editor.error = None;
@@ -255,11 +266,13 @@ pub fn undo(model: &mut Model, redo: bool) -> Vec<Effect> {
     preview(editor)
 }
 
-/// Save the edited text.
+/// Save the edited text (the worker applies it to the manifest as it reads then).
 pub fn save(model: &mut Model) -> Vec<Effect> {
     let Screen::Editor(editor) = &model.screen else { return Vec::new() };
     match &editor.text {
-        Some(text) if *text != editor.saved => vec![Effect::Save(text.clone())],
+        Some(text) if *text != editor.saved => {
+            vec![Effect::Save { name: editor.name.clone(), base: editor.saved.clone(), text: text.clone() }]
+        }
         _ => {
             model.status = "nothing to save".into();
             Vec::new()
@@ -267,15 +280,149 @@ pub fn save(model: &mut Model) -> Vec<Effect> {
     }
 }
 
+/// The editor's text becomes `theirs` (the manifest as it reads now) with the editor's
+/// entry in it; undo and redo follow onto it. After a save, `theirs` is what was written.
+fn onto(editor: &mut Editor, theirs: &str, mine: String) {
+    let follow = |texts: &mut Vec<String>| {
+        *texts = texts.iter().filter_map(|t| edit::with_entry_of(t, theirs, &editor.name)).collect();
+    };
+    follow(&mut editor.undo);
+    follow(&mut editor.redo);
+    editor.text = Some(mine);
+    editor.conflict = None;
+}
+
+/// The manifest read again (`saving`: by a save) is `theirs`: the editor's edits go onto
+/// it, or the designer is asked when the entry changed there too.
+fn rebased(model: &mut Model, theirs: String, saving: bool) -> Vec<Effect> {
+    let Screen::Editor(editor) = &mut model.screen else { return Vec::new() };
+    let mine = editor.text.clone().unwrap_or_default();
+    match edit::rebase(&editor.saved, &mine, &theirs, &editor.name) {
+        Some(merged) => {
+            onto(editor, &theirs, merged);
+            editor.saved = theirs;
+            model.status = "read the manifest again; your edits of this entry are kept (s saves them)".into();
+            preview(editor)
+        }
+        None => {
+            editor.conflict = Some(Box::new(super::model::Conflict { theirs, saving, both: false }));
+            model.status =
+                format!("{} changed on disk too: m keeps yours, t takes the file's, b shows both", editor.name);
+            Vec::new()
+        }
+    }
+}
+
+/// A save found the entry changed on disk too.
+pub fn save_conflict(model: &mut Model, theirs: String) -> Vec<Effect> {
+    model.outside = false;
+    rebased(model, theirs, true)
+}
+
+/// `m`, `t` or `b` while the entry conflicts: keep mine (saved at once when a save found
+/// the conflict), take the file's (`u` brings mine back), or show both side by side.
+pub fn resolve(model: &mut Model, choice: char) -> Vec<Effect> {
+    let Screen::Editor(editor) = &mut model.screen else { return Vec::new() };
+    let Some(conflict) = editor.conflict.as_mut() else { return Vec::new() };
+    let mine = editor.text.clone().unwrap_or_default();
+    let theirs = conflict.theirs.clone();
+    match choice {
+        'b' => {
+            conflict.both = !conflict.both;
+            return Vec::new();
+        }
+        'm' => {
+            let saving = conflict.saving;
+            let kept = edit::with_entry_of(&mine, &theirs, &editor.name).unwrap_or(mine);
+            onto(editor, &theirs, kept.clone());
+            editor.saved = theirs.clone();
+            model.status = format!("kept your {}; the rest of the file is as it reads now", editor.name);
+            if saving {
+                return vec![Effect::Save { name: editor.name.clone(), base: theirs, text: kept }];
+            }
+        }
+        't' => {
+            let yours = edit::with_entry_of(&mine, &theirs, &editor.name);
+            onto(editor, &theirs, theirs.clone());
+            editor.undo.extend(yours);
+            editor.redo.clear();
+            editor.saved = theirs;
+            model.status = format!("took the file's {}; u brings your version back", editor.name);
+        }
+        _ => return Vec::new(),
+    }
+    let Screen::Editor(editor) = &mut model.screen else { return Vec::new() };
+    preview(editor)
+}
+
+/// `S` in the editor: a prompt for a new file beside the manifest to save it as (for a
+/// manifest that cannot be written), filled in with a free-looking name.
+pub fn ask_save_as(model: &mut Model) {
+    let Screen::Editor(editor) = &model.screen else { return };
+    if editor.text.is_none() {
+        return;
+    }
+    let stem = model.manifest.file_stem().map_or("library".into(), |s| s.to_string_lossy().into_owned());
+    let path = model.manifest.with_file_name(format!("{stem}-2.toml"));
+    model.prompt = Some(super::model::Prompt {
+        purpose: super::model::Purpose::SaveAs,
+        input: path.display().to_string().as_str().into(),
+    });
+    model.status = "save the manifest as a new file beside it (an existing file is never replaced)".into();
+}
+
+/// Enter in the save-as prompt.
+pub fn save_as(model: &mut Model) -> Vec<Effect> {
+    let typed = model.prompt.take().map(|p| p.input.value().to_string()).unwrap_or_default();
+    let Screen::Editor(editor) = &model.screen else { return Vec::new() };
+    let Some(text) = editor.text.clone() else { return Vec::new() };
+    if typed.trim().is_empty() {
+        model.status = "not saved: no file named".into();
+        return Vec::new();
+    }
+    model.status = format!("saving as {typed}");
+    vec![Effect::SaveAs(std::path::PathBuf::from(typed.trim()), text)]
+}
+
+/// The manifest was saved as another file: the UI goes on with that file.
+pub fn saved_as(model: &mut Model, result: Result<(std::path::PathBuf, String), String>) {
+    match result {
+        Ok((path, text)) => {
+            let old = std::mem::replace(&mut model.manifest, path);
+            model.read_only.clear();
+            if let Screen::Editor(editor) = &mut model.screen {
+                editor.saved = text;
+            }
+            model.status = format!(
+                "saved as {}; the UI goes on with it ({} is unchanged; solidtex tui {} opens it later)",
+                model.manifest.display(),
+                old.display(),
+                model.manifest.display()
+            );
+        }
+        Err(e) => model.status = format!("not saved: {e}"),
+    }
+}
+
 /// The save finished.
 pub fn saved(model: &mut Model, result: Result<String, String>) {
+    if result.is_ok() {
+        model.outside = false;
+    }
     match (result, &mut model.screen) {
-        (Ok(text), Screen::Editor(editor)) => {
-            editor.saved = text;
+        (Ok(written), Screen::Editor(editor)) => {
+            let merged = editor.text.as_deref() != Some(written.as_str());
+            if merged {
+                onto(editor, &written, written.clone());
+            }
+            editor.saved = written;
             let (name, valid) = (editor.name.clone(), editor.error.is_none());
             super::update::mark_changed(model, &name, valid);
-            model.status =
-                format!("saved {}; {name} changed since its last build (b rebuilds it)", model.manifest.display());
+            let kept = if merged { ", with the file's other changes kept:" } else { "" };
+            model.status = format!(
+                "saved{kept} {}; {name} changed since its last build (b rebuilds it)",
+                model.manifest.display()
+            );
         }
         (Ok(_), Screen::Exemplar(view)) => {
             if let Some(stamp) = &mut view.stamp {
@@ -287,6 +434,7 @@ pub fn saved(model: &mut Model, result: Result<String, String>) {
             model.status = format!("saved the steps into {}", model.manifest.display());
         }
         (Ok(_), _) => model.status = format!("saved {}", model.manifest.display()),
+        (Err(e), Screen::Editor(_)) => model.status = format!("not saved: {e}; S saves under another name"),
         (Err(e), _) => model.status = format!("not saved: {e}"),
     }
 }
@@ -345,6 +493,7 @@ pub fn filled(model: &mut Model, name: &str, result: Result<std::sync::Arc<super
                     depth: 1.0,
                     show_depth: false,
                     undo: Vec::new(),
+                    saved: Box::new(preview.spec.clone()),
                     dragging: false,
                     refilling: false,
                     overlay: None,
@@ -591,7 +740,8 @@ mod tests {
         assert!(update(&mut m, Message::Save).is_empty(), "nothing to save after undoing");
         update(&mut m, Message::Redo);
         let edited = TEXT.replace("size = 16", "size = 32");
-        assert_eq!(update(&mut m, Message::Save), vec![Effect::Save(edited.clone())]);
+        let save = Effect::Save { name: editor(&m).name.clone(), base: TEXT.into(), text: edited.clone() };
+        assert_eq!(update(&mut m, Message::Save), vec![save]);
         update(&mut m, Message::Saved(Ok(edited)));
         assert!(m.status.starts_with("saved"));
         let stale = std::sync::Arc::new(crate::Volume::new([2; 3], crate::Channel::rgb()).unwrap());

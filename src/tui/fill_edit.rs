@@ -6,7 +6,7 @@
 use super::message::Effect;
 use super::model::{FillEdit, FillView, Model, OverlayKey, Screen};
 use crate::fill::render::{self, View};
-use crate::fill::spec::{FaceGroup, PasteSpec};
+use crate::fill::spec::{FaceGroup, FillSpec, PasteSpec};
 use crate::library::guided::{Overlay, Picture};
 use glam::{Quat, Vec3};
 use std::sync::Arc;
@@ -54,23 +54,79 @@ pub fn cursor_at(model: &mut Model, across: f32, down: f32) {
     }
 }
 
-/// Change the spec (kept for undo) and say what changed.
+/// Change the spec (kept for undo) and say what changed, and what of it the fill's
+/// texture type does not use.
 fn change(model: &mut Model, what: impl FnOnce(&mut FillEdit, Vec3) -> Result<String, String>) {
     let Some((view, at)) = editing(model) else {
         model.status = "the fill is still running".into();
         return;
     };
+    let filled = view.filled.clone().expect("editing has a fill");
     let edit = view.edit.as_mut().expect("editing has an edit");
     let before = edit.spec.clone();
     model.status = match what(edit, at) {
         Ok(done) => {
             if edit.spec != before {
-                edit.undo.push(before);
+                edit.undo.push(before.clone());
             }
-            format!("{done}; r refills with it, w writes the fill spec")
+            match newly_ignored(&filled, &before, &edit.spec).as_slice() {
+                [] => format!("{done}; r refills with it, w writes the fill spec"),
+                notes => format!("{done}, but {}", notes.join("; ")),
+            }
         }
         Err(why) => why,
     };
+}
+
+/// What `after` asks that the fill's texture type does not use and `before` did not ask.
+fn newly_ignored(filled: &super::model::FillPreview, before: &FillSpec, after: &FillSpec) -> Vec<String> {
+    let sources = &filled.model.sources;
+    let known = crate::fill::spec::ignored(before, filled.kind, sources);
+    let notes = crate::fill::spec::ignored(after, filled.kind, sources);
+    notes.into_iter().filter(|n| !known.contains(n)).collect()
+}
+
+/// The spec was written by `w`: leaving no longer asks, unless it changes again.
+pub fn written(model: &mut Model, spec: &FillSpec) {
+    if let Screen::Fill(FillView { edit: Some(e), .. }) = &mut model.screen {
+        *e.saved = spec.clone();
+    }
+}
+
+/// A fill spec chosen with `o` arrived: its constraints (strokes, depth, scale points,
+/// pastes) replace the preview's (`u` gives them back), for `r` to refill with.
+pub fn spec_loaded(model: &mut Model, path: &std::path::Path, result: Result<Box<FillSpec>, String>) {
+    let Screen::Fill(FillView { edit: Some(e), name, filled, .. }) = &mut model.screen else { return };
+    let loaded = match result {
+        Ok(loaded) => loaded,
+        Err(why) => {
+            model.status = format!("no constraints loaded: {why}");
+            return;
+        }
+    };
+    let before = e.spec.clone();
+    e.spec.directions = loaded.directions.clone();
+    e.spec.depth = loaded.depth.clone();
+    e.spec.scales = loaded.scales.clone();
+    e.spec.pastes = loaded.pastes.clone();
+    e.undo.push(before.clone());
+    e.stroke.clear();
+    *e.saved = e.spec.clone();
+    let other = if loaded.exemplar != *name { format!(" (written for {})", loaded.exemplar) } else { String::new() };
+    model.status = format!(
+        "loaded {} stroke(s), {} depth point(s), {} face group(s), {} paste(s) from {}{other}; r refills with them",
+        e.spec.directions.len(),
+        e.spec.depth.points.len(),
+        e.spec.depth.faces.len(),
+        e.spec.pastes.len(),
+        path.display()
+    );
+    if let Some(filled) = filled {
+        let notes = crate::fill::spec::ignored(&e.spec, filled.kind, &filled.model.sources);
+        if !notes.is_empty() {
+            model.status += &format!("; {}", notes.join("; "));
+        }
+    }
 }
 
 fn show(p: Vec3) -> String {
@@ -348,6 +404,7 @@ pub(crate) mod tests {
             depth,
             spec: crate::fill::spec::FillSpec::new("marble"),
             shape: "block".into(),
+            kind: crate::texture_type::TextureType::T0,
         }
     }
 
@@ -571,5 +628,36 @@ pub(crate) mod tests {
         assert!(e.stroke.is_empty() && e.spec.directions.len() == 1 && e.spec.directions[0].len() == 4);
         update(&mut m, Message::EndDrag);
         assert_eq!(edit(&m).spec.directions.len(), 1, "a lone button release adds nothing");
+    }
+    /// With a depth point placed, q, esc and ctrl-c (quit) ask before the constraints go; a
+    /// type-0 fill says it ignores the point; once written the preview leaves at once, and
+    /// a written spec's constraints load back (u gives the old ones back).
+    #[test]
+    fn placed_constraints_are_guarded_and_a_written_spec_loads_back() {
+        let mut m = filling(filled_cube(None));
+        update(&mut m, Message::DepthPoint);
+        assert!(m.status.contains("[depth] is not used by type 0"), "{}", m.status);
+        update(&mut m, Message::Quit);
+        assert!(!m.quit && m.status.contains("unsaved fill constraints: w writes them"), "{}", m.status);
+        update(&mut m, Message::Back);
+        assert!(matches!(m.screen, Screen::Fill(_)) && m.status.contains("esc again leaves"), "{}", m.status);
+        let spec = edit(&m).spec.clone();
+        assert!(matches!(update(&mut m, Message::WriteSpec).as_slice(), [Effect::WriteSpec(..)]));
+        update(&mut m, Message::SpecWritten(Box::new(spec.clone()), Ok(("out/exports".into(), vec![], vec![]))));
+        update(&mut m, Message::Undo);
+        assert!(edit(&m).spec.depth.points.is_empty());
+        let folder = PathBuf::from("out/exports");
+        assert_eq!(
+            update(&mut m, Message::OpenSpec),
+            vec![Effect::List(folder, crate::tui::new_entry::FileKind::FillSpec)]
+        );
+        update(&mut m, Message::Back);
+        assert!(matches!(m.screen, Screen::Fill(_)) && m.status.contains("no fill spec loaded"), "{}", m.status);
+        let path = PathBuf::from("out/exports/marble.fill.toml");
+        update(&mut m, Message::SpecLoaded(path, Ok(Box::new(spec.clone()))));
+        assert_eq!(edit(&m).spec.depth.points, spec.depth.points);
+        assert!(m.status.contains("loaded 0 stroke(s), 1 depth point(s)"), "{}", m.status);
+        update(&mut m, Message::Quit);
+        assert!(m.quit, "the loaded constraints are saved in that file: q quits at once");
     }
 }

@@ -26,8 +26,12 @@ fn unless(keys: &'static str, action: &'static str, why_not: Option<&'static str
 /// The hints of the screen on top of `model`, most used first (`?` help and `q` quit stay
 /// at the right of the status line).
 pub fn hints(model: &Model) -> Vec<Hint> {
-    if model.rename.is_some() {
-        return vec![hint("enter", "rename"), hint("esc", "keep the name"), hint("ctrl-u", "clear")];
+    if let Some(prompt) = &model.prompt {
+        let (enter, esc) = match prompt.purpose {
+            super::model::Purpose::Rename => ("rename", "keep the name"),
+            super::model::Purpose::SaveAs => ("save as", "do not save"),
+        };
+        return vec![hint("enter", enter), hint("esc", esc), hint("ctrl-u", "clear")];
     }
     match &model.screen {
         Screen::Library => library(model),

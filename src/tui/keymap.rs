@@ -10,8 +10,16 @@ pub fn key(screen: &Screen, event: KeyEvent) -> Option<Message> {
     if event.modifiers.contains(KeyModifiers::CONTROL) && event.code == KeyCode::Char('c') {
         return Some(Message::Quit);
     }
+    if event.modifiers.contains(KeyModifiers::CONTROL) && event.code == KeyCode::Char('r') {
+        return Some(Message::Reload);
+    }
     if let Screen::Editor(Editor { input: Some(_), .. }) = screen {
         return typing(event);
+    }
+    if let (Screen::Editor(Editor { conflict: Some(_), .. }), KeyCode::Char(c @ ('m' | 't' | 'b'))) =
+        (screen, event.code)
+    {
+        return Some(Message::Resolve(c));
     }
     let common = match event.code {
         KeyCode::Char('?') => Some(Message::Help),
@@ -96,6 +104,7 @@ fn library(code: KeyCode) -> Option<Message> {
         KeyCode::Char('n') => Some(Message::New),
         KeyCode::Char('v') => Some(Message::Compare),
         KeyCode::Char('V') => Some(Message::BeforeAfter),
+        KeyCode::Char('u') => Some(Message::Undo),
         KeyCode::PageDown => Some(Message::ScrollErrors(3)),
         KeyCode::PageUp => Some(Message::ScrollErrors(-3)),
         _ => None,
@@ -141,6 +150,7 @@ fn editor(code: KeyCode) -> Option<Message> {
         KeyCode::Char('u') => Some(Message::Undo),
         KeyCode::Char('r') => Some(Message::Redo),
         KeyCode::Char('s') => Some(Message::Save),
+        KeyCode::Char('S') => Some(Message::SaveAs),
         KeyCode::Char('a') => Some(Message::AddBlur),
         KeyCode::Char('t') => Some(Message::AddMeshStep(true)),
         KeyCode::Char('n') => Some(Message::AddMeshStep(false)),
@@ -181,6 +191,7 @@ fn fill(code: KeyCode) -> Option<Message> {
         KeyCode::Char('v') => Some(Message::NextOverlay),
         KeyCode::Char('r') => Some(Message::Refill),
         KeyCode::Char('w') => Some(Message::WriteSpec),
+        KeyCode::Char('o') => Some(Message::OpenSpec),
         _ => None,
     }
 }
@@ -219,6 +230,7 @@ pub const SECTIONS: [Section; 9] = [
             ("v", "mark for comparing; v on another shows both"),
             ("V", "its previous build beside the new one"),
             ("e", "edit its recipe"),
+            ("u", "undo the last copy, delete, rename or new entry"),
             ("pgup/pgdn", "scroll the manifest's mistakes"),
         ],
     ),
@@ -255,7 +267,9 @@ pub const SECTIONS: [Section; 9] = [
         &[
             ("up/down, j/k", "choose a value"),
             ("enter", "edit it (enter keeps, esc drops)"),
-            ("s", "save the manifest"),
+            ("s", "save the manifest (changes made to it meanwhile are kept)"),
+            ("S", "save it as a new file beside it"),
+            ("m / t / b", "entry changed on disk too: keep mine / take the file's / show both"),
             ("u / r", "undo / redo"),
             ("a", "add a blur step"),
             ("t / n", "add a stamp / scatter step: pick its mesh"),
@@ -281,6 +295,7 @@ pub const SECTIONS: [Section; 9] = [
             ("v", "the texture, the frame field, a guided cut"),
             ("r", "fill again with the constraints"),
             ("w", "write the fill spec and the shape"),
+            ("o", "load the constraints of a written fill spec"),
         ],
     ),
     (
@@ -314,6 +329,7 @@ pub const SECTIONS: [Section; 9] = [
         "everywhere",
         &[
             ("esc", "back (asks if work is unsaved)"),
+            ("ctrl-r", "read the manifest again after a change on disk"),
             ("?", "this help; / searches it"),
             ("q, ctrl-c", "quit (asks if work is unsaved)"),
         ],

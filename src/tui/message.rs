@@ -4,9 +4,23 @@ use crate::volume::{Axis, Volume};
 use std::path::PathBuf;
 use std::sync::Arc;
 
-/// The manifest's entries after a change: the reloaded list, its errors, the entry to
-/// select and what happened; or why nothing changed.
-pub type Changed = Result<(Vec<super::model::Item>, Vec<String>, String, String), String>;
+/// The manifest's entries after a change, or why nothing changed.
+pub type Changed = Result<Change, String>;
+
+/// The manifest's entries after a change.
+#[derive(Debug, Clone)]
+pub struct Change {
+    /// The reloaded list.
+    pub items: Vec<super::model::Item>,
+    /// Its errors.
+    pub errors: Vec<String>,
+    /// The entry to select.
+    pub select: String,
+    /// What happened.
+    pub status: String,
+    /// The change that undoes it and what it undoes (library operations).
+    pub inverse: Option<(EntryChange, String)>,
+}
 
 /// A volume to compare and its quality figures, or why it cannot be read.
 pub type SideResult = Result<(Arc<Volume>, Option<crate::quality::Glance>), String>;
@@ -124,8 +138,21 @@ pub enum Message {
     RemoveStep,
     /// Move the step of the selected field before the previous one (true) or after the next.
     MoveStep(bool),
-    /// The manifest was saved (or not).
+    /// The manifest was saved (or not): the text written.
     Saved(Result<String, String>),
+    /// A save found the entry changed on disk too: the manifest as it reads now.
+    SaveConflict(String),
+    /// The manifest changed on disk, not by this UI.
+    ChangedOnDisk,
+    /// `S` in the editor: a prompt for another file to save the manifest as.
+    SaveAs,
+    /// The manifest was saved as another file (its path and text), or why not.
+    SavedAs(Result<(PathBuf, String), String>),
+    /// Ctrl-R: read the manifest again (the editor keeps its edits of the entry).
+    Reload,
+    /// While the entry being edited conflicts: keep mine (`m`), take theirs (`t`), or show
+    /// both (`b`).
+    Resolve(char),
     /// A preview finished: the edit generation it belongs to, the volume, and the
     /// warnings its build gave.
     Previewed(u64, Result<Arc<Volume>, String>, Vec<String>),
@@ -167,6 +194,13 @@ pub enum Message {
     Refill,
     /// Fill preview: write the fill spec and the shape.
     WriteSpec,
+    /// Fill preview: the spec written (the preview's constraints then count as saved), and
+    /// what was written or why not.
+    SpecWritten(Box<crate::fill::spec::FillSpec>, Result<(String, Vec<String>, Vec<String>), String>),
+    /// Fill preview: choose a written fill spec to load its constraints.
+    OpenSpec,
+    /// A fill spec chosen with `o` was read (or why not).
+    SpecLoaded(PathBuf, Result<Box<crate::fill::spec::FillSpec>, String>),
     /// Zoom the slices in (true) or out.
     Zoom(bool),
     /// Show the next of the exemplar and its masks.
@@ -197,6 +231,8 @@ pub enum Message {
     BuildProgress(String, String, f32),
     /// A running build warned about exemplar `.0`: the message.
     BuildWarning(String, String),
+    /// A worker stopped on an internal error (a panic): what it said.
+    WorkerFailed(String),
 }
 
 /// Work `update` asks the runtime to start in a worker thread.
@@ -217,8 +253,16 @@ pub enum Effect {
         /// The edit generation.
         generation: u64,
     },
-    /// Write the manifest text (atomically).
-    Save(String),
+    /// Save the editor's text of entry `name`, edited from `base` (the manifest as read):
+    /// applied to the manifest as it reads then (see [`super::edit::rebase`]).
+    Save {
+        /// The entry edited.
+        name: String,
+        /// The manifest as the editor read it.
+        base: String,
+        /// The editor's text.
+        text: String,
+    },
     /// Fill a drawn shape with this exemplar.
     Fill(String),
     /// Stop every running build.
@@ -231,6 +275,12 @@ pub enum Effect {
     SaveSteps(String, Vec<super::model::StampStep>, String),
     /// Copy or delete an entry of the manifest and save it.
     ChangeEntry(EntryChange),
+    /// Undo a library operation by this change (and say what it undoes).
+    UndoEntry(EntryChange, String),
+    /// Write the editor's text as a new manifest file beside the manifest.
+    SaveAs(PathBuf, String),
+    /// Read the manifest's list again, selecting this entry.
+    Reload(String),
     /// Write exemplar `name`'s volume in every interchange format, its contact sheet and
     /// the slice on screen (axis, index) into `OUTPUT/exports/NAME/`.
     Export(String, Arc<Volume>, Axis, usize),
@@ -253,6 +303,8 @@ pub enum Effect {
     Overlay(String, SharedFill, Box<super::model::OverlayKey>),
     /// Write exemplar `name`'s fill spec and the drawn shape into `OUTPUT/exports/`.
     WriteSpec(String, Box<crate::fill::spec::FillSpec>, String),
+    /// Read a fill spec for the fill preview.
+    LoadSpec(PathBuf),
     /// Read a volume to compare: side, its label, the exemplar, and whether it is the
     /// previous build kept beside it.
     LoadSide(usize, String, String, bool),
@@ -281,4 +333,6 @@ pub enum EntryChange {
     Rename(String, String),
     /// Add an entry of this recipe, reading this file (an image or a volume) if any.
     New(String, Option<PathBuf>),
+    /// Put a deleted entry back where it was.
+    Restore(Box<super::edit::Removed>),
 }

@@ -26,7 +26,7 @@ mod view_compare;
 mod view_edit;
 mod view_new;
 
-pub use message::{Changed, Effect, EntryChange, Message};
+pub use message::{Change, Changed, Effect, EntryChange, Message};
 pub use model::{BuildState, FillPreview, Item, Model, Screen};
 pub use update::update;
 pub use view::draw;
@@ -40,13 +40,13 @@ use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::Mutex;
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::mpsc::{Receiver, Sender, channel};
 use std::time::Duration;
 
 /// The library items of a manifest, with their build state read from `output`.
 pub fn load_items(manifest: &Path, output: &Path) -> (Vec<Item>, Vec<String>) {
-    let text = match io::read_text(manifest, "manifest") {
+    let text = match read_manifest(manifest) {
         Ok(text) => text,
         Err(e) => return (Vec::new(), vec![e.to_string()]),
     };
@@ -54,7 +54,7 @@ pub fn load_items(manifest: &Path, output: &Path) -> (Vec<Item>, Vec<String>) {
     let (entries, errors) = io::manifest::parse_plan_lenient(&text, folder);
     let shown = manifest.display();
     // Every entry in manifest order; a broken one is listed too, so it can be opened and fixed.
-    let items = entry_names(&text)
+    let items = entry_names_of(&text)
         .into_iter()
         .map(|name| match entries.iter().find(|e| e.name == name) {
             Some(entry) => item(entry, folder, output),
@@ -77,7 +77,7 @@ pub fn load_items(manifest: &Path, output: &Path) -> (Vec<Item>, Vec<String>) {
 
 /// The names of a manifest's entries in order, valid or not (entries without a name, or
 /// with a repeated one, are left out: the editor finds entries by name).
-fn entry_names(text: &str) -> Vec<String> {
+fn entry_names_of(text: &str) -> Vec<String> {
     let Ok(doc) = text.parse::<toml::Table>() else { return Vec::new() };
     let mut names: Vec<String> = Vec::new();
     let list = doc.get("exemplar").and_then(|v| v.as_array()).map(Vec::as_slice).unwrap_or_default();
@@ -121,6 +121,10 @@ pub fn run(manifest: &Path, output: &Path) -> Result<()> {
     }
     let (items, errors) = load_items(manifest, output);
     let mut model = Model::new(manifest.to_path_buf(), output.to_path_buf(), items, errors);
+    model.read_only = read_only(manifest, output);
+    if !model.read_only.is_empty() {
+        model.status = model.read_only.join("; ");
+    }
     let (send, receive) = channel();
     let mut terminal = ratatui::init();
     let mut graphics = graphics::Graphics::detect();
@@ -131,19 +135,56 @@ pub fn run(manifest: &Path, output: &Path) -> Result<()> {
     let mouse = std::env::var("SOLIDTEX_MOUSE").map_or(true, |v| v != "0");
     if mouse {
         let _ = crossterm::execute!(std::io::stdout(), crossterm::event::EnableMouseCapture);
-        // A panic leaves the terminal as it found it: mouse reports off, then ratatui's restore.
-        let restore = std::panic::take_hook();
-        std::panic::set_hook(Box::new(move |info| {
-            let _ = crossterm::execute!(std::io::stdout(), crossterm::event::DisableMouseCapture);
-            restore(info);
-        }));
     }
+    MOUSE.store(mouse, Ordering::SeqCst);
+    OPEN.store(true, Ordering::SeqCst);
+    // A panic of the UI's own thread leaves the terminal as it found it (ratatui's hook
+    // restores it, then reports); a worker's panic is caught and becomes its job's error in
+    // the status line, so nothing is printed over the screen.
+    let ui = std::thread::current().id();
+    let report = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        if std::thread::current().id() == ui {
+            restore_terminal();
+            report(info);
+        }
+    }));
     let result = event_loop(&mut terminal, &mut model, &send, &receive, graphics.as_mut());
-    if mouse {
-        let _ = crossterm::execute!(std::io::stdout(), crossterm::event::DisableMouseCapture);
-    }
-    ratatui::restore();
+    restore_terminal();
     result
+}
+
+/// What cannot be written, said when the library opens: a read-only manifest or output
+/// folder.
+fn read_only(manifest: &Path, output: &Path) -> Vec<String> {
+    let mut notes = Vec::new();
+    if io::atomic::read_only(manifest) {
+        notes.push(format!(
+            "{} is read-only: saves are refused (the editor's S saves under another name)",
+            manifest.display()
+        ));
+    }
+    if output.is_dir() && io::atomic::read_only(output) {
+        notes.push(format!("the output folder {} is read-only: builds and exports will fail", output.display()));
+    }
+    notes
+}
+
+/// Whether the UI has the terminal (raw mode, alternate screen), and whether it asked for
+/// mouse reports.
+static OPEN: AtomicBool = AtomicBool::new(false);
+static MOUSE: AtomicBool = AtomicBool::new(false);
+
+/// Give the terminal back as the UI found it, once, from whichever thread gets here first:
+/// a normal exit, a panic of the UI thread, or a signal (SIGTERM, SIGHUP) handled by the
+/// binary.
+pub fn restore_terminal() {
+    if OPEN.swap(false, Ordering::SeqCst) {
+        if MOUSE.load(Ordering::SeqCst) {
+            let _ = crossterm::execute!(std::io::stdout(), crossterm::event::DisableMouseCapture);
+        }
+        ratatui::restore();
+    }
 }
 
 fn event_loop(
@@ -155,16 +196,24 @@ fn event_loop(
 ) -> Result<()> {
     let fail = |e: std::io::Error| Error::io("terminal", e);
     let mut regions = mouse::Regions::default();
+    let mut looked = std::time::Instant::now();
     while !model.quit {
+        // Once a second: has someone else changed the manifest?
+        if looked.elapsed() >= Duration::from_secs(1) {
+            looked = std::time::Instant::now();
+            if !model.outside && changed_outside(&model.manifest) {
+                start(update(model, Message::ChangedOnDisk), model, send);
+            }
+        }
         terminal.draw(|f| view::draw_with(f, model, graphics.as_deref_mut(), &mut regions)).map_err(fail)?;
         let message = if event::poll(Duration::from_millis(100)).map_err(fail)? {
             match event::read().map_err(fail)? {
-                Event::Key(key) if key.kind == KeyEventKind::Press => match (&model.help, &model.rename) {
+                Event::Key(key) if key.kind == KeyEventKind::Press => match (&model.help, &model.prompt) {
                     (Some(help), _) => keymap::help_key(help, key),
                     (None, Some(_)) => keymap::typing(key),
                     (None, None) => keymap::key(&model.screen, key),
                 },
-                Event::Mouse(m) if model.help.is_none() && model.rename.is_none() => {
+                Event::Mouse(m) if model.help.is_none() && model.prompt.is_none() => {
                     mouse::message(&model.screen, &regions, m)
                 }
                 _ => None,
@@ -182,139 +231,255 @@ fn event_loop(
     Ok(())
 }
 
-/// Run effects in worker threads that report back through `send`.
+/// Run effects in worker threads that report back through `send`. A worker that panics
+/// says so in the status line (a build fails its entries) and the UI goes on.
 fn start(effects: Vec<Effect>, model: &Model, send: &Sender<Message>) {
     for effect in effects {
         let (send, manifest, output) = (send.clone(), model.manifest.clone(), model.output.clone());
-        std::thread::spawn(move || match effect {
-            Effect::Load(name) => {
-                let result =
-                    io::read_volume(&library::files::volume(&output, &name), io::budget_from_env().unwrap_or(u64::MAX))
-                        .map(Arc::new)
-                        .map_err(|e| e.to_string());
-                let _ = send.send(Message::Loaded(name, result));
-            }
-            Effect::Build(names) => build(&manifest, &output, names, &send),
-            Effect::ReadManifest => {
-                let text = io::read_text(&manifest, "manifest").map_err(|e| e.to_string());
-                let _ = send.send(Message::EditorReady(text));
-            }
-            Effect::Save(text) => {
-                let result =
-                    io::atomic::write_document(&manifest, text.as_bytes()).map(|_| text).map_err(|e| e.to_string());
-                let _ = send.send(Message::Saved(result));
-            }
-            Effect::Preview { name, text, generation } => {
-                let (result, warnings) = match library::recipe::preview(&manifest, &name, &text) {
-                    Ok((volume, warnings)) => (Ok(Arc::new(volume)), warnings),
-                    Err(e) => (Err(e.to_string()), Vec::new()),
-                };
-                let _ = send.send(Message::Previewed(generation, result, warnings));
-            }
-            Effect::CancelBuilds => {
-                CANCELS.fetch_add(1, Ordering::SeqCst);
-            }
-            Effect::LoadMasks(name) => {
-                let _ = send.send(Message::MasksLoaded(name.clone(), load_masks(&output, &name)));
-            }
-            Effect::LoadSeed(name) => {
-                let _ = send.send(Message::SeedLoaded(find_seed(&manifest, &name).map_err(|e| e.to_string())));
-            }
-            Effect::SaveSteps(name, steps, file) => {
-                let _ = send.send(Message::Saved(save_steps(&manifest, &name, &steps, &file)));
-            }
-            Effect::ChangeEntry(change) => {
-                let _ = send.send(Message::EntriesChanged(change_entry(&manifest, &output, &change)));
-            }
-            Effect::Export(name, volume, axis, index) => {
-                let result = export(&output, &name, &volume, axis, index).map_err(|e| e.to_string());
-                let _ = send.send(Message::Exported(result));
-            }
-            Effect::ExportCut(name, filled, axis, offset) => {
-                let result = export_cut(&output, &name, &filled.0, axis, offset).map_err(|e| e.to_string());
-                let _ = send.send(Message::Exported(result));
-            }
-            Effect::List(folder, kind) => {
-                let _ = send.send(Message::Listed(folder.clone(), list_folder(&folder, kind)));
-            }
-            Effect::Peek(path) => {
-                let result = io::read_image_fit(&path, Some(256)).map(Arc::new).map_err(|e| e.to_string());
-                let _ = send.send(Message::Peeked(path, result));
-            }
-            Effect::LoadSide(side, label, name, previous) => {
-                let result = side_of(&output, &name, previous).map_err(|e| e.to_string());
-                let _ = send.send(Message::SideLoaded(side, label, result));
-            }
-            Effect::Settle(name, accept) => {
-                let _ = send.send(Message::EntriesChanged(settle(&manifest, &output, &name, accept)));
-            }
-            Effect::Refill(name, spec, shape) => {
-                let result = library::fill::preview_with(&spec, &shape, &crate::progress::NoProgress)
-                    .map(Arc::new)
-                    .map_err(|e| e.to_string());
-                let _ = send.send(Message::Filled(name, result));
-            }
-            Effect::Overlay(name, filled, key) => {
-                let view = fill_edit::plane_view(&filled.0, key.axis, key.offset, fill_edit::OVERLAY_SIZE);
-                let result =
-                    library::guided::picture(&filled.0, &key.spec, key.overlay, &view, &crate::progress::NoProgress)
-                        .map(Arc::new)
-                        .map_err(|e| e.to_string());
-                let _ = send.send(Message::OverlayMade(name, key, result));
-            }
-            Effect::WriteSpec(name, spec, shape) => {
-                let _ =
-                    send.send(Message::Exported(write_spec(&output, &name, &spec, &shape).map_err(|e| e.to_string())));
-            }
-            Effect::StepMesh(path, stamp) => {
-                let named = seed_file(&manifest, &path).map(|(_, name)| name.unwrap_or_default());
-                let _ = send.send(Message::StepMeshChosen(named.map_err(|e| e.to_string()), stamp));
-            }
-            Effect::LoadSeedFile(path) => {
-                let _ = send.send(Message::SeedLoaded(seed_file(&manifest, &path).map_err(|e| e.to_string())));
-            }
-            Effect::LoadPhotos(name) => {
-                let result = photos_of(&manifest, &name).map(Arc::new).map_err(|e| e.to_string());
-                let _ = send.send(Message::PhotosLoaded(name, result));
-            }
-            Effect::Fill(name) => {
-                let result = library::fill::preview(&manifest, &output, &name, &crate::progress::NoProgress)
-                    .map(Arc::new)
-                    .map_err(|e| e.to_string());
-                let _ = send.send(Message::Filled(name, result));
+        std::thread::spawn(move || {
+            let building = if let Effect::Build(names) = &effect { names.clone() } else { Vec::new() };
+            let run = || {
+                work(effect, &send, &manifest, &output);
+                Ok(())
+            };
+            if let Err(e) = library::build::caught(run) {
+                for name in building {
+                    let _ = send.send(Message::Built(name, Err(e.to_string())));
+                }
+                let _ = send.send(Message::WorkerFailed(e.to_string()));
             }
         });
     }
 }
 
-/// Copies, deletes or renames an entry of the manifest, saves it and reloads the list: the
-/// list, its errors, the entry to select and a status line.
+/// Do one effect's work and send its result.
+fn work(effect: Effect, send: &Sender<Message>, manifest: &Path, output: &Path) {
+    let (manifest, output) = (manifest.to_path_buf(), output.to_path_buf());
+    match effect {
+        Effect::Load(name) => {
+            let result =
+                io::read_volume(&library::files::volume(&output, &name), io::budget_from_env().unwrap_or(u64::MAX))
+                    .map(Arc::new)
+                    .map_err(|e| e.to_string());
+            let _ = send.send(Message::Loaded(name, result));
+        }
+        Effect::Build(names) => build(&manifest, &output, names, send),
+        Effect::ReadManifest => {
+            let text = read_manifest(&manifest).map_err(|e| e.to_string());
+            let _ = send.send(Message::EditorReady(text));
+        }
+        Effect::Save { name, base, text } => {
+            let _ = send.send(save_editor(&manifest, &name, &base, &text));
+        }
+        Effect::SaveAs(path, text) => {
+            let result = save_as(&manifest, &path, &text).map(|_| (path, text)).map_err(|e| e.to_string());
+            let _ = send.send(Message::SavedAs(result));
+        }
+        Effect::Reload(select) => {
+            let (items, errors) = load_items(&manifest, &output);
+            let status = format!("read {} again: {} exemplar(s)", manifest.display(), items.len());
+            let change = message::Change { items, errors, select, status, inverse: None };
+            let _ = send.send(Message::EntriesChanged(Ok(change)));
+        }
+        Effect::UndoEntry(change, what) => {
+            let result = change_entry(&manifest, &output, &change).map(|c| message::Change {
+                status: format!("undid {what}: {}", c.status.trim_end_matches(" (u undoes)")),
+                inverse: None,
+                ..c
+            });
+            let _ = send.send(Message::EntriesChanged(result));
+        }
+        Effect::Preview { name, text, generation } => {
+            let (result, warnings) = match library::recipe::preview(&manifest, &name, &text) {
+                Ok((volume, warnings)) => (Ok(Arc::new(volume)), warnings),
+                Err(e) => (Err(e.to_string()), Vec::new()),
+            };
+            let _ = send.send(Message::Previewed(generation, result, warnings));
+        }
+        Effect::CancelBuilds => {
+            CANCELS.fetch_add(1, Ordering::SeqCst);
+        }
+        Effect::LoadMasks(name) => {
+            let _ = send.send(Message::MasksLoaded(name.clone(), load_masks(&output, &name)));
+        }
+        Effect::LoadSeed(name) => {
+            let _ = send.send(Message::SeedLoaded(find_seed(&manifest, &name).map_err(|e| e.to_string())));
+        }
+        Effect::SaveSteps(name, steps, file) => {
+            let _ = send.send(Message::Saved(save_steps(&manifest, &name, &steps, &file)));
+        }
+        Effect::ChangeEntry(change) => {
+            let _ = send.send(Message::EntriesChanged(change_entry(&manifest, &output, &change)));
+        }
+        Effect::Export(name, volume, axis, index) => {
+            let result = export(&output, &name, &volume, axis, index).map_err(|e| e.to_string());
+            let _ = send.send(Message::Exported(result));
+        }
+        Effect::ExportCut(name, filled, axis, offset) => {
+            let result = export_cut(&output, &name, &filled.0, axis, offset).map_err(|e| e.to_string());
+            let _ = send.send(Message::Exported(result));
+        }
+        Effect::List(folder, kind) => {
+            let _ = send.send(Message::Listed(folder.clone(), list_folder(&folder, kind)));
+        }
+        Effect::Peek(path) => {
+            let result = io::read_image_fit(&path, Some(256)).map(Arc::new).map_err(|e| e.to_string());
+            let _ = send.send(Message::Peeked(path, result));
+        }
+        Effect::LoadSide(side, label, name, previous) => {
+            let result = side_of(&output, &name, previous).map_err(|e| e.to_string());
+            let _ = send.send(Message::SideLoaded(side, label, result));
+        }
+        Effect::Settle(name, accept) => {
+            let _ = send.send(Message::EntriesChanged(settle(&manifest, &output, &name, accept)));
+        }
+        Effect::Refill(name, spec, shape) => {
+            let result = library::fill::preview_with(&spec, &shape, &crate::progress::NoProgress)
+                .map(Arc::new)
+                .map_err(|e| e.to_string());
+            let _ = send.send(Message::Filled(name, result));
+        }
+        Effect::Overlay(name, filled, key) => {
+            let view = fill_edit::plane_view(&filled.0, key.axis, key.offset, fill_edit::OVERLAY_SIZE);
+            let result =
+                library::guided::picture(&filled.0, &key.spec, key.overlay, &view, &crate::progress::NoProgress)
+                    .map(Arc::new)
+                    .map_err(|e| e.to_string());
+            let _ = send.send(Message::OverlayMade(name, key, result));
+        }
+        Effect::WriteSpec(name, spec, shape) => {
+            let result = write_spec(&output, &name, &spec, &shape).map_err(|e| e.to_string());
+            let _ = send.send(Message::SpecWritten(spec, result));
+        }
+        Effect::LoadSpec(path) => {
+            let result = io::fill_spec::read_fill_spec(&path).map(Box::new).map_err(|e| e.to_string());
+            let _ = send.send(Message::SpecLoaded(path, result));
+        }
+        Effect::StepMesh(path, stamp) => {
+            let named = seed_file(&manifest, &path).map(|(_, name)| name.unwrap_or_default());
+            let _ = send.send(Message::StepMeshChosen(named.map_err(|e| e.to_string()), stamp));
+        }
+        Effect::LoadSeedFile(path) => {
+            let _ = send.send(Message::SeedLoaded(seed_file(&manifest, &path).map_err(|e| e.to_string())));
+        }
+        Effect::LoadPhotos(name) => {
+            let result = photos_of(&manifest, &name).map(Arc::new).map_err(|e| e.to_string());
+            let _ = send.send(Message::PhotosLoaded(name, result));
+        }
+        Effect::Fill(name) => {
+            let result = library::fill::preview(&manifest, &output, &name, &crate::progress::NoProgress)
+                .map(Arc::new)
+                .map_err(|e| e.to_string());
+            let _ = send.send(Message::Filled(name, result));
+        }
+    }
+}
+
+/// Copies, deletes, renames, adds or restores an entry of the manifest as it reads now,
+/// saves it and reloads the list; with the change that undoes it.
 fn change_entry(manifest: &Path, output: &Path, change: &EntryChange) -> Changed {
-    let text = io::read_text(manifest, "manifest").map_err(|e| e.to_string())?;
-    let (text, select, status) = match change {
+    let text = read_manifest(manifest).map_err(|e| e.to_string())?;
+    let (new_text, select, status, inverse) = match change {
         EntryChange::Duplicate(name) => {
-            let (text, copy) = edit::duplicate(&text, name)?;
-            (text, copy.clone(), format!("copied {name} as {copy} (e edits it, b builds it)"))
+            let (t, copy) = edit::duplicate(&text, name)?;
+            let status = format!("copied {name} as {copy} (e edits it, b builds it; u undoes)");
+            (t, copy.clone(), status, (EntryChange::Delete(copy.clone()), format!("the copy {copy}")))
         }
         EntryChange::Delete(name) => {
-            let text = edit::delete(&text, name)?;
-            let status = format!("deleted {name} from {}; its built files stay", manifest.display());
-            (text, String::new(), status)
+            let t = edit::delete(&text, name)?;
+            let restore = EntryChange::Restore(Box::new(edit::removed(&text, &t, name)));
+            let status = format!("deleted {name} from {}; its built files stay (u undoes)", manifest.display());
+            (t, String::new(), status, (restore, format!("the deletion of {name}")))
         }
         EntryChange::Rename(name, new) => {
-            let text = edit::rename(&text, name, new)?;
-            let status = format!("renamed {name} to {new}; the files built as {name} stay (b builds {new})");
-            (text, new.clone(), status)
+            let t = edit::rename(&text, name, new)?;
+            let status = format!("renamed {name} to {new}; the files built as {name} stay (b builds {new}; u undoes)");
+            let back = EntryChange::Rename(new.clone(), name.clone());
+            (t, new.clone(), status, (back, format!("the rename of {name} to {new}")))
         }
-        EntryChange::New(recipe, file) => added(manifest, &text, recipe, file.as_deref())?,
+        EntryChange::New(recipe, file) => {
+            let (t, name, status) = added(manifest, &text, recipe, file.as_deref())?;
+            let what = format!("the new entry {name}");
+            (t, name.clone(), status, (EntryChange::Delete(name), what))
+        }
+        EntryChange::Restore(removed) => {
+            let t = edit::restore(&text, removed)?;
+            let name = removed.name.clone();
+            let status = format!("{name} is back in {}", manifest.display());
+            (t, name.clone(), status, (EntryChange::Delete(name.clone()), format!("the return of {name}")))
+        }
     };
-    io::atomic::write_document(manifest, text.as_bytes()).map_err(|e| e.to_string())?;
+    write_manifest(manifest, &new_text).map_err(|e| e.to_string())?;
     // A kept previous build belongs to the name it was built under: it goes with the entry.
     if let EntryChange::Delete(name) | EntryChange::Rename(name, _) = change {
         let _ = library::previous::drop_kept(output, name);
     }
     let (items, errors) = load_items(manifest, output);
-    Ok((items, errors, select, status))
+    Ok(message::Change { items, errors, select, status, inverse: Some(inverse) })
+}
+
+/// The manifest text the UI last read or wrote, to tell a change made outside from its
+/// own: reads and writes of the manifest go through [`read_manifest`] and
+/// [`write_manifest`], which hold it while they touch the file.
+static KNOWN: Mutex<Option<String>> = Mutex::new(None);
+
+/// Read the manifest, remembering its text.
+fn read_manifest(manifest: &Path) -> Result<String> {
+    let mut known = KNOWN.lock().unwrap_or_else(|e| e.into_inner());
+    let text = io::read_text(manifest, "manifest")?;
+    *known = Some(text.clone());
+    Ok(text)
+}
+
+/// Write the manifest (refused when it is read-only), remembering its text.
+fn write_manifest(manifest: &Path, text: &str) -> Result<()> {
+    let mut known = KNOWN.lock().unwrap_or_else(|e| e.into_inner());
+    io::atomic::write_document(manifest, text.as_bytes())?;
+    *known = Some(text.to_string());
+    Ok(())
+}
+
+/// Whether the manifest reads otherwise than the UI last read or wrote it.
+fn changed_outside(manifest: &Path) -> bool {
+    let known = KNOWN.lock().unwrap_or_else(|e| e.into_inner());
+    let now = io::read_text(manifest, "manifest").ok();
+    known.is_some() && now.is_some() && *known != now
+}
+
+/// Write `text` as a new manifest at `path`, beside `manifest` (its relative paths start
+/// from that folder); an existing file is never replaced.
+fn save_as(manifest: &Path, path: &Path, text: &str) -> Result<()> {
+    let folder = |p: &Path| new_entry::manifest_folder(p).canonicalize().ok();
+    if folder(path).is_none() || folder(path) != folder(manifest) {
+        return Err(Error::file(
+            path,
+            format!(
+                "save-as writes beside the manifest, in {} (its image and mesh paths are relative to that folder)",
+                new_entry::manifest_folder(manifest).display()
+            ),
+        ));
+    }
+    if path.exists() {
+        return Err(Error::file(path, "exists; save-as never replaces a file: name a new one"));
+    }
+    let mut known = KNOWN.lock().unwrap_or_else(|e| e.into_inner());
+    io::write_bytes(path, text.as_bytes())?;
+    *known = Some(text.to_string());
+    Ok(())
+}
+
+/// Save the editor's text of entry `name` (edited from `base`) onto the manifest as it
+/// reads now: written when their changes and mine do not meet, else the text as it reads
+/// now for the designer to choose.
+fn save_editor(manifest: &Path, name: &str, base: &str, text: &str) -> Message {
+    let theirs = match read_manifest(manifest) {
+        Ok(theirs) => theirs,
+        Err(e) => return Message::Saved(Err(e.to_string())),
+    };
+    match edit::rebase(base, text, &theirs, name) {
+        Some(merged) => Message::Saved(write_manifest(manifest, &merged).map(|_| merged).map_err(|e| e.to_string())),
+        None => Message::SaveConflict(theirs),
+    }
 }
 
 /// The manifest with a new entry of `recipe` reading `file` (written relative to the
@@ -366,7 +531,7 @@ fn settle(manifest: &Path, output: &Path, name: &str, accept: bool) -> Changed {
     };
     let status = done.map_err(|e| e.to_string())?;
     let (items, errors) = load_items(manifest, output);
-    Ok((items, errors, name.to_string(), status))
+    Ok(message::Change { items, errors, select: name.to_string(), status, inverse: None })
 }
 
 /// The images exemplar `name` was made from, per slice axis: a synthesis' photos (shrunk as
@@ -524,7 +689,7 @@ fn build(manifest: &Path, output: &Path, names: Vec<String>, send: &Sender<Messa
     let row = |name: &str| items.iter().find(|i| i.name == name).cloned();
     let messages: Vec<Message> = match outcomes {
         Ok(outcomes) => outcomes.iter().map(|o| finished(o, row(o.name()))).collect(),
-        Err(e) => names.into_iter().map(|n| Message::Built(n, Err(e.to_string()))).collect(),
+        Err(e) => names.iter().map(|n| failed(n, &e.to_string(), row(n))).collect(),
     };
     for message in messages {
         let _ = send.send(message);
@@ -537,8 +702,20 @@ fn finished(outcome: &Outcome, row: Option<Item>) -> Message {
     match (outcome, row) {
         (Outcome::Cancelled(_), Some(row)) => Message::BuildCancelled(name, row),
         (Outcome::Built(_) | Outcome::Cached(_), Some(row)) => Message::Built(name, Ok(row)),
-        (Outcome::Failed(_, why), _) => Message::Built(name, Err(why.clone())),
+        (Outcome::Failed(_, why), row) => failed(&name, why, row),
         (_, None) => Message::Built(name, Err("the entry is no longer in the manifest".to_string())),
+    }
+}
+
+/// The message for an entry whose build failed, given its row as the files on disk leave
+/// it: an earlier build there stays openable.
+fn failed(name: &str, why: &str, row: Option<Item>) -> Message {
+    match row {
+        Some(row) => {
+            let older = matches!(row.state, BuildState::Built(_) | BuildState::Changed(..));
+            Message::Built(name.to_string(), Ok(Item { state: BuildState::Failed(why.to_string(), older), ..row }))
+        }
+        None => Message::Built(name.to_string(), Err(why.to_string())),
     }
 }
 
@@ -616,11 +793,11 @@ fn save_steps(
     steps: &[model::StampStep],
     file: &str,
 ) -> std::result::Result<String, String> {
-    let text = io::read_text(manifest, "manifest").map_err(|e| e.to_string())?;
+    let text = read_manifest(manifest).map_err(|e| e.to_string())?;
     let text = edit::append_steps(&text, name, steps, file)?;
     let folder = manifest.parent().unwrap_or(Path::new("."));
     io::manifest::parse_entry(&text, folder, name).map_err(|e| e.to_string())?;
-    io::atomic::write_document(manifest, text.as_bytes()).map_err(|e| e.to_string())?;
+    write_manifest(manifest, &text).map_err(|e| e.to_string())?;
     Ok(text)
 }
 
@@ -641,8 +818,8 @@ fn load_masks(output: &Path, name: &str) -> std::result::Result<Vec<(String, Arc
 #[cfg(test)]
 mod tests {
     use super::{
-        BuildState, Effect, EntryChange, Message, change_entry, finished, list_folder, load_items, new_entry,
-        photos_of, settle, side_of, update,
+        BuildState, Effect, EntryChange, Message, change_entry, finished, list_folder, load_items, message, new_entry,
+        photos_of, read_only, save_as, save_editor, settle, side_of, update,
     };
 
     /// `E` on the slices writes every format, the contact sheet and the slice on screen
@@ -718,7 +895,7 @@ mod tests {
     }
 
     /// Each finished entry becomes one message: a cancelled one keeps its row as the
-    /// previous output left it, a failed one says why.
+    /// previous output left it, a failed one says why and whether its earlier build stays.
     #[test]
     fn each_outcome_becomes_its_message() {
         let row = super::Item {
@@ -731,8 +908,12 @@ mod tests {
         };
         let cancelled = finished(&super::Outcome::Cancelled("m".into()), Some(row.clone()));
         assert!(matches!(cancelled, Message::BuildCancelled(n, r) if n == "m" && r == row));
-        let failed = finished(&super::Outcome::Failed("m".into(), "no image".into()), Some(row));
-        assert!(matches!(failed, Message::Built(n, Err(e)) if n == "m" && e == "no image"));
+        let failed = finished(&super::Outcome::Failed("m".into(), "no image".into()), Some(row.clone()));
+        let kept = BuildState::Failed("no image".into(), true);
+        assert!(matches!(failed, Message::Built(n, Ok(r)) if n == "m" && r.state == kept), "the earlier build stays");
+        let never = super::Item { state: BuildState::NotBuilt, ..row };
+        let failed = finished(&super::Outcome::Failed("m".into(), "no image".into()), Some(never));
+        assert!(matches!(failed, Message::Built(_, Ok(r)) if r.state == BuildState::Failed("no image".into(), false)));
     }
 
     /// A photo that would decode past the memory budget (a 32,000² 1-bit PNG of 128 KB)
@@ -761,7 +942,9 @@ mod tests {
         let built: Vec<Message> = receive.iter().filter(|m| matches!(m, Message::Built(..))).collect();
         assert!(built.iter().any(|m| matches!(m, Message::Built(n, Ok(_)) if n == "m")));
         let failed = built.iter().find_map(|m| match m {
-            Message::Built(n, Err(e)) if n == "boom" => Some(e.clone()),
+            Message::Built(n, Ok(super::Item { state: BuildState::Failed(e, false), .. })) if n == "boom" => {
+                Some(e.clone())
+            }
             _ => None,
         });
         assert!(failed.as_deref().is_some_and(|e| e.contains("bomb.png") && e.contains("too large")), "{failed:?}");
@@ -817,7 +1000,7 @@ mod tests {
         // esc drops the prompt and keeps the name
         run(&mut m, Message::Rename);
         run(&mut m, Message::Cancel);
-        assert!(m.rename.is_none() && m.status.contains("the name stays"));
+        assert!(m.prompt.is_none() && m.status.contains("the name stays"));
     }
 
     /// An entry made from a photo in another folder is written with a relative path, the
@@ -849,7 +1032,8 @@ mod tests {
         assert!(e.contains("cannot load it as a volume"), "{e}");
         assert_eq!(std::fs::read_to_string(&manifest).unwrap(), original);
         let good = EntryChange::New("synth".into(), Some(photos.join("bark.png")));
-        let (items, errors, select, status) = change_entry(&manifest, &dir.path().join("out"), &good).unwrap();
+        let message::Change { items, errors, select, status, .. } =
+            change_entry(&manifest, &dir.path().join("out"), &good).unwrap();
         assert!(errors.is_empty() && select == "bark" && items.len() == 2, "{errors:?} {select}");
         assert!(status.contains("added bark (synth from"), "{status}");
         let text = std::fs::read_to_string(&manifest).unwrap();
@@ -883,20 +1067,20 @@ mod tests {
         let (before, _) = side_of(&out, "m", true).unwrap();
         let (after, _) = side_of(&out, "m", false).unwrap();
         assert_ne!(before.data(), after.data(), "seed 1 beside seed 2");
-        let (items, _, select, status) = settle(&manifest, &out, "m", false).unwrap();
+        let message::Change { items, select, status, .. } = settle(&manifest, &out, "m", false).unwrap();
         assert!(select == "m" && status.contains("previous build again"), "{status}");
         assert!(!items[0].previous && matches!(items[0].state, BuildState::Changed(..)), "{:?}", items[0]);
         assert_eq!(side_of(&out, "m", false).unwrap().0.data(), before.data());
         assert!(side_of(&out, "m", true).unwrap_err().to_string().contains("no previous build of m"));
         super::build(&manifest, &out, vec!["m".into()], &std::sync::mpsc::channel().0);
-        let (items, _, _, status) = settle(&manifest, &out, "m", true).unwrap();
+        let message::Change { items, status, .. } = settle(&manifest, &out, "m", true).unwrap();
         assert!(!items[0].previous && status.contains("kept the new build"), "{status}");
         assert_eq!(side_of(&out, "m", false).unwrap().0.data(), after.data());
         // a kept copy goes with its entry when the entry is renamed
         std::fs::write(&manifest, text.replace("seed = 1", "seed = 3")).unwrap();
         super::build(&manifest, &out, vec!["m".into()], &std::sync::mpsc::channel().0);
         assert!(load_items(&manifest, &out).0[0].previous);
-        let (items, ..) = change_entry(&manifest, &out, &EntryChange::Rename("m".into(), "n".into())).unwrap();
+        let items = change_entry(&manifest, &out, &EntryChange::Rename("m".into(), "n".into())).unwrap().items;
         assert!(!items[0].previous && !crate::library::previous::folder(&out, "m").exists());
     }
 
@@ -923,5 +1107,55 @@ mod tests {
         assert!(shape.triangles.len() > 100);
         let (_, again, _) = super::write_spec(&out, "kiwi", &spec, "fruit").unwrap();
         assert_eq!(again, ["kiwi.fill-2.toml", "kiwi.fill-fruit-2.obj"]);
+    }
+    /// Each library operation returns its inverse; applied to the manifest as it reads
+    /// later, it undoes the operation and keeps an edit made outside meanwhile.
+    #[test]
+    fn library_operations_are_undone_onto_the_file_as_it_reads() {
+        let (dir, manifest) = two_broken();
+        let original = std::fs::read_to_string(&manifest).unwrap();
+        let out = dir.path().join("out");
+        let undo = |change: &EntryChange| change_entry(&manifest, &out, change).unwrap().inverse.unwrap();
+        for change in [
+            EntryChange::Delete("b".into()),
+            EntryChange::Delete("a".into()),
+            EntryChange::Duplicate("a".into()),
+            EntryChange::Rename("a".into(), "apple".into()),
+        ] {
+            let (inverse, what) = undo(&change);
+            undo(&inverse);
+            assert_eq!(std::fs::read_to_string(&manifest).unwrap(), original, "{what} undone byte for byte");
+            let (inverse, what) = undo(&change);
+            let outside = std::fs::read_to_string(&manifest).unwrap() + "# noted outside\n";
+            std::fs::write(&manifest, &outside).unwrap();
+            change_entry(&manifest, &out, &inverse).unwrap();
+            let back = std::fs::read_to_string(&manifest).unwrap();
+            assert_eq!(back, original.clone() + "# noted outside\n", "{what}");
+            std::fs::write(&manifest, &original).unwrap();
+        }
+    }
+
+    /// A read-only manifest is flagged, never written (its edits are refused with the
+    /// reason), and can be saved as a new file beside it, never over an existing one.
+    #[test]
+    fn a_read_only_manifest_is_flagged_and_saved_under_another_name() {
+        use std::os::unix::fs::PermissionsExt;
+        let (dir, manifest) = two_broken();
+        let original = std::fs::read_to_string(&manifest).unwrap();
+        std::fs::set_permissions(&manifest, std::fs::Permissions::from_mode(0o444)).unwrap();
+        let notes = read_only(&manifest, &dir.path().join("out"));
+        assert!(notes.len() == 1 && notes[0].contains("is read-only"), "{notes:?}");
+        let e = change_entry(&manifest, &dir.path().join("out"), &EntryChange::Delete("a".into())).unwrap_err();
+        assert!(e.contains("is read-only") && e.contains("another name"), "{e}");
+        let e = save_editor(&manifest, "a", &original, &original.replace("size = 8", "size = 9"));
+        assert!(matches!(&e, Message::Saved(Err(e)) if e.contains("is read-only")), "{e:?}");
+        assert_eq!(std::fs::read_to_string(&manifest).unwrap(), original);
+        let copy = dir.path().join("lib-2.toml");
+        save_as(&manifest, &copy, "[[exemplar]]\n").unwrap();
+        assert_eq!(std::fs::read_to_string(&copy).unwrap(), "[[exemplar]]\n");
+        assert!(save_as(&manifest, &copy, "x").unwrap_err().to_string().contains("never replaces"));
+        let elsewhere = tempfile::tempdir().unwrap();
+        let e = save_as(&manifest, &elsewhere.path().join("lib.toml"), "x").unwrap_err().to_string();
+        assert!(e.contains("beside the manifest"), "{e}");
     }
 }

@@ -1,5 +1,6 @@
 //! The terminal UI's state: plain data, changed only by `update`.
 
+use super::message::EntryChange;
 use crate::volume::{Axis, Volume};
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -18,8 +19,9 @@ pub enum BuildState {
     /// Built (the classified type), but its recipe or inputs changed since (why): the
     /// output is stale.
     Changed(String, String),
-    /// The last build failed with this message.
-    Failed(String),
+    /// The last build failed with this message; true when an earlier build is still there
+    /// to open.
+    Failed(String, bool),
     /// The manifest entry has a mistake (this message): `e` opens it to fix.
     Broken(String),
 }
@@ -73,6 +75,8 @@ pub struct ExemplarView {
     pub photos: Option<Result<Arc<Photos>, String>>,
     /// Whether the photo of the slice axis is shown beside its slice.
     pub beside_photo: bool,
+    /// Whether the volume is an earlier build kept after the latest build failed.
+    pub older: bool,
 }
 
 /// The images an exemplar was made from, for the slices across x, y and z (None: no image
@@ -94,6 +98,7 @@ impl ExemplarView {
             layer: 0,
             photos: None,
             beside_photo: false,
+            older: false,
         }
     }
 }
@@ -160,6 +165,20 @@ pub struct Editor {
     pub previewing: bool,
     /// Why the newest preview failed (the panel then shows the last good one, marked stale).
     pub preview_error: Option<String>,
+    /// The manifest as it reads now, when it and this entry changed on disk since the
+    /// editor read it: the designer keeps theirs or mine (see [`Conflict`]).
+    pub conflict: Option<Box<Conflict>>,
+}
+
+/// The entry being edited changed both here and on disk.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Conflict {
+    /// The manifest as it reads now.
+    pub theirs: String,
+    /// Whether it was found by a save (keeping mine then saves).
+    pub saving: bool,
+    /// Whether both versions of the entry are shown side by side.
+    pub both: bool,
 }
 
 pub use crate::fill::FillPreview;
@@ -199,6 +218,9 @@ pub struct FillEdit {
     pub show_depth: bool,
     /// Earlier specs, newest last (`u`).
     pub undo: Vec<crate::fill::spec::FillSpec>,
+    /// The spec as the preview opened, or as last written (`w`) or loaded (`o`): leaving
+    /// with another asks first.
+    pub saved: Box<crate::fill::spec::FillSpec>,
     /// Whether a stroke is being dragged with the mouse.
     pub dragging: bool,
     /// Whether a refill with the spec runs (the fill shown stays until it ends).
@@ -299,20 +321,45 @@ pub struct Model {
     pub screen: Screen,
     /// The help overlay, when shown.
     pub help: Option<Help>,
-    /// The new name being typed for the selected library entry.
-    pub rename: Option<tui_input::Input>,
+    /// A line being typed: a library entry's new name, or the file to save the manifest as.
+    pub prompt: Option<Prompt>,
     /// The entry `v` marked to compare with the next one `v` is pressed on.
     pub mark: Option<String>,
     /// One line of status at the bottom.
     pub status: String,
     /// Leave the program.
     pub quit: bool,
+    /// The manifest changed on disk since this UI last read or wrote it (Ctrl-R reloads).
+    pub outside: bool,
+    /// Library operations done here, newest last, each as the change that undoes it
+    /// (applied to the manifest as it reads then) and what it undoes.
+    pub undo: Vec<(EntryChange, String)>,
+    /// Why files cannot be written (a read-only manifest or output folder), said at start.
+    pub read_only: Vec<String>,
     /// The action a second press of the same key confirms (unsaved work would be lost).
     pub confirm: Option<Confirm>,
     /// Progress of running builds: exemplar -> (stage, fraction).
     pub progress: std::collections::BTreeMap<String, (String, f32)>,
     /// The latest pyramid level a synthesis build finished: exemplar -> (`2/3`, volume).
     pub previews: std::collections::BTreeMap<String, (String, Arc<Volume>)>,
+}
+
+/// A line typed at the bottom of the screen.
+#[derive(Debug, Clone)]
+pub struct Prompt {
+    /// What it is for.
+    pub purpose: Purpose,
+    /// What is typed.
+    pub input: tui_input::Input,
+}
+
+/// What a prompt is for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Purpose {
+    /// The selected library entry's new name.
+    Rename,
+    /// The file the editor saves the manifest as (when the manifest cannot be written).
+    SaveAs,
 }
 
 /// The help overlay: the keys of every screen, the one on top first, filtered by a query.
@@ -342,9 +389,12 @@ impl Model {
             mark: None,
             screen: Screen::Library,
             help: None,
-            rename: None,
+            prompt: None,
             status,
             quit: false,
+            outside: false,
+            undo: Vec::new(),
+            read_only: Vec::new(),
             confirm: None,
             progress: Default::default(),
             previews: Default::default(),

@@ -3,7 +3,7 @@
 //! folder listing and the photo arrive as messages from workers.
 
 use super::message::{Effect, EntryChange};
-use super::model::{Editor, ExemplarView, Model, Screen};
+use super::model::{Editor, ExemplarView, FillView, Model, Screen};
 use crate::volume::Image2d;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -17,6 +17,8 @@ pub enum FileKind {
     Volume,
     /// A mesh (a seed for stamp mode).
     Mesh,
+    /// A fill spec (`solidtex fill --spec`).
+    FillSpec,
 }
 
 impl FileKind {
@@ -26,6 +28,7 @@ impl FileKind {
             FileKind::Image => &["png", "jpg", "jpeg", "exr", "tif", "tiff", "hdr"],
             FileKind::Volume => &["exr", "nrrd", "vol", "png", "vdb", "dds"],
             FileKind::Mesh => &["obj", "stl", "ply"],
+            FileKind::FillSpec => &["toml"],
         }
     }
 }
@@ -99,23 +102,25 @@ pub struct NewEntry {
     pub kind: usize,
     /// The file picker, once the kind is chosen (kinds that read a file).
     pub picker: Option<Picker>,
-    /// When it picks a mesh instead of making an entry: for what, and the screen to go
-    /// back to.
-    pub mesh_for: Option<MeshFor>,
+    /// When it picks a file for another screen instead of making an entry: for what, and
+    /// the screen to go back to.
+    pub pick_for: Option<PickFor>,
 }
 
-/// What a mesh is picked for.
+/// What a file is picked for.
 #[derive(Debug, Clone)]
-pub enum MeshFor {
-    /// The seed of stamp mode in this exemplar view.
+pub enum PickFor {
+    /// The seed mesh of stamp mode in this exemplar view.
     Seed(Box<ExemplarView>),
-    /// A stamp (true) or scatter step appended in this recipe editor.
+    /// The mesh of a stamp (true) or scatter step appended in this recipe editor.
     Step(Box<Editor>, bool),
+    /// A written fill spec whose constraints this fill preview loads.
+    Spec(Box<FillView>),
 }
 
 /// `n` on the library: the list of kinds.
 pub fn start(model: &mut Model) {
-    model.screen = Screen::New(NewEntry { kind: 0, picker: None, mesh_for: None });
+    model.screen = Screen::New(NewEntry { kind: 0, picker: None, pick_for: None });
     model.status = "new exemplar: choose what makes it (enter), esc goes back".into();
 }
 
@@ -191,15 +196,20 @@ pub fn open(model: &mut Model) -> Vec<Effect> {
         return go_to(picker, target);
     }
     let path = picker.folder.join(&row.name);
-    match entry.mesh_for.take() {
-        Some(MeshFor::Seed(view)) => {
+    match entry.pick_for.take() {
+        Some(PickFor::Seed(view)) => {
             model.screen = Screen::Exemplar(*view);
             model.status = format!("loading the seed {}", path.display());
             return vec![Effect::LoadSeedFile(path)];
         }
-        Some(MeshFor::Step(editor, stamp)) => {
+        Some(PickFor::Step(editor, stamp)) => {
             model.screen = Screen::Editor(*editor);
             return vec![Effect::StepMesh(path, stamp)];
+        }
+        Some(PickFor::Spec(view)) => {
+            model.screen = Screen::Fill(*view);
+            model.status = format!("reading {}", path.display());
+            return vec![Effect::LoadSpec(path)];
         }
         None => {}
     }
@@ -218,7 +228,7 @@ pub fn pick_seed(model: &mut Model) -> Vec<Effect> {
     }
     let view = Box::new(view.clone());
     let picker = Picker::new(FileKind::Mesh, folder.clone());
-    model.screen = Screen::New(NewEntry { kind: 0, picker: Some(picker), mesh_for: Some(MeshFor::Seed(view)) });
+    model.screen = Screen::New(NewEntry { kind: 0, picker: Some(picker), pick_for: Some(PickFor::Seed(view)) });
     model.status = "choose a seed mesh (obj, stl, ply): enter takes it, esc keeps the one in use".into();
     vec![Effect::List(folder, FileKind::Mesh)]
 }
@@ -234,10 +244,26 @@ pub fn pick_step_mesh(model: &mut Model, stamp: bool) -> Vec<Effect> {
     let editor = Box::new(editor.clone());
     let picker = Picker::new(FileKind::Mesh, folder.clone());
     model.screen =
-        Screen::New(NewEntry { kind: 0, picker: Some(picker), mesh_for: Some(MeshFor::Step(editor, stamp)) });
+        Screen::New(NewEntry { kind: 0, picker: Some(picker), pick_for: Some(PickFor::Step(editor, stamp)) });
     let what = if stamp { "stamp" } else { "scatter" };
     model.status = format!("choose the mesh to {what} (obj, stl, ply): enter takes it, esc goes back");
     vec![Effect::List(folder, FileKind::Mesh)]
+}
+
+/// `o` in the fill preview: a picker for a written fill spec, starting in the folder `w`
+/// writes them to (`OUTPUT/exports/`; backspace goes up when it does not exist yet).
+pub fn pick_spec(model: &mut Model) -> Vec<Effect> {
+    let Screen::Fill(view) = &model.screen else { return Vec::new() };
+    if view.edit.is_none() {
+        model.status = "the fill is still running".into();
+        return Vec::new();
+    }
+    let folder = model.output.join("exports");
+    let view = Box::new(view.clone());
+    let picker = Picker::new(FileKind::FillSpec, folder.clone());
+    model.screen = Screen::New(NewEntry { kind: 0, picker: Some(picker), pick_for: Some(PickFor::Spec(view)) });
+    model.status = "choose a fill spec (toml) to load its constraints: enter loads it, esc goes back".into();
+    vec![Effect::List(folder, FileKind::FillSpec)]
 }
 
 /// Backspace or left in the picker: the folder above.
@@ -268,7 +294,7 @@ fn add(model: &mut Model, kind: Kind, file: Option<PathBuf>) -> Vec<Effect> {
 /// The manifest changed (or not) after a new entry was asked for: on success the library
 /// shows it; a refusal leaves the picker open with the reason.
 pub fn added(model: &mut Model, ok: bool) {
-    if ok && matches!(model.screen, Screen::New(NewEntry { mesh_for: None, .. })) {
+    if ok && matches!(model.screen, Screen::New(NewEntry { pick_for: None, .. })) {
         model.screen = Screen::Library;
     }
 }
@@ -277,10 +303,11 @@ pub fn added(model: &mut Model, ok: bool) {
 /// screen is not this one.
 pub fn back(model: &mut Model) -> bool {
     let Some(entry) = screen(model) else { return false };
-    if let Some(back) = entry.mesh_for.take() {
+    if let Some(back) = entry.pick_for.take() {
         (model.screen, model.status) = match back {
-            MeshFor::Seed(view) => (Screen::Exemplar(*view), "the seed mesh stays".into()),
-            MeshFor::Step(editor, _) => (Screen::Editor(*editor), "no step added".into()),
+            PickFor::Seed(view) => (Screen::Exemplar(*view), "the seed mesh stays".into()),
+            PickFor::Step(editor, _) => (Screen::Editor(*editor), "no step added".into()),
+            PickFor::Spec(view) => (Screen::Fill(*view), "no fill spec loaded".into()),
         };
     } else if entry.picker.take().is_none() {
         model.screen = Screen::Library;
@@ -407,7 +434,14 @@ mod tests {
         // a refused file leaves the picker open; an added entry shows on the library
         update(&mut m, Message::EntriesChanged(Err("a.png: cannot decode it as an image".into())));
         assert!(matches!(m.screen, Screen::New(_)) && m.status.contains("cannot decode"), "{}", m.status);
-        update(&mut m, Message::EntriesChanged(Ok((Vec::new(), Vec::new(), "a".into(), "added a".into()))));
+        let change = crate::tui::Change {
+            items: Vec::new(),
+            errors: Vec::new(),
+            select: "a".into(),
+            status: "added a".into(),
+            inverse: None,
+        };
+        update(&mut m, Message::EntriesChanged(Ok(change)));
         assert!(matches!(m.screen, Screen::Library));
     }
 

@@ -1,7 +1,7 @@
 //! `update`: the only place the model changes. Pure: returns the work to start.
 
 use super::message::{Effect, EntryChange, Message, SharedFill};
-use super::model::{BuildState, Confirm, ExemplarView, Model, Screen};
+use super::model::{BuildState, Confirm, ExemplarView, Model, Prompt, Purpose, Screen};
 use super::{compare, editing, fill_edit, new_entry, stamping};
 use crate::volume::Axis;
 
@@ -97,26 +97,28 @@ fn handle(model: &mut Model, message: Message) -> Vec<Effect> {
         Message::EditorReady(result) => return editing::editor_ready(model, result),
         Message::Rename => start_rename(model),
         Message::Export => return export(model),
-        Message::Exported(result) => {
-            model.status = match result {
-                Ok((folder, files, skipped)) => {
-                    let mut text = format!("exported {} files into {folder}: {}", files.len(), files.join(", "));
-                    if !skipped.is_empty() {
-                        text += &format!("; not {}", skipped.join(", not "));
-                    }
-                    text
-                }
-                Err(e) => format!("nothing exported: {e}"),
+        Message::Exported(result) => model.status = exported(result),
+        Message::SpecWritten(spec, result) => {
+            if result.is_ok() {
+                fill_edit::written(model, &spec);
             }
+            model.status = exported(result);
         }
-        Message::Commit if model.rename.is_some() => return finish_rename(model),
-        Message::Input(request) if model.rename.is_some() => {
-            model.rename.as_mut().expect("checked").handle(request);
+        Message::OpenSpec => return new_entry::pick_spec(model),
+        Message::SpecLoaded(path, result) => fill_edit::spec_loaded(model, &path, result),
+        Message::Commit if model.prompt.as_ref().is_some_and(|p| p.purpose == Purpose::SaveAs) => {
+            return editing::save_as(model);
         }
-        Message::Cancel if model.rename.is_some() => {
-            model.rename = None;
-            model.status = "the name stays".into();
+        Message::Commit if model.prompt.is_some() => return finish_rename(model),
+        Message::Input(request) if model.prompt.is_some() => {
+            model.prompt.as_mut().expect("checked").input.handle(request);
         }
+        Message::Cancel if model.prompt.is_some() => {
+            let purpose = model.prompt.take().expect("checked").purpose;
+            model.status = if purpose == Purpose::Rename { "the name stays" } else { "not saved" }.into();
+        }
+        Message::SaveAs => editing::ask_save_as(model),
+        Message::SavedAs(result) => editing::saved_as(model, result),
         Message::Commit => return editing::commit(model),
         Message::Input(request) => editing::input(model, request),
         Message::Cancel => {
@@ -126,6 +128,7 @@ fn handle(model: &mut Model, message: Message) -> Vec<Effect> {
         }
         Message::Undo if matches!(model.screen, Screen::Exemplar(_)) => stamping::undo(model),
         Message::Undo if matches!(model.screen, Screen::Fill(_)) => fill_edit::undo(model),
+        Message::Undo if matches!(model.screen, Screen::Library) => return undo_entry(model),
         Message::Undo => return editing::undo(model, false),
         Message::Redo => return editing::undo(model, true),
         Message::Save => return editing::save(model),
@@ -135,6 +138,13 @@ fn handle(model: &mut Model, message: Message) -> Vec<Effect> {
         Message::RemoveStep => return editing::step(model, true, false),
         Message::MoveStep(earlier) => return editing::step(model, false, earlier),
         Message::Saved(result) => editing::saved(model, result),
+        Message::SaveConflict(theirs) => return editing::save_conflict(model, theirs),
+        Message::Resolve(choice) => return editing::resolve(model, choice),
+        Message::Reload => return reload(model),
+        Message::ChangedOnDisk => {
+            model.outside = true;
+            model.status = "the manifest changed on disk: Ctrl-R reloads".into();
+        }
         Message::Previewed(generation, result, warnings) => editing::previewed(model, generation, result, warnings),
         Message::FillPreview => return editing::open_fill(model),
         Message::Filled(name, result) => editing::filled(model, &name, result),
@@ -203,8 +213,23 @@ fn handle(model: &mut Model, message: Message) -> Vec<Effect> {
             }
         }
         Message::BuildWarning(name, warning) => model.status = format!("warning: {name}: {warning}"),
+        Message::WorkerFailed(why) => model.status = format!("{why}; nothing else is lost, the UI goes on"),
     }
     Vec::new()
+}
+
+/// What an export wrote, or why nothing.
+fn exported(result: Result<(String, Vec<String>, Vec<String>), String>) -> String {
+    match result {
+        Ok((folder, files, skipped)) => {
+            let mut text = format!("exported {} files into {folder}: {}", files.len(), files.join(", "));
+            if !skipped.is_empty() {
+                text += &format!("; not {}", skipped.join(", not "));
+            }
+            text
+        }
+        Err(e) => format!("nothing exported: {e}"),
+    }
 }
 
 /// Whether `message` comes from a key (not from a worker's result).
@@ -217,6 +242,9 @@ fn from_key(message: &Message) -> bool {
             | Message::BuildCancelled(..)
             | Message::EditorReady(_)
             | Message::Saved(_)
+            | Message::SaveConflict(_)
+            | Message::SavedAs(_)
+            | Message::ChangedOnDisk
             | Message::Previewed(..)
             | Message::Filled(..)
             | Message::OverlayMade(..)
@@ -227,6 +255,9 @@ fn from_key(message: &Message) -> bool {
             | Message::BuildStarted(_)
             | Message::Exported(_)
             | Message::BuildWarning(..)
+            | Message::WorkerFailed(_)
+            | Message::SpecWritten(..)
+            | Message::SpecLoaded(..)
             | Message::Listed(..)
             | Message::Peeked(..)
             | Message::PhotosLoaded(..)
@@ -284,13 +315,13 @@ fn start_rename(model: &mut Model) {
         return;
     };
     model.status = format!("new name for {name} (enter renames, esc keeps it)");
-    model.rename = Some(name.as_str().into());
+    model.prompt = Some(Prompt { purpose: Purpose::Rename, input: name.as_str().into() });
 }
 
 /// Enter in the rename prompt: rename the entry in the manifest (the worker refuses a name
 /// the manifest does not allow or one taken, and says why).
 fn finish_rename(model: &mut Model) -> Vec<Effect> {
-    let new = model.rename.take().map(|i| i.value().to_string()).unwrap_or_default();
+    let new = model.prompt.take().map(|p| p.input.value().to_string()).unwrap_or_default();
     let Some(name) = model.items.get(model.selected).map(|i| i.name.clone()) else { return Vec::new() };
     if new == name {
         model.status = "the name stays".into();
@@ -300,24 +331,47 @@ fn finish_rename(model: &mut Model) -> Vec<Effect> {
     vec![Effect::ChangeEntry(EntryChange::Rename(name, new))]
 }
 
-/// The manifest's entries changed: the new list, the row of `select` chosen.
+/// The manifest's entries changed: the new list, the row of `select` chosen; a library
+/// operation can be undone.
 fn entries_changed(model: &mut Model, result: super::message::Changed) {
     match result {
-        Ok((items, errors, select, status)) => {
-            let row = items.iter().position(|i| i.name == select).unwrap_or(model.selected);
-            model.selected = row.min(items.len().saturating_sub(1));
-            (model.items, model.errors, model.status) = (items, errors, status);
+        Ok(change) => {
+            let row = change.items.iter().position(|i| i.name == change.select).unwrap_or(model.selected);
+            model.selected = row.min(change.items.len().saturating_sub(1));
+            (model.items, model.errors, model.status) = (change.items, change.errors, change.status);
+            model.undo.extend(change.inverse);
+            model.outside = false;
         }
         Err(e) => model.status = format!("the manifest is unchanged: {e}"),
     }
 }
 
+/// `u` on the library: undo the last library operation, applied to the manifest as it
+/// reads now (an edit made outside since stays).
+fn undo_entry(model: &mut Model) -> Vec<Effect> {
+    let Some((change, what)) = model.undo.pop() else {
+        model.status = "no library operation to undo".into();
+        return Vec::new();
+    };
+    model.status = format!("undoing {what}");
+    vec![Effect::UndoEntry(change, what)]
+}
+
+/// Ctrl-R: read the manifest again (the editor keeps its edits of its entry).
+fn reload(model: &mut Model) -> Vec<Effect> {
+    if matches!(model.screen, Screen::Editor(_)) {
+        return vec![Effect::ReadManifest];
+    }
+    let select = model.items.get(model.selected).map(|i| i.name.clone()).unwrap_or_default();
+    vec![Effect::Reload(select)]
+}
+
 /// `q` or Ctrl-C: quit, asking first when recipe edits or stamps are unsaved.
 fn quit(model: &mut Model, asked: Option<Confirm>) {
     match unsaved(model) {
-        Some(what) if asked != Some(Confirm::Quit) => {
+        Some((what, how)) if asked != Some(Confirm::Quit) => {
             model.confirm = Some(Confirm::Quit);
-            model.status = format!("unsaved {what}: s saves them, q again quits without saving");
+            model.status = format!("unsaved {what}: {how}, q again quits without saving");
         }
         _ => model.quit = true,
     }
@@ -342,9 +396,9 @@ fn back(model: &mut Model, asked: Option<Confirm>) -> Vec<Effect> {
         return vec![Effect::CancelBuilds];
     } else if on_library {
         model.status = "this is the library, the first screen: q quits".into();
-    } else if let Some(what) = unsaved(model).filter(|_| asked != Some(Confirm::Leave)) {
+    } else if let Some((what, how)) = unsaved(model).filter(|_| asked != Some(Confirm::Leave)) {
         model.confirm = Some(Confirm::Leave);
-        model.status = format!("unsaved {what}: s saves them, esc again leaves without saving");
+        model.status = format!("unsaved {what}: {how}, esc again leaves without saving");
     } else if let Screen::Fill(super::model::FillView { from: Some(view), .. }) = &mut model.screen {
         let view = std::mem::replace(view, Box::new(ExemplarView::new("")));
         model.status = format!("back to {}", view.name);
@@ -452,11 +506,15 @@ fn masks_loaded(
     }
 }
 
-/// What would be lost by leaving the screen: recipe edits or stamps not yet saved.
-fn unsaved(model: &Model) -> Option<&'static str> {
+/// What would be lost by leaving the screen (recipe edits, stamps or fill constraints not
+/// yet saved), and the key that saves it.
+fn unsaved(model: &Model) -> Option<(&'static str, &'static str)> {
     match &model.screen {
-        Screen::Editor(e) if e.text.as_ref().is_some_and(|t| *t != e.saved) => Some("recipe edits"),
-        Screen::Exemplar(_) if stamps_unsaved(model) => Some("stamps"),
+        Screen::Editor(e) if e.text.as_ref().is_some_and(|t| *t != e.saved) => Some(("recipe edits", "s saves them")),
+        Screen::Exemplar(_) if stamps_unsaved(model) => Some(("stamps", "s saves them")),
+        Screen::Fill(v) if v.edit.as_ref().is_some_and(|e| e.spec != *e.saved || !e.stroke.is_empty()) => {
+            Some(("fill constraints", "w writes them as a fill spec"))
+        }
         _ => None,
     }
 }
@@ -509,13 +567,18 @@ fn open(model: &mut Model) -> Vec<Effect> {
         model.status = format!("{} has a mistake (e opens it to fix): {reason}", item.name);
         return Vec::new();
     }
-    if !matches!(item.state, BuildState::Built(_) | BuildState::Changed(..)) {
+    let older = matches!(item.state, BuildState::Failed(_, true));
+    if !older && !matches!(item.state, BuildState::Built(_) | BuildState::Changed(..)) {
         model.status = format!("{} is not built yet: press b to build it", item.name);
         return Vec::new();
     }
     let name = item.name.clone();
-    model.screen = Screen::Exemplar(ExemplarView::new(&name));
-    model.status = format!("loading {name}");
+    model.screen = Screen::Exemplar(ExemplarView { older, ..ExemplarView::new(&name) });
+    model.status = if older {
+        format!("loading the earlier build of {name} (its latest build failed)")
+    } else {
+        format!("loading {name}")
+    };
     vec![Effect::Load(name)]
 }
 
@@ -589,14 +652,19 @@ fn built(model: &mut Model, name: &str, result: Result<crate::tui::model::Item, 
     if let Some(item) = model.items.iter_mut().find(|i| i.name == name) {
         match result {
             Ok(row) => {
-                if let BuildState::Built(kind) = &row.state {
-                    model.status = format!("built {name} (measured type {kind})");
+                match &row.state {
+                    BuildState::Built(kind) => model.status = format!("built {name} (measured type {kind})"),
+                    BuildState::Failed(e, true) => {
+                        model.status = format!("{name} failed: {e}; its earlier build stays (enter opens it)")
+                    }
+                    BuildState::Failed(e, false) => model.status = format!("{name} failed: {e}"),
+                    _ => {}
                 }
                 *item = row;
             }
             Err(e) => {
                 model.status = format!("{name} failed: {e}");
-                item.state = BuildState::Failed(e);
+                item.state = BuildState::Failed(e, false);
             }
         }
     }
@@ -889,5 +957,69 @@ mod tests {
         update(&mut m, Message::NextLayer);
         let Screen::Exemplar(view) = &m.screen else { panic!("the exemplar view") };
         assert!(Arc::ptr_eq(view.volume.as_ref().unwrap(), &v), "back to the exemplar");
+    }
+    /// A save that finds the entry changed on disk asks; m keeps mine (saved again onto the
+    /// file as it reads), t takes theirs (u brings mine back), esc leaves it unsaved.
+    #[test]
+    fn an_entry_changed_on_disk_too_is_never_saved_over_silently() {
+        let mut m = edited();
+        let Screen::Editor(e) = &m.screen else { panic!("the editor") };
+        let (base, mine) = (e.saved.clone(), e.text.clone().unwrap());
+        let save = Effect::Save { name: "a".into(), base: base.clone(), text: mine.clone() };
+        assert_eq!(update(&mut m, Message::Save), vec![save]);
+        let theirs = format!("# noted\n{}", base.replace("size = 8", "size = 12"));
+        update(&mut m, Message::SaveConflict(theirs.clone()));
+        assert!(m.status.contains("a changed on disk too: m keeps yours"), "{}", m.status);
+        update(&mut m, Message::Resolve('b'));
+        let Screen::Editor(e) = &m.screen else { panic!("the editor") };
+        assert!(e.conflict.as_ref().is_some_and(|c| c.both));
+        let effects = update(&mut m, Message::Resolve('m'));
+        let kept = format!("# noted\n{}", mine);
+        assert_eq!(effects[0], Effect::Save { name: "a".into(), base: theirs.clone(), text: kept.clone() });
+        let mut m = edited();
+        update(&mut m, Message::SaveConflict(theirs.clone()));
+        update(&mut m, Message::Resolve('t'));
+        let Screen::Editor(e) = &m.screen else { panic!("the editor") };
+        assert_eq!((e.text.as_deref(), e.saved.as_str()), (Some(theirs.as_str()), theirs.as_str()));
+        update(&mut m, Message::Undo);
+        let Screen::Editor(e) = &m.screen else { panic!("the editor") };
+        assert_eq!(e.text.as_deref(), Some(kept.as_str()), "u brings mine back onto their file");
+        let mut m = edited();
+        update(&mut m, Message::SaveConflict(theirs));
+        update(&mut m, Message::Cancel);
+        let Screen::Editor(e) = &m.screen else { panic!("the editor") };
+        assert!(e.conflict.is_none() && e.text.as_deref() == Some(mine.as_str()) && m.status.contains("not saved"));
+        update(&mut m, Message::ChangedOnDisk);
+        assert!(m.outside && m.status.contains("Ctrl-R reloads"));
+        assert_eq!(update(&mut m, Message::Reload), vec![Effect::ReadManifest]);
+    }
+
+    /// `u` on the library undoes the last library operation by its inverse change; a failed
+    /// rebuild whose earlier build is there still opens it.
+    #[test]
+    fn library_operations_undo_and_a_failed_build_keeps_its_earlier_one() {
+        let mut m = model();
+        update(&mut m, Message::Undo);
+        assert!(m.status.contains("no library operation to undo"));
+        let change = crate::tui::Change {
+            items: m.items.clone(),
+            errors: Vec::new(),
+            select: "a-2".into(),
+            status: "copied a as a-2".into(),
+            inverse: Some((EntryChange::Delete("a-2".into()), "the copy a-2".into())),
+        };
+        update(&mut m, Message::EntriesChanged(Ok(change)));
+        let undo = EntryChange::Delete("a-2".into());
+        assert_eq!(update(&mut m, Message::Undo), vec![Effect::UndoEntry(undo, "the copy a-2".into())]);
+        assert!(m.undo.is_empty());
+        let row = Item { state: BuildState::Failed("no image".into(), true), ..m.items[0].clone() };
+        update(&mut m, Message::Built("a".into(), Ok(row)));
+        assert!(m.status.contains("a failed: no image; its earlier build stays"), "{}", m.status);
+        assert_eq!(update(&mut m, Message::Open), vec![Effect::Load("a".into())]);
+        assert!(matches!(&m.screen, Screen::Exemplar(v) if v.older));
+        let mut m = model();
+        m.items[1].state = BuildState::Failed("no image".into(), false);
+        m.selected = 1;
+        assert!(update(&mut m, Message::Open).is_empty() && m.status.contains("not built yet"));
     }
 }

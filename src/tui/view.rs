@@ -40,8 +40,11 @@ pub fn draw_with(
     }
     // A long status (an error with its reason) gets as many lines as it needs, up to four,
     // beside the key hints rather than under them.
-    let status_text = match &model.rename {
-        Some(input) => format!("new name: {}_  (enter renames, esc keeps the name)", input.value()),
+    let status_text = match &model.prompt {
+        Some(p) if p.purpose == super::model::Purpose::Rename => {
+            format!("new name: {}_  (enter renames, esc keeps the name)", p.input.value())
+        }
+        Some(p) => format!("save as: {}_  (enter saves, esc does not)", p.input.value()),
         None => model.status.clone(),
     };
     let status_lines = wrapped_lines(&status_text, area.width.saturating_sub(16)).clamp(1, 4);
@@ -94,8 +97,14 @@ fn key_bar(model: &Model) -> Vec<Span<'static>> {
 }
 
 fn library(frame: &mut Frame, model: &Model, area: Rect, regions: &mut Regions) {
-    let block =
-        Block::default().borders(Borders::ALL).title(format!(" solidtex library: {} ", model.manifest.display()));
+    let mut title = format!(" solidtex library: {} ", model.manifest.display());
+    if model.outside {
+        title += "(changed on disk: Ctrl-R reloads) ";
+    }
+    if !model.read_only.is_empty() {
+        title += "(read-only) ";
+    }
+    let block = Block::default().borders(Borders::ALL).title(title);
     let area = if model.errors.is_empty() {
         area
     } else {
@@ -128,7 +137,8 @@ fn library(frame: &mut Frame, model: &Model, area: Rect, regions: &mut Regions) 
             BuildState::Built(t) if item.previous => ("built; previous kept".to_string(), t.clone()),
             BuildState::Built(t) => ("built".to_string(), t.clone()),
             BuildState::Changed(t, _) => ("changed since built".to_string(), t.clone()),
-            BuildState::Failed(e) => (format!("failed: {e}"), "-".to_string()),
+            BuildState::Failed(e, true) => (format!("failed (earlier build kept): {e}"), "-".to_string()),
+            BuildState::Failed(e, false) => (format!("failed: {e}"), "-".to_string()),
             BuildState::Broken(_) => ("mistake: e fixes it".to_string(), "-".to_string()),
         };
         let badge = if measured != "-" && measured != declared { format!("{measured} (differs)") } else { measured };
@@ -225,7 +235,11 @@ fn exemplar(
         None => {
             let shown = view.layers.get(view.layer).map_or("exemplar", |l| l.0.as_str());
             let zoom = if view.zoom > 1 { format!(" x{}", view.zoom) } else { String::new() };
-            format!(" {} {shown}{zoom}  (x/y/z, arrows, c channel, +/- zoom, a masks, f fill, m stamp) ", view.name)
+            let older = if view.older { " (earlier build: the latest failed)" } else { "" };
+            format!(
+                " {}{older} {shown}{zoom}  (x/y/z, arrows, c channel, +/- zoom, a masks, f fill, m stamp) ",
+                view.name
+            )
         }
     };
     let block = Block::default().borders(Borders::ALL).title(title);
@@ -579,7 +593,7 @@ mod tests {
         assert!(text.contains("no key matches 'qqq'") && text.contains("/qqq_"), "{text}");
         // the rename prompt shows what is typed, and the key bar its keys
         m.help = None;
-        m.rename = Some("ab".into());
+        m.prompt = Some(crate::tui::model::Prompt { purpose: crate::tui::model::Purpose::Rename, input: "ab".into() });
         let (text, _) = screen(&m, 80, 24);
         assert!(text.contains("new name: ab_") && text.contains("keep the name"), "{text}");
     }
@@ -758,7 +772,7 @@ mod tests {
     fn the_new_entry_screen_lists_kinds_then_files_with_the_photo() {
         use crate::tui::new_entry::{FileRow, NewEntry, Picker};
         let mut m = model();
-        m.screen = Screen::New(NewEntry { kind: 2, picker: None, mesh_for: None });
+        m.screen = Screen::New(NewEntry { kind: 2, picker: None, pick_for: None });
         let (text, buffer) = screen(&m, 100, 24);
         assert!(text.contains("new exemplar: what makes it?") && text.contains("procedural:chocolate"), "{text}");
         let chosen = (0..100u16).map(|x| buffer[(x, 3)].symbol().to_string()).collect::<String>();
@@ -768,7 +782,7 @@ mod tests {
             ["..", "photos", "a.png"].iter().map(|n| FileRow { name: n.to_string(), folder: !n.ends_with(".png") });
         m.screen = Screen::New(NewEntry {
             kind: 0,
-            mesh_for: None,
+            pick_for: None,
             picker: Some(Picker {
                 file: crate::tui::new_entry::FileKind::Image,
                 folder: PathBuf::from("/w/lib"),

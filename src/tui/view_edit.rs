@@ -18,6 +18,10 @@ use ratatui::widgets::{Block, Borders, Paragraph, Widget, Wrap};
 pub fn editor(frame: &mut Frame, editor: &Editor, area: Rect, regions: &mut super::mouse::Regions) {
     let modified = editor.text.as_ref().is_some_and(|t| *t != editor.saved);
     let title = format!(" recipe: {}{} ", editor.name, if modified { " [modified]" } else { "" });
+    if let (Some(conflict), Some(mine)) = (editor.conflict.as_ref().filter(|c| c.both), &editor.text) {
+        both(frame, &editor.name, mine, &conflict.theirs, area);
+        return;
+    }
     let hint = " enter edit  s save  u undo  r redo  esc back ";
     let block = Block::default().borders(Borders::ALL).title(title).title_bottom(hint);
     let inner = block.inner(area);
@@ -46,6 +50,17 @@ pub fn editor(frame: &mut Frame, editor: &Editor, area: Rect, regions: &mut supe
         frame.render_widget(message.block(Block::default().borders(Borders::TOP)), area);
     }
     preview(frame, editor, right);
+}
+
+/// The entry as the editor has it beside the entry as the file has it now.
+fn both(frame: &mut Frame, name: &str, mine: &str, theirs: &str, area: Rect) {
+    let [left, right] = Layout::horizontal([Constraint::Percentage(50), Constraint::Percentage(50)]).areas(area);
+    let gone = "(not in the file)".to_string();
+    for (rect, text, label) in [(left, mine, "yours (m keeps it)"), (right, theirs, "the file's (t takes it)")] {
+        let entry = edit::entry_text(text, name).unwrap_or_else(|| gone.clone());
+        let block = Block::default().borders(Borders::ALL).title(format!(" {name}: {label} ")).title_bottom(" b back ");
+        frame.render_widget(Paragraph::new(entry).block(block).wrap(Wrap { trim: false }), rect);
+    }
 }
 
 fn field_lines(editor: &Editor, text: &str) -> Vec<Line<'static>> {

@@ -3,7 +3,7 @@
 
 use super::graphics::Graphics;
 use super::mouse::{List, Regions};
-use super::new_entry::{KINDS, MeshFor, NewEntry, Picker};
+use super::new_entry::{KINDS, NewEntry, PickFor, Picker};
 use super::view::HalfBlocks;
 use ratatui::Frame;
 use ratatui::layout::{Constraint, Layout, Rect};
@@ -19,10 +19,11 @@ pub fn new_entry(
     regions: &mut Regions,
     graphics: Option<&mut Graphics>,
 ) {
-    let what = match &entry.mesh_for {
-        Some(MeshFor::Seed(view)) => format!("seed mesh for {}", view.name),
-        Some(MeshFor::Step(editor, true)) => format!("mesh to stamp into {}", editor.name),
-        Some(MeshFor::Step(editor, false)) => format!("mesh to scatter in {}", editor.name),
+    let what = match &entry.pick_for {
+        Some(PickFor::Seed(view)) => format!("seed mesh for {}", view.name),
+        Some(PickFor::Step(editor, true)) => format!("mesh to stamp into {}", editor.name),
+        Some(PickFor::Step(editor, false)) => format!("mesh to scatter in {}", editor.name),
+        Some(PickFor::Spec(view)) => format!("fill spec to load into the preview of {}", view.name),
         None => format!("new {} exemplar", KINDS[entry.kind].recipe),
     };
     match &entry.picker {
