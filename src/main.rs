@@ -36,7 +36,8 @@ fn stop_cleanly_on_signals() {
     let Ok(mut signals) = signal_hook::iterator::Signals::new([SIGINT, SIGTERM, SIGHUP]) else { return };
     std::thread::spawn(move || {
         if let Some(signal) = signals.forever().next() {
-            solidtex::tui::restore_terminal();
+            // whatever happens while giving the terminal back, the process exits
+            let _ = std::panic::catch_unwind(solidtex::tui::restore_terminal);
             solidtex::io::atomic::remove_live_temporaries();
             std::process::exit(128 + signal);
         }

@@ -143,7 +143,10 @@ wait_for "no room for the rest" 60
 if screen | grep -q "stale"; then echo "tui e2e: the preview after a stamp at x > 31 is stale"; screen; exit 1; fi
 if screen | head -n 18 | grep -q "no room"; then echo "tui e2e: a warning was printed over the screen"; screen; exit 1; fi
 screen | head -n 1 | grep -q "recipe: kiwi" || { echo "tui e2e: the top border was overwritten"; screen; exit 1; }
+# closing the terminal (SIGHUP) ends the UI
 tmux kill-session -t "$session"
+sleep 1
+if pgrep -f "tui $out/lib/library.toml -o $out/built" >/dev/null; then echo "tui e2e: the UI outlived its terminal"; exit 1; fi
 
 # d. A manifest with two broken entries: both errors listed, B builds the valid ones, a
 # broken entry opens in the editor.
@@ -250,6 +253,7 @@ press "undid the deletion of strata" 10 u
 grep -q '^name = "strata"' "$lib" && grep -q '^size = 20' "$lib" || { echo "tui e2e: undo lost strata or the outside edit"; cat "$lib"; exit 1; }
 # a panicking build: the entry fails with the reason, the UI goes on
 press "strata failed: internal error" 60 Up Up Up Up Up Up Down b
+screen | grep -q "panicked at" && { echo "tui e2e: the panic was printed over the screen"; screen; exit 1; }
 press "built marble" 60 Up b
 # a failed rebuild keeps the last good volume; b on one entry keeps the other rows
 n=$(grep -c '^name = ' "$lib")

@@ -177,13 +177,13 @@ static MOUSE: AtomicBool = AtomicBool::new(false);
 
 /// Give the terminal back as the UI found it, once, from whichever thread gets here first:
 /// a normal exit, a panic of the UI thread, or a signal (SIGTERM, SIGHUP) handled by the
-/// binary.
+/// binary. Errors are ignored, never printed: after SIGHUP the terminal is gone.
 pub fn restore_terminal() {
     if OPEN.swap(false, Ordering::SeqCst) {
         if MOUSE.load(Ordering::SeqCst) {
             let _ = crossterm::execute!(std::io::stdout(), crossterm::event::DisableMouseCapture);
         }
-        ratatui::restore();
+        let _ = ratatui::try_restore();
     }
 }
 

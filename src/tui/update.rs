@@ -507,20 +507,41 @@ fn masks_loaded(
 }
 
 /// What would be lost by leaving the screen (recipe edits, stamps or fill constraints not
-/// yet saved), and the key that saves it.
+/// yet saved, also under a file picker opened from them, or a new entry half made), and
+/// how to keep it.
 fn unsaved(model: &Model) -> Option<(&'static str, &'static str)> {
+    use super::new_entry::{NewEntry, PickFor};
+    let (edits, stamps, constraints) =
+        (("recipe edits", "s saves them"), ("stamps", "s saves them"), ("fill constraints", "w writes them"));
+    let under = |what: (&'static str, &'static str)| (what.0, "esc goes back to them");
     match &model.screen {
-        Screen::Editor(e) if e.text.as_ref().is_some_and(|t| *t != e.saved) => Some(("recipe edits", "s saves them")),
-        Screen::Exemplar(_) if stamps_unsaved(model) => Some(("stamps", "s saves them")),
-        Screen::Fill(v) if v.edit.as_ref().is_some_and(|e| e.spec != *e.saved || !e.stroke.is_empty()) => {
-            Some(("fill constraints", "w writes them as a fill spec"))
+        Screen::Editor(e) if edits_unsaved(e) => Some(edits),
+        Screen::Exemplar(v) if stamped(v) => Some(stamps),
+        Screen::Fill(v) if constrained(v) => Some(constraints),
+        Screen::New(NewEntry { pick_for: Some(PickFor::Step(e, _)), .. }) if edits_unsaved(e) => Some(under(edits)),
+        Screen::New(NewEntry { pick_for: Some(PickFor::Seed(v)), .. }) if stamped(v) => Some(under(stamps)),
+        Screen::New(NewEntry { pick_for: Some(PickFor::Spec(v)), .. }) if constrained(v) => Some(under(constraints)),
+        Screen::New(NewEntry { pick_for: None, picker: Some(_), .. }) => {
+            Some(("new entry (no file chosen yet)", "enter on a file adds it"))
         }
         _ => None,
     }
 }
 
+fn edits_unsaved(editor: &super::model::Editor) -> bool {
+    editor.text.as_ref().is_some_and(|t| *t != editor.saved)
+}
+
+fn stamped(view: &ExemplarView) -> bool {
+    view.stamp.as_ref().is_some_and(|s| !s.steps.is_empty())
+}
+
+fn constrained(view: &super::model::FillView) -> bool {
+    view.edit.as_ref().is_some_and(|e| e.spec != *e.saved || !e.stroke.is_empty())
+}
+
 fn stamps_unsaved(model: &Model) -> bool {
-    matches!(&model.screen, Screen::Exemplar(v) if v.stamp.as_ref().is_some_and(|s| !s.steps.is_empty()))
+    matches!(&model.screen, Screen::Exemplar(v) if stamped(v))
 }
 
 fn with_view(model: &mut Model, f: impl FnOnce(&mut ExemplarView)) {
@@ -896,6 +917,20 @@ mod tests {
         assert!(matches!(m.screen, Screen::Editor(_)) && m.status.contains("esc again"), "{}", m.status);
         update(&mut m, Message::Cancel);
         assert!(matches!(m.screen, Screen::Library));
+        // a mesh picker opened from unsaved edits still asks; esc goes back to them
+        let mut m = edited();
+        update(&mut m, Message::AddMeshStep(true));
+        assert!(matches!(m.screen, Screen::New(_)));
+        update(&mut m, Message::Quit);
+        assert!(!m.quit && m.status.contains("unsaved recipe edits: esc goes back to them"), "{}", m.status);
+        update(&mut m, Message::Back);
+        assert!(matches!(m.screen, Screen::Editor(_)), "esc in the picker goes back to the editor");
+        // a new entry whose file is not chosen yet asks too
+        let mut m = model();
+        update(&mut m, Message::New);
+        update(&mut m, Message::Open);
+        update(&mut m, Message::Quit);
+        assert!(!m.quit && m.status.contains("unsaved new entry"), "{}", m.status);
     }
 
     #[test]
