@@ -129,7 +129,7 @@ pub struct ViewArgs {
     /// Edges sharper than this many degrees stay sharp in the smooth shading, 0 to 180.
     #[arg(long, default_value_t = crate::fill::view::DEFAULT_CREASE)]
     pub crease: f32,
-    /// One normal per tet face instead of smooth shading (shows the tets).
+    /// One normal per triangle of the input surface instead of smooth shading (shows its facets).
     #[arg(long)]
     pub flat: bool,
     /// Displacement mapping: move the surface along its normal by SCALE x (the exemplars'

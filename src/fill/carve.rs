@@ -162,8 +162,9 @@ pub fn carve(
                 draw_triangle(&mut hits, size, shown.map(|p| frame.to_pixel(p)), |b| {
                     let p = tri[0].0 * b[0] + tri[1].0 * b[1] + tri[2].0 * b[2];
                     let q = shown[0] * b[0] + shown[1] * b[1] + shown[2] * b[2];
-                    let tet = grid.locate(&model.mesh, p)?;
-                    others(p).then_some(Hit { depth: frame.forward.dot(q), model: 0, tet, point: p, normal: lit })
+                    grid.locate(&model.mesh, p)?;
+                    let hit = Hit { depth: frame.forward.dot(q), model: 0, triangle: u32::MAX, point: p, normal: lit };
+                    others(p).then_some(hit)
                 });
             }
         }
@@ -207,7 +208,7 @@ fn relief_triangles(
     let corner = |i: usize, j: usize| {
         let (s, t) = (s0 + (s1 - s0) * i as f32 / ns as f32, t0 + (t1 - t0) * j as f32 / nt as f32);
         let p = origin + along * s + across * t;
-        let d = grid.locate(&model.mesh, p).map_or(MIDLEVEL, |tet| shade_point(model, textures, tet as usize, p)[0]);
+        let d = grid.locate(&model.mesh, p).and_then(|_| shade_point(model, textures, p)).map_or(MIDLEVEL, |c| c[0]);
         (p, p + facing * scale * (d - MIDLEVEL))
     };
     let corners: Vec<(Vec3, Vec3)> =
@@ -292,7 +293,8 @@ mod tests {
         let patch = Patch { source: 0, coords: mesh.vertices.clone(), vertices };
         let source = Source { exemplar: "ramp".into(), volume: "ramp.exr".into(), mask: MaskRef::File("m.exr".into()) };
         let tet_patches = vec![vec![0]; mesh.tets.len()];
-        let model = LstModel { mesh, sources: vec![source], patches: vec![patch], tet_patches };
+        let surface = LstModel::boundary_of(&mesh).unwrap();
+        let model = LstModel::new(mesh, surface, vec![source], vec![patch], tet_patches);
         let colour = Volume::from_fn([16; 3], Channel::rgb(), |x, y, _, o| {
             o.copy_from_slice(&[(x as f32 + 0.5) / 16.0, (y as f32 + 0.5) / 16.0, 0.5])
         })

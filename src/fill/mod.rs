@@ -11,6 +11,7 @@
 
 pub mod carve;
 pub mod field;
+pub mod locate;
 pub mod mesher;
 pub mod model;
 pub mod paste;
@@ -112,8 +113,7 @@ fn fill_here(job: &Job, mesh: TetMesh, progress: &dyn Progress) -> Result<(LstMo
         paste: pasted.stats.clone(),
         depth: field.depth.clone(),
     };
-    let model =
-        LstModel { mesh, sources: job.sources.clone(), patches: pasted.patches, tet_patches: pasted.tet_patches };
+    let model = LstModel::new(mesh, job.surface.clone(), job.sources.clone(), pasted.patches, pasted.tet_patches);
     Ok((model, report))
 }
 

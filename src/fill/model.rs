@@ -1,11 +1,15 @@
 //! The LST model: a tet mesh, the (exemplar, mask) sources, the pasted patches and, per
 //! tet, the patches that show in it. Small: exemplars are referenced, not embedded.
 
+use super::locate::{Location, Locator};
 use super::paste::{Patch, Stats};
 use super::tets::TetMesh;
 use crate::error::{Error, Result};
 use crate::mask::{self, Layer};
+use crate::mesh::Mesh;
 use crate::volume::{Axis, Volume};
+use glam::Vec3;
+use std::sync::OnceLock;
 
 /// Where a source's mask comes from: a file, or a recipe regenerated on load.
 #[derive(Debug, Clone, PartialEq)]
@@ -96,26 +100,70 @@ pub struct Source {
     pub mask: MaskRef,
 }
 
-/// A filled model.
+/// A filled model: the input surface gives its shape, the tets its texture.
 #[derive(Debug, Clone, PartialEq)]
 pub struct LstModel {
-    /// The tet mesh.
+    /// The tet mesh (not to be moved once [`LstModel::locate`] has been called: the
+    /// locator it makes is kept).
     pub mesh: TetMesh,
+    /// The closed surface that was filled: every picture takes the model's shape from it.
+    pub surface: Mesh,
     /// The sources the patches use.
     pub sources: Vec<Source>,
     /// The patches, in paste order.
     pub patches: Vec<Patch>,
     /// Per tet, its patches bottom first.
     pub tet_patches: Vec<Vec<u32>>,
+    located: Located,
+}
+
+/// The model's [`Locator`], made on first use.
+#[derive(Debug, Clone, Default)]
+struct Located(OnceLock<Locator>);
+
+impl PartialEq for Located {
+    /// A cache: equal whether made or not.
+    fn eq(&self, _: &Located) -> bool {
+        true
+    }
 }
 
 impl LstModel {
+    /// A model of `mesh` filling `surface`.
+    pub fn new(
+        mesh: TetMesh,
+        surface: Mesh,
+        sources: Vec<Source>,
+        patches: Vec<Patch>,
+        tet_patches: Vec<Vec<u32>>,
+    ) -> LstModel {
+        LstModel { mesh, surface, sources, patches, tet_patches, located: Located::default() }
+    }
+
+    /// The boundary of `mesh` as a surface: for models written before the input surface
+    /// was kept, and for tests that fill a tet mesh directly.
+    pub fn boundary_of(mesh: &TetMesh) -> Result<Mesh> {
+        Mesh::new(mesh.vertices.clone(), mesh.boundary_faces(&mesh.neighbours()))
+    }
+
+    /// Checks that every tet's corners are vertices of the mesh.
+    pub fn check_tets(mesh: &TetMesh) -> Result<()> {
+        let nv = mesh.vertices.len() as u32;
+        match mesh.tets.iter().position(|t| t.iter().any(|v| *v >= nv)) {
+            Some(t) => Err(Error::invalid(format!("tet {t} uses a vertex beyond the {nv} vertices"))),
+            None => Ok(()),
+        }
+    }
+
+    /// Where `p` takes its texture (see [`Locator::locate`]).
+    pub fn locate(&self, p: Vec3) -> Option<Location> {
+        self.located.0.get_or_init(|| Locator::new(&self.mesh)).locate(&self.mesh, p)
+    }
+
     /// Checks the cross references (after reading a file).
     pub fn check(&self) -> Result<()> {
-        let (nv, np) = (self.mesh.vertices.len() as u32, self.patches.len() as u32);
-        if let Some(t) = self.mesh.tets.iter().position(|t| t.iter().any(|v| *v >= nv)) {
-            return Err(Error::invalid(format!("tet {t} uses a vertex beyond the {nv} vertices")));
-        }
+        LstModel::check_tets(&self.mesh)?;
+        let np = self.patches.len() as u32;
         if let Some(p) = self.patches.iter().position(|p| p.source as usize >= self.sources.len()) {
             return Err(Error::invalid(format!("patch {p} uses a source beyond the {} sources", self.sources.len())));
         }

@@ -14,9 +14,10 @@ use super::model::LstModel;
 use super::sampler::Sampler;
 use super::tets::TetMesh;
 use crate::error::{Error, Result};
+use crate::mesh::{Mesh, Slices};
 use crate::render::{Rgb8, to_u8};
 use crate::volume::{Channel, Volume};
-use glam::Vec3;
+use glam::{Affine3A, Vec3};
 use rayon::prelude::*;
 
 /// Rows per parallel band.
@@ -123,11 +124,11 @@ fn extent((lo, hi): (Vec3, Vec3), u: Vec3, v: Vec3) -> (glam::Vec2, glam::Vec2) 
         .fold((glam::Vec2::INFINITY, glam::Vec2::NEG_INFINITY), |(a, b), p| (a.min(p), b.max(p)))
 }
 
-/// The bounding box of several models' vertices.
+/// The bounding box of several models' vertices (tets and input surfaces).
 pub fn bounds(models: &[(&LstModel, &Textures)]) -> (Vec3, Vec3) {
     models
         .iter()
-        .flat_map(|(m, _)| m.mesh.vertices.iter())
+        .flat_map(|(m, _)| m.mesh.vertices.iter().chain(&m.surface.vertices))
         .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(a, b), p| (a.min(*p), b.max(*p)))
 }
 
@@ -199,13 +200,52 @@ impl Cut {
     }
 }
 
-/// Renders the cut of `model` seen through `view`.
+/// Renders the cut of `model` seen through `view`: its outline is the input surface's
+/// cross-section, its texture that of the tets.
 pub fn cut(model: &LstModel, textures: &Textures, view: &View) -> Cut {
+    cut_within(
+        model,
+        textures,
+        view,
+        &Outlines::new(&model.surface, view, view.normal() * view.right.length(), 1).inside(0),
+    )
+}
+
+/// The cut of `model` at the pixels of `view` that `inside` marks (its outline).
+pub fn cut_within(model: &LstModel, textures: &Textures, view: &View, inside: &[bool]) -> Cut {
     let bands = bin_tets(&model.mesh, view);
     let rows: Vec<Vec<([f32; 4], u32)>> =
-        bands.par_iter().enumerate().map(|(b, tets)| render_band(model, textures, view, b, tets)).collect();
+        bands.par_iter().enumerate().map(|(b, tets)| render_band(model, textures, view, (b, tets), inside)).collect();
     let (pixels, patches) = rows.into_iter().flatten().unzip();
     Cut { width: view.width, height: view.height, pixels, patches }
+}
+
+/// The outlines of a stack of parallel views: `view` moved by `step` for each next one,
+/// each pixel inside or outside a closed surface (ray parity along the rows, see
+/// [`Slices`]; the surface's cross-section filled).
+pub struct Outlines {
+    /// None for a flat stack (steps in the views' plane), which holds nothing.
+    slices: Option<Slices>,
+    pixels: usize,
+}
+
+impl Outlines {
+    /// The outlines of `surface` in `count` views, the first `view`, each next one moved
+    /// by `step` (not in the view's plane).
+    pub fn new(surface: &Mesh, view: &View, step: Vec3, count: usize) -> Outlines {
+        // voxel (x, y, k) of the grid is pixel (x, y) of view k
+        let to_model =
+            Affine3A::from_cols(view.right.into(), view.down.into(), step.into(), (view.origin - step * 0.5).into());
+        let solid = to_model.matrix3.determinant().abs() > 0.0;
+        let grid = [view.width, view.height, count];
+        let slices = solid.then(|| Slices::new(&surface.transformed(to_model.inverse()), grid));
+        Outlines { slices, pixels: view.width * view.height }
+    }
+
+    /// Per pixel of view `k`, whether it lies inside the surface.
+    pub fn inside(&self, k: usize) -> Vec<bool> {
+        self.slices.as_ref().map_or_else(|| vec![false; self.pixels], |s| s.inside(k))
+    }
 }
 
 /// For each band of rows, the tets that cross the plane there, in index order.
@@ -231,11 +271,19 @@ fn bin_tets(mesh: &TetMesh, view: &View) -> Vec<Vec<u32>> {
 }
 
 /// The pixels of one band of rows, each with the patch that shows most there.
-fn render_band(model: &LstModel, textures: &Textures, view: &View, band: usize, tets: &[u32]) -> Vec<([f32; 4], u32)> {
+fn render_band(
+    model: &LstModel,
+    textures: &Textures,
+    view: &View,
+    (band, tets): (usize, &[u32]),
+    inside: &[bool],
+) -> Vec<([f32; 4], u32)> {
     let y0 = band * BAND;
     let y1 = (y0 + BAND).min(view.height);
     let mut out = vec![([0.0f32; 4], NO_PATCH); (y1 - y0) * view.width];
-    let mut done = vec![false; out.len()];
+    let inside = &inside[y0 * view.width..y1 * view.width];
+    // pixels outside the surface count as done: nothing shows there
+    let mut done: Vec<bool> = inside.iter().map(|i| !i).collect();
     let (right, down) = (view.right / view.right.length_squared(), view.down / view.down.length_squared());
     let (normal, offset) = (view.normal(), view.normal().dot(view.origin));
     for &t in tets {
@@ -261,10 +309,17 @@ fn render_band(model: &LstModel, textures: &Textures, view: &View, band: usize, 
                 let l = inverse * (view.point(x, y) - c[0]);
                 let b = [1.0 - l.x - l.y - l.z, l.x, l.y, l.z];
                 if b.iter().all(|w| *w >= -1e-5) {
-                    out[i] = shade(textures, &layers, b);
+                    out[i] = shade(textures, &layers, b, false);
                     done[i] = true;
                 }
             }
+        }
+    }
+    // inside the surface but in no tet: the nearest boundary tet's texture, extended
+    for (i, _) in done.iter().enumerate().filter(|(_, d)| !**d) {
+        let (x, y) = (i % view.width, y0 + i / view.width);
+        if let Some(at) = model.locate(view.point(x, y)) {
+            out[i] = shade(textures, &layers_of(model, at.tet as usize), at.weights, !at.inside);
         }
     }
     out
@@ -340,17 +395,21 @@ fn layers_of(model: &LstModel, t: usize) -> Vec<Layer> {
         .collect()
 }
 
-/// The composited colour of the model at `point` inside tet `t`.
-pub fn shade_point(model: &LstModel, textures: &Textures, t: usize, point: Vec3) -> [f32; 4] {
-    let b = model.mesh.barycentric(t, point).map(|x| x.max(0.0));
-    let sum: f32 = b.iter().sum::<f32>().max(1e-12);
-    shade(textures, &layers_of(model, t), b.map(|x| x / sum)).0
+/// The composited colour of the model at `point` (see [`LstModel::locate`]); `None` only
+/// for a point that is not finite.
+pub fn shade_point(model: &LstModel, textures: &Textures, point: Vec3) -> Option<[f32; 4]> {
+    let at = model.locate(point)?;
+    Some(shade(textures, &layers_of(model, at.tet as usize), at.weights, !at.inside).0)
 }
 
 /// Composites the layers at barycentric point `b`, top first; also the patch that
-/// contributes most.
-fn shade(textures: &Textures, layers: &[Layer], b: [f32; 4]) -> ([f32; 4], u32) {
-    let at = |w: &[Vec3; 4]| w[0] * b[0] + w[1] * b[1] + w[2] * b[2] + w[3] * b[3];
+/// contributes most. A point `extended` past its tet reads each texture at the nearest
+/// point of the texture cube, so a patch's mask does not end at the tet's face.
+fn shade(textures: &Textures, layers: &[Layer], b: [f32; 4], extended: bool) -> ([f32; 4], u32) {
+    let at = |w: &[Vec3; 4]| {
+        let p = w[0] * b[0] + w[1] * b[1] + w[2] * b[2] + w[3] * b[3];
+        if extended { p.clamp(Vec3::ZERO, Vec3::ONE) } else { p }
+    };
     let mut colour = Vec3::ZERO;
     let mut cover = 0.0f32;
     let (mut most, mut share) = (NO_PATCH, 0.0f32);
@@ -382,7 +441,15 @@ fn shade(textures: &Textures, layers: &[Layer], b: [f32; 4]) -> ([f32; 4], u32) 
 /// Cuts several models (a multi-material model): each pixel shows the first model that
 /// holds it.
 pub fn cut_many(models: &[(&LstModel, &Textures)], view: &View) -> Cut {
-    let mut cuts = models.iter().map(|(m, t)| cut(m, t, view));
+    let step = view.normal() * view.right.length();
+    let insides: Vec<Vec<bool>> =
+        models.iter().map(|(m, _)| Outlines::new(&m.surface, view, step, 1).inside(0)).collect();
+    cut_many_within(models, view, &insides)
+}
+
+/// [`cut_many`] with each model's outline given (`insides`, one per model).
+pub fn cut_many_within(models: &[(&LstModel, &Textures)], view: &View, insides: &[Vec<bool>]) -> Cut {
+    let mut cuts = models.iter().zip(insides).map(|((m, t), inside)| cut_within(m, t, view, inside));
     let mut out = cuts.next().unwrap_or(Cut {
         width: view.width,
         height: view.height,
@@ -399,6 +466,12 @@ pub fn cut_many(models: &[(&LstModel, &Textures)], view: &View) -> Cut {
         }
     }
     out
+}
+
+/// The outlines of every model in a stack of `count` parallel views, the first `view`,
+/// each next moved by `step`.
+pub fn stack_outlines(models: &[(&LstModel, &Textures)], view: &View, step: Vec3, count: usize) -> Vec<Outlines> {
+    models.iter().map(|(m, _)| Outlines::new(&m.surface, view, step, count)).collect()
 }
 
 /// Samples models into a volume of `res` voxels along the longest side of their box: R, G,
@@ -425,16 +498,21 @@ pub fn bake(models: &[(&LstModel, &Textures)], carried: &[Carried], res: usize, 
         .collect();
     crate::volume::check_size(dims, channels.len(), budget)?;
     let mut data = Vec::with_capacity(dims[0] * dims[1] * dims[2] * channels.len());
-    for z in 0..dims[2] {
+    let slice = |z: usize| {
         let origin = Vec3::new(lo.x, lo.y, lo.z + (z as f32 + 0.5) * step);
-        let view = View { origin, right: Vec3::X * step, down: Vec3::Y * step, width: dims[0], height: dims[1] };
-        let colour = cut_many(models, &view).pixels;
+        View { origin, right: Vec3::X * step, down: Vec3::Y * step, width: dims[0], height: dims[1] }
+    };
+    let outlines = stack_outlines(models, &slice(0), Vec3::Z * step, dims[2]);
+    for z in 0..dims[2] {
+        let view = slice(z);
+        let insides: Vec<Vec<bool>> = outlines.iter().map(|o| o.inside(z)).collect();
+        let colour = cut_many_within(models, &view, &insides).pixels;
         let extra: Vec<Vec<[f32; 4]>> = carried
             .iter()
             .map(|c| {
                 let pairs: Vec<(&LstModel, &Textures)> =
                     models.iter().map(|(m, _)| *m).zip(c.textures.iter().copied()).collect();
-                cut_many(&pairs, &view).pixels
+                cut_many_within(&pairs, &view, &insides).pixels
             })
             .collect();
         for (i, p) in colour.iter().enumerate() {
@@ -490,6 +568,73 @@ mod tests {
             }
         }
         assert!(inside > 800 && outside > 0, "{inside} inside, {outside} outside");
+    }
+
+    /// A coarse tet mesh of a ball, one grey patch over it, and the ball.
+    fn coarse_ball() -> (LstModel, Textures) {
+        let ball = crate::mesh::shapes::ellipsoid(Vec3::splat(1.0), 24, 48);
+        let mesh = crate::fill::mesher::tetrahedralize(&ball, 400).unwrap();
+        let vertices: Vec<u32> = (0..mesh.vertices.len() as u32).collect();
+        let patch = super::super::paste::Patch { source: 0, coords: vec![Vec3::splat(0.5); vertices.len()], vertices };
+        let source = super::super::Source {
+            exemplar: "grey".into(),
+            volume: "grey.exr".into(),
+            mask: super::super::MaskRef::File("m.exr".into()),
+        };
+        let tet_patches = vec![vec![0]; mesh.tets.len()];
+        let model = LstModel::new(mesh, ball, vec![source], vec![patch], tet_patches);
+        let grey = Volume::from_fn([4; 3], Channel::rgb(), |_, _, _, o| o.fill(0.8)).unwrap();
+        let full = Volume::from_fn([4; 3], vec![Channel::A], |_, _, _, o| o.fill(1.0)).unwrap();
+        (model, Textures::new(&[grey], &[full]))
+    }
+
+    /// A cut's outline is the input surface's cross-section, pixel for pixel, where the
+    /// coarse tets' own cross-section strays from it; every pixel inside is textured.
+    #[test]
+    fn a_cut_takes_its_outline_from_the_input_surface() {
+        let (model, textures) = coarse_ball();
+        let view =
+            View::framing(model.surface.bounds(), Vec3::new(0.0, 0.1, 0.0), Vec3::new(0.3, 1.0, 0.2), 96).unwrap();
+        let picture = cut(&model, &textures, &view);
+        let ones = vec![1.0; model.mesh.vertices.len()];
+        let tets = field_cut(&model.mesh, &ones, &view);
+        let (mut wrong, mut tets_wrong) = (0, 0);
+        let surface = &model.surface;
+        let on_surface = |q: Vec3| {
+            let corners = surface.triangles.iter().map(|t| t.map(|v| surface.vertices[v as usize]));
+            corners.map(|c| q.distance(crate::mesh::closest_on_triangle(q, c))).fold(f32::INFINITY, f32::min) < 1e-4
+        };
+        for (i, p) in picture.pixels.iter().enumerate() {
+            let q = view.point(i % 96, i / 96);
+            let inside = surface.contains(q);
+            // a centre on the surface itself may fall either way
+            wrong += usize::from((p[3] > 0.0) != inside && !on_surface(q));
+            tets_wrong += usize::from(tets[i].is_some() != inside);
+            assert!(!inside || (p[0] - 0.8).abs() < 1e-5, "pixel {i}: {p:?}");
+        }
+        assert_eq!(wrong, 0);
+        assert!(tets_wrong > 20, "the tets alone would miss or add {tets_wrong} pixels");
+    }
+
+    /// A bake's coverage is the input surface's at every voxel centre.
+    #[test]
+    fn a_bake_covers_the_voxels_inside_the_input_surface() {
+        let (model, textures) = coarse_ball();
+        let volume = bake(&[(&model, &textures)], &[], 24, u64::MAX).unwrap();
+        let (lo, hi) = bounds(&[(&model, &textures)]);
+        let step = (hi - lo).max_element() / 24.0;
+        let [nx, ny, nz] = volume.dims();
+        let alpha = volume.channel_index(&Channel::A).unwrap();
+        let mut wrong = 0;
+        for z in 0..nz {
+            for y in 0..ny {
+                for x in 0..nx {
+                    let centre = lo + (Vec3::new(x as f32, y as f32, z as f32) + 0.5) * step;
+                    wrong += usize::from((volume.get(x, y, z, alpha) > 0.0) != model.surface.contains(centre));
+                }
+            }
+        }
+        assert_eq!(wrong, 0, "of {} voxels", nx * ny * nz);
     }
 
     #[test]

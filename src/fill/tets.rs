@@ -178,10 +178,19 @@ impl TetGrid {
     /// The grid of `mesh`'s tets: cells about one tet's volume, at most 128 along the
     /// longest side of the mesh's box.
     pub fn new(mesh: &TetMesh) -> Result<TetGrid> {
+        TetGrid::at_most(mesh, 128)
+    }
+
+    /// [`TetGrid::new`] with at most `cells` cells along the longest side (a single cell
+    /// always fits).
+    pub fn at_most(mesh: &TetMesh, cells: usize) -> Result<TetGrid> {
         let (lo, hi) =
             mesh.vertices.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(a, b), p| (a.min(*p), b.max(*p)));
         let volume = mesh.volume().max(1e-12) as f32;
-        let cell = (volume / mesh.tets.len().max(1) as f32).cbrt().max((hi - lo).max_element() / 128.0).max(1e-6);
+        let cell = (volume / mesh.tets.len().max(1) as f32)
+            .cbrt()
+            .max((hi - lo).max_element() / cells.max(1) as f32)
+            .max(1e-6);
         let dims = ((hi - lo) / cell).ceil().as_uvec3().max(glam::UVec3::ONE).to_array().map(|d| d as usize);
         let grid = TetGrid { lo, cell, dims, offsets: Vec::new(), tets: Vec::new() };
         let span = |t: usize| {
@@ -232,6 +241,11 @@ impl TetGrid {
     fn cell_of(&self, p: Vec3) -> [usize; 3] {
         let c = ((p - self.lo) / self.cell).floor().max(Vec3::ZERO);
         [0, 1, 2].map(|k| (c[k].min(u32::MAX as f32) as usize).min(self.dims[k] - 1))
+    }
+
+    /// The grid's corner, cell side and cells per axis.
+    pub fn layout(&self) -> (Vec3, f32, [usize; 3]) {
+        (self.lo, self.cell, self.dims)
     }
 
     /// The first tet (by index) holding `p` (barycentric coordinates all at least -1e-5).

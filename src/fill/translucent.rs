@@ -17,7 +17,7 @@
 use super::model::LstModel;
 #[cfg(test)]
 use super::render::BACKGROUND;
-use super::render::{Cut, Textures, View, bounds, cut_many};
+use super::render::{Cut, Textures, View, bounds, cut_many_within, stack_outlines};
 use super::view::{Hit, Shading, camera, draw_triangle, facets};
 use crate::error::{Error, Result};
 use crate::render::{Rgb8, to_u8};
@@ -125,11 +125,14 @@ pub fn render_with(
     }
     let mut started = vec![false; pixels];
     let mut done = 0;
+    let outlines =
+        stack_outlines(models, &frame.at(frame.near + 0.5 * depth, forward), forward * depth, settings.slices);
     for k in 0..settings.slices {
         let view = frame.at(frame.near + (k as f32 + 0.5) * depth, forward);
         let kept_share = kept(&view, settings.cutaway, forward * depth);
-        let cut = cut_many(models, &view);
-        let rho = densities(models, density, &cut, &view, settings.levels);
+        let insides: Vec<Vec<bool>> = outlines.iter().map(|o| o.inside(k)).collect();
+        let cut = cut_many_within(models, &view, &insides);
+        let rho = densities(models, density, (&cut, &insides), &view, settings.levels);
         let centre = frame.near + (k as f32 + 0.5) * depth;
         let pixels = colour.par_iter_mut().zip(through.par_iter_mut()).zip(started.par_iter_mut());
         pixels.enumerate().for_each(|(i, ((c, t), first))| {
@@ -236,7 +239,7 @@ fn frames(models: &[(&LstModel, &Textures)], s: &Settings) -> (Vec3, Frame) {
 }
 
 /// Per pixel, the depth along `forward` where its ray first enters a model (the nearest
-/// front-facing boundary face; infinity where it enters none).
+/// front-facing triangle of its input surface; none where it enters none).
 fn entries(models: &[(&LstModel, &Textures)], frame: &Frame, forward: Vec3) -> Vec<Option<Hit>> {
     let size = frame.size;
     let mut hits: Vec<Option<Hit>> = vec![None; size * size];
@@ -250,7 +253,7 @@ fn entries(models: &[(&LstModel, &Textures)], frame: &Frame, forward: Vec3) -> V
             }
             draw_triangle(&mut hits, size, f.shown.map(to_pixel), |b| {
                 let p = f.shown[0] * b[0] + f.shown[1] * b[1] + f.shown[2] * b[2];
-                Some(Hit { depth: forward.dot(p), model: f.model, tet: f.tet, point: p, normal })
+                Some(Hit { depth: forward.dot(p), model: f.model, triangle: f.triangle, point: p, normal })
             });
         }
     }
@@ -283,7 +286,7 @@ impl SkinLayer<'_> {
         colour.par_iter_mut().zip(through.par_iter_mut()).zip(entries).for_each(|((c, t), entry)| {
             let Some(h) = entry.filter(|h| kept(h.point)) else { return };
             let model = models[h.model as usize].0;
-            if let Some(rgb) = self.skin.colour_at(model, h.model as usize, h.tet as usize, h.point) {
+            if let Some(rgb) = self.skin.colour_at(model, h.model as usize, h.point) {
                 *c += Vec3::from_array(rgb) * (*t * self.opacity);
                 *t *= 1.0 - self.opacity;
             }
@@ -296,7 +299,7 @@ impl SkinLayer<'_> {
 fn densities(
     models: &[(&LstModel, &Textures)],
     density: Density,
-    cut: &Cut,
+    (cut, insides): (&Cut, &[Vec<bool>]),
     view: &View,
     (lo, hi): (f32, f32),
 ) -> Vec<f32> {
@@ -307,7 +310,7 @@ fn densities(
         Density::Light => cut.pixels.iter().map(luma).collect(),
         Density::Channel(textures) => {
             let pairs: Vec<(&LstModel, &Textures)> = models.iter().map(|(m, _)| *m).zip(textures).collect();
-            cut_many(&pairs, view).pixels.iter().map(|p| p[0]).collect()
+            cut_many_within(&pairs, view, insides).pixels.iter().map(|p| p[0]).collect()
         }
     };
     raw.into_iter().map(|r| ((r - lo) / (hi - lo)).clamp(0.0, 1.0)).collect()
@@ -355,8 +358,9 @@ mod tests {
         let coords = mesh.vertices.clone();
         let tet_patches = vec![vec![0]; mesh.tets.len()];
         let source = Source { exemplar: "test".into(), volume: "test.exr".into(), mask: MaskRef::File("m.exr".into()) };
+        let surface = LstModel::boundary_of(&mesh).unwrap();
         let model =
-            LstModel { mesh, sources: vec![source], patches: vec![Patch { source: 0, vertices, coords }], tet_patches };
+            LstModel::new(mesh, surface, vec![source], vec![Patch { source: 0, vertices, coords }], tet_patches);
         let full = Volume::from_fn([4, 4, 4], vec![Channel::A], |_, _, _, o| o[0] = 1.0).unwrap();
         (model, Textures::new(&[colour], &[full]))
     }

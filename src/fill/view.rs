@@ -1,16 +1,17 @@
-//! A picture of the filled model's surface: an orthographic z-buffer of the tet mesh's
-//! boundary faces, each pixel coloured by compositing the patches of the tet behind it and
-//! lit by a light over the viewer's shoulder, with normals blended smoothly across faces
-//! except at creases (or flat, one normal per face).
+//! A picture of the filled model's surface: an orthographic z-buffer of the model's input
+//! surface (the closed mesh that was filled), each pixel coloured by compositing the
+//! patches of the tet that holds the point (or of the nearest, its map extended: the tets
+//! only approximate the surface) and lit by a light over the viewer's shoulder, with
+//! normals blended smoothly across triangles except at creases (or flat, one normal per
+//! triangle).
 //!
 //! ```text
-//!   yaw/pitch -> view axes (right, up, forward) -> rasterize boundary faces (nearest wins)
-//!             -> per pixel: tet + point -> patches composited -> x (ambient + diffuse)
+//!   yaw/pitch -> view axes (right, up, forward) -> rasterize input triangles (nearest wins)
+//!             -> per pixel: point -> tet -> patches composited -> x (ambient + diffuse)
 //! ```
 
 use super::model::LstModel;
 use super::render::{BACKGROUND, Textures, shade_point};
-use super::tets::FACES;
 use crate::error::Result;
 use crate::mesh::Mesh;
 use crate::render::{Rgb8, to_u8};
@@ -18,15 +19,15 @@ use crate::surface::SkinLookup;
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
-/// What each pixel sees: the tet, the surface point, the shading normal.
+/// What each pixel sees: the model, the surface point, the shading normal.
 #[derive(Clone, Copy)]
 pub(super) struct Hit {
     /// Distance along the view direction (nearest wins).
     pub depth: f32,
     /// Which of the models drawn.
     pub model: u32,
-    /// The tet whose patches colour the point.
-    pub tet: u32,
+    /// The triangle drawn (of the model's input surface, or of a skin's mesh).
+    pub triangle: u32,
     /// The point sampled for colour.
     pub point: Vec3,
     /// The shading normal.
@@ -49,7 +50,7 @@ impl Frame {
     /// The camera `yaw`/`pitch` degrees around the models, their vertices filling the
     /// picture with a margin.
     pub fn new(models: &[&LstModel], camera: (f32, f32), size: usize) -> Frame {
-        Frame::around(models.iter().flat_map(|m| m.mesh.vertices.iter().copied()), camera, size)
+        Frame::around(models.iter().flat_map(|m| m.surface.vertices.iter().copied()), camera, size)
     }
 
     /// The camera `yaw`/`pitch` degrees around `points`, which fill the picture with a margin.
@@ -94,10 +95,11 @@ impl Frame {
                 None => BACKGROUND,
                 Some(h) => {
                     let (model, textures) = models[h.model as usize];
-                    let on_skin = skin.and_then(|s| s.colour_at(model, h.model as usize, h.tet as usize, h.point));
-                    let c = match on_skin {
-                        Some([r, g, b]) => [r, g, b, 1.0],
-                        None => shade_point(model, textures, h.tet as usize, h.point),
+                    let on_skin = skin.and_then(|s| s.colour_at(model, h.model as usize, h.point));
+                    let Some(c) =
+                        on_skin.map(|[r, g, b]| [r, g, b, 1.0]).or_else(|| shade_point(model, textures, h.point))
+                    else {
+                        return BACKGROUND;
                     };
                     let lit = 0.35 + 0.65 * h.normal.dot(light).max(0.0);
                     [c[0], c[1], c[2]].map(|v| to_u8(v * lit))
@@ -115,11 +117,11 @@ impl Frame {
 /// How the surface is lit.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Shading {
-    /// One normal per boundary face: the tet faces show.
+    /// One normal per triangle: the input mesh's facets show.
     Flat,
-    /// Normals blended across each face from its corners. A corner's normal is the
-    /// area-weighted mean of the faces around it whose normals lie within `crease` degrees
-    /// of the face's own, so edges sharper than that stay sharp.
+    /// Normals blended across each triangle from its corners. A corner's normal is the
+    /// area-weighted mean of the triangles around it whose normals lie within `crease`
+    /// degrees of the triangle's own, so edges sharper than that stay sharp.
     Smooth {
         /// Degrees, 0 to 180.
         crease: f32,
@@ -127,7 +129,7 @@ pub enum Shading {
 }
 
 /// The crease angle of [`Shading::Smooth`] by default, in degrees.
-pub const DEFAULT_CREASE: f32 = 40.0;
+pub const DEFAULT_CREASE: f32 = 60.0;
 
 /// Renders the surface of `model` seen from `yaw` degrees around y and `pitch` degrees up,
 /// smooth-shaded with the [`DEFAULT_CREASE`].
@@ -184,11 +186,10 @@ pub struct Skin<'a> {
 pub const SKIN_DEPTH: f32 = 0.05;
 
 impl Skin<'_> {
-    /// The skin's colour at `point` of tet `tet` of model `index`, or `None` where the
-    /// solid shows.
-    pub fn colour_at(&self, model: &LstModel, index: usize, tet: usize, point: Vec3) -> Option<[f32; 3]> {
+    /// The skin's colour at `point` of model `index`, or `None` where the solid shows.
+    pub fn colour_at(&self, model: &LstModel, index: usize, point: Vec3) -> Option<[f32; 3]> {
         if let Some(depth) = self.depth
-            && shade_point(model, &depth[index], tet, point)[0] > SKIN_DEPTH
+            && shade_point(model, &depth[index], point).is_none_or(|d| d[0] > SKIN_DEPTH)
         {
             return None;
         }
@@ -198,7 +199,7 @@ impl Skin<'_> {
 }
 
 /// The surfaces of several models (each pixel shows the nearest), seen from `camera`
-/// (yaw, pitch degrees); with a displacement, the boundary is subdivided into triangles
+/// (yaw, pitch degrees); with a displacement, the surface is subdivided into triangles
 /// about two pixels across and displaced, lit by the displaced triangles' normals; with a
 /// skin, the surface near it shows the skin's colours. Also the triangles drawn.
 pub fn surfaces(
@@ -246,7 +247,8 @@ pub fn surfaces_with(
             let affordable = ((MAX_TRIANGLES / facets.len().max(1)) as f32).sqrt() as usize;
             let level = ((pixels / 2.0).ceil() as usize).clamp(1, MAX_LEVEL.min(affordable.max(1)));
             let normals = vertex_normals(model, &facets);
-            facets = displaced(model, &facets, &normals, &d.textures[i], d.scale, level);
+            let taper = Taper::new(model, &facets, 2.0 * d.scale.abs() + frame.pixel());
+            facets = displaced(model, &facets, (&normals, &taper), &d.textures[i], d.scale, level);
         }
         all.extend(facets);
     }
@@ -276,18 +278,109 @@ pub fn skin_picture(mesh: &Mesh, colours: &[[f32; 3]], camera: (f32, f32), size:
             let point = at(corners, b);
             let normal = at(t.map(|v| normals[v as usize]), b).normalize_or(flat);
             // the model field holds nothing; `point` the barycentric weights, for the colour
-            Some(Hit { depth: frame.forward.dot(point), model: 0, tet: i as u32, point: Vec3::from(b), normal })
+            Some(Hit { depth: frame.forward.dot(point), model: 0, triangle: i as u32, point: Vec3::from(b), normal })
         });
     }
     let light = frame.light();
     let mut out = Rgb8::new(size, size, BACKGROUND);
     for (i, hit) in hits.iter().enumerate() {
         let Some(h) = hit else { continue };
-        let t = mesh.triangles[h.tet as usize];
+        let t = mesh.triangles[h.triangle as usize];
         let [a, b, c] = t.map(|v| colours[v as usize]);
         let w = h.point;
         let lit = 0.35 + 0.65 * h.normal.dot(light).max(0.0);
         out.put(i % size, i / size, [0, 1, 2].map(|k| to_u8((w.x * a[k] + w.y * b[k] + w.z * c[k]) * lit)));
+    }
+    out
+}
+
+/// How shattered a surface picture looks: the share of the pixels inside the outline
+/// (eroded by 3 px) with a luminance step above 6/255 to a 4-neighbour, leaving out the
+/// pixels within 2 px of an occlusion edge or of an edge of `surface` sharper than `crease`
+/// degrees. The edges are found by drawing `surface` with the picture's camera (a depth
+/// step of over 3 pixels between neighbours; neighbouring triangles whose normals differ by
+/// more than `crease`). A picture of a uniform exemplar shows shading only, so what this
+/// counts are facets the surface does not have.
+pub fn shard_share(picture: &Rgb8, surface: &Mesh, camera: (f32, f32), crease: f32) -> f64 {
+    let size = picture.width;
+    let frame = Frame::around(surface.vertices.iter().copied(), camera, size);
+    let normals: Vec<Vec3> = surface
+        .triangles
+        .iter()
+        .map(|t| {
+            let c = t.map(|v| surface.vertices[v as usize]);
+            (c[1] - c[0]).cross(c[2] - c[0]).normalize_or_zero()
+        })
+        .collect();
+    let mut hits: Vec<Option<Hit>> = vec![None; size * size];
+    for (i, t) in surface.triangles.iter().enumerate() {
+        let corners = t.map(|v| surface.vertices[v as usize]);
+        if normals[i].dot(frame.forward) >= 0.0 {
+            continue;
+        }
+        draw_triangle(&mut hits, size, corners.map(|p| frame.to_pixel(p)), |b| {
+            let point = at(corners, b);
+            Some(Hit { depth: frame.forward.dot(point), model: 0, triangle: i as u32, point, normal: normals[i] })
+        });
+    }
+    let (limit, jump) = (crease.to_radians().cos(), 3.0 * frame.pixel());
+    let mut edge = vec![false; size * size];
+    let mut outside = vec![false; size * size];
+    for y in 0..size {
+        for x in 0..size {
+            let i = y * size + x;
+            let Some(a) = hits[i] else {
+                outside[i] = true;
+                continue;
+            };
+            for j in [(x + 1 < size).then_some(i + 1), (y + 1 < size).then_some(i + size)].into_iter().flatten() {
+                let Some(b) = hits[j] else { continue };
+                let creased =
+                    a.triangle != b.triangle && normals[a.triangle as usize].dot(normals[b.triangle as usize]) < limit;
+                if creased || (a.depth - b.depth).abs() > jump {
+                    (edge[i], edge[j]) = (true, true);
+                }
+            }
+        }
+    }
+    let (near_edge, near_outside) = (grow(&edge, size, 2), grow(&outside, size, 3));
+    let luma = |i: usize| {
+        let p = &picture.data[i * 3..i * 3 + 3];
+        0.2126 * p[0] as f32 + 0.7152 * p[1] as f32 + 0.0722 * p[2] as f32
+    };
+    let counted = |i: usize| !near_edge[i] && !near_outside[i];
+    let (mut steps, mut total) = (0usize, 0usize);
+    for y in 0..size {
+        for x in 0..size {
+            let i = y * size + x;
+            if !counted(i) {
+                continue;
+            }
+            total += 1;
+            let neighbours = [
+                (x + 1 < size).then_some(i + 1),
+                (y + 1 < size).then_some(i + size),
+                (x > 0).then(|| i - 1),
+                (y > 0).then(|| i - size),
+            ];
+            if neighbours.into_iter().flatten().any(|j| counted(j) && (luma(i) - luma(j)).abs() > 6.0) {
+                steps += 1;
+            }
+        }
+    }
+    steps as f64 / total.max(1) as f64
+}
+
+/// The pixels within `reach` (Chebyshev) of a marked one.
+fn grow(marked: &[bool], size: usize, reach: usize) -> Vec<bool> {
+    let mut out = vec![false; marked.len()];
+    for (i, _) in marked.iter().enumerate().filter(|(_, m)| **m) {
+        let (x, y) = (i % size, i / size);
+        for v in y.saturating_sub(reach)..(y + reach + 1).min(size) {
+            for u in x.saturating_sub(reach)..(x + reach + 1).min(size) {
+                out[v * size + u] = true;
+            }
+        }
     }
     out
 }
@@ -301,70 +394,92 @@ pub fn camera(yaw: f32, pitch: f32) -> (Vec3, Vec3, Vec3) {
     (forward, right, right.cross(forward))
 }
 
-/// A boundary face of the tet mesh: its tet, corners (vertex ids and points), unit normal
-/// and area.
+/// A triangle of a model's input surface: its number, corners (vertex ids and points),
+/// unit normal and area.
 struct Face {
-    tet: usize,
+    triangle: u32,
     ids: [u32; 3],
     corners: [Vec3; 3],
     normal: Vec3,
     area: f32,
 }
 
-fn boundary_faces(model: &LstModel) -> Vec<Face> {
-    let mesh = &model.mesh;
-    let neighbours = mesh.neighbours();
-    let mut faces = Vec::new();
-    for (t, tet) in mesh.tets.iter().enumerate() {
-        for (k, face) in FACES.iter().enumerate() {
-            if neighbours[t][k] == super::tets::NONE {
-                let ids = face.map(|s| tet[s]);
-                let corners = ids.map(|v| mesh.vertices[v as usize]);
-                let cross = (corners[1] - corners[0]).cross(corners[2] - corners[0]);
-                faces.push(Face {
-                    tet: t,
-                    ids,
-                    corners,
-                    normal: cross.normalize_or_zero(),
-                    area: cross.length() / 2.0,
-                });
-            }
-        }
-    }
-    faces
-}
-
-/// The normal at each corner of each face under `shading`.
-fn corner_normals(faces: &[Face], shading: Shading) -> Vec<[Vec3; 3]> {
-    let Shading::Smooth { crease } = shading else {
-        return faces.iter().map(|f| [f.normal; 3]).collect();
-    };
-    let mut incident: Vec<(u32, u32)> =
-        faces.iter().enumerate().flat_map(|(i, f)| f.ids.map(|v| (v, i as u32))).collect();
-    incident.sort_unstable();
-    let around = |v: u32| {
-        let start = incident.partition_point(|e| e.0 < v);
-        incident[start..].iter().take_while(move |e| e.0 == v).map(|e| &faces[e.1 as usize])
-    };
-    let limit = crease.clamp(0.0, 180.0).to_radians().cos();
-    faces
-        .par_iter()
-        .map(|f| {
-            f.ids.map(|v| {
-                let alike = around(v).filter(|g| g.normal.dot(f.normal) >= limit);
-                alike.map(|g| g.normal * g.area).sum::<Vec3>().normalize_or(f.normal)
-            })
+fn surface_faces(model: &LstModel) -> Vec<Face> {
+    let surface = &model.surface;
+    (surface.triangles.iter().enumerate())
+        .map(|(i, &ids)| {
+            let corners = ids.map(|v| surface.vertices[v as usize]);
+            let cross = (corners[1] - corners[0]).cross(corners[2] - corners[0]);
+            Face { triangle: i as u32, ids, corners, normal: cross.normalize_or_zero(), area: cross.length() / 2.0 }
         })
         .collect()
 }
 
-/// A triangle to draw: the points shown (on the boundary, or displaced), the points its
-/// colour is sampled at (on the boundary, a little inside its tet), its tet and the
-/// shading normal at each corner.
+/// The normal at each corner of each face under `shading`. Smooth: the faces around a
+/// vertex fall into fans split by crease edges (whose faces' normals differ by more than
+/// the crease angle, or that are not shared by exactly two faces); each corner takes the
+/// area-weighted mean normal of its fan, so the normal is continuous across every edge that
+/// is not a crease.
+fn corner_normals(faces: &[Face], shading: Shading) -> Vec<[Vec3; 3]> {
+    let Shading::Smooth { crease } = shading else {
+        return faces.iter().map(|f| [f.normal; 3]).collect();
+    };
+    let limit = crease.clamp(0.0, 180.0).to_radians().cos();
+    // corner slot 3f + k; slots of the same vertex joined across smooth edges
+    let mut fans = Fans((0..3 * faces.len() as u32).collect());
+    let mut edges: Vec<((u32, u32), u32)> = (faces.iter().enumerate())
+        .flat_map(|(i, f)| (0..3).map(move |k| (f.ids[k], f.ids[(k + 1) % 3], i as u32)))
+        .map(|(a, b, f)| ((a.min(b), a.max(b)), f))
+        .collect();
+    edges.sort_unstable();
+    for run in edges.chunk_by(|x, y| x.0 == y.0) {
+        let [(key, f), (_, g)] = run else { continue };
+        let (f, g) = (&faces[*f as usize], &faces[*g as usize]);
+        if f.normal.dot(g.normal) < limit {
+            continue;
+        }
+        for v in [key.0, key.1] {
+            let slot = |face: &Face| 3 * face.triangle + face.ids.iter().position(|&u| u == v).unwrap_or(0) as u32;
+            fans.join(slot(f), slot(g));
+        }
+    }
+    let mut sums = vec![Vec3::ZERO; 3 * faces.len()];
+    for (i, f) in faces.iter().enumerate() {
+        for k in 0..3 {
+            sums[fans.root(3 * i as u32 + k) as usize] += f.normal * f.area;
+        }
+    }
+    (faces.iter().enumerate())
+        .map(|(i, f)| std::array::from_fn(|k| sums[fans.root((3 * i + k) as u32) as usize].normalize_or(f.normal)))
+        .collect()
+}
+
+/// Union–find over corner slots.
+struct Fans(Vec<u32>);
+
+impl Fans {
+    fn root(&self, mut i: u32) -> u32 {
+        while self.0[i as usize] != i {
+            i = self.0[i as usize];
+        }
+        i
+    }
+
+    fn join(&mut self, a: u32, b: u32) {
+        let (a, b) = (self.root(a), self.root(b));
+        // the lower slot is the root: the result does not depend on the order of joins
+        let (low, high) = (a.min(b), a.max(b));
+        self.0[high as usize] = low;
+    }
+}
+
+/// A triangle to draw: the points shown (on the surface, or displaced), the points its
+/// colour is sampled at (on the surface), and the shading normal at each corner.
 pub(super) struct Facet {
     pub model: u32,
-    pub tet: u32,
-    /// The mesh vertices at the corners (of the boundary face it is or lies on).
+    /// The input surface's triangle it is or lies on.
+    pub triangle: u32,
+    /// The surface vertices at the corners (of the triangle it is or lies on).
     pub ids: [u32; 3],
     pub shown: [Vec3; 3],
     pub sampled: [Vec3; 3],
@@ -372,7 +487,7 @@ pub(super) struct Facet {
 }
 
 impl Facet {
-    /// The unit normal of the shown triangle (outward, as the boundary faces are).
+    /// The unit normal of the shown triangle (outward, as the surface's triangles are).
     pub fn normal(&self) -> Vec3 {
         let s = self.shown;
         (s[1] - s[0]).cross(s[2] - s[0]).normalize_or_zero()
@@ -384,26 +499,25 @@ fn at<T: std::ops::Mul<f32, Output = T> + std::ops::Add<Output = T> + Copy>(v: [
     v[0] * b[0] + v[1] * b[1] + v[2] * b[2]
 }
 
-/// The boundary faces of model number `index` as facets, with their corner normals under
+/// The input surface of model number `index` as facets, with their corner normals under
 /// `shading`.
 pub(super) fn facets(model: &LstModel, index: u32, shading: Shading) -> Vec<Facet> {
-    let faces = boundary_faces(model);
+    let faces = surface_faces(model);
     let normals = corner_normals(&faces, shading);
     faces
         .iter()
         .zip(normals)
         .map(|(f, normals)| {
             let p = f.corners;
-            let inward = (model.mesh.centroid(f.tet) - (p[0] + p[1] + p[2]) / 3.0) * 1e-3;
-            Facet { model: index, tet: f.tet as u32, ids: f.ids, shown: p, sampled: p.map(|c| c + inward), normals }
+            Facet { model: index, triangle: f.triangle, ids: f.ids, shown: p, sampled: p, normals }
         })
         .collect()
 }
 
-/// Per mesh vertex, the area-weighted mean normal of the facets around it (creases and
-/// shading aside), so faces that share an edge move it the same way.
+/// Per surface vertex, the area-weighted mean normal of the facets around it (creases
+/// and shading aside), so faces that share an edge move it the same way.
 fn vertex_normals(model: &LstModel, facets: &[Facet]) -> Vec<Vec3> {
-    let mut normals = vec![Vec3::ZERO; model.mesh.vertices.len()];
+    let mut normals = vec![Vec3::ZERO; model.surface.vertices.len()];
     for f in facets {
         let s = f.shown;
         let weighted = (s[1] - s[0]).cross(s[2] - s[0]);
@@ -412,13 +526,68 @@ fn vertex_normals(model: &LstModel, facets: &[Facet]) -> Vec<Vec3> {
     normals.into_iter().map(|n| n.normalize_or_zero()).collect()
 }
 
-/// Each facet split into `level`² triangles whose corners move along the mesh's vertex
-/// normals (blended) by `scale x (d - MIDLEVEL)`, `d` sampled at the corner's point of the
-/// face; every new triangle is lit by its own normal.
+/// How much of the displacement a surface point takes: 0 on a crease (an edge whose
+/// triangles' normals differ by more than [`DEFAULT_CREASE`]), rising linearly to 1 at
+/// `band` from the nearest crease edge. Vertex normals lean across a crease, so moving its
+/// points along them would throw spikes out of it; tapered, both sides meet on the crease.
+struct Taper {
+    band: f32,
+    /// Per facet, the crease edges within `band` of it.
+    near: Vec<Vec<[Vec3; 2]>>,
+}
+
+impl Taper {
+    fn new(model: &LstModel, facets: &[Facet], band: f32) -> Taper {
+        let limit = DEFAULT_CREASE.to_radians().cos();
+        let mut edges: Vec<((u32, u32), usize)> = facets
+            .iter()
+            .enumerate()
+            .flat_map(|(i, f)| {
+                (0..3)
+                    .map(move |k| (f.ids[k].min(f.ids[(k + 1) % 3]), f.ids[k].max(f.ids[(k + 1) % 3])))
+                    .map(move |e| (e, i))
+            })
+            .collect();
+        edges.sort_unstable();
+        let creases: Vec<[Vec3; 2]> = edges
+            .chunk_by(|a, b| a.0 == b.0)
+            .filter(|run| run.len() != 2 || facets[run[0].1].normal().dot(facets[run[1].1].normal()) < limit)
+            .map(|run| [run[0].0.0, run[0].0.1].map(|v| model.surface.vertices[v as usize]))
+            .collect();
+        let near = facets
+            .par_iter()
+            .map(|f| {
+                let (lo, hi) = (
+                    f.shown[0].min(f.shown[1]).min(f.shown[2]) - band,
+                    f.shown[0].max(f.shown[1]).max(f.shown[2]) + band,
+                );
+                creases
+                    .iter()
+                    .copied()
+                    .filter(|[a, b]| a.min(*b).cmple(hi).all() && a.max(*b).cmpge(lo).all())
+                    .collect()
+            })
+            .collect();
+        Taper { band: band.max(1e-9), near }
+    }
+
+    /// The share of the displacement at `point` of facet `facet`.
+    fn at(&self, facet: usize, point: Vec3) -> f32 {
+        let nearest = self.near[facet]
+            .iter()
+            .map(|[a, b]| point.distance(crate::mesh::closest_on_segment(point, *a, *b)))
+            .fold(f32::INFINITY, f32::min);
+        (nearest / self.band).min(1.0)
+    }
+}
+
+/// Each facet split into `level`² triangles whose corners move along the surface's vertex
+/// normals (blended) by `scale x (d - MIDLEVEL)` times the taper, `d` sampled at the
+/// corner's point of the surface; every new triangle is lit by its own normal.
 fn displaced(
     model: &LstModel,
     facets: &[Facet],
-    vertex_normals: &[Vec3],
+    (vertex_normals, taper): (&[Vec3], &Taper),
     textures: &Textures,
     scale: f32,
     level: usize,
@@ -426,7 +595,8 @@ fn displaced(
     let row = |j: usize| (0..j).map(|r| level + 1 - r).sum::<usize>();
     facets
         .par_iter()
-        .flat_map_iter(|f| {
+        .enumerate()
+        .flat_map_iter(|(n, f)| {
             let mut corners = Vec::with_capacity((level + 1) * (level + 2) / 2);
             for j in 0..=level {
                 for i in 0..=level - j {
@@ -434,8 +604,9 @@ fn displaced(
                     let b = [1.0 - s - t, s, t];
                     let (sampled, on_face) = (at(f.sampled, b), at(f.shown, b));
                     let normal = at(f.ids.map(|v| vertex_normals[v as usize]), b).normalize_or(f.normal());
-                    let value = shade_point(model, textures, f.tet as usize, on_face)[0];
-                    corners.push((sampled, on_face + normal * scale * (value - MIDLEVEL)));
+                    let value = shade_point(model, textures, on_face).map_or(MIDLEVEL, |c| c[0]);
+                    let moved = scale * (value - MIDLEVEL) * taper.at(n, on_face);
+                    corners.push((sampled, on_face + normal * moved));
                 }
             }
             let id = move |i: usize, j: usize| row(j) + i;
@@ -448,11 +619,11 @@ fn displaced(
                     }
                 }
             }
-            let (model, tet, ids) = (f.model, f.tet, f.ids);
+            let (model, triangle, ids) = (f.model, f.triangle, f.ids);
             out.into_iter().map(move |k| {
                 let shown = k.map(|c| corners[c].1);
                 let mut facet =
-                    Facet { model, tet, ids, shown, sampled: k.map(|c| corners[c].0), normals: [Vec3::ZERO; 3] };
+                    Facet { model, triangle, ids, shown, sampled: k.map(|c| corners[c].0), normals: [Vec3::ZERO; 3] };
                 facet.normals = [facet.normal(); 3];
                 facet
             })
@@ -479,7 +650,7 @@ fn draw_facets(hits: &mut [Option<Hit>], facets: &[Facet], frame: &Frame, keep: 
             keep(shown).then(|| Hit {
                 depth: frame.forward.dot(shown),
                 model: f.model,
-                tet: f.tet,
+                triangle: f.triangle,
                 point: at(f.sampled, b),
                 normal: at(f.normals, b).normalize_or(flat),
             })
@@ -560,12 +731,13 @@ mod tests {
     /// The drawn fruit, tetrahedralized, with one grey patch over every tet: only the
     /// lighting varies across the picture.
     fn grey_fruit() -> (LstModel, Textures) {
-        let mesh = crate::fill::mesher::tetrahedralize(&crate::mesh::shapes::named("fruit").unwrap(), 3000).unwrap();
+        let fruit = crate::mesh::shapes::named("fruit").unwrap();
+        let mesh = crate::fill::mesher::tetrahedralize(&fruit, 3000).unwrap();
         let vertices: Vec<u32> = (0..mesh.vertices.len() as u32).collect();
         let patch = Patch { source: 0, coords: vec![Vec3::splat(0.5); vertices.len()], vertices };
         let source = Source { exemplar: "grey".into(), volume: "grey.exr".into(), mask: MaskRef::File("m.exr".into()) };
         let tet_patches = vec![vec![0]; mesh.tets.len()];
-        let model = LstModel { mesh, sources: vec![source], patches: vec![patch], tet_patches };
+        let model = LstModel::new(mesh, fruit, vec![source], vec![patch], tet_patches);
         let grey = Volume::from_fn([4; 3], Channel::rgb(), |_, _, _, o| o.fill(0.8)).unwrap();
         let full = Volume::from_fn([4; 3], vec![Channel::A], |_, _, _, o| o.fill(1.0)).unwrap();
         (model, Textures::new(&[grey], &[full]))
@@ -595,7 +767,7 @@ mod tests {
         use rand::{RngExt, SeedableRng};
         let mut rng = rand_pcg::Pcg64::seed_from_u64(5);
         let size = 48;
-        let hit = |b: [f32; 3]| Some(Hit { depth: b[0], model: 0, tet: 0, point: Vec3::ZERO, normal: Vec3::Z });
+        let hit = |b: [f32; 3]| Some(Hit { depth: b[0], model: 0, triangle: 0, point: Vec3::ZERO, normal: Vec3::Z });
         for case in 0..3000 {
             let reach = [2.0, 60.0, 4000.0][case % 3];
             let s: [Vec2; 3] = std::array::from_fn(|_| {
@@ -630,14 +802,16 @@ mod tests {
         let patch = Patch { source: 0, coords: mesh.vertices.clone(), vertices };
         let source = Source { exemplar: "ramp".into(), volume: "ramp.exr".into(), mask: MaskRef::File("m.exr".into()) };
         let tet_patches = vec![vec![0]; mesh.tets.len()];
-        let model = LstModel { mesh, sources: vec![source], patches: vec![patch], tet_patches };
+        let surface = LstModel::boundary_of(&mesh).unwrap();
+        let model = LstModel::new(mesh, surface, vec![source], vec![patch], tet_patches);
         let ramp = Volume::from_fn([8, 2, 2], vec![Channel::Displacement], |x, _, _, o| o[0] = (x as f32 + 0.5) / 8.0)
             .unwrap();
         let full = Volume::from_fn([2; 3], vec![Channel::A], |_, _, _, o| o.fill(1.0)).unwrap();
         let textures = Textures::channel(&[ramp], &[full], &[Channel::Displacement]).unwrap();
         let plain = facets(&model, 0, Shading::Smooth { crease: DEFAULT_CREASE });
         let normals = vertex_normals(&model, &plain);
-        let moved = displaced(&model, &plain, &normals, &textures, 0.2, 4);
+        let taper = Taper::new(&model, &plain, 0.2);
+        let moved = displaced(&model, &plain, (&normals, &taper), &textures, 0.2, 4);
         assert_eq!(moved.len(), plain.len() * 16);
         let mut checked = 0;
         for f in moved.iter().filter(|f| f.sampled.iter().all(|p| p.y > 0.99)) {
@@ -649,12 +823,35 @@ mod tests {
                     checked += 1;
                 }
             }
-            assert!(f.normal().y > 0.9, "the top stays facing up, tilted by the ramp: {}", f.normal());
+            let inner = f.sampled.iter().all(|p| (0.2..0.8).contains(&p.x) && (0.2..0.8).contains(&p.z));
+            assert!(!inner || f.normal().y > 0.9, "the top stays facing up, tilted by the ramp: {}", f.normal());
         }
         assert!(checked > 100, "{checked} corners on the top face");
+        // the cube's edges are creases: their points stay where they are, no spikes
+        let on_edge = |p: Vec3| p.to_array().iter().filter(|c| **c < 1e-4 || **c > 1.0 - 1e-4).count() >= 2;
+        let edges: Vec<(Vec3, Vec3)> =
+            moved.iter().flat_map(|f| f.shown.into_iter().zip(f.sampled)).filter(|(_, p)| on_edge(*p)).collect();
+        assert!(edges.len() > 100 && edges.iter().all(|(a, b)| a.distance(*b) < 1e-5), "{} edge corners", edges.len());
         // no displacement channel, no move: scale 0 leaves every corner on the face
-        let still = displaced(&model, &plain, &normals, &textures, 0.0, 2);
+        let still = displaced(&model, &plain, (&normals, &taper), &textures, 0.0, 2);
         assert!(still.iter().all(|f| f.shown.iter().zip(f.sampled).all(|(a, b)| (*a - b).length() < 2e-3)));
+    }
+
+    /// The picture's outline is the input mesh's, drawn by the same camera, pixel for
+    /// pixel; the tets' boundary would give another.
+    #[test]
+    fn the_view_shows_the_input_surface_not_the_tets_boundary() {
+        let (model, textures) = grey_fruit();
+        let picture = surface(&model, &textures, 35.0, 25.0, 256);
+        let shown: Vec<bool> = picture.data.chunks_exact(3).map(|p| p != BACKGROUND).collect();
+        let outline = |surface: Mesh| {
+            let alone = LstModel::new(model.mesh.clone(), surface, vec![], vec![], vec![]);
+            let frame = Frame::around(model.surface.vertices.iter().copied(), (35.0, 25.0), 256);
+            let hits = rasterize(&facets(&alone, 0, Shading::Flat), &frame, |_| true);
+            hits.iter().zip(&shown).filter(|(h, s)| h.is_some() != **s).count()
+        };
+        assert_eq!(outline(model.surface.clone()), 0);
+        assert!(outline(LstModel::boundary_of(&model.mesh).unwrap()) > 50);
     }
 
     #[test]

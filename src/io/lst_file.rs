@@ -7,13 +7,16 @@ use crate::error::{Error, Result};
 use crate::fill::model::{LstModel, MaskRef, Source};
 use crate::fill::paste::Patch;
 use crate::fill::tets::TetMesh;
+use crate::mesh::Mesh;
 use glam::Vec3;
 use std::path::Path;
 
 /// The first 8 bytes.
 pub const MAGIC: &[u8; 8] = b"SOLIDLST";
-/// The version this code writes and reads.
-pub const VERSION: u32 = 1;
+/// The version this code writes; it also reads [`FIRST_VERSION`].
+pub const VERSION: u32 = 2;
+/// Models without their input surface, read with the tet mesh's boundary as the surface.
+pub const FIRST_VERSION: u32 = 1;
 
 /// The model as bytes.
 pub fn to_bytes(model: &LstModel) -> Vec<u8> {
@@ -40,6 +43,12 @@ pub fn to_bytes(model: &LstModel) -> Vec<u8> {
         out.extend_from_slice(&(list.len() as u32).to_le_bytes());
         list.iter().for_each(|p| out.extend_from_slice(&p.to_le_bytes()));
     }
+    let surface = &model.surface;
+    for count in [surface.vertices.len(), surface.triangles.len()] {
+        out.extend_from_slice(&(count as u32).to_le_bytes());
+    }
+    surface.vertices.iter().flat_map(|v| v.to_array()).for_each(|x| out.extend_from_slice(&x.to_le_bytes()));
+    surface.triangles.iter().flatten().for_each(|i| out.extend_from_slice(&i.to_le_bytes()));
     out
 }
 
@@ -60,9 +69,9 @@ pub fn from_bytes(bytes: &[u8]) -> Result<LstModel> {
     }
     let mut r = Reader { bytes, at: 8 };
     let version = r.u32()?;
-    if version != VERSION {
+    if !(FIRST_VERSION..=VERSION).contains(&version) {
         return Err(Error::invalid(format!(
-            "model version {version} is not supported; this solidtex reads version {VERSION}"
+            "model version {version} is not supported; this solidtex reads versions {FIRST_VERSION} to {VERSION}"
         )));
     }
     let (nv, nt, ns, np) = (r.count(12)?, r.count(16)?, r.count(12)?, r.count(6)?);
@@ -71,10 +80,20 @@ pub fn from_bytes(bytes: &[u8]) -> Result<LstModel> {
     let tets = (0..nt).map(|_| Ok([r.u32()?, r.u32()?, r.u32()?, r.u32()?])).collect::<Result<Vec<_>>>()?;
     let patches = (0..np).map(|_| r.patch()).collect::<Result<Vec<_>>>()?;
     let tet_patches = (0..nt).map(|_| r.list()).collect::<Result<Vec<_>>>()?;
+    let mesh = TetMesh { vertices, tets };
+    let surface = if version == FIRST_VERSION { None } else { Some(r.surface()?) };
     if r.at != bytes.len() {
         return Err(Error::invalid(format!("{} unexpected byte(s) after the model", bytes.len() - r.at)));
     }
-    let model = LstModel { mesh: TetMesh { vertices, tets }, sources, patches, tet_patches };
+    let surface = match surface {
+        Some(s) => s,
+        // checked first: the boundary is made from the tets' vertex numbers
+        None => {
+            LstModel::check_tets(&mesh)?;
+            LstModel::boundary_of(&mesh)?
+        }
+    };
+    let model = LstModel::new(mesh, surface, sources, patches, tet_patches);
     model.check()?;
     Ok(model)
 }
@@ -140,8 +159,57 @@ impl Reader<'_> {
         Ok(Patch { source, vertices, coords })
     }
 
+    /// The input surface: vertex and triangle counts, then each; checked as any mesh.
+    fn surface(&mut self) -> Result<Mesh> {
+        let (nv, nt) = (self.count(12)?, self.count(12)?);
+        let vertices = (0..nv).map(|_| self.vec3()).collect::<Result<Vec<_>>>()?;
+        let triangles = (0..nt).map(|_| Ok([self.u32()?, self.u32()?, self.u32()?])).collect::<Result<Vec<_>>>()?;
+        Mesh::new(vertices, triangles).map_err(|e| Error::invalid(format!("the model's input surface: {e}")))
+    }
+
     fn list(&mut self) -> Result<Vec<u32>> {
         let n = self.count(4)?;
         (0..n).map(|_| self.u32()).collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::fill::tets::cube_lattice;
+
+    fn model() -> LstModel {
+        let mesh = cube_lattice([2, 2, 2], 0.5);
+        let surface = crate::mesh::shapes::ellipsoid(Vec3::splat(0.5), 6, 8);
+        let vertices: Vec<u32> = (0..mesh.vertices.len() as u32).collect();
+        let patch = Patch { source: 0, coords: mesh.vertices.clone(), vertices };
+        let source = Source { exemplar: "e".into(), volume: "e.exr".into(), mask: MaskRef::File("m.exr".into()) };
+        let tet_patches = vec![vec![0]; mesh.tets.len()];
+        LstModel::new(mesh, surface, vec![source], vec![patch], tet_patches)
+    }
+
+    #[test]
+    fn a_model_reads_back_with_its_input_surface() {
+        let m = model();
+        let back = from_bytes(&to_bytes(&m)).unwrap();
+        assert_eq!(back, m);
+        assert_eq!(back.surface, m.surface);
+    }
+
+    /// A model written before the input surface was kept (version 1: no surface after
+    /// the patch lists) reads with its tets' boundary as the surface.
+    #[test]
+    fn a_first_version_model_reads_with_the_tets_boundary_as_its_surface() {
+        let m = model();
+        let mut bytes = to_bytes(&m);
+        // two counts, then three numbers per vertex and per triangle
+        let surface = 4 * (2 + 3 * m.surface.vertices.len() + 3 * m.surface.triangles.len());
+        bytes.truncate(bytes.len() - surface);
+        bytes[8..12].copy_from_slice(&FIRST_VERSION.to_le_bytes());
+        let old = from_bytes(&bytes).unwrap();
+        assert_eq!(old.surface, LstModel::boundary_of(&m.mesh).unwrap());
+        assert_eq!(old.mesh, m.mesh);
+        bytes[8..12].copy_from_slice(&3u32.to_le_bytes());
+        assert!(from_bytes(&bytes).unwrap_err().to_string().contains("versions 1 to 2"));
     }
 }

@@ -30,7 +30,7 @@ use std::f64::consts::PI;
 
 pub mod shapes;
 pub(crate) mod voxelize;
-pub use voxelize::{Coverage, voxelize};
+pub use voxelize::{Coverage, Slices, voxelize};
 
 /// A triangle mesh: corner positions and index triples.
 ///

@@ -59,6 +59,42 @@ pub fn voxelize(mesh: &Mesh, grid: [usize; 3], supersample: usize) -> Coverage {
     Coverage { origin: frame.origin, dims: frame.dims, alpha: slices.concat() }
 }
 
+/// Which voxel centres of a grid lie inside a mesh (given in voxel coordinates), one
+/// z-slice at a time: for grids too large to hold whole (a bake at 1024³), the triangles
+/// are prepared once and each slice is read on demand. Slice `k` agrees with
+/// [`voxelize`] at supersample 1.
+pub struct Slices {
+    grid: [usize; 3],
+    found: Option<(Frame, Rule, RayTable)>,
+}
+
+impl Slices {
+    /// The slices of `mesh` on a grid of `grid` voxels.
+    pub fn new(mesh: &Mesh, grid: [usize; 3]) -> Slices {
+        let found = Frame::new(mesh.bounds(), grid, 1).map(|frame| {
+            let rule = if mesh.boundary_edges() == 0 { Rule::Parity } else { Rule::Winding(Cone::new(mesh)) };
+            let rays = RayTable::new(mesh, &rule, &frame);
+            (frame, rule, rays)
+        });
+        Slices { grid, found }
+    }
+
+    /// Per voxel of grid slice `k` (x fastest), whether its centre is inside.
+    pub fn inside(&self, k: usize) -> Vec<bool> {
+        let [nx, ny, _] = self.grid;
+        let mut out = vec![false; nx * ny];
+        let Some((frame, rule, rays)) = &self.found else { return out };
+        let Some(local) = k.checked_sub(frame.origin[2]).filter(|l| *l < frame.dims[2]) else { return out };
+        let alpha = rays.slice(rule, frame, local);
+        let [ox, oy, _] = frame.origin;
+        for (j, row) in alpha.chunks_exact(frame.dims[0]).enumerate() {
+            let at = ox + nx * (oy + j);
+            out[at..at + row.len()].iter_mut().zip(row).for_each(|(o, a)| *o = *a > 0.5);
+        }
+        out
+    }
+}
+
 /// The covered box and the sample lattice inside it.
 struct Frame {
     origin: [usize; 3],

@@ -396,7 +396,8 @@ pub(crate) mod tests {
             mask: crate::fill::MaskRef::Splotch { size: 16, falloff: 0.1, seed: 1 },
         }];
         let depth = depth.map(|_| mesh.vertices.iter().map(|v| v.x).collect());
-        let model = crate::fill::LstModel { mesh, sources, patches: vec![patch], tet_patches };
+        let surface = crate::fill::LstModel::boundary_of(&mesh).unwrap();
+        let model = crate::fill::LstModel::new(mesh, surface, sources, vec![patch], tet_patches);
         FillPreview {
             model,
             textures: Textures::new(&[marble], &[mask]),
@@ -459,7 +460,8 @@ pub(crate) mod tests {
         let dir = tempfile::tempdir().unwrap();
         let mut cube = filled_cube(None);
         // the cube made the drawn block's size, so the spec's strokes lie inside the block
-        for v in &mut cube.model.mesh.vertices {
+        let model = &mut cube.model;
+        for v in model.mesh.vertices.iter_mut().chain(&mut model.surface.vertices) {
             *v = (*v * 2.0 - Vec3::ONE) * Vec3::new(1.0, 0.5, 0.5);
         }
         cube.spec.built = dir.path().to_path_buf();
@@ -510,7 +512,8 @@ pub(crate) mod tests {
     fn a_layered_exemplar_gives_a_layered_guided_cut() {
         let dir = tempfile::tempdir().unwrap();
         let mut cube = filled_cube(None);
-        for v in &mut cube.model.mesh.vertices {
+        let model = &mut cube.model;
+        for v in model.mesh.vertices.iter_mut().chain(&mut model.surface.vertices) {
             *v = (*v * 2.0 - Vec3::ONE) * Vec3::new(1.0, 0.5, 0.5);
         }
         let mut spec = cube.spec.clone();

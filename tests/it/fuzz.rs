@@ -433,7 +433,7 @@ fn lst_seeds(dir: &Path) -> Vec<Files> {
     ];
     let mut tet_patches = vec![vec![0]; mesh.tets.len()];
     tet_patches[0].push(1);
-    let model = LstModel { mesh, sources, patches, tet_patches };
+    let model = LstModel::new(mesh, cuboid, sources, patches, tet_patches);
     vec![written(dir, "model.lst", |p| lst_file::write_lst(p, &model))]
 }
 

@@ -217,7 +217,7 @@ fn bad_mesh_files_are_refused_with_the_file_and_problem_named() {
 }
 
 /// The shared sample meshes, or `None` (with a note) when the folder is absent.
-fn shared_meshes() -> Option<PathBuf> {
+pub fn shared_meshes() -> Option<PathBuf> {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/meshes");
     if dir.is_dir() {
         Some(dir)
