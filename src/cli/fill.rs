@@ -225,7 +225,8 @@ pub fn run_fill(args: &FillArgs) -> Result<()> {
     let (tets, refined) = fill::tetrahedralize(&surface, &spec).map_err(|e| e.in_file(&args.mesh))?;
     let meshed = started.elapsed().as_secs_f64();
     warn_if_far(&args.mesh, tets.tets.len(), spec.tets);
-    let held = mesher::volume_check(&surface, &tets, spec.tets).map_err(|e| e.in_file(&args.mesh))?;
+    let held = mesher::volume_check(&surface, &tets, spec.tets, fill::cover_margin(&spec))
+        .map_err(|e| e.in_file(&args.mesh))?;
     warn_if_lost(&args.mesh, &held);
     let distance = mesher::surface_distance(&surface, &tets).map_err(|e| e.in_file(&args.mesh))?;
     let missing = library::fill::missing(&spec)?;
@@ -295,6 +296,16 @@ pub fn run_fill(args: &FillArgs) -> Result<()> {
     }
     for note in &report.ignored {
         tell!("warning: {}: {note}", args.spec.display());
+    }
+    if let Some(share) = report.outer_share.filter(|s| *s > crate::fill::model::OUTER_WARNING) {
+        tell!(
+            "warning: {}: {:.0} % of the volume lies in the outer {:.0} % of depth, so the '{}' exemplar's outer \
+             layer (skin, bark) fills most of the model; a depth axis or points along the body's middle give it a core",
+            args.spec.display(),
+            share * 100.0,
+            crate::fill::model::OUTER_DEPTH * 100.0,
+            spec.exemplar
+        );
     }
     tell!("wrote {} ({:.0} KB)", args.output.display(), bytes as f64 / 1024.0);
     // A figure, not a result: if the volumes cannot be read it is left out.

@@ -123,10 +123,31 @@ const SURFACE_LOSS: f64 = 1.0;
 pub fn tetrahedralize(mesh: &Mesh, target_tets: usize) -> Result<TetMesh> {
     // on a pool thread, the many small parallel steps hand out work without waking and
     // parking the calling thread each time
-    rayon::scope(|_| tetrahedralize_here(mesh, target_tets))
+    rayon::scope(|_| tetrahedralize_here(mesh, target_tets, Fit::Conform))
 }
 
-fn tetrahedralize_here(mesh: &Mesh, target_tets: usize) -> Result<TetMesh> {
+/// [`tetrahedralize`] for tets that only carry a texture, the shape coming from `mesh`
+/// itself (a filled model): the lattice is cut and conformed as there, but no cubes are
+/// split where the boundary strays from the surface (step 6), and no distances are
+/// measured to find them; then the boundary is moved out by `margin` lattice spacings
+/// where the tets allow (see [`conform::inflate`]), so that they hold the surface. Points
+/// of the solid the tets still miss take the nearest tet's texture (see
+/// [`crate::fill::locate`]).
+pub fn tetrahedralize_covering(mesh: &Mesh, target_tets: usize, margin: f32) -> Result<TetMesh> {
+    rayon::scope(|_| tetrahedralize_here(mesh, target_tets, Fit::Cover { margin }))
+}
+
+/// How closely the tets' boundary must follow the surface.
+#[derive(Clone, Copy, PartialEq)]
+enum Fit {
+    /// Conformed, then refined where it strays (the tets are the shape).
+    Conform,
+    /// Conformed, then moved out by a margin in lattice spacings (the tets carry a texture
+    /// over a shape given elsewhere).
+    Cover { margin: f32 },
+}
+
+fn tetrahedralize_here(mesh: &Mesh, target_tets: usize, fit: Fit) -> Result<TetMesh> {
     let volume = check(mesh, target_tets)?;
     let off = |count: usize| (count.max(1) as f64 / target_tets as f64).ln().abs();
     let rank = |count: usize, worst: f32| rank(off(count), worst);
@@ -137,7 +158,7 @@ fn tetrahedralize_here(mesh: &Mesh, target_tets: usize) -> Result<TetMesh> {
     let features = features::features(mesh);
     for attempt in 0..SPACING_TRIES {
         let mut at = AtSpacing::new(mesh, &features, h)?;
-        let count = at.refined(|tets, worst| {
+        let count = at.refined(fit, |tets, worst| {
             let better = best.as_ref().is_none_or(|(b, w)| rank(tets.tets.len(), worst) < rank(b.tets.len(), *w));
             if better && !tets.tets.is_empty() {
                 best = Some((tets, worst));
@@ -192,40 +213,70 @@ fn rank(off: f64, worst: f32) -> (u8, f64) {
 }
 
 /// The share of the surface's volume a tet mesh should hold; below it, a part thinner than
-/// the lattice spacing was lost (conforming alone moves the boundary by far less).
+/// the lattice spacing was lost.
 pub const HELD_VOLUME: f64 = 0.95;
 
 /// How much of a surface's volume a tet mesh holds.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct VolumeCheck {
-    /// The tet mesh's volume over the surface's.
+    /// The share of the solid's volume inside the tets.
     pub share: f64,
     /// When the share is below [`HELD_VOLUME`]: the smallest target tet count (the target
-    /// doubled up to 4 times, within [`TARGET_TETS`]) whose [`tetrahedralize`] holds that
-    /// share, if any.
+    /// doubled up to 4 times, within [`TARGET_TETS`]) whose [`tetrahedralize_covering`]
+    /// holds that share, if any.
     pub holding: Option<usize>,
     /// The largest target tried for `holding` (the given one when none was needed).
     pub tried: usize,
 }
 
-/// Compares the volume of `tets` (made from `mesh` for `target_tets`) with the volume
-/// `mesh` encloses, and where parts are lost, looks for a target tet count that keeps them
-/// (meshing as [`tetrahedralize`] does, so the advice reproduces).
-pub fn volume_check(mesh: &Mesh, tets: &TetMesh, target_tets: usize) -> Result<VolumeCheck> {
-    let volume = check(mesh, target_tets)?;
-    let share = tets.volume() / volume;
+/// How much of the solid `mesh` encloses the tets `tets` (made from it for
+/// `target_tets` by [`tetrahedralize_covering`] with `margin`) hold, and where parts are
+/// lost, a target tet count that keeps them (meshing the same way, so the advice
+/// reproduces).
+pub fn volume_check(mesh: &Mesh, tets: &TetMesh, target_tets: usize, margin: f32) -> Result<VolumeCheck> {
+    check(mesh, target_tets)?;
+    let share = held(mesh, tets);
     let mut tried = target_tets;
     if share >= HELD_VOLUME {
         return Ok(VolumeCheck { share, holding: None, tried });
     }
     for count in (1..=4).map(|k| target_tets << k).take_while(|n| TARGET_TETS.contains(n)) {
         tried = count;
-        let Ok(finer) = tetrahedralize(mesh, count) else { break };
-        if finer.volume() / volume >= HELD_VOLUME {
+        let Ok(finer) = tetrahedralize_covering(mesh, count, margin) else { break };
+        if held(mesh, &finer) >= HELD_VOLUME {
             return Ok(VolumeCheck { share, holding: Some(count), tried });
         }
     }
     Ok(VolumeCheck { share, holding: None, tried })
+}
+
+/// Voxels along the longest side of the grid [`held`] samples the solid on.
+const HELD_SAMPLES: usize = 64;
+
+/// The share of the solid `mesh` encloses that lies inside the tets: of the centres of a
+/// grid's voxels inside the surface, those a tet holds. (The tets' own volume would count
+/// what they hold beyond the surface.)
+fn held(mesh: &Mesh, tets: &TetMesh) -> f64 {
+    let Ok(grid) = crate::fill::tets::TetGrid::new(tets) else { return 0.0 };
+    let (lo, hi) = mesh.bounds();
+    let step = (hi - lo).max_element().max(1e-12) / HELD_SAMPLES as f32;
+    let dims = ((hi - lo) / step).ceil().as_uvec3().max(glam::UVec3::ONE).to_array().map(|d| d as usize);
+    let to_grid =
+        glam::Affine3A::from_scale_rotation_translation(Vec3::splat(1.0 / step), glam::Quat::IDENTITY, -lo / step);
+    let slices = crate::mesh::Slices::new(&mesh.transformed(to_grid), dims);
+    let (inside, held) = (0..dims[2])
+        .into_par_iter()
+        .map(|z| {
+            let slice = slices.inside(z);
+            let points = slice
+                .iter()
+                .enumerate()
+                .filter(|(_, i)| **i)
+                .map(|(k, _)| lo + (Vec3::new((k % dims[0]) as f32, (k / dims[0]) as f32, z as f32) + 0.5) * step);
+            points.fold((0usize, 0usize), |(n, h), p| (n + 1, h + usize::from(grid.locate(tets, p).is_some())))
+        })
+        .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
+    held as f64 / inside.max(1) as f64
 }
 
 /// How far the boundary of a tet mesh lies from the surface it was made from, both ways.
@@ -372,9 +423,17 @@ impl<'a> AtSpacing<'a> {
     /// farther than [`REFINE_FROM`] split, up to [`REFINEMENTS`] times. Each mesh goes to
     /// `tried` with how far its boundary strays (in mean edges); the tet count of the one
     /// that strays least.
-    fn refined(&mut self, mut tried: impl FnMut(TetMesh, f32)) -> usize {
+    fn refined(&mut self, fit: Fit, mut tried: impl FnMut(TetMesh, f32)) -> usize {
         let limit = REFINE_FROM * self.lattice.h as f32;
-        let tets = self.conformed();
+        let mut tets = self.conformed();
+        if let Fit::Cover { margin } = fit {
+            if margin > 0.0 {
+                conform::inflate(&mut tets, margin * self.lattice.h as f32);
+            }
+            let count = tets.tets.len();
+            tried(tets, 0.0);
+            return count;
+        }
         let (mut far, mut least) = strays(&self.surface, self.mesh, &tets, limit);
         let mut count = tets.tets.len();
         tried(tets, least);

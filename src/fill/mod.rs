@@ -111,18 +111,21 @@ fn fill_here(job: &Job, mesh: TetMesh, progress: &dyn Progress) -> Result<(LstMo
         raised_scale: raised,
         ignored: spec::ignored(job.spec, job.kind, &job.sources),
         paste: pasted.stats.clone(),
+        outer_share: field.depth.as_deref().map(|d| model::outer_share(&mesh, d)),
         depth: field.depth.clone(),
     };
     let model = LstModel::new(mesh, job.surface.clone(), job.sources.clone(), pasted.patches, pasted.tet_patches);
     Ok((model, report))
 }
 
-/// The tet mesh a fill of `surface` by `spec` uses: the lattice mesh, refined near the
+/// The tet mesh a fill of `surface` by `spec` uses: the lattice mesh covering the solid (see
+/// [`mesher::tetrahedralize_covering`]: the model takes its shape from `surface`), refined near the
 /// spec's depth axes; when the refinement takes the count more than 15 % past `spec.tets`,
 /// the lattice is made again, coarser by the share the refinement added. Also how many
 /// tets the refinement added.
 pub fn tetrahedralize(surface: &Mesh, spec: &FillSpec) -> Result<(TetMesh, usize)> {
-    let mut tets = mesher::tetrahedralize(surface, spec.tets)?;
+    let margin = cover_margin(spec);
+    let mut tets = mesher::tetrahedralize_covering(surface, spec.tets, margin)?;
     let added = refine_axes(&mut tets, &spec.depth.axes);
     let total = tets.tets.len() as f64;
     if added == 0 || total <= spec.tets as f64 * (1.0 + COUNT_TOLERANCE) {
@@ -131,9 +134,19 @@ pub fn tetrahedralize(surface: &Mesh, spec: &FillSpec) -> Result<(TetMesh, usize
     // the refinement adds about the same share to a coarser lattice: leave room for it
     let lattice = (total - added as f64).max(1.0);
     let target = (spec.tets as f64 * lattice / total).max(*mesher::TARGET_TETS.start() as f64);
-    let mut again = mesher::tetrahedralize(surface, target.round() as usize)?;
+    let mut again = mesher::tetrahedralize_covering(surface, target.round() as usize, margin)?;
     let added = refine_axes(&mut again, &spec.depth.axes);
     Ok((again, added))
+}
+
+/// How far the tets' boundary is moved out past the surface, in lattice spacings, so that
+/// they hold it and its points find their tet at once. Not for a fill with a depth field:
+/// its boundary vertices are held at the surface's depth, which must lie on the surface.
+const COVER_MARGIN: f32 = 0.3;
+
+/// How far [`tetrahedralize`] moves the tets' boundary out for `spec`, in lattice spacings.
+pub fn cover_margin(spec: &FillSpec) -> f32 {
+    if spec.depth.given() { 0.0 } else { COVER_MARGIN }
 }
 
 /// How far past the tet count asked for the refinement may take it (15 %) before the
@@ -214,7 +227,7 @@ mod tests {
     use crate::volume::{Axis, Channel};
 
     fn layered_spec() -> FillSpec {
-        let group = |y: f32, value: f32| FaceGroup { at: Vec3::new(0.5, y, 0.5), crease: 30.0, value };
+        let group = |y: f32, value: f32| FaceGroup { at: Vec3::new(0.5, y, 0.5), crease: 30.0, angle: 180.0, value };
         let mut spec = FillSpec::new("ramp");
         spec.seed = 2;
         spec.depth = DepthSpec { surface: false, faces: vec![group(1.0, 0.0), group(0.0, 1.0)], ..Default::default() };

@@ -157,7 +157,13 @@ impl LstModel {
 
     /// Where `p` takes its texture (see [`Locator::locate`]).
     pub fn locate(&self, p: Vec3) -> Option<Location> {
-        self.located.0.get_or_init(|| Locator::new(&self.mesh)).locate(&self.mesh, p)
+        self.locator().locate(p)
+    }
+
+    /// The model's locator, made on first use: call it before many threads locate points,
+    /// so that it is made once, in parallel, rather than waited for.
+    pub fn locator(&self) -> &Locator {
+        self.located.0.get_or_init(|| Locator::new(&self.mesh))
     }
 
     /// Checks the cross references (after reading a file).
@@ -207,6 +213,29 @@ pub struct FillReport {
     /// The depth field at the tet mesh's vertices (depth-varying types), for showing it.
     #[serde(skip)]
     pub depth: Option<Vec<f32>>,
+    /// The share of the volume whose depth is under [`OUTER_DEPTH`] (depth-varying types):
+    /// near 1, the exemplar's skin or bark fills most of the model.
+    pub outer_share: Option<f32>,
+}
+
+/// The depth under which a depth-varying fill shows its outermost layer (skin, bark).
+pub const OUTER_DEPTH: f32 = 0.1;
+/// An outer share above this is warned about.
+pub const OUTER_WARNING: f32 = 0.5;
+
+/// The share of `mesh`'s volume whose depth (given at the vertices) is under
+/// [`OUTER_DEPTH`], each tet counted by its volume and the mean depth of its corners.
+pub fn outer_share(mesh: &TetMesh, depth: &[f32]) -> f32 {
+    let (mut outer, mut total) = (0.0f64, 0.0f64);
+    for (t, tet) in mesh.tets.iter().enumerate() {
+        let v = f64::from(mesh.volume_of(t).abs());
+        let mean = tet.iter().map(|&i| depth.get(i as usize).copied().unwrap_or(0.0)).sum::<f32>() / 4.0;
+        total += v;
+        if mean < OUTER_DEPTH {
+            outer += v;
+        }
+    }
+    (outer / total.max(f64::MIN_POSITIVE)) as f32
 }
 
 #[cfg(test)]

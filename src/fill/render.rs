@@ -124,11 +124,11 @@ fn extent((lo, hi): (Vec3, Vec3), u: Vec3, v: Vec3) -> (glam::Vec2, glam::Vec2) 
         .fold((glam::Vec2::INFINITY, glam::Vec2::NEG_INFINITY), |(a, b), p| (a.min(p), b.max(p)))
 }
 
-/// The bounding box of several models' vertices (tets and input surfaces).
+/// The bounding box of several models' input surfaces (their shapes).
 pub fn bounds(models: &[(&LstModel, &Textures)]) -> (Vec3, Vec3) {
     models
         .iter()
-        .flat_map(|(m, _)| m.mesh.vertices.iter().chain(&m.surface.vertices))
+        .flat_map(|(m, _)| m.surface.vertices.iter())
         .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(a, b), p| (a.min(*p), b.max(*p)))
 }
 
@@ -213,6 +213,8 @@ pub fn cut(model: &LstModel, textures: &Textures, view: &View) -> Cut {
 
 /// The cut of `model` at the pixels of `view` that `inside` marks (its outline).
 pub fn cut_within(model: &LstModel, textures: &Textures, view: &View, inside: &[bool]) -> Cut {
+    // made once before the bands below locate points
+    model.locator();
     let bands = bin_tets(&model.mesh, view);
     let rows: Vec<Vec<([f32; 4], u32)>> =
         bands.par_iter().enumerate().map(|(b, tets)| render_band(model, textures, view, (b, tets), inside)).collect();

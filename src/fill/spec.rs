@@ -84,14 +84,25 @@ pub struct DepthSpec {
     pub faces: Vec<FaceGroup>,
 }
 
-/// Surface faces reached from the face nearest `at` without crossing a crease sharper than
-/// `crease` degrees (the thesis' multi-face fill).
+impl DepthSpec {
+    /// Whether any depth constraint inside or on the surface is given (axes, points or
+    /// face groups).
+    pub fn given(&self) -> bool {
+        !(self.axes.is_empty() && self.points.is_empty() && self.faces.is_empty())
+    }
+}
+
+/// Surface faces reached from the face nearest `at` (the seed) without crossing a crease
+/// sharper than `crease` degrees (the thesis' multi-face fill) and whose normals lie within
+/// `angle` degrees of the seed's (the TUI's single-face fill; 180 for no limit).
 #[derive(Debug, Clone, PartialEq)]
 pub struct FaceGroup {
     /// A point on or near the seed face.
     pub at: Vec3,
     /// Crease angle in degrees.
     pub crease: f32,
+    /// The largest angle between a face's normal and the seed face's, degrees.
+    pub angle: f32,
     /// The group's depth.
     pub value: f32,
 }
@@ -161,7 +172,7 @@ pub fn ignored(spec: &FillSpec, kind: TextureType, sources: &[super::Source]) ->
                 .to_string(),
         );
     }
-    let depth_given = !(spec.depth.axes.is_empty() && spec.depth.points.is_empty() && spec.depth.faces.is_empty());
+    let depth_given = spec.depth.given();
     if depth_given && matches!(kind, TextureType::T0 | TextureType::T1a) {
         out.push(format!("[depth] is not used by type {kind}: it has no depth-varying layers"));
     }
@@ -301,10 +312,11 @@ fn fract(x: f32) -> f32 {
 
 /// The triangles of a face group, sorted.
 pub fn face_group(surface: &Mesh, group: &FaceGroup) -> Result<Vec<usize>> {
-    if !(0.0..=180.0).contains(&group.crease) || !(0.0..=1.0).contains(&group.value) {
+    let degrees = 0.0..=180.0;
+    if !(degrees.contains(&group.crease) && degrees.contains(&group.angle) && (0.0..=1.0).contains(&group.value)) {
         return Err(Error::invalid(format!(
-            "depth.faces at {}: crease {} must be 0 to 180 degrees and value {} in 0 to 1",
-            group.at, group.crease, group.value
+            "depth.faces at {}: crease {} and angle {} must be 0 to 180 degrees and value {} in 0 to 1",
+            group.at, group.crease, group.angle, group.value
         )));
     }
     let normal = |t: usize| {
@@ -317,13 +329,14 @@ pub fn face_group(surface: &Mesh, group: &FaceGroup) -> Result<Vec<usize>> {
     };
     let seed = (0..surface.triangles.len()).min_by(|&a, &b| distance(a).total_cmp(&distance(b))).unwrap_or(0);
     let adjacency = edge_adjacency(surface);
-    let cos = group.crease.to_radians().cos();
+    let (cos, spread) = (group.crease.to_radians().cos(), group.angle.to_radians().cos());
     let mut seen = vec![false; surface.triangles.len()];
     let mut stack = vec![seed];
     seen[seed] = true;
     while let Some(t) = stack.pop() {
         for &n in &adjacency[t] {
-            if !seen[n] && normal(t).dot(normal(n)) >= cos {
+            let along = group.angle >= 180.0 || normal(seed).dot(normal(n)) >= spread;
+            if !seen[n] && normal(t).dot(normal(n)) >= cos && along {
                 seen[n] = true;
                 stack.push(n);
             }
@@ -386,6 +399,32 @@ pub fn depth_axis(volume: &crate::Volume) -> Option<usize> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// On a smooth fruit a crease never stops the flood; the angle from the clicked face's
+    /// normal does: a patch around the click, every face of it within the angle.
+    #[test]
+    fn a_face_group_with_an_angle_stays_near_the_clicked_face() {
+        let fruit = crate::mesh::shapes::named("fruit").unwrap();
+        let at = Vec3::new(0.0, 0.7, 0.0);
+        let flood = face_group(&fruit, &FaceGroup { at, crease: 30.0, angle: 180.0, value: 0.0 }).unwrap();
+        assert_eq!(flood.len(), fruit.triangles.len());
+        let patch = face_group(&fruit, &FaceGroup { at, crease: 30.0, angle: 20.0, value: 0.0 }).unwrap();
+        assert!(
+            patch.len() > 1 && patch.len() < fruit.triangles.len() / 5,
+            "{} of {}",
+            patch.len(),
+            fruit.triangles.len()
+        );
+        let normal = |t: usize| {
+            let [a, b, c] = fruit.triangles[t].map(|i| fruit.vertices[i as usize]);
+            (b - a).cross(c - a).normalize()
+        };
+        let centre = |t: usize| fruit.triangles[t].iter().map(|&i| fruit.vertices[i as usize]).sum::<Vec3>() / 3.0;
+        let clicked =
+            (0..fruit.triangles.len()).min_by(|&a, &b| centre(a).distance(at).total_cmp(&centre(b).distance(at)));
+        let seed = normal(clicked.unwrap());
+        assert!(patch.iter().all(|&t| normal(t).dot(seed) >= 20f32.to_radians().cos() - 1e-6));
+    }
 
     #[test]
     fn a_tapered_axis_falls_from_1_in_the_middle_to_the_end_depth() {

@@ -250,13 +250,17 @@ impl TetGrid {
 
     /// The first tet (by index) holding `p` (barycentric coordinates all at least -1e-5).
     pub fn locate(&self, mesh: &TetMesh, p: Vec3) -> Option<u32> {
+        self.candidates(p).iter().copied().find(|&t| mesh.barycentric(t as usize, p).iter().all(|w| *w >= -1e-5))
+    }
+
+    /// The tets listed in the cell of `p`, in index order (none for a point not finite).
+    pub fn candidates(&self, p: Vec3) -> &[u32] {
         if !p.is_finite() {
-            return None;
+            return &[];
         }
         let [x, y, z] = self.cell_of(p);
         let i = x + self.dims[0] * (y + self.dims[1] * z);
-        let range = self.offsets[i] as usize..self.offsets[i + 1] as usize;
-        self.tets[range].iter().copied().find(|&t| mesh.barycentric(t as usize, p).iter().all(|w| *w >= -1e-5))
+        &self.tets[self.offsets[i] as usize..self.offsets[i + 1] as usize]
     }
 }
 

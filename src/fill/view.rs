@@ -237,6 +237,8 @@ pub fn surfaces_with(
     progress: &dyn crate::progress::Progress,
 ) -> Result<(Rgb8, usize)> {
     let meshes: Vec<&LstModel> = models.iter().map(|(m, _)| *m).collect();
+    // made once before the threads below locate points
+    meshes.iter().for_each(|m| _ = m.locator());
     let frame = Frame::new(&meshes, camera, size);
     let mut all = Vec::new();
     for (i, (model, _)) in models.iter().enumerate() {

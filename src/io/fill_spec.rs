@@ -14,6 +14,9 @@ use std::path::Path;
 /// Allowed target tet counts.
 pub const TETS: std::ops::RangeInclusive<usize> = 100..=200_000;
 
+/// A face group's `angle` when a spec gives none: no limit (the thesis' multi-face fill).
+pub const NO_LIMIT: f32 = 180.0;
+
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RawSpec {
@@ -62,6 +65,7 @@ struct RawDepth {
 struct RawFaces {
     at: [f32; 3],
     crease: Option<f32>,
+    angle: Option<f32>,
     value: f32,
 }
 
@@ -205,7 +209,11 @@ fn depth(raw: Option<RawDepth>) -> Result<DepthSpec> {
         if !(0.0..=180.0).contains(&crease) {
             return Err(Error::invalid(format!("{field}.crease = {crease} must be 0 to 180 degrees")));
         }
-        faces.push(FaceGroup { at: point(&field, f.at)?, crease, value: f.value });
+        let angle = f.angle.unwrap_or(NO_LIMIT);
+        if !(0.0..=180.0).contains(&angle) {
+            return Err(Error::invalid(format!("{field}.angle = {angle} must be 0 to 180 degrees")));
+        }
+        faces.push(FaceGroup { at: point(&field, f.at)?, crease, angle, value: f.value });
     }
     let taper = raw.taper.unwrap_or(0.0);
     if !(0.0..=0.5).contains(&taper) {
@@ -271,7 +279,11 @@ pub fn spec_text(spec: &FillSpec, library: &str, built: &str, header: &str) -> S
         t += &format!("points = [{}]\n", points.join(", "));
     }
     for f in &d.faces {
-        t += &format!("\n[[depth.faces]]\nat = {}\ncrease = {}\nvalue = {}\n", v(f.at), f.crease, f.value);
+        t += &format!("\n[[depth.faces]]\nat = {}\ncrease = {}\n", v(f.at), f.crease);
+        if f.angle < NO_LIMIT {
+            t += &format!("angle = {}\n", f.angle);
+        }
+        t += &format!("value = {}\n", f.value);
     }
     for (p, scale) in &spec.scales {
         t += &format!("\n[[scale_at]]\npoint = {}\nscale = {scale}\n", v(*p));
@@ -308,7 +320,10 @@ mod tests {
         spec.depth.axes = vec![vec![Vec3::new(-0.5, 0.0, 0.0), Vec3::new(0.5, 0.0, 0.0)]];
         spec.depth.taper = 0.5;
         spec.depth.points = vec![(Vec3::new(0.1, 0.2, 0.3), 0.75)];
-        spec.depth.faces = vec![FaceGroup { at: Vec3::new(0.0, 0.5, 0.0), crease: 25.0, value: 1.0 }];
+        spec.depth.faces = vec![
+            FaceGroup { at: Vec3::new(0.0, 0.5, 0.0), crease: 25.0, angle: NO_LIMIT, value: 1.0 },
+            FaceGroup { at: Vec3::new(0.0, -0.5, 0.0), crease: 30.0, angle: 20.0, value: 0.5 },
+        ];
         spec.scales = vec![(Vec3::new(0.5, 0.0, 0.0), 0.2)];
         let rotation = Quat::from_axis_angle(Vec3::Y, 30f32.to_radians());
         spec.pastes = vec![PasteSpec { exemplar: "marble".into(), at: Vec3::new(0.1, 0.0, 0.0), rotation, scale: 0.3 }];

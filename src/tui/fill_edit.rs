@@ -195,14 +195,19 @@ pub fn depth_value(model: &mut Model, step: f32) {
     }
 }
 
-/// `g`: the surface faces around the face nearest the cursor (up to a 30° crease) get the
-/// current depth (the thesis' single-face fill).
+/// `g`: the surface faces connected to the face nearest the cursor whose normals lie within
+/// [`SINGLE_FACE_ANGLE`] of its normal get the current depth (the thesis' single-face fill,
+/// widened to the faces that continue the clicked one: a lattice of small triangles has no
+/// single face worth filling).
 pub fn face_group(model: &mut Model) {
     change(model, |e, at| {
-        e.spec.depth.faces.push(FaceGroup { at, crease: 30.0, value: e.depth });
-        Ok(format!("the faces nearest {} get depth {:.2}", show(at), e.depth))
+        e.spec.depth.faces.push(FaceGroup { at, crease: 30.0, angle: SINGLE_FACE_ANGLE, value: e.depth });
+        Ok(format!("the faces within {SINGLE_FACE_ANGLE}° of the face nearest {} get depth {:.2}", show(at), e.depth))
     });
 }
+
+/// How far (degrees) the normals of the faces `g` fills may turn from the clicked face's.
+pub const SINGLE_FACE_ANGLE: f32 = 20.0;
 
 /// `p`: a manual paste of the exemplar at the cursor, a quarter of the model across.
 pub fn paste(model: &mut Model, size: f32) {

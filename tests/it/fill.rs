@@ -262,7 +262,7 @@ fn a_pipe_of_genus_one_fills_and_its_hole_stays_empty() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     let mesh = draw(d, "pipe");
-    let spec = spec(d, "marble.toml", "exemplar = \"marble\"\nscale = 0.5\ntets = 3000\nseed = 1\n");
+    let spec = spec(d, "marble.toml", "exemplar = \"marble\"\nscale = 0.6\ntets = 3000\nseed = 1\n");
     let stats = fill(d, &mesh, &spec, "pipe.lst");
     assert_eq!(stats["fill"]["paste"]["forced"], 0, "{stats}");
     assert_eq!(stats["type"], "0");
@@ -863,8 +863,8 @@ fn where_the_tets_stray_over_half_an_edge_from_the_surface_fill_says_where_to_cu
 fn a_thin_part_the_tets_lose_is_warned_about_with_a_count_that_keeps_it() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    // a cube and, beside it, a plate thinner than the lattice spacing at 3,000 tets
-    cube_and_plate(d, 0.08);
+    // a cube and, beside it, a plate far thinner than the lattice spacing at 3,000 tets
+    cube_and_plate(d, 0.03);
     let spec = spec(d, "marble.toml", "exemplar = \"marble\"\n");
     let fill_with = |tets: &str| {
         let json = at(d, "p.json");
@@ -987,4 +987,26 @@ fn filled_models_are_shaded_as_smoothly_as_their_mesh() {
         let most = if ["libigl_bunny", "cgal_cactus"].contains(&name.as_str()) { 0.02 } else { 0.003 };
         assert!(*share <= most, "{name}: {:.2} % of the pixels step by more than 6/255", share * 100.0);
     }
+}
+
+/// A depth-varying exemplar whose depth field leaves most of the model near depth 0 (all
+/// skin) is warned about, naming the share; the kiwi in its fruit is not.
+#[test]
+fn a_fill_that_is_mostly_skin_is_warned_about() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (mesh, kiwi) = kiwi_fruit(d);
+    let run = solidtex(&["fill", &mesh, "--spec", &kiwi, "-o", &at(d, "k.lst"), "--json", &at(d, "k.json")]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    assert!(!stderr(&run).contains("outer layer"), "{}", stderr(&run));
+    // the core only at a point near the rim
+    let body = KIWI.replace("axis = [[[-0.75, 0, 0], [0.75, 0, 0]]]", "points = [[0, 0.55, 0, 1.0]]");
+    let skin = spec(d, "skin.toml", &body);
+    let run = solidtex(&["fill", &mesh, "--spec", &skin, "-o", &at(d, "s.lst"), "--json", &at(d, "s.json")]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let stats: serde_json::Value = serde_json::from_slice(&std::fs::read(d.join("s.json")).unwrap()).unwrap();
+    let share = stats["fill"]["outer_share"].as_f64().unwrap();
+    assert!(share > 0.5, "{stats}");
+    let said = stderr(&run);
+    assert!(said.contains(&format!("{:.0} % of the volume lies in the outer 10 % of depth", share * 100.0)), "{said}");
 }

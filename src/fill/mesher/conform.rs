@@ -560,6 +560,35 @@ fn ease_in(work: &Work, v: u32, star: &[u32], surface: Option<&Surface>) -> Vec3
     best.1
 }
 
+/// Moves every boundary vertex of `mesh` out along the boundary's normal there by
+/// `margin` (or half, a quarter, down to a sixteenth of it, else not at all) as far as
+/// every tet around it keeps [`MIN_DIHEDRAL`], in vertex order. The boundary faces are
+/// chords of the surface, so a convex part of the surface bulges out between the
+/// vertices: moved out, the tets hold the surface, and points on it find their tet
+/// without a search for the nearest face.
+pub(super) fn inflate(mesh: &mut TetMesh, margin: f32) {
+    let neighbours = mesh.neighbours();
+    let mut normals = vec![Vec3::ZERO; mesh.vertices.len()];
+    for [a, b, c] in mesh.boundary_faces(&neighbours) {
+        let [pa, pb, pc] = [a, b, c].map(|v| mesh.vertices[v as usize]);
+        let weighted = (pb - pa).cross(pc - pa);
+        [a, b, c].iter().for_each(|&v| normals[v as usize] += weighted);
+    }
+    let (offsets, stars) = mesh.vertex_tets();
+    let floor = cos_deg(MIN_DIHEDRAL);
+    for v in 0..mesh.vertices.len() {
+        let Some(normal) = normals[v].try_normalize() else { continue };
+        let star = &stars[offsets[v]..offsets[v + 1]];
+        let from = mesh.vertices[v];
+        let moved = (0..=HALVINGS)
+            .map(|k| from + normal * (margin / (1 << k) as f32))
+            .find(|&p| worst_below(mesh, star, v as u32, p, floor) <= floor);
+        if let Some(p) = moved {
+            mesh.vertices[v] = p;
+        }
+    }
+}
+
 /// The cosine of the smallest dihedral angle of the tets `star` with vertex `v` put at `p`
 /// (lower is better); 2 when one of them is inverted or flat. Comparing cosines spares the
 /// arc cosines.
