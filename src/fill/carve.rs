@@ -15,8 +15,8 @@
 use super::model::LstModel;
 use super::render::Textures;
 use super::render::shade_point;
-use super::tets::{TetGrid, TetMesh};
-use super::view::{Displacement, Frame, Hit, MIDLEVEL, Shading, draw_triangle, facets, rasterize};
+use super::tets::TetMesh;
+use super::view::{Displacement, Frame, Hit, MIDLEVEL, Rays, Shading, draw_triangle, facets, rasterize};
 use crate::error::{Error, Result};
 use crate::render::Rgb8;
 use glam::{Vec2, Vec3};
@@ -139,7 +139,7 @@ pub fn carve(
     let shading = Shading::Smooth { crease: super::view::DEFAULT_CREASE };
     let mut hits = rasterize(&facets(model, 0, shading), &frame, |p| sides.iter().all(|s| s.keeps(p)));
     let boundary: Vec<Option<f32>> = hits.iter().map(|h| h.map(|h| h.depth)).collect();
-    let grid = TetGrid::new(&model.mesh)?;
+    let rays = Rays::new(&model.surface, &frame);
     let reach = reach(&model.mesh, &strokes.iter().flat_map(|s| s.points.iter().copied()).collect::<Vec<_>>());
     for (k, side) in sides.iter().enumerate() {
         let others = |p: Vec3| sides.iter().enumerate().all(|(j, s)| j == k || s.keeps(p));
@@ -151,9 +151,7 @@ pub fn carve(
                     [(quad[0], quad[0]), (quad[1], quad[1]), (quad[2], quad[2])],
                     [(quad[0], quad[0]), (quad[2], quad[2]), (quad[3], quad[3])],
                 ],
-                Some((textures, scale)) => {
-                    relief_triangles(&quad, facing, model, &grid, (textures, *scale), frame.pixel())
-                }
+                Some((textures, scale)) => relief_triangles(&quad, facing, model, (textures, *scale), frame.pixel()),
             };
             for tri in triangles {
                 let shown = tri.map(|c| c.1);
@@ -162,7 +160,15 @@ pub fn carve(
                 draw_triangle(&mut hits, size, shown.map(|p| frame.to_pixel(p)), |b| {
                     let p = tri[0].0 * b[0] + tri[1].0 * b[1] + tri[2].0 * b[2];
                     let q = shown[0] * b[0] + shown[1] * b[1] + shown[2] * b[2];
-                    grid.locate(&model.mesh, p)?;
+                    // inside by the ray through p's own pixel (q is p displaced)
+                    let pixel = frame.to_pixel(p).floor();
+                    let (x, y) = (
+                        pixel.x.clamp(0.0, (size - 1) as f32) as usize,
+                        pixel.y.clamp(0.0, (size - 1) as f32) as usize,
+                    );
+                    if !rays.inside(x, y, p) {
+                        return None;
+                    }
                     let hit = Hit { depth: frame.forward.dot(q), model: 0, triangle: u32::MAX, point: p, normal: lit };
                     others(p).then_some(hit)
                 });
@@ -178,12 +184,11 @@ const MAX_RELIEF_TRIANGLES: usize = 2_000_000;
 
 /// The part of a stroke's quad inside the model's bounds as a grid of triangles about two
 /// pixels across, each corner (point on the face, point shown) moved along `facing` by
-/// `scale x (d - 0.5)`, `d` sampled in the tet holding it (0.5, no move, outside).
+/// `scale x (d - 0.5)`, `d` the model's Displacement channel there (see [`LstModel::locate`]).
 fn relief_triangles(
     quad: &[Vec3; 4],
     facing: Vec3,
     model: &LstModel,
-    grid: &TetGrid,
     (textures, scale): (&Textures, f32),
     pixel: f32,
 ) -> Vec<[(Vec3, Vec3); 3]> {
@@ -208,7 +213,7 @@ fn relief_triangles(
     let corner = |i: usize, j: usize| {
         let (s, t) = (s0 + (s1 - s0) * i as f32 / ns as f32, t0 + (t1 - t0) * j as f32 / nt as f32);
         let p = origin + along * s + across * t;
-        let d = grid.locate(&model.mesh, p).and_then(|_| shade_point(model, textures, p)).map_or(MIDLEVEL, |c| c[0]);
+        let d = shade_point(model, textures, p).map_or(MIDLEVEL, |c| c[0]);
         (p, p + facing * scale * (d - MIDLEVEL))
     };
     let corners: Vec<(Vec3, Vec3)> =
@@ -359,7 +364,6 @@ mod tests {
             Volume::from_fn([16; 3], vec![Channel::Displacement], |x, _, _, o| o[0] = (x as f32 + 0.5) / 16.0).unwrap();
         let full = Volume::from_fn([2; 3], vec![Channel::A], |_, _, _, o| o.fill(1.0)).unwrap();
         let textures = Textures::channel(&[relief], &[full], &[Channel::Displacement]).unwrap();
-        let grid = TetGrid::new(&model.mesh).unwrap();
         let quad = [
             Vec3::new(-1.0, -1.0, 0.5),
             Vec3::new(2.0, -1.0, 0.5),
@@ -367,7 +371,7 @@ mod tests {
             Vec3::new(-1.0, 2.0, 0.5),
         ];
         let scale = 0.2;
-        let triangles = relief_triangles(&quad, Vec3::Z, &model, &grid, (&textures, scale), 0.01);
+        let triangles = relief_triangles(&quad, Vec3::Z, &model, (&textures, scale), 0.01);
         let mut checked = 0;
         for (p, q) in triangles.iter().flatten() {
             assert!((q.x, q.y) == (p.x, p.y), "corners move along the normal only");

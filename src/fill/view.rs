@@ -114,6 +114,46 @@ impl Frame {
     }
 }
 
+/// Where the rays of a picture cross a model's input surface: per pixel, the depths at
+/// which its ray enters and leaves the solid, to tell whether a point seen at a pixel
+/// (on a stroke cut's face) lies inside.
+pub(super) struct Rays {
+    forward: Vec3,
+    near: f32,
+    step: f32,
+    /// Per pixel row, per pixel, the crossings in steps from `near`, sorted.
+    rows: Vec<Vec<Vec<f64>>>,
+}
+
+impl Rays {
+    /// The rays of `frame` through `surface` (closed).
+    pub fn new(surface: &Mesh, frame: &Frame) -> Rays {
+        let depths = surface.vertices.iter().map(|p| frame.forward.dot(*p));
+        let (lo, hi) = depths.fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), d| (a.min(d), b.max(d)));
+        let step = frame.pixel();
+        let near = lo - step;
+        let along = ((hi - near) / step).ceil() as usize + 2;
+        // grid x: depth in steps from `near`; grid y and z: the pixel's x and y
+        let (s, half) = (frame.scale, frame.size as f32 / 2.0);
+        let to_grid = glam::Affine3A::from_cols(
+            Vec3::new(frame.forward.x / step, frame.right.x * s, -frame.up.x * s).into(),
+            Vec3::new(frame.forward.y / step, frame.right.y * s, -frame.up.y * s).into(),
+            Vec3::new(frame.forward.z / step, frame.right.z * s, -frame.up.z * s).into(),
+            Vec3::new(-near / step, half - frame.centre.x * s, half + frame.centre.y * s).into(),
+        );
+        let slices = crate::mesh::Slices::new(&surface.transformed(to_grid), [along, frame.size, frame.size]);
+        let rows = (0..frame.size).into_par_iter().map(|y| slices.crossings(y)).collect();
+        Rays { forward: frame.forward, near, step, rows }
+    }
+
+    /// Whether `p`, seen at pixel `(x, y)`, lies inside the surface.
+    pub fn inside(&self, x: usize, y: usize, p: Vec3) -> bool {
+        let depth = f64::from((self.forward.dot(p) - self.near) / self.step);
+        let crossings = &self.rows[y][x];
+        crossings.partition_point(|c| *c < depth) % 2 == 1
+    }
+}
+
 /// How the surface is lit.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Shading {
@@ -854,6 +894,36 @@ mod tests {
         };
         assert_eq!(outline(model.surface.clone()), 0);
         assert!(outline(LstModel::boundary_of(&model.mesh).unwrap()) > 50);
+    }
+
+    /// A point seen at a pixel is inside by the ray crossings exactly when the surface holds
+    /// it (points within a hair of the surface aside).
+    #[test]
+    fn the_rays_of_a_picture_tell_inside_from_outside() {
+        let fruit = crate::mesh::shapes::named("fruit").unwrap();
+        let frame = Frame::around(fruit.vertices.iter().copied(), (35.0, 25.0), 64);
+        let rays = Rays::new(&fruit, &frame);
+        let on_surface = |q: Vec3| {
+            let corners = fruit.triangles.iter().map(|t| t.map(|v| fruit.vertices[v as usize]));
+            corners.map(|c| q.distance(crate::mesh::closest_on_triangle(q, c))).fold(f32::INFINITY, f32::min) < 1e-4
+        };
+        let (mut inside, mut checked) = (0, 0);
+        for y in (0..64).step_by(3) {
+            for x in (0..64).step_by(3) {
+                let mx = (x as f32 + 0.5 - 32.0) / frame.scale + frame.centre.x;
+                let my = (32.0 - (y as f32 + 0.5)) / frame.scale + frame.centre.y;
+                for k in -20..=20 {
+                    let p = frame.right * mx + frame.up * my + frame.forward * (k as f32 * 0.05);
+                    if on_surface(p) {
+                        continue;
+                    }
+                    let want = fruit.contains(p);
+                    assert_eq!(rays.inside(x, y, p), want, "pixel {x}, {y}, depth {k}");
+                    (inside, checked) = (inside + usize::from(want), checked + 1);
+                }
+            }
+        }
+        assert!(inside > 1000 && inside < checked, "{inside} of {checked} inside");
     }
 
     #[test]

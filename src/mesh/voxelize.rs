@@ -79,6 +79,23 @@ impl Slices {
         Slices { grid, found }
     }
 
+    /// Per row of grid slice `k` (the line through the voxel centres along x), where it
+    /// crosses the mesh, sorted, in grid coordinates (voxel `i` spans `i..i + 1`): inside
+    /// between the first and second, the third and fourth, and so on, for a closed mesh.
+    pub fn crossings(&self, k: usize) -> Vec<Vec<f64>> {
+        let [_, ny, _] = self.grid;
+        let mut out = vec![Vec::new(); ny];
+        let Some((frame, _, rays)) = &self.found else { return out };
+        let Some(local) = k.checked_sub(frame.origin[2]).filter(|l| *l < frame.dims[2]) else { return out };
+        let pz = frame.sample(2, local);
+        let mut found = Vec::new();
+        for (m, ids) in rays.by_row(frame, local).iter().enumerate() {
+            rays.crossings(ids, local, [frame.sample(1, m), pz], &mut found);
+            out[frame.origin[1] + m] = found.iter().map(|c| c.0).collect();
+        }
+        out
+    }
+
     /// Per voxel of grid slice `k` (x fastest), whether its centre is inside.
     pub fn inside(&self, k: usize) -> Vec<bool> {
         let [nx, ny, _] = self.grid;
@@ -254,10 +271,8 @@ impl RayTable {
         RayTable { tris, by_slice }
     }
 
-    /// The alpha of voxel slice `k`, x fastest.
-    fn slice(&self, rule: &Rule, frame: &Frame, k: usize) -> Vec<f32> {
-        let [nx, ny, _] = frame.dims;
-        let ss = frame.ss;
+    /// The triangles of voxel slice `k` by sample row.
+    fn by_row(&self, frame: &Frame, k: usize) -> Vec<Vec<u32>> {
         let mut by_row = vec![Vec::new(); frame.samples(1)];
         for &id in &self.by_slice[k] {
             let (first, last) = self.tris[id as usize].rows;
@@ -265,20 +280,34 @@ impl RayTable {
                 row.push(id);
             }
         }
+        by_row
+    }
+
+    /// Into `out`, where the sample row at `(py, pz)` of sample layer `layer` crosses the
+    /// triangles `ids`: (x, weight), sorted.
+    fn crossings(&self, ids: &[u32], layer: usize, [py, pz]: [f64; 2], out: &mut Vec<(f64, i32)>) {
+        out.clear();
+        for &id in ids {
+            let tri = &self.tris[id as usize];
+            if (tri.layers.0..=tri.layers.1).contains(&layer) {
+                out.extend(crossing(tri, py, pz));
+            }
+        }
+        out.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    }
+
+    /// The alpha of voxel slice `k`, x fastest.
+    fn slice(&self, rule: &Rule, frame: &Frame, k: usize) -> Vec<f32> {
+        let [nx, ny, _] = frame.dims;
+        let ss = frame.ss;
+        let by_row = self.by_row(frame, k);
         let mut counts = vec![0u32; nx * ny];
         let mut crossings = Vec::new();
         for layer in k * ss..(k + 1) * ss {
             let pz = frame.sample(2, layer);
             for (m, ids) in by_row.iter().enumerate() {
                 let py = frame.sample(1, m);
-                crossings.clear();
-                for &id in ids {
-                    let tri = &self.tris[id as usize];
-                    if (tri.layers.0..=tri.layers.1).contains(&layer) {
-                        crossings.extend(crossing(tri, py, pz));
-                    }
-                }
-                crossings.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+                self.crossings(ids, layer, [py, pz], &mut crossings);
                 let row = &mut counts[(m / ss) * nx..][..nx];
                 match rule {
                     Rule::Parity => fill_row(frame, &crossings, row),
