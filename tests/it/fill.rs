@@ -973,8 +973,21 @@ fn filled_models_are_shaded_as_smoothly_as_their_mesh() {
     let spec = grey_spec(d, 5000);
     let mut meshes: Vec<(String, String)> =
         ["fruit", "log", "vase"].iter().map(|s| (s.to_string(), draw(d, s))).collect();
+    let cake = at(d, "cake");
+    assert!(solidtex(&["draw", "cake", "-o", &cake, "--library", &library()]).status.success());
+    for layer in ["sponge-low", "cream", "sponge-high", "glaze"] {
+        meshes.push((layer.into(), format!("{cake}/{layer}.obj")));
+    }
     if let Some(shared) = crate::mesh::shared_meshes() {
-        for name in ["libigl_bunny", "cgal_dragknob", "cgal_cactus", "cgal_blobby"] {
+        for name in [
+            "libigl_bunny",
+            "cgal_dragknob",
+            "cgal_cactus",
+            "cgal_blobby",
+            "cgal_blob-closed",
+            "cgal_ellipe0.003",
+            "cgal_pipe",
+        ] {
             meshes.push((name.into(), shared.join(format!("{name}.obj")).to_string_lossy().into_owned()));
         }
     }
