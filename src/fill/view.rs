@@ -121,8 +121,9 @@ pub(super) struct Rays {
     forward: Vec3,
     near: f32,
     step: f32,
-    /// Per pixel row, per pixel, the crossings in steps from `near`, sorted.
-    rows: Vec<Vec<Vec<f64>>>,
+    /// Per pixel row: where each pixel's crossings start in the row's list (one more
+    /// than the pixels), and the crossings in steps from `near`, sorted per pixel.
+    rows: Vec<(Vec<u32>, Vec<f64>)>,
 }
 
 impl Rays {
@@ -142,14 +143,28 @@ impl Rays {
             Vec3::new(-near / step, half - frame.centre.x * s, half + frame.centre.y * s).into(),
         );
         let slices = crate::mesh::Slices::new(&surface.transformed(to_grid), [along, frame.size, frame.size]);
-        let rows = (0..frame.size).into_par_iter().map(|y| slices.crossings(y)).collect();
+        let rows = (0..frame.size)
+            .into_par_iter()
+            .map(|y| {
+                let pixels = slices.crossings(y);
+                let mut starts = Vec::with_capacity(pixels.len() + 1);
+                starts.push(0u32);
+                let mut all = Vec::new();
+                for crossings in pixels {
+                    all.extend(crossings);
+                    starts.push(all.len() as u32);
+                }
+                (starts, all)
+            })
+            .collect();
         Rays { forward: frame.forward, near, step, rows }
     }
 
     /// Whether `p`, seen at pixel `(x, y)`, lies inside the surface.
     pub fn inside(&self, x: usize, y: usize, p: Vec3) -> bool {
         let depth = f64::from((self.forward.dot(p) - self.near) / self.step);
-        let crossings = &self.rows[y][x];
+        let (starts, all) = &self.rows[y];
+        let crossings = &all[starts[x] as usize..starts[x + 1] as usize];
         crossings.partition_point(|c| *c < depth) % 2 == 1
     }
 }
