@@ -311,7 +311,7 @@ fn render_band(
                 let l = inverse * (view.point(x, y) - c[0]);
                 let b = [1.0 - l.x - l.y - l.z, l.x, l.y, l.z];
                 if b.iter().all(|w| *w >= -1e-5) {
-                    out[i] = shade(textures, &layers, b, false);
+                    out[i] = shade(textures, (layers.iter().rev().copied(), layers.first().copied()), b, false);
                     done[i] = true;
                 }
             }
@@ -321,7 +321,7 @@ fn render_band(
     for (i, _) in done.iter().enumerate().filter(|(_, d)| !**d) {
         let (x, y) = (i % view.width, y0 + i / view.width);
         if let Some(at) = model.locate(view.point(x, y)) {
-            out[i] = shade(textures, &layers_of(model, at.tet as usize), at.weights, !at.inside);
+            out[i] = shade(textures, lazy_layers(model, at.tet as usize), at.weights, !at.inside);
         }
     }
     out
@@ -390,24 +390,38 @@ type Layer = (usize, [Vec3; 4], u32);
 
 /// The patches of tet `t`, bottom first.
 fn layers_of(model: &LstModel, t: usize) -> Vec<Layer> {
-    let tet = model.mesh.tets[t];
-    model.tet_patches[t]
-        .iter()
-        .map(|&p| (model.patches[p as usize].source as usize, model.patches[p as usize].corners(tet), p))
-        .collect()
+    model.tet_patches[t].iter().map(|&p| layer(model, t, p)).collect()
+}
+
+/// Patch `p` of tet `t` as a layer.
+fn layer(model: &LstModel, t: usize, p: u32) -> Layer {
+    let patch = &model.patches[p as usize];
+    (patch.source as usize, patch.corners(model.mesh.tets[t]), p)
+}
+
+/// The layers of tet `t` from the top, made one at a time (compositing mostly stops after
+/// the first or second), and its bottom layer.
+fn lazy_layers(model: &LstModel, t: usize) -> (impl Iterator<Item = Layer> + '_, Option<Layer>) {
+    let list = &model.tet_patches[t];
+    (list.iter().rev().map(move |&p| layer(model, t, p)), list.first().map(|&p| layer(model, t, p)))
 }
 
 /// The composited colour of the model at `point` (see [`LstModel::locate`]); `None` only
-/// for a point that is not finite.
+/// for a point that is not finite or a model without tets.
 pub fn shade_point(model: &LstModel, textures: &Textures, point: Vec3) -> Option<[f32; 4]> {
     let at = model.locate(point)?;
-    Some(shade(textures, &layers_of(model, at.tet as usize), at.weights, !at.inside).0)
+    Some(shade(textures, lazy_layers(model, at.tet as usize), at.weights, !at.inside).0)
 }
 
 /// Composites the layers at barycentric point `b`, top first; also the patch that
 /// contributes most. A point `extended` past its tet reads each texture at the nearest
 /// point of the texture cube, so a patch's mask does not end at the tet's face.
-fn shade(textures: &Textures, layers: &[Layer], b: [f32; 4], extended: bool) -> ([f32; 4], u32) {
+fn shade(
+    textures: &Textures,
+    (top_first, bottom): (impl Iterator<Item = Layer>, Option<Layer>),
+    b: [f32; 4],
+    extended: bool,
+) -> ([f32; 4], u32) {
     let at = |w: &[Vec3; 4]| {
         let p = w[0] * b[0] + w[1] * b[1] + w[2] * b[2] + w[3] * b[3];
         if extended { p.clamp(Vec3::ZERO, Vec3::ONE) } else { p }
@@ -415,17 +429,17 @@ fn shade(textures: &Textures, layers: &[Layer], b: [f32; 4], extended: bool) -> 
     let mut colour = Vec3::ZERO;
     let mut cover = 0.0f32;
     let (mut most, mut share) = (NO_PATCH, 0.0f32);
-    for (source, w, patch) in layers.iter().rev() {
-        let p = at(w);
-        let a = textures.masks[*source].alpha(p);
+    for (source, w, patch) in top_first {
+        let p = at(&w);
+        let a = textures.masks[source].alpha(p);
         if a <= 0.0 {
             continue;
         }
         let weight = a * (1.0 - cover);
-        colour += textures.colour[*source].rgb(p) * weight;
+        colour += textures.colour[source].rgb(p) * weight;
         cover += weight;
         if weight > share {
-            (most, share) = (*patch, weight);
+            (most, share) = (patch, weight);
         }
         if cover > 0.996 {
             break;
@@ -433,9 +447,9 @@ fn shade(textures: &Textures, layers: &[Layer], b: [f32; 4], extended: bool) -> 
     }
     if cover > 0.0 {
         colour /= cover;
-    } else if let Some((source, w, patch)) = layers.first() {
-        colour = textures.colour[*source].rgb(at(w));
-        most = *patch;
+    } else if let Some((source, w, patch)) = bottom {
+        colour = textures.colour[source].rgb(at(&w));
+        most = patch;
     }
     ([colour.x, colour.y, colour.z, 1.0], most)
 }
