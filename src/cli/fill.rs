@@ -270,16 +270,16 @@ pub fn run_fill(args: &FillArgs) -> Result<()> {
     );
     let [x, y, z] = distance.at;
     tell!(
-        "  surface within {:.2} tet edges (tets to mesh {:.3}, mesh to tets {:.3}, creases included; farthest at \
-         {x:.4}, {y:.4}, {z:.4})",
+        "  tets within {:.2} tet edges of the surface (tets to mesh {:.3}, mesh to tets {:.3}, creases included; \
+         farthest at {x:.4}, {y:.4}, {z:.4}); the model's shape is the surface itself",
         distance.in_edges(),
         distance.from_tets,
         distance.from_surface
     );
     if distance.in_edges() > STRAY_EDGES {
         tell!(
-            "  over half a tet edge: a part or a gap there is thinner than the lattice; `solidtex cut {} --plane \
-             {x:.4},{y:.4},{z:.4},0,0,1` shows it",
+            "  over half a tet edge: a part or a gap there is thinner than the lattice, and takes its texture \
+             from the nearest tets, stretched; `solidtex cut {} --plane {x:.4},{y:.4},{z:.4},0,0,1` shows it",
             args.output.display()
         );
     }
@@ -337,7 +337,7 @@ fn warn_if_lost(mesh: &Path, held: &mesher::VolumeCheck) {
     };
     tell!(
         "warning: {}: the tet mesh holds {:.1} % of the mesh's volume: {lost:.1} % is in parts thinner than \
-         the lattice spacing and will not be textured; {advice}",
+         the lattice spacing and takes its texture stretched from the nearest tets; {advice}",
         mesh.display(),
         held.share * 100.0
     );
