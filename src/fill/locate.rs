@@ -5,7 +5,9 @@
 //!
 //! ```text
 //!   p --TetGrid--> tet holding p ? --yes--> (tet, weights ≥ 0)
-//!                                  --no---> nearest boundary face (rings of cells) -> (its tet, weights)
+//!                                  --no---> nearest boundary face (the cell's list of faces
+//!                                           that can be nearest, else rings of cells)
+//!                                           -> (its tet, weights)
 //! ```
 //!
 //! Extending the nearest face's map keeps the texture continuous across the face; where the
@@ -90,7 +92,7 @@ impl Cells {
 }
 
 /// Lists of numbers per cell: `items[offsets[i]..offsets[i + 1]]`.
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone)]
 struct Lists {
     offsets: Vec<u32>,
     items: Vec<u32>,
