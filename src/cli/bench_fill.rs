@@ -58,7 +58,8 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             continue;
         }
         timed(args, &format!("fill/tetmesh/{name}/5k"), || {
-            let tets = mesher::tetrahedralize(mesh, 5000)?;
+            // as a fill meshes: covering the solid
+            let tets = mesher::tetrahedralize_covering(mesh, 5000, crate::fill::cover_margin(&case.spec))?;
             Ok(format!("{} tets, min dihedral {:.1} deg", tets.tets.len(), tets.min_dihedral_degrees()))
         })?;
         let mut model = None;
