@@ -15,7 +15,7 @@
 //! edge and differ away from it by the distance times the difference of their gradients,
 //! so a point a fraction of an edge outside sees a step of a fraction of that difference.
 
-use super::tets::{FACES, NONE, TetGrid, TetMesh};
+use super::tets::{FACES, NONE, TetGrid, TetMesh, cell_in};
 use crate::mesh::closest_on_triangle;
 use glam::{Mat3, Vec3};
 use std::sync::OnceLock;
@@ -63,8 +63,7 @@ struct Cells {
 impl Cells {
     /// The cell holding `p`, clamped into the grid.
     fn of(&self, p: Vec3) -> [usize; 3] {
-        let c = ((p - self.lo) / self.side).floor().max(Vec3::ZERO);
-        [0, 1, 2].map(|k| (c[k].min(u32::MAX as f32) as usize).min(self.dims[k] - 1))
+        cell_in(self.lo, self.side, self.dims, p)
     }
 
     fn index(&self, [x, y, z]: [usize; 3]) -> usize {

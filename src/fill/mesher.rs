@@ -431,6 +431,7 @@ impl<'a> AtSpacing<'a> {
                 conform::inflate(&mut tets, margin * self.lattice.h as f32);
             }
             let count = tets.tets.len();
+            // no distance measured: the spacing loop ranks covering meshes by count alone
             tried(tets, 0.0);
             return count;
         }

@@ -10,6 +10,7 @@
 //! each pixel takes the first tet (in index order) that contains it, so the picture does
 //! not depend on the thread count.
 
+use super::locate::Location;
 use super::model::LstModel;
 use super::sampler::Sampler;
 use super::tets::TetMesh;
@@ -409,8 +410,12 @@ fn lazy_layers(model: &LstModel, t: usize) -> (impl Iterator<Item = Layer> + '_,
 /// The composited colour of the model at `point` (see [`LstModel::locate`]); `None` only
 /// for a point that is not finite or a model without tets.
 pub fn shade_point(model: &LstModel, textures: &Textures, point: Vec3) -> Option<[f32; 4]> {
-    let at = model.locate(point)?;
-    Some(shade(textures, lazy_layers(model, at.tet as usize), at.weights, !at.inside).0)
+    model.locate(point).map(|at| shade_at(model, textures, &at))
+}
+
+/// The composited colour of the model at a located point.
+pub fn shade_at(model: &LstModel, textures: &Textures, at: &Location) -> [f32; 4] {
+    shade(textures, lazy_layers(model, at.tet as usize), at.weights, !at.inside).0
 }
 
 /// Composites the layers at barycentric point `b`, top first; also the patch that

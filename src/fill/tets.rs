@@ -239,8 +239,7 @@ impl TetGrid {
     /// The cell holding `p`, clamped into the grid (monotone in each coordinate, so a box's
     /// corner cells span the cells of every point in it).
     fn cell_of(&self, p: Vec3) -> [usize; 3] {
-        let c = ((p - self.lo) / self.cell).floor().max(Vec3::ZERO);
-        [0, 1, 2].map(|k| (c[k].min(u32::MAX as f32) as usize).min(self.dims[k] - 1))
+        cell_in(self.lo, self.cell, self.dims, p)
     }
 
     /// The grid's corner, cell side and cells per axis.
@@ -262,6 +261,13 @@ impl TetGrid {
         let i = x + self.dims[0] * (y + self.dims[1] * z);
         &self.tets[self.offsets[i] as usize..self.offsets[i + 1] as usize]
     }
+}
+
+/// The cell holding `p` on a grid from `lo` of cells of side `side`, `dims` per axis,
+/// clamped into the grid (monotone in each coordinate).
+pub(crate) fn cell_in(lo: Vec3, side: f32, dims: [usize; 3], p: Vec3) -> [usize; 3] {
+    let c = ((p - lo) / side).floor().max(Vec3::ZERO);
+    [0, 1, 2].map(|k| (c[k].min(u32::MAX as f32) as usize).min(dims[k] - 1))
 }
 
 /// A box of `cells` cubes of side `h` from the origin, each split into 6 tets around its

@@ -286,7 +286,8 @@ impl SkinLayer<'_> {
         colour.par_iter_mut().zip(through.par_iter_mut()).zip(entries).for_each(|((c, t), entry)| {
             let Some(h) = entry.filter(|h| kept(h.point)) else { return };
             let model = models[h.model as usize].0;
-            if let Some(rgb) = self.skin.colour_at(model, h.model as usize, h.point) {
+            let at = model.locate(h.point);
+            if let Some(rgb) = self.skin.colour_at(model, h.model as usize, h.point, at.as_ref()) {
                 *c += Vec3::from_array(rgb) * (*t * self.opacity);
                 *t *= 1.0 - self.opacity;
             }

@@ -10,8 +10,9 @@
 //!             -> per pixel: point -> tet -> patches composited -> x (ambient + diffuse)
 //! ```
 
+use super::locate::Location;
 use super::model::LstModel;
-use super::render::{BACKGROUND, Textures, shade_point};
+use super::render::{BACKGROUND, Textures, shade_at, shade_point};
 use crate::error::Result;
 use crate::mesh::Mesh;
 use crate::render::{Rgb8, to_u8};
@@ -95,9 +96,11 @@ impl Frame {
                 None => BACKGROUND,
                 Some(h) => {
                     let (model, textures) = models[h.model as usize];
-                    let on_skin = skin.and_then(|s| s.colour_at(model, h.model as usize, h.point));
+                    // located once for the skin's depth test and the colour
+                    let at = model.locate(h.point);
+                    let on_skin = skin.and_then(|s| s.colour_at(model, h.model as usize, h.point, at.as_ref()));
                     let Some(c) =
-                        on_skin.map(|[r, g, b]| [r, g, b, 1.0]).or_else(|| shade_point(model, textures, h.point))
+                        on_skin.map(|[r, g, b]| [r, g, b, 1.0]).or_else(|| at.map(|at| shade_at(model, textures, &at)))
                     else {
                         return BACKGROUND;
                     };
@@ -241,10 +244,11 @@ pub struct Skin<'a> {
 pub const SKIN_DEPTH: f32 = 0.05;
 
 impl Skin<'_> {
-    /// The skin's colour at `point` of model `index`, or `None` where the solid shows.
-    pub fn colour_at(&self, model: &LstModel, index: usize, point: Vec3) -> Option<[f32; 3]> {
+    /// The skin's colour at `point` of model `index` (located at `at`, see
+    /// [`LstModel::locate`]), or `None` where the solid shows.
+    pub fn colour_at(&self, model: &LstModel, index: usize, point: Vec3, at: Option<&Location>) -> Option<[f32; 3]> {
         if let Some(depth) = self.depth
-            && shade_point(model, &depth[index], point).is_none_or(|d| d[0] > SKIN_DEPTH)
+            && at.is_none_or(|at| shade_at(model, &depth[index], at)[0] > SKIN_DEPTH)
         {
             return None;
         }
