@@ -20,7 +20,8 @@ use std::time::Instant;
 const OTHERS: [&str; 4] = ["libigl_bunny.obj", "cgal_sphere.obj", "cgal_dragknob.obj", "cgal_pipe.obj"];
 
 /// The filling workloads of one mesh (`{}`: the mesh's name).
-const NAMES: [&str; 6] = ["tetmesh/{}/5k", "paste/{}/5k", "cut/{}/512", "view/{}/512", "bake/{}/64", "render/{}/512"];
+const NAMES: [&str; 7] =
+    ["tetmesh/{}/5k", "paste/{}/5k", "cut/{}/512", "view/{}/512", "bake/{}/64", "render/{}/512", "export/{}/512"];
 
 /// The one large fill: the drawn fruit at 50,000 tets, where the parallel parts show.
 const LARGE: &str = "fill/large/fruit-2b/50k";
@@ -128,6 +129,16 @@ fn render_workloads(args: &BenchArgs, name: &str, model: &LstModel, textures: &T
         };
         let rendering = translucent::render(&[(model, textures)], translucent::Density::Uniform, &settings, None)?;
         Ok(format!("{} slices", rendering.slices))
+    })?;
+    // `export`'s default: edges of about two pixels of a 512 view, vertex colours, the file
+    // made in memory
+    timed(args, &format!("fill/export/{name}/512"), || {
+        let edge = 2.0 * crate::fill::view::pixel_size(&[model], (35.0, 25.0), 512);
+        let options = crate::fill::export::Options { edge, crease: crate::fill::view::DEFAULT_CREASE, atlas: None };
+        let mesh = crate::fill::export::export(model, textures, None, options, &NoProgress)?;
+        let part = io::gltf::Part { name: name.to_string(), mesh: &mesh };
+        let bytes = io::gltf::glb(&[part], serde_json::Value::Null)?;
+        Ok(format!("{} triangles, {:.1} MB", mesh.triangles.len(), bytes.len() as f64 / 1e6))
     })
 }
 

@@ -371,7 +371,7 @@ fn seam_strength(loaded: &Loaded) -> Option<f64> {
 /// Refuse a displacement `scale` that would move the surface farther than the models'
 /// size (the diagonal of their box): the picture is then noise and its triangles, each
 /// spread over the whole picture, take minutes to draw (exit 2).
-fn within_models(flag: &str, scale: f32, loaded: &[Loaded]) -> Result<()> {
+pub(super) fn within_models(flag: &str, scale: f32, loaded: &[Loaded]) -> Result<()> {
     let (lo, hi) = render::bounds(&pairs(loaded));
     let size = lo.distance(hi);
     if scale.abs() > size {
@@ -419,9 +419,9 @@ impl Progress for Bar {
 }
 
 /// A model with its sources' volumes, masks and colour textures.
-struct Loaded {
-    model: LstModel,
-    textures: Textures,
+pub(super) struct Loaded {
+    pub(super) model: LstModel,
+    pub(super) textures: Textures,
     /// Each source's exemplar volume (every channel).
     volumes: Vec<Volume>,
     /// Where each was read.
@@ -469,7 +469,7 @@ fn shared_channels(loaded: &[Loaded]) -> (Vec<Channel>, Vec<Channel>) {
     all.into_iter().partition(|c| loaded.iter().flat_map(|l| &l.volumes).all(|v| v.channel_index(c).is_some()))
 }
 
-fn load_models(paths: &[PathBuf]) -> Result<Vec<Loaded>> {
+pub(super) fn load_models(paths: &[PathBuf]) -> Result<Vec<Loaded>> {
     if paths.len() > render::MAX_MODELS {
         return Err(usage(Error::invalid(format!(
             "{} models given; at most {} combine in one picture or volume",
@@ -618,7 +618,7 @@ pub fn run_cut(args: &CutArgs) -> Result<()> {
 
 /// Per model, textures sampling `channel`; the error names the volume that lacks it and
 /// the channels it has.
-fn channel_textures(loaded: &[Loaded], channel: &Channel) -> Result<Vec<Textures>> {
+pub(super) fn channel_textures(loaded: &[Loaded], channel: &Channel) -> Result<Vec<Textures>> {
     loaded
         .iter()
         .map(|l| {

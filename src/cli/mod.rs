@@ -19,6 +19,7 @@ mod bench_guided;
 mod bench_surface;
 pub mod build;
 mod commands;
+mod export;
 mod fill;
 mod guided;
 mod handmade;
@@ -202,6 +203,9 @@ pub enum Command {
     View(fill::ViewArgs),
     /// Render one or more filled models as translucent material (volume rendering) as a PNG.
     Render(fill::RenderArgs),
+    /// Take filled models (or a surface skin) out as a glTF 2.0 binary (.glb): the surface with
+    /// vertex colours or a texture atlas, for Blender, game engines and web viewers.
+    Export(export::ExportArgs),
     /// Grow a 2D exemplar over a mesh's surface (Turk 2001): a .ply with vertex colours.
     Surface(surface::SurfaceArgs),
     /// Draw the frame field of sketch-guided synthesis (Zhang 2011) on a cut as a PNG.
@@ -251,6 +255,7 @@ pub fn run(command: Command) -> crate::Result<()> {
         Command::Bake(args) => fill::run_bake(&args),
         Command::View(args) => fill::run_view(&args),
         Command::Render(args) => fill::run_render(&args),
+        Command::Export(args) => export::run(&args),
         Command::Surface(args) => surface::run(&args),
         Command::Field(args) => guided::run(&args),
         Command::Guided(args) => guided::run_guided(&args),

@@ -10,6 +10,7 @@
 //! ```
 
 pub mod carve;
+pub mod export;
 pub mod field;
 pub mod locate;
 pub mod mesher;

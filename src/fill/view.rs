@@ -446,6 +446,12 @@ fn grow(marked: &[bool], size: usize, reach: usize) -> Vec<bool> {
     out
 }
 
+/// Model units per pixel of a `size`-pixel picture of `models` seen from `camera` (yaw,
+/// pitch degrees), as [`surfaces`] frames them.
+pub fn pixel_size(models: &[&LstModel], camera: (f32, f32), size: usize) -> f32 {
+    Frame::new(models, camera, size).pixel()
+}
+
 /// The axes of an orthographic camera `yaw` degrees around y and `pitch` degrees up from
 /// the +z side, looking at the origin: (forward, right, up), orthonormal.
 pub fn camera(yaw: f32, pitch: f32) -> (Vec3, Vec3, Vec3) {
@@ -457,15 +463,16 @@ pub fn camera(yaw: f32, pitch: f32) -> (Vec3, Vec3, Vec3) {
 
 /// A triangle of a model's input surface: its number, corners (vertex ids and points),
 /// unit normal and area.
-struct Face {
-    triangle: u32,
-    ids: [u32; 3],
-    corners: [Vec3; 3],
-    normal: Vec3,
-    area: f32,
+pub(super) struct Face {
+    pub triangle: u32,
+    pub ids: [u32; 3],
+    pub corners: [Vec3; 3],
+    pub normal: Vec3,
+    pub area: f32,
 }
 
-fn surface_faces(model: &LstModel) -> Vec<Face> {
+/// The triangles of the model's input surface as faces.
+pub(super) fn surface_faces(model: &LstModel) -> Vec<Face> {
     let surface = &model.surface;
     (surface.triangles.iter().enumerate())
         .map(|(i, &ids)| {
@@ -476,18 +483,14 @@ fn surface_faces(model: &LstModel) -> Vec<Face> {
         .collect()
 }
 
-/// The normal at each corner of each face under `shading`. Smooth: the faces around a
-/// vertex fall into fans split by crease edges (whose faces' normals differ by more than
-/// the crease angle, or that are not shared by exactly two faces); each corner takes the
-/// area-weighted mean normal of its fan, so the normal is continuous across every edge that
-/// is not a crease.
-fn corner_normals(faces: &[Face], shading: Shading) -> Vec<[Vec3; 3]> {
-    let Shading::Smooth { crease } = shading else {
-        return faces.iter().map(|f| [f.normal; 3]).collect();
-    };
-    let limit = crease.clamp(0.0, 180.0).to_radians().cos();
-    // corner slot 3f + k; slots of the same vertex joined across smooth edges
+/// The corners of the faces (slot 3f + k: corner k of face f) gathered into fans under
+/// `shading`. Smooth: the corners of a vertex are joined across every edge that is not a
+/// crease (an edge whose faces' normals differ by more than the crease angle, or that is
+/// not shared by exactly two faces). Flat: every corner is its own fan.
+pub(super) fn corner_fans(faces: &[Face], shading: Shading) -> Fans {
     let mut fans = Fans((0..3 * faces.len() as u32).collect());
+    let Shading::Smooth { crease } = shading else { return fans };
+    let limit = crease.clamp(0.0, 180.0).to_radians().cos();
     let mut edges: Vec<((u32, u32), u32)> = (faces.iter().enumerate())
         .flat_map(|(i, f)| (0..3).map(move |k| (f.ids[k], f.ids[(k + 1) % 3], i as u32)))
         .map(|(a, b, f)| ((a.min(b), a.max(b)), f))
@@ -504,6 +507,13 @@ fn corner_normals(faces: &[Face], shading: Shading) -> Vec<[Vec3; 3]> {
             fans.join(slot(f), slot(g));
         }
     }
+    fans
+}
+
+/// The normal at each corner of each face: the area-weighted mean normal of the faces of
+/// its fan ([`corner_fans`]), so the normal is continuous across every edge that is not a
+/// crease (and each face's own under flat shading).
+pub(super) fn corner_normals(faces: &[Face], fans: &Fans) -> Vec<[Vec3; 3]> {
     let mut sums = vec![Vec3::ZERO; 3 * faces.len()];
     for (i, f) in faces.iter().enumerate() {
         for k in 0..3 {
@@ -516,10 +526,11 @@ fn corner_normals(faces: &[Face], shading: Shading) -> Vec<[Vec3; 3]> {
 }
 
 /// Union–find over corner slots.
-struct Fans(Vec<u32>);
+pub(super) struct Fans(Vec<u32>);
 
 impl Fans {
-    fn root(&self, mut i: u32) -> u32 {
+    /// The slot that stands for the fan of `i`.
+    pub(super) fn root(&self, mut i: u32) -> u32 {
         while self.0[i as usize] != i {
             i = self.0[i as usize];
         }
@@ -564,7 +575,7 @@ fn at<T: std::ops::Mul<f32, Output = T> + std::ops::Add<Output = T> + Copy>(v: [
 /// `shading`.
 pub(super) fn facets(model: &LstModel, index: u32, shading: Shading) -> Vec<Facet> {
     let faces = surface_faces(model);
-    let normals = corner_normals(&faces, shading);
+    let normals = corner_normals(&faces, &corner_fans(&faces, shading));
     faces
         .iter()
         .zip(normals)
@@ -577,7 +588,7 @@ pub(super) fn facets(model: &LstModel, index: u32, shading: Shading) -> Vec<Face
 
 /// Per surface vertex, the area-weighted mean normal of the facets around it (creases
 /// and shading aside), so faces that share an edge move it the same way.
-fn vertex_normals(model: &LstModel, facets: &[Facet]) -> Vec<Vec3> {
+pub(super) fn vertex_normals(model: &LstModel, facets: &[Facet]) -> Vec<Vec3> {
     let mut normals = vec![Vec3::ZERO; model.surface.vertices.len()];
     for f in facets {
         let s = f.shown;
@@ -591,14 +602,14 @@ fn vertex_normals(model: &LstModel, facets: &[Facet]) -> Vec<Vec3> {
 /// triangles' normals differ by more than [`DEFAULT_CREASE`]), rising linearly to 1 at
 /// `band` from the nearest crease edge. Vertex normals lean across a crease, so moving its
 /// points along them would throw spikes out of it; tapered, both sides meet on the crease.
-struct Taper {
+pub(super) struct Taper {
     band: f32,
     /// Per facet, the crease edges within `band` of it.
     near: Vec<Vec<[Vec3; 2]>>,
 }
 
 impl Taper {
-    fn new(model: &LstModel, facets: &[Facet], band: f32) -> Taper {
+    pub(super) fn new(model: &LstModel, facets: &[Facet], band: f32) -> Taper {
         let limit = DEFAULT_CREASE.to_radians().cos();
         let mut edges: Vec<((u32, u32), usize)> = facets
             .iter()
@@ -633,7 +644,7 @@ impl Taper {
     }
 
     /// The share of the displacement at `point` of facet `facet`.
-    fn at(&self, facet: usize, point: Vec3) -> f32 {
+    pub(super) fn at(&self, facet: usize, point: Vec3) -> f32 {
         let nearest = self.near[facet]
             .iter()
             .map(|[a, b]| point.distance(crate::mesh::closest_on_segment(point, *a, *b)))

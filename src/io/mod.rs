@@ -20,6 +20,7 @@ mod exr_file;
 mod fields;
 pub mod fill_spec;
 pub mod flipbook;
+pub mod gltf;
 pub mod guard;
 pub mod guided_cache;
 mod kopf_vol;

@@ -69,6 +69,19 @@ pub fn write_rgb8(path: &Path, picture: &Rgb8) -> Result<()> {
     write_png(path, (picture.width, picture.height), png::ColorType::Rgb, &picture.data, None)
 }
 
+/// An 8-bit RGB picture encoded as PNG, in memory (to embed in another file).
+pub fn rgb8_bytes(picture: &Rgb8) -> Result<Vec<u8>> {
+    let fail = |e: png::EncodingError| Error::invalid(format!("cannot encode PNG: {e}"));
+    let mut bytes = Vec::new();
+    let mut encoder = png::Encoder::new(&mut bytes, picture.width as u32, picture.height as u32);
+    encoder.set_color(png::ColorType::Rgb);
+    encoder.set_depth(png::BitDepth::Eight);
+    let mut writer = encoder.write_header().map_err(fail)?;
+    writer.write_image_data(&picture.data).map_err(fail)?;
+    writer.finish().map_err(fail)?;
+    Ok(bytes)
+}
+
 /// Write a 2D image with 1 to 4 channels as an 8-bit PNG.
 pub fn write_image(path: &Path, image: &Image2d) -> Result<()> {
     let colour = colour_type(image.channel_count(), path, &crate::volume::channel_names(image.channels()))?;

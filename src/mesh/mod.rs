@@ -29,6 +29,7 @@ use glam::{Affine3A, DVec3, Vec3};
 use std::f64::consts::PI;
 
 pub mod shapes;
+pub mod split;
 pub(crate) mod voxelize;
 pub use voxelize::{Coverage, Slices, voxelize};
 

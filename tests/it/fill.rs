@@ -46,7 +46,7 @@ pub fn fill(dir: &Path, mesh: &str, spec: &str, out: &str) -> serde_json::Value 
 
 /// Draws `shape` into `dir` and fills it by a spec of `body` (named after `name`) into
 /// `NAME.lst`; the model's path.
-fn filled(dir: &Path, shape: &str, name: &str, body: &str) -> String {
+pub fn filled(dir: &Path, shape: &str, name: &str, body: &str) -> String {
     let (mesh, spec) = (draw(dir, shape), spec(dir, &format!("{name}.toml"), body));
     fill(dir, &mesh, &spec, &format!("{name}.lst"));
     at(dir, &format!("{name}.lst"))
@@ -430,7 +430,7 @@ fn the_exemplars_other_channels_survive_the_fill_into_cuts_and_bakes() {
     assert!(!Path::new(&bad).exists());
 }
 
-const TRUNK: &str = r#"
+pub const TRUNK: &str = r#"
 exemplar = "trunk"
 seed = 1
 tets = 6000

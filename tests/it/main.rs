@@ -4,6 +4,7 @@ mod bad_input;
 mod classify;
 mod cli;
 mod coordinates;
+mod export;
 mod fill;
 mod formats;
 mod fuzz;
