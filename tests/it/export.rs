@@ -226,7 +226,7 @@ fn several_models_a_relief_and_a_skin_export_and_bad_input_is_refused() {
     let skin_glb = at(d, "skin.glb");
     let run = solidtex(&["export", &skin, "-o", &skin_glb]);
     assert!(run.status.success(), "{}", stderr(&run));
-    validated(&[&both, &raised, &skin_glb]);
+    validated(&[&both, &flat, &raised, &skin_glb]);
     // bad input: a clear error, nothing written
     let bad = at(d, "bad.glb");
     assert_fails(&solidtex(&["export", &kiwi, "--displacement", "0.1", "-o", &bad]), &["kiwi.exr", "Displacement"]);

@@ -46,6 +46,7 @@ fn an_output_naming_an_input_is_refused_and_nothing_changes() {
         vec!["cut", "w.lst", "-o", "w.lst"],
         vec!["view", "w.lst", "-o", "w.lst"],
         vec!["render", "w.lst", "-o", "w.lst"],
+        vec!["export", "w.lst", "-o", "w.lst"],
         vec!["field", "fruit.obj", "--spec", "s.toml", "-o", "s.toml"],
         vec!["fill", "fruit.obj", "--spec", "s.toml", "-o", "w.lst", "--json", "s.toml"],
         vec!["fill", "fruit.obj", "--spec", "w.lst", "-o", "w.lst"],
