@@ -73,6 +73,11 @@ pub struct Options {
     /// ([`super::occupancy`]); 0: not at all. Only runs over the whole grid weigh it (a
     /// cut on demand must equal the same voxels of the whole solid).
     pub histogram: f32,
+    /// Weigh the colour balance at every level, not only the finest: for label exemplars,
+    /// whose phases must be placed in the right shares from the coarsest level on. On a
+    /// photo, balancing the coarse levels lengthens its features (their layout is fixed
+    /// there, and an over-used colour is moved in long runs).
+    pub balance_every_level: bool,
 }
 
 impl Default for Options {
@@ -87,6 +92,7 @@ impl Default for Options {
             max_dims: 16,
             layered: false,
             histogram: 0.0,
+            balance_every_level: false,
         }
     }
 }
@@ -533,7 +539,8 @@ pub fn run(
 /// the whole grid.
 fn balance_at(setup: &Setup, level: usize, versions: &[Mask]) -> Option<Balance> {
     let whole = versions.iter().all(|m| m.on.iter().all(|on| *on));
-    if setup.options.histogram <= 0.0 || setup.exemplars.cube.is_some() || !whole {
+    let weighed = setup.options.balance_every_level || level + 1 == setup.options.levels;
+    if setup.options.histogram <= 0.0 || setup.exemplars.cube.is_some() || !whole || !weighed {
         return None;
     }
     let planes: Vec<&Prepared> = setup.planes().map(|a| setup.exemplar(a, level)).collect();
@@ -1092,6 +1099,20 @@ mod tests {
     }
 
     #[test]
+    fn a_photo_is_balanced_at_its_finest_level_and_labels_at_every_level() {
+        let (exemplars, frames) = world(16);
+        let photo = Setup { options: Options { histogram: 4.0, ..options() }, ..setup(&exemplars, &frames, 16) };
+        let whole = |level: usize| vec![Mask::full([8 << level; 3]); 3];
+        let weighed =
+            |setup: &Setup| (0..2).map(|level| balance_at(setup, level, &whole(level)).is_some()).collect::<Vec<_>>();
+        assert_eq!(weighed(&photo), vec![false, true]);
+        let labels = Setup { options: Options { balance_every_level: true, ..photo.options }, ..photo };
+        assert_eq!(weighed(&labels), vec![true, true]);
+        let off = Setup { options: Options { histogram: 0.0, ..labels.options }, ..labels };
+        assert_eq!(weighed(&off), vec![false, false]);
+    }
+
+    #[test]
     fn the_reach_covers_a_turned_neighbourhood() {
         let o = Options { n: 5, ..Options::default() };
         // offsets up to 2 along two unit axes turned 45°: 2.83 voxels, to the nearest: 3
@@ -1131,6 +1152,7 @@ mod tests {
             passes: 2,
             k: 3,
             max_dims: 8,
+            balance_every_level: false,
             layered: false,
             histogram: 0.0,
         }

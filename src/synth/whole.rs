@@ -9,7 +9,8 @@
 //!  labels      exemplars of at most 16 colours: two rounds of settling (each voxel
 //!              shows the pixel of its triple most of its face neighbours show)
 //!  balance     homogeneous solids: candidates in colours the solid holds too much of
-//!              cost more, counted per parity sub-pass ([`super::occupancy`]; `--histogram`)
+//!              cost more, counted per parity sub-pass ([`super::occupancy`]; `--histogram`),
+//!              at the finest level (labels: at every level)
 //!  output      each voxel's shown pixel (a layered solid adds its Depth)
 //! ```
 
@@ -52,6 +53,7 @@ pub fn options(params: &SynthParams, layered: bool) -> Options {
         max_dims: params.max_pca_dims,
         layered,
         histogram: if layered { 0.0 } else { BALANCE * params.histogram_strength },
+        balance_every_level: false,
     }
 }
 
@@ -66,14 +68,15 @@ pub fn synthesize(
 ) -> Result<Vec<f32>> {
     let featured = images.map(with_edge_distance);
     let featured: Vec<Image2d> = featured.into_iter().collect::<Result<_>>()?;
-    let options = options(params, layered);
+    let labels = images.iter().all(|image| super::edges::is_labels(image));
+    let options = Options { balance_every_level: labels, ..options(params, layered) };
     let exemplars = Exemplars::prepare([&featured[0], &featured[1], &featured[2]], &options)?;
     let dims = params.size;
     let depth = layered.then(|| depth_along_z(dims[2]));
     let wrap = [params.tileable, params.tileable, params.tileable && !layered];
     let setup = Setup { exemplars: &exemplars, frames: None, wrap, depth: depth.as_ref(), dims, seed, options };
     let mut out = coords::run(&setup, &coords::plan(&setup, &Mask::full(dims), 0), None, progress)?;
-    if images.iter().all(|image| super::edges::is_labels(image)) {
+    if labels {
         for _ in 0..SETTLE_ROUNDS {
             out.values = coords::settled(&setup, &out.values);
         }
