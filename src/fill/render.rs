@@ -148,6 +148,24 @@ pub struct Cut {
 
 /// The patch of a pixel outside the model.
 pub const NO_PATCH: u32 = u32::MAX;
+
+impl Cut {
+    /// A cut of `view`'s size with nothing in it.
+    pub fn empty(view: &View) -> Cut {
+        let n = view.width * view.height;
+        Cut { width: view.width, height: view.height, pixels: vec![[0.0; 4]; n], patches: vec![NO_PATCH; n] }
+    }
+
+    /// Emptied and sized for `view`, keeping its memory.
+    fn clear(&mut self, view: &View) {
+        let n = view.width * view.height;
+        (self.width, self.height) = (view.width, view.height);
+        self.pixels.resize(n, [0.0; 4]);
+        self.patches.resize(n, NO_PATCH);
+        self.pixels.par_iter_mut().for_each(|p| *p = [0.0; 4]);
+        self.patches.par_iter_mut().for_each(|p| *p = NO_PATCH);
+    }
+}
 /// Patch numbers of one model in [`Cut::patches`] stay below this.
 const MODEL_STRIDE: u32 = 1 << 26;
 /// The most models a cut, bake, view or rendering combines (their patch numbers share a u32).
@@ -214,13 +232,22 @@ pub fn cut(model: &LstModel, textures: &Textures, view: &View) -> Cut {
 
 /// The cut of `model` at the pixels of `view` that `inside` marks (its outline).
 pub fn cut_within(model: &LstModel, textures: &Textures, view: &View, inside: &[bool]) -> Cut {
+    let mut out = Cut::empty(view);
+    cut_within_into(model, textures, view, inside, &mut out);
+    out
+}
+
+/// [`cut_within`] written into `out` (taking the view's size), each band of rows by its own
+/// thread, so a stack of cuts reuses one picture's memory.
+pub fn cut_within_into(model: &LstModel, textures: &Textures, view: &View, inside: &[bool], out: &mut Cut) {
     // made once before the bands below locate points
     model.locator();
+    out.clear(view);
     let bands = bin_tets(&model.mesh, view);
-    let rows: Vec<Vec<([f32; 4], u32)>> =
-        bands.par_iter().enumerate().map(|(b, tets)| render_band(model, textures, view, (b, tets), inside)).collect();
-    let (pixels, patches) = rows.into_iter().flatten().unzip();
-    Cut { width: view.width, height: view.height, pixels, patches }
+    let rows = out.pixels.par_chunks_mut(BAND * view.width).zip(out.patches.par_chunks_mut(BAND * view.width));
+    rows.zip(bands.par_iter()).enumerate().for_each(|(b, ((pixels, patches), tets))| {
+        render_band(model, textures, view, (b, tets), inside, (pixels, patches));
+    });
 }
 
 /// The outlines of a stack of parallel views: `view` moved by `step` for each next one,
@@ -280,10 +307,14 @@ fn render_band(
     view: &View,
     (band, tets): (usize, &[u32]),
     inside: &[bool],
-) -> Vec<([f32; 4], u32)> {
+    (pixels, patches): (&mut [[f32; 4]], &mut [u32]),
+) {
     let y0 = band * BAND;
     let y1 = (y0 + BAND).min(view.height);
-    let mut out = vec![([0.0f32; 4], NO_PATCH); (y1 - y0) * view.width];
+    let mut put = |i: usize, (colour, patch): ([f32; 4], u32)| {
+        pixels[i] = colour;
+        patches[i] = patch;
+    };
     let inside = &inside[y0 * view.width..y1 * view.width];
     // pixels outside the surface count as done: nothing shows there
     let mut done: Vec<bool> = inside.iter().map(|i| !i).collect();
@@ -312,7 +343,7 @@ fn render_band(
                 let l = inverse * (view.point(x, y) - c[0]);
                 let b = [1.0 - l.x - l.y - l.z, l.x, l.y, l.z];
                 if b.iter().all(|w| *w >= -1e-5) {
-                    out[i] = shade(textures, (layers.iter().rev().copied(), layers.first().copied()), b, false);
+                    put(i, shade(textures, (layers.iter().rev().copied(), layers.first().copied()), b, false));
                     done[i] = true;
                 }
             }
@@ -322,10 +353,9 @@ fn render_band(
     for (i, _) in done.iter().enumerate().filter(|(_, d)| !**d) {
         let (x, y) = (i % view.width, y0 + i / view.width);
         if let Some(at) = model.locate(view.point(x, y)) {
-            out[i] = shade(textures, lazy_layers(model, at.tet as usize), at.weights, !at.inside);
+            put(i, shade(textures, lazy_layers(model, at.tet as usize), at.weights, !at.inside));
         }
     }
-    out
 }
 
 /// A field given at the mesh's vertices (e.g. depth), interpolated at every pixel of the
@@ -470,23 +500,37 @@ pub fn cut_many(models: &[(&LstModel, &Textures)], view: &View) -> Cut {
 
 /// [`cut_many`] with each model's outline given (`insides`, one per model).
 pub fn cut_many_within(models: &[(&LstModel, &Textures)], view: &View, insides: &[Vec<bool>]) -> Cut {
-    let mut cuts = models.iter().zip(insides).map(|((m, t), inside)| cut_within(m, t, view, inside));
-    let mut out = cuts.next().unwrap_or(Cut {
-        width: view.width,
-        height: view.height,
-        pixels: vec![[0.0; 4]; view.width * view.height],
-        patches: vec![NO_PATCH; view.width * view.height],
-    });
-    for (m, other) in cuts.enumerate() {
-        let offset = (m as u32 + 1).saturating_mul(MODEL_STRIDE);
-        for ((p, q), (a, b)) in out.pixels.iter_mut().zip(other.pixels).zip(out.patches.iter_mut().zip(other.patches)) {
-            if p[3] == 0.0 {
-                *p = q;
-                *a = if b == NO_PATCH { NO_PATCH } else { b + offset };
-            }
-        }
-    }
+    let (mut out, mut other) = (Cut::empty(view), Cut::empty(view));
+    cut_many_within_into(models, view, insides, (&mut out, &mut other));
     out
+}
+
+/// [`cut_many_within`] written into `out`, with `other` for the second and later models'
+/// cuts: a stack of cuts reuses their memory.
+pub fn cut_many_within_into(
+    models: &[(&LstModel, &Textures)],
+    view: &View,
+    insides: &[Vec<bool>],
+    (out, other): (&mut Cut, &mut Cut),
+) {
+    if models.is_empty() {
+        out.clear(view);
+    }
+    for (m, ((model, textures), inside)) in models.iter().zip(insides).enumerate() {
+        if m == 0 {
+            cut_within_into(model, textures, view, inside, out);
+            continue;
+        }
+        cut_within_into(model, textures, view, inside, other);
+        let offset = (m as u32).saturating_mul(MODEL_STRIDE);
+        let pairs = out.pixels.par_iter_mut().zip(out.patches.par_iter_mut());
+        pairs.zip(other.pixels.par_iter().zip(other.patches.par_iter())).for_each(|((p, a), (q, b))| {
+            if p[3] == 0.0 {
+                *p = *q;
+                *a = if *b == NO_PATCH { NO_PATCH } else { b + offset };
+            }
+        });
+    }
 }
 
 /// The outlines of every model in a stack of `count` parallel views, the first `view`,

@@ -17,7 +17,7 @@
 use super::model::LstModel;
 #[cfg(test)]
 use super::render::BACKGROUND;
-use super::render::{Cut, Textures, View, bounds, cut_many_within, stack_outlines};
+use super::render::{Cut, Textures, View, bounds, cut_many_within_into, stack_outlines};
 use super::view::{Hit, Shading, camera, draw_triangle, facets};
 use crate::error::{Error, Result};
 use crate::render::{Rgb8, to_u8};
@@ -127,12 +127,21 @@ pub fn render_with(
     let mut done = 0;
     let outlines =
         stack_outlines(models, &frame.at(frame.near + 0.5 * depth, forward), forward * depth, settings.slices);
+    // one slice's cuts and densities, their memory kept from slice to slice
+    let first = frame.at(frame.near + 0.5 * depth, forward);
+    let [mut cut, mut other, mut channel] = [(); 3].map(|_| Cut::empty(&first));
+    let mut rho = Vec::with_capacity(pixels);
     for k in 0..settings.slices {
         let view = frame.at(frame.near + (k as f32 + 0.5) * depth, forward);
         let kept_share = kept(&view, settings.cutaway, forward * depth);
-        let insides: Vec<Vec<bool>> = outlines.iter().map(|o| o.inside(k)).collect();
-        let cut = cut_many_within(models, &view, &insides);
-        let rho = densities(models, density, (&cut, &insides), &view, settings.levels);
+        let mut insides: Vec<Vec<bool>> = outlines.iter().map(|o| o.inside(k)).collect();
+        // a ray that is already opaque takes nothing more: its pixels are not cut
+        for inside in &mut insides {
+            inside.par_iter_mut().zip(through.par_iter()).for_each(|(i, t)| *i &= *t > OPAQUE);
+        }
+        cut_many_within_into(models, &view, &insides, (&mut cut, &mut other));
+        let scratch = (&mut channel, &mut other);
+        densities(models, density, (&cut, &insides), &view, (settings.levels, scratch), &mut rho);
         let centre = frame.near + (k as f32 + 0.5) * depth;
         let pixels = colour.par_iter_mut().zip(through.par_iter_mut()).zip(started.par_iter_mut());
         pixels.enumerate().for_each(|(i, ((c, t), first))| {
@@ -157,7 +166,7 @@ pub fn render_with(
         if progress.cancelled() {
             return Err(Error::Cancelled);
         }
-        if through.iter().all(|t| *t <= OPAQUE) {
+        if through.par_iter().all(|t| *t <= OPAQUE) {
             break;
         }
     }
@@ -297,24 +306,30 @@ impl SkinLayer<'_> {
 }
 
 /// The density of every pixel of a slice, 0 to 1.
+/// The density at each pixel of a slice, into `rho`: from `density`, mapped from `lo..hi`
+/// to 0..1; a density channel is cut into the `scratch` cuts.
 fn densities(
     models: &[(&LstModel, &Textures)],
     density: Density,
     (cut, insides): (&Cut, &[Vec<bool>]),
     view: &View,
-    (lo, hi): (f32, f32),
-) -> Vec<f32> {
+    ((lo, hi), scratch): ((f32, f32), (&mut Cut, &mut Cut)),
+    rho: &mut Vec<f32>,
+) {
     let luma = |p: &[f32; 4]| 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2];
-    let raw: Vec<f32> = match density {
-        Density::Uniform => vec![1.0; cut.pixels.len()],
-        Density::Dark => cut.pixels.iter().map(|p| 1.0 - luma(p)).collect(),
-        Density::Light => cut.pixels.iter().map(luma).collect(),
+    let scaled = |r: f32| ((r - lo) / (hi - lo)).clamp(0.0, 1.0);
+    rho.clear();
+    match density {
+        Density::Uniform => rho.resize(cut.pixels.len(), scaled(1.0)),
+        Density::Dark => rho.par_extend(cut.pixels.par_iter().map(|p| scaled(1.0 - luma(p)))),
+        Density::Light => rho.par_extend(cut.pixels.par_iter().map(|p| scaled(luma(p)))),
         Density::Channel(textures) => {
             let pairs: Vec<(&LstModel, &Textures)> = models.iter().map(|(m, _)| *m).zip(textures).collect();
-            cut_many_within(&pairs, view, insides).pixels.iter().map(|p| p[0]).collect()
+            let (into, other) = scratch;
+            cut_many_within_into(&pairs, view, insides, (&mut *into, other));
+            rho.par_extend(into.pixels.par_iter().map(|p| scaled(p[0])));
         }
-    };
-    raw.into_iter().map(|r| ((r - lo) / (hi - lo)).clamp(0.0, 1.0)).collect()
+    }
 }
 
 /// The share of pixel `i`'s slab of a slice (`step` long along the ray, centred on the
