@@ -305,7 +305,6 @@ impl SkinLayer<'_> {
     }
 }
 
-/// The density of every pixel of a slice, 0 to 1.
 /// The density at each pixel of a slice, into `rho`: from `density`, mapped from `lo..hi`
 /// to 0..1; a density channel is cut into the `scratch` cuts.
 fn densities(
