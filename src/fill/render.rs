@@ -280,22 +280,34 @@ impl Outlines {
 
 /// For each band of rows, the tets that cross the plane there, in index order.
 fn bin_tets(mesh: &TetMesh, view: &View) -> Vec<Vec<u32>> {
+    const CHUNK: usize = 1024;
     let n = view.normal();
     let offset = n.dot(view.origin);
     let down = view.down / view.down.length_squared();
-    let mut bands = vec![Vec::new(); view.height.div_ceil(BAND)];
-    for (t, tet) in mesh.tets.iter().enumerate() {
-        let c = tet.map(|v| mesh.vertices[v as usize]);
-        let side = c.map(|p| n.dot(p) - offset);
-        if side.iter().all(|s| *s > 0.0) || side.iter().all(|s| *s < 0.0) {
-            continue;
-        }
-        let rows = c.map(|p| down.dot(p - view.origin));
-        let lo = rows.iter().copied().fold(f32::INFINITY, f32::min).floor().max(0.0) as usize;
-        let hi = rows.iter().copied().fold(f32::NEG_INFINITY, f32::max).ceil().max(0.0) as usize;
-        for band in bands.iter_mut().take((hi / BAND + 1).min(view.height.div_ceil(BAND))).skip(lo / BAND) {
-            band.push(t as u32);
-        }
+    let count = view.height.div_ceil(BAND);
+    // chunks of tets binned in parallel, then joined in chunk order: each band in index order
+    let chunks: Vec<Vec<Vec<u32>>> = (mesh.tets.par_chunks(CHUNK).enumerate())
+        .map(|(k, chunk)| {
+            let mut bands = vec![Vec::new(); count];
+            for (j, tet) in chunk.iter().enumerate() {
+                let c = tet.map(|v| mesh.vertices[v as usize]);
+                let side = c.map(|p| n.dot(p) - offset);
+                if side.iter().all(|s| *s > 0.0) || side.iter().all(|s| *s < 0.0) {
+                    continue;
+                }
+                let rows = c.map(|p| down.dot(p - view.origin));
+                let lo = rows.iter().copied().fold(f32::INFINITY, f32::min).floor().max(0.0) as usize;
+                let hi = rows.iter().copied().fold(f32::NEG_INFINITY, f32::max).ceil().max(0.0) as usize;
+                for band in bands.iter_mut().take((hi / BAND + 1).min(count)).skip(lo / BAND) {
+                    band.push((k * CHUNK + j) as u32);
+                }
+            }
+            bands
+        })
+        .collect();
+    let mut bands = vec![Vec::new(); count];
+    for chunk in chunks {
+        bands.iter_mut().zip(chunk).for_each(|(band, part)| band.extend(part));
     }
     bands
 }
