@@ -21,7 +21,7 @@
 
 use super::model::LstModel;
 use super::render::{Textures, shade_point};
-use super::view::{self, Face, Fans, MIDLEVEL, Shading, Taper};
+use super::view::{self, Face, Fans, Shading, Taper, at as blend};
 use crate::error::{Error, Result};
 use crate::mesh::split::{self, Bary};
 use crate::progress::Progress;
@@ -134,10 +134,6 @@ fn key(fans: &Fans, face: u32, b: Bary) -> Key {
     }
 }
 
-fn blend<T: std::ops::Mul<f32, Output = T> + std::ops::Add<Output = T> + Copy>(v: [T; 3], b: Bary) -> T {
-    v[0] * b[0] + v[1] * b[1] + v[2] * b[2]
-}
-
 /// The split surface: each vertex as (face, coordinates in it), and the triangles.
 struct Split {
     vertices: Vec<(u32, Bary)>,
@@ -195,7 +191,7 @@ pub fn export(
         }
         Some(relief) => {
             let moved = displaced(model, (&faces, &vertices, &points), relief, options, progress)?;
-            let normals = area_normals(&moved, &triangles);
+            let normals = crate::surface::retile::vertex_normals(&moved, &triangles);
             (moved, unit(normals, &vertices, &faces))
         }
     };
@@ -237,17 +233,6 @@ fn unit(normals: Vec<Vec3>, vertices: &[(u32, Bary)], faces: &[Face]) -> Vec<Vec
         .collect()
 }
 
-/// Per vertex, the sum of its triangles' area-weighted normals.
-fn area_normals(positions: &[Vec3], triangles: &[[u32; 3]]) -> Vec<Vec3> {
-    let mut sums = vec![Vec3::ZERO; positions.len()];
-    for t in triangles {
-        let p = t.map(|v| positions[v as usize]);
-        let weighted = (p[1] - p[0]).cross(p[2] - p[0]);
-        t.iter().for_each(|&v| sums[v as usize] += weighted);
-    }
-    sums
-}
-
 /// The split surface's points moved as `view --displacement` moves them: along the
 /// surface's vertex normal (creases aside) by the relief, tapered to zero at creases.
 fn displaced(
@@ -265,8 +250,7 @@ fn displaced(
         let (f, b) = vertices[i];
         let face = &faces[f as usize];
         let normal = blend(face.ids.map(|v| vertex_normals[v as usize]), b).normalize_or(face.normal);
-        let value = shade_point(model, relief.textures, points[i]).map_or(MIDLEVEL, |c| c[0]);
-        points[i] + normal * (relief.scale * (value - MIDLEVEL) * taper.at(f as usize, points[i]))
+        points[i] + normal * view::relief_at(model, (relief.textures, relief.scale), &taper, f as usize, points[i])
     })
 }
 

@@ -567,7 +567,7 @@ impl Facet {
 }
 
 /// Blends three corner values at barycentric `b`.
-fn at<T: std::ops::Mul<f32, Output = T> + std::ops::Add<Output = T> + Copy>(v: [T; 3], b: [f32; 3]) -> T {
+pub(super) fn at<T: std::ops::Mul<f32, Output = T> + std::ops::Add<Output = T> + Copy>(v: [T; 3], b: [f32; 3]) -> T {
     v[0] * b[0] + v[1] * b[1] + v[2] * b[2]
 }
 
@@ -653,6 +653,19 @@ impl Taper {
     }
 }
 
+/// How far displacement moves `point` (on facet `facet`) along its normal: `scale x (d -
+/// MIDLEVEL)`, `d` sampled from `textures` there, times the crease taper.
+pub(super) fn relief_at(
+    model: &LstModel,
+    (textures, scale): (&Textures, f32),
+    taper: &Taper,
+    facet: usize,
+    point: Vec3,
+) -> f32 {
+    let value = shade_point(model, textures, point).map_or(MIDLEVEL, |c| c[0]);
+    scale * (value - MIDLEVEL) * taper.at(facet, point)
+}
+
 /// Each facet split into `level`² triangles whose corners move along the surface's vertex
 /// normals (blended) by `scale x (d - MIDLEVEL)` times the taper, `d` sampled at the
 /// corner's point of the surface; every new triangle is lit by its own normal.
@@ -676,8 +689,7 @@ fn displaced(
                     let b = [1.0 - s - t, s, t];
                     let (sampled, on_face) = (at(f.sampled, b), at(f.shown, b));
                     let normal = at(f.ids.map(|v| vertex_normals[v as usize]), b).normalize_or(f.normal());
-                    let value = shade_point(model, textures, on_face).map_or(MIDLEVEL, |c| c[0]);
-                    let moved = scale * (value - MIDLEVEL) * taper.at(n, on_face);
+                    let moved = relief_at(model, (textures, scale), taper, n, on_face);
                     corners.push((sampled, on_face + normal * moved));
                 }
             }

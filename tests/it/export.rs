@@ -240,6 +240,7 @@ fn several_models_a_relief_and_a_skin_export_and_bad_input_is_refused() {
     let renamed = at(d, "model.glb");
     std::fs::copy(&kiwi, &renamed).unwrap();
     assert_usage(&solidtex(&["export", &renamed, "-o", &renamed]), &["input"]);
+    assert_eq!(std::fs::read(&renamed).unwrap(), before, "the input named as the output is kept as it was");
     assert_eq!(std::fs::read(&kiwi).unwrap(), before);
     assert!(!Path::new(&bad).exists());
 }
