@@ -17,10 +17,22 @@ pub fn classify(file: &Path, json: bool) -> Result<()> {
     say!("  primary     {}", c.primary_axis.as_deref().unwrap_or("none (isotropic)"));
     say!("  depth axis  {}", c.depth_axis.as_deref().unwrap_or("none (homogeneous)"));
     say!("  confidence  {:.2}", c.confidence);
-    let [gx, gy, gz] = c.gradient_energy;
-    let [lx, ly, lz] = c.layering;
-    say!("  gradient energy / variance   x {gx:.4}  y {gy:.4}  z {gz:.4}   (alike within a factor 1.8)");
-    say!("  within-slice variance share  x {lx:.3}  y {ly:.3}  z {lz:.3}   (layered below 0.45)");
+    if c.confidence < crate::classify::LOW_CONFIDENCE {
+        let [a, b] = [&c.nearest[0], &c.nearest[1]].map(|n| format!("{} ({:.2})", n.texture_type, n.score));
+        say!("  nearest     {a}, {b}: the measurements sit near a threshold; look at the cuts");
+    }
+    let [lx, ly, lz] = c.layering.map(|w| 1.0 - w);
+    say!(
+        "  slice means' share of the variance  x {lx:.3}  y {ly:.3}  z {lz:.3}   (a depth axis: >= {} and {}x the others)",
+        crate::classify::MIN_BETWEEN,
+        crate::classify::STANDS_OUT
+    );
+    let lags = crate::classify::LAGS.map(|l| l.to_string()).join(", ");
+    let within = if c.depth_axis.is_some() { ", within the depth slices" } else { "" };
+    say!("  variogram at lags {lags}{within}   (axes alike within a factor 1.8 at every lag)");
+    for (axis, v) in ["x", "y", "z"].iter().zip(&c.variogram) {
+        say!("    {axis}  {}", v.map(|g| format!("{g:.3}")).join("  "));
+    }
     if let Some(declared) = volume.meta.texture_type.filter(|d| *d != t) {
         say!("  note        the file declares type {declared}");
     }

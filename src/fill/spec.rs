@@ -362,19 +362,27 @@ fn edge_adjacency(surface: &Mesh) -> Vec<Vec<usize>> {
     out
 }
 
+/// The axis whose gradient energy lies farthest (in logarithms) from the other two's.
+fn odd_one(energy: [f64; 3]) -> usize {
+    let log = energy.map(|e| e.max(1e-12).ln());
+    let apart = |k: usize| (log[k] - (log[(k + 1) % 3] + log[(k + 2) % 3]) / 2.0).abs();
+    (0..3).max_by(|a, b| apart(*a).total_cmp(&apart(*b))).unwrap_or(2)
+}
+
 /// The texture axes (0 = x, 1 = y, 2 = z) that the primary, secondary and third field
 /// directions map to: `given` if set; else the primary is the axis the exemplar's Depth
-/// channel runs along (or, without one, the axis it changes fastest along — slowest for a
-/// 1-a fibre texture) and the secondary the remaining axis it changes slowest along.
+/// channel runs along (or, without one, the axis it changes fastest along — for a 1-a
+/// texture the odd one: the fibre axis it changes slowest along, or the normal of sheets
+/// it changes fastest across) and the secondary the remaining axis it changes slowest along.
 pub fn texture_axes(exemplar: &crate::Volume, kind: TextureType, given: Option<[Axis; 2]>) -> Result<[usize; 3]> {
     let [a, b] = match given {
         Some([a, b]) => [a.index(), b.index()],
         None => {
             let energy = crate::classify::classify(exemplar)?.gradient_energy;
             let order = |x: &usize, y: &usize| energy[*x].total_cmp(&energy[*y]);
-            let primary = match depth_axis(exemplar) {
+            let primary = match exemplar.depth_axis() {
                 Some(d) => d,
-                None if kind == TextureType::T1a => (0..3).min_by(order).unwrap_or(2),
+                None if kind == TextureType::T1a => odd_one(energy),
                 None => (0..3).max_by(order).unwrap_or(2),
             };
             let secondary = (0..3).filter(|&i| i != primary).min_by(order).unwrap_or((primary + 1) % 3);
@@ -382,18 +390,6 @@ pub fn texture_axes(exemplar: &crate::Volume, kind: TextureType, given: Option<[
         }
     };
     Ok([a, b, 3 - a - b])
-}
-
-/// The axis the Depth channel grows along, if the volume has one.
-pub fn depth_axis(volume: &crate::Volume) -> Option<usize> {
-    let c = volume.channel_index(&crate::Channel::Depth)?;
-    let d = volume.dims();
-    let step = |axis: usize| {
-        let mut far = [0, 0, 0];
-        far[axis] = d[axis] - 1;
-        (volume.get(far[0], far[1], far[2], c) - volume.get(0, 0, 0, c)).abs()
-    };
-    (0..3).max_by(|x, y| step(*x).total_cmp(&step(*y)))
 }
 
 #[cfg(test)]

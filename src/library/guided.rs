@@ -156,7 +156,7 @@ fn layered_slices(
     depths: &[(Vec3, f32)],
     domain: &Domain,
 ) -> Result<Option<([Image2d; 3], ScalarGrid)>> {
-    let (Some(axis), Some(c)) = (crate::fill::spec::depth_axis(volume), volume.channel_index(&Channel::Depth)) else {
+    let (Some(axis), Some(c)) = (volume.depth_axis(), volume.channel_index(&Channel::Depth)) else {
         return Ok(None);
     };
     if !depths.iter().any(|d| d.1 > 0.0) {

@@ -196,9 +196,11 @@ fn cream(seed: u64, p: Vec3) -> [f32; 3] {
     mix([0.99, 0.97, 0.91], [0.93, 0.88, 0.76], 0.35 * band).map(|c| c + grain)
 }
 
+/// Isotropic on purpose: a type-0 material is pasted at a random orientation per patch,
+/// so sheen streaks running one way would cross at random angles at the seams.
 fn chocolate(seed: u64, p: Vec3) -> [f32; 3] {
-    let streak = fbm(seed, Vec3::new(p.x * 2.0, p.y * 6.0, p.z * 2.0), [2, 6, 2], 4);
-    let sheen = (0.5 + 1.2 * streak).clamp(0.0, 1.0).powi(3);
+    let swirl = fbm(seed, p * 4.0, [4; 3], 4);
+    let sheen = (0.5 + 1.2 * swirl).clamp(0.0, 1.0).powi(3);
     mix([0.24, 0.13, 0.07], [0.45, 0.28, 0.17], sheen)
 }
 

@@ -247,6 +247,19 @@ impl Volume {
         self.voxel_mut(x, y, z)[channel] = value;
     }
 
+    /// The axis the Depth channel grows along (0 = x, 1 = y, 2 = z), if there is one: the
+    /// axis whose far end differs most from the first voxel.
+    pub fn depth_axis(&self) -> Option<usize> {
+        let c = self.channel_index(&Channel::Depth)?;
+        let d = self.dims();
+        let step = |axis: usize| {
+            let mut far = [0, 0, 0];
+            far[axis] = d[axis] - 1;
+            (self.get(far[0], far[1], far[2], c) - self.get(0, 0, 0, c)).abs()
+        };
+        (0..3).max_by(|x, y| step(*x).total_cmp(&step(*y)))
+    }
+
     /// The first sample that is NaN or infinite, as (x, y, z, channel).
     pub fn first_non_finite(&self) -> Option<[usize; 4]> {
         let n = self.channels.len();

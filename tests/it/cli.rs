@@ -114,6 +114,17 @@ fn build_makes_the_default_library() {
     for extra in ["marble-synth.mask.exr", "marble-synth.nrrd", "kiwi.masks", "report.md", "report.html"] {
         assert!(names.contains(&extra.to_string()), "{extra} missing from {names:?}");
     }
+    // Every entry reads as the type its manifest (or recipe) declares.
+    let report = std::fs::read_to_string(dir.path().join("lib/report.md")).unwrap();
+    let rows: Vec<Vec<&str>> = report
+        .lines()
+        .filter(|l| l.starts_with("| ") && !l.starts_with("| exemplar"))
+        .map(|l| l.split(" | ").collect())
+        .collect();
+    assert_eq!(rows.len(), 13, "{report}");
+    for row in rows {
+        assert_eq!(row[2], row[3], "{}: declared {}, classified {}", row[0], row[2], row[3]);
+    }
     let strata = read_volume(&dir.path().join("lib/strata.exr"), 1 << 30).unwrap();
     assert_eq!(strata.meta.texture_type, Some(solidtex::TextureType::T1b));
     assert_eq!(strata.meta.get("name"), Some("strata"));

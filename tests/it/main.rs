@@ -10,6 +10,7 @@ mod formats;
 mod fuzz;
 mod guided;
 mod handmade;
+mod labelled;
 mod library;
 mod masks;
 mod mesh;

@@ -21,6 +21,28 @@ fn classify_reports_type_axes_and_measurements() {
 }
 
 #[test]
+fn a_borderline_volume_gets_its_two_nearest_types_with_scores() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("stretched.exr");
+    // Noise cells 4 along x and 6 along y and z: stretched by 1.5, near the alike factor 1.8.
+    let volume = Volume::from_fn([24; 3], Channel::grey(), |x, y, z, o| {
+        let p = glam::Vec3::new(x as f32, y as f32, z as f32) / 24.0;
+        o[0] = 0.5 + 0.4 * solidtex::noise::fbm(1, p * glam::Vec3::new(4.0, 6.0, 6.0), [4, 6, 6], 3);
+    })
+    .unwrap();
+    write_volume(&file, &volume).unwrap();
+    let run = solidtex(&["classify", &file.to_string_lossy(), "--json"]);
+    let json: serde_json::Value = serde_json::from_slice(&run.stdout).unwrap();
+    let confidence = json["confidence"].as_f64().unwrap();
+    assert!(confidence < 0.6, "{json}");
+    let names: Vec<&str> =
+        json["nearest"].as_array().unwrap().iter().map(|n| n["texture_type"].as_str().unwrap()).collect();
+    assert_eq!(&names[..2], ["0", "1-a"], "{json}");
+    let text = String::from_utf8(solidtex(&["classify", &file.to_string_lossy()]).stdout).unwrap();
+    assert!(text.contains(&format!("nearest     0 ({confidence:.2}), 1-a (")), "{text}");
+}
+
+#[test]
 fn classify_refuses_small_volumes_and_explains_constant_ones() {
     let dir = tempfile::tempdir().unwrap();
     let small = dir.path().join("small.exr");
