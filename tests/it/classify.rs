@@ -33,7 +33,7 @@ fn right(case: &Case, order: [Axis; 3], c: &Classification) -> bool {
 #[test]
 fn classification_is_right_on_at_least_95_percent_of_the_labelled_set() {
     let set = cases();
-    assert!(set.len() >= 80, "{} solids", set.len());
+    assert!(set.len() >= 100, "{} solids", set.len());
     let mut results = Vec::new();
     let mut misses = Vec::new();
     for case in &set {
@@ -53,7 +53,7 @@ fn classification_is_right_on_at_least_95_percent_of_the_labelled_set() {
     for t in [TextureType::T0, TextureType::T1a, TextureType::T1b, TextureType::T2a, TextureType::T2b] {
         let (n, of) = share(&|r| r.0 == t);
         eprintln!("type {t}: {n}/{of} right");
-        assert!(n * 10 >= of * 9, "type {t}: {n}/{of} right; misses:\n{}", misses.join("\n"));
+        assert!(n * 100 >= of * 85, "type {t}: {n}/{of} right; misses:\n{}", misses.join("\n"));
     }
     for floor in [0.0, 0.3, 0.5, 0.7, 0.9] {
         let (n, of) = share(&|r| r.1 >= floor);

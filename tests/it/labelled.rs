@@ -34,7 +34,7 @@ fn case(name: impl Into<String>, volume: Volume, want: TextureType, axis: Option
 
 /// Every case of the set, unpermuted.
 pub fn cases() -> Vec<Case> {
-    let mut out = generated(1..=3);
+    let mut out = generated(1..=4);
     out.extend(synthesized());
     out
 }
