@@ -36,8 +36,15 @@ fn stop_cleanly_on_signals() {
     let Ok(mut signals) = signal_hook::iterator::Signals::new([SIGINT, SIGTERM, SIGHUP]) else { return };
     std::thread::spawn(move || {
         if let Some(signal) = signals.forever().next() {
-            // whatever happens while giving the terminal back, the process exits
-            let _ = std::panic::catch_unwind(solidtex::tui::restore_terminal);
+            // whatever happens while giving the terminal back, the process exits: a write to
+            // a terminal that is closing can block (the UI thread may hold the output's
+            // lock), so the restore gets half a second
+            let (restored, wait) = std::sync::mpsc::channel();
+            std::thread::spawn(move || {
+                let _ = std::panic::catch_unwind(solidtex::tui::restore_terminal);
+                let _ = restored.send(());
+            });
+            let _ = wait.recv_timeout(std::time::Duration::from_millis(500));
             solidtex::io::atomic::remove_live_temporaries();
             std::process::exit(128 + signal);
         }

@@ -19,6 +19,31 @@ pub trait Progress: Sync {
     fn level_done(&self, _level: usize, _levels: usize, _dims: [usize; 3], _channels: usize, _data: &[f32]) {}
 }
 
+/// A part of a longer job: the part's fractions land in `from..from + span` of the
+/// whole's, under the whole's stage name; stopping and warnings pass through.
+pub struct Part<'a> {
+    /// The whole job's progress.
+    pub whole: &'a dyn Progress,
+    /// The stage the whole shows while the part runs.
+    pub stage: String,
+    /// The whole's fraction when the part starts.
+    pub from: f32,
+    /// The share of the whole the part is.
+    pub span: f32,
+}
+
+impl Progress for Part<'_> {
+    fn update(&self, _stage: &str, fraction: f32) {
+        self.whole.update(&self.stage, self.from + fraction.clamp(0.0, 1.0) * self.span);
+    }
+    fn cancelled(&self) -> bool {
+        self.whole.cancelled()
+    }
+    fn warn(&self, message: &str) {
+        self.whole.warn(message)
+    }
+}
+
 /// Progress that goes nowhere.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct NoProgress;

@@ -22,7 +22,7 @@ screen() { tmux capture-pane -t "$session" -p; }
 wait_for() { # text, seconds (also found when the status line wraps it)
   for _ in $(seq 1 $(( $2 * 10 ))); do
     screen | grep -q "$1" && return 0
-    screen | sed 's/ *? help  q quit$//' | tr '\n' ' ' | tr -s ' ' | grep -q "$1" && return 0
+    screen | sed 's/ *? help  M log  q quit$//' | tr '\n' ' ' | tr -s ' ' | grep -q "$1" && return 0
     sleep 0.1
   done
   echo "tui e2e: never saw '$1'; the screen was:"; screen; exit 1
@@ -48,7 +48,7 @@ screen | grep -q "cycle colour" && { echo "tui e2e: the search kept a key withou
 press "/zoom  (/ changes it" 5 Enter
 tmux send-keys -t "$session" f
 sleep 0.3
-screen | grep -q "fill preview" && { echo "tui e2e: f acted under the help"; screen; exit 1; }
+screen | grep -q "fill: marble" && { echo "tui e2e: f acted under the help"; screen; exit 1; }
 press "/ search  esc close" 5 Escape
 tmux send-keys -t "$session" Escape
 sleep 0.5
@@ -58,10 +58,10 @@ for f in marble.exr marble.nrrd marble.vol marble.vdb marble.dds marble.png marb
   [ -s "$out/built/exports/marble/$f" ] || { echo "tui e2e: the export lacks $f"; ls "$out/built/exports/marble"; exit 1; }
 done
 # fill preview: a shape filled with marble, the cut moved
-press "fill preview: marble" 5 f
+press "fill: marble" 5 f
 wait_for "tets, [0-9]* patches" 60
-press "cut across z at +0.00" 5 PageUp z
-press "cut across z at +0.05" 5 Right
+press "cut z +0.00" 5 PageUp z
+press "cut z +0.05" 5 Right
 # E exports the cut as a PNG; a second export never replaces the first
 press "marble.fill-cut-z+0.05.png" 30 E
 press "marble.fill-cut-z+0.05-2.png" 30 E
@@ -115,14 +115,17 @@ wait_for "solidtex library" 10
 # i. entries edited since their build are found stale when the UI opens, with the reason
 wait_for "changed since their last build (select one to see why)" 5
 press "marble changed since its last build (the recipe changed)" 5 Down Up
-# R rebuilds the changed entries only
-press "built marble" 60 R
-screen | grep -q "changed since built" && { echo "tui e2e: R left a changed entry"; screen; exit 1; }
+# R builds the changed entries and those never built, with done/total, elapsed time and an
+# estimate; esc cancels what is left
+press "building 1/[0-9]* · 0:0" 10 R
+for _ in $(seq 1 1200); do screen | grep -q "waiting (queued)\|level [0-9]/\|building" || break; sleep 0.1; done
+screen | grep -q "changed since built\|not built" && { echo "tui e2e: R left a changed or unbuilt entry"; screen; exit 1; }
+screen | grep -q "^│marble  *32x32x32 .*built" || { echo "tui e2e: R did not build marble"; screen; exit 1; }
 press "built kiwi" 60 Down Down Down b
 press "XY z=32/63" 10 Enter
 # k. constraints on the fill preview's cut: a depth point, the depth map, a refill, the spec
 # written and run by `solidtex fill`
-press "fill preview: kiwi" 5 f
+press "fill: kiwi" 5 f
 wait_for "tets, [0-9]* patches" 120
 press "depth 0.50 at" 5 L L L L '[' '[' d
 press "the depth field" 5 c
@@ -139,9 +142,9 @@ press "saved the steps" 5 s
 press "solidtex library" 5 Escape
 sed -i 's/^  count = 280$/  count = 600/' "$out/lib/library.toml"
 press "recipe: kiwi" 10 e
-wait_for "no room for the rest" 60
+wait_for "preview: placed [0-9]* of [0-9]* seeds" 60
 if screen | grep -q "stale"; then echo "tui e2e: the preview after a stamp at x > 31 is stale"; screen; exit 1; fi
-if screen | head -n 18 | grep -q "no room"; then echo "tui e2e: a warning was printed over the screen"; screen; exit 1; fi
+if screen | head -n 18 | grep -q "placed [0-9]* of"; then echo "tui e2e: a warning was printed over the screen"; screen; exit 1; fi
 screen | head -n 1 | grep -q "recipe: kiwi" || { echo "tui e2e: the top border was overwritten"; screen; exit 1; }
 # closing the terminal (SIGHUP) ends the UI
 tmux kill-session -t "$session"
@@ -171,14 +174,15 @@ wait_for "size = 8" 10
 press "added a blur at 4,4,4" 10 a
 press "saved" 10 s
 grep -q '^  blur = "4,4,4"' "$out/lib/broken.toml" || { echo "tui e2e: the blur step was not saved"; exit 1; }
-press "removed step 0" 10 x
+press "removed step 1" 10 x
 press "saved" 10 s
 cmp -s "$out/lib/broken.toml" tests/manifests/two-broken.toml || { echo "tui e2e: adding then removing a step changed the manifest"; diff "$out/lib/broken.toml" tests/manifests/two-broken.toml; exit 1; }
 press "solidtex library" 5 Escape
 # h. r renames the entry (a taken name refused with the reason); renaming it back gives the
 # file back byte for byte
 press "new name: b_" 5 r
-press "already has an exemplar" 10 C-u a Enter
+press "new name: a_  refused: the manifest already has" 10 C-u a Enter
+press "the name stays" 5 Escape
 press "new name: b_" 5 r
 press "renamed b to bark" 10 C-u b a r k Enter
 grep -q '^name = "bark"' "$out/lib/broken.toml" || { echo "tui e2e: the new name is not in the manifest"; exit 1; }
@@ -264,10 +268,10 @@ press "its earlier build stays" 60 b
 press "tile (earlier build: the latest failed)" 10 Enter
 press "solidtex library" 5 Escape
 # the fill preview asks before dropping a depth point; type 0 says it ignores it
-press "fill preview: marble" 10 $(for _ in $(seq 1 20); do printf 'Up '; done) Enter f
+press "fill: marble" 10 $(for _ in $(seq 1 20); do printf 'Up '; done) Enter f
 wait_for "tets, [0-9]* patches" 120
-press "but .depth. is not used by type" 5 d
-press "unsaved fill constraints: w writes them" 5 q
+press ".depth. is not used by type 0" 5 d
+press "q again quits without saving; unsaved fill" 5 q
 press "esc again leaves without saving" 5 Escape
 press "q again quits without saving" 5 C-c
 press "marble.fill.toml" 10 w
@@ -297,4 +301,54 @@ sleep 1
 tmux send-keys -t "$session" "stty -a | tr ' ' '\n' | grep -x -e -icanon -e icanon -e -echo -e echo | tr '\n' ' '; echo END" Enter
 press "icanon echo END" 10
 tmux kill-session -t "$session"
+# l. At 80x24, no text editor needed: the help scrolls to its last section; a field added
+# through the picker and one through $EDITOR (a scripted editor that adds a line after the
+# entry's name); a 128³ synthesis shows its progress moving at least every 3 s.
+fresh="$out/fresh"
+mkdir -p "$fresh" && cp -r exemplars/. "$fresh/"
+cat > "$out/editor.sh" <<'EOS'
+#!/bin/sh
+# called as `editor.sh +LINE FILE`, as vi would be
+line=${1#+}
+sed -i "${line}a mask_falloff = 0.1" "$2"
+EOS
+chmod +x "$out/editor.sh"
+tmux new-session -d -s "$session" -x 80 -y 24 "EDITOR=$out/editor.sh $bin tui $fresh/library.toml -o $out/fresh-built"
+wait_for "solidtex library" 10
+press "keys: library" 5 '?'
+screen | grep -q "quit (asks if work is unsaved)" && { echo "tui e2e: the help fit without scrolling"; screen; exit 1; }
+press "quit (asks if work is unsaved)" 5 G
+press "solidtex library" 5 Escape
+press "recipe: marble" 10 e
+wait_for "seed = 3" 10
+press "add a field: enter adds it" 5 +
+press 'exports = \["nrrd"\]_' 5 G Enter
+press "recipe: marble \[modified\]" 5 Enter
+press "saved" 10 s
+press "mask_falloff = 0.1" 10 o
+sed -n '/^name = "marble"$/,/^seed/p' "$fresh/library.toml" | grep -q '^mask_falloff = 0.1' || { echo "tui e2e: the outside editor's field is missing"; cat "$fresh/library.toml"; exit 1; }
+sed -n '/^name = "marble"$/,/^\[\[/p' "$fresh/library.toml" | grep -q '^exports = \["nrrd"\]' || { echo "tui e2e: the picked field was not saved"; cat "$fresh/library.toml"; exit 1; }
+press "solidtex library" 5 Escape
+sed -i '/^name = "marble-synth"/,/^seed/{s/^size = 32/size = 128/;s/^levels = 2/levels = 3/}' "$fresh/library.toml"
+press "filter \"marble-s\" (1 of 13)" 10 C-r /marble-s Enter
+tmux send-keys -t "$session" b
+# a dimmed key that does nothing says why
+wait_for "marble-synth .*level [0-9]/3" 30
+press "b build: building" 10 b
+last="" still=0 seen=0
+for _ in $(seq 1 600); do
+  row=$(screen | grep "^│marble-synth" || true)
+  case "$row" in *built*|*failed*) break ;; esac
+  gauge=$(printf '%s' "$row" | grep -o 'level [0-9]/[0-9] [#-]* [0-9]*%' || true)
+  if [ -n "$gauge" ] && [ "$gauge" = "$last" ]; then still=$((still + 1)); else still=0; fi
+  [ -n "$gauge" ] && seen=$((seen + 1))
+  [ "$still" -gt 30 ] && { echo "tui e2e: the 128³ build's progress stood at '$gauge' for over 3 s"; screen; exit 1; }
+  last=$gauge
+  sleep 0.1
+done
+[ "$seen" -gt 10 ] || { echo "tui e2e: no progress gauge seen during the 128³ build"; screen; exit 1; }
+wait_for "built marble-synth" 120
+tmux send-keys -t "$session" q
+sleep 1
+tmux kill-session -t "$session" 2>/dev/null || true
 echo "e2e: 1 passed, 0 failed"

@@ -257,7 +257,7 @@ pub fn parse_entry(text: &str, folder: &Path, name: &str) -> Result<Entry> {
     }
     let shown = shown_name(name);
     let own = errors.iter().find(|e| e.contains(&format!("({shown})")) || e.contains(&format!("{name:?}")));
-    let whole = errors.iter().find(|e| !e.contains("exemplar["));
+    let whole = errors.iter().find(|e| !e.contains(": entry "));
     match own.or(whole) {
         Some(error) => Err(Error::invalid(error.clone())),
         None => Err(Error::invalid(format!("no exemplar named {name:?}"))),
@@ -279,7 +279,8 @@ fn plan_of(text: &str, folder: &Path, quote: bool) -> Result<Plan> {
         if entries.iter().any(|x| x.name == entry.name) {
             let line = entry_line(text, i);
             return Err(Error::invalid(format!(
-                "line {line}: exemplar[{i}].name = {name:?} is used twice; names must be unique"
+                "line {line}: entry {}: name = {name:?} is used twice; names must be unique",
+                i + 1
             )));
         }
         entries.push(entry);
@@ -302,9 +303,8 @@ pub fn parse_plan_lenient(text: &str, folder: &Path) -> (Vec<Entry>, Vec<String>
         let name = e.name.clone();
         let line = entry_line(text, i);
         match validate(e, folder) {
-            Ok(entry) if entries.iter().any(|x| x.name == entry.name) => {
-                errors.push(format!("line {line}: exemplar[{i}].name = {name:?} is used twice; names must be unique"))
-            }
+            Ok(entry) if entries.iter().any(|x| x.name == entry.name) => errors
+                .push(format!("line {line}: entry {}: name = {name:?} is used twice; names must be unique", i + 1)),
             Ok(entry) => entries.push(entry),
             Err(err) => errors.push(entry_error(text, i, &name, &err)),
         }
@@ -332,9 +332,14 @@ fn entry_error(text: &str, i: usize, name: &str, error: &Error) -> String {
     }
     let field = leading_path(rest);
     let field_line = line_of(text, &format!("{path}.{field}")).or_else(|| line_of(text, &path));
+    let said = match step.and_then(|k| k.parse::<usize>().ok()) {
+        Some(k) => format!("step {}: {rest}", k + 1),
+        None => message.clone(),
+    };
+    let entry = format!("entry {} ({})", i + 1, shown_name(name));
     match field_line {
-        Some(at) if at != line => format!("line {line}: exemplar[{i}] ({}), line {at}: {message}", shown_name(name)),
-        _ => format!("line {line}: exemplar[{i}] ({}): {message}", shown_name(name)),
+        Some(at) if at != line => format!("line {line}: {entry}, line {at}: {said}"),
+        _ => format!("line {line}: {entry}: {said}"),
     }
 }
 
@@ -377,7 +382,8 @@ fn line_at(text: &str, offset: usize) -> usize {
 /// shown, cut to 80 characters; otherwise the file is said not to be TOML and nothing of
 /// it is echoed.
 pub(crate) fn syntax_error(text: &str, error: &toml::de::Error, what: &str, quote: bool) -> Error {
-    let message = error.message().trim_end();
+    let plain = plain(error.message().trim_end());
+    let message = plain.as_str();
     let Some(start) = error.span().map(|s| s.start.min(text.len())) else {
         return Error::invalid(format!("invalid {what}: {message}"));
     };
@@ -393,11 +399,199 @@ pub(crate) fn syntax_error(text: &str, error: &toml::de::Error, what: &str, quot
     Error::invalid(format!("invalid {what} at line {line}: {message}: {:?}", clip(shown.trim(), 80)))
 }
 
+/// A reader's message (`invalid value: integer \`-5\`, expected usize`) in the user's
+/// words (`must be a whole number, 0 or more, got -5`).
+fn plain(message: &str) -> String {
+    if message.contains("untagged enum RawSize") {
+        return "size must be one number or three, e.g. 64 or [64, 64, 32]".into();
+    }
+    const WANTS: [(&str, &str); 7] = [
+        ("expected usize", "a whole number, 0 or more"),
+        ("expected u64", "a whole number, 0 or more"),
+        ("expected f32", "a number"),
+        ("expected a sequence", "a list, e.g. [1, 2]"),
+        ("expected a string", "text in quotes"),
+        ("expected struct RawStep", "a [[exemplar.steps]] table"),
+        ("expected struct RawExemplar", "an [[exemplar]] table"),
+    ];
+    for (tail, want) in WANTS {
+        if let Some(head) = message.strip_suffix(tail) {
+            let got = head.trim_end_matches([',', ' ']);
+            let got = got.strip_prefix("invalid value: ").or(got.strip_prefix("invalid type: ")).unwrap_or(got);
+            let got = got.replace('`', "").replace("integer ", "").replace("floating point ", "");
+            return format!("must be {want}, got {got}");
+        }
+    }
+    message.to_string()
+}
+
 /// `text` cut to `most` characters, with `...` where it was cut.
 fn clip(text: &str, most: usize) -> String {
     match text.char_indices().nth(most) {
         Some((at, _)) => format!("{}...", &text[..at]),
         None => text.to_string(),
+    }
+}
+
+/// Which recipes take a field.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Takers {
+    /// Every recipe.
+    All,
+    /// `synth` and `synth-layered`.
+    Synth,
+    /// `synth-layered` only.
+    Layered,
+    /// `sweep` only.
+    Sweep,
+    /// `load` only.
+    Load,
+    /// The recipes that make a volume of a given size: procedural ones and synthesis.
+    Sized,
+}
+
+impl Takers {
+    /// Whether `recipe` takes the field.
+    pub fn take(self, recipe: &str) -> bool {
+        let synth = recipe == "synth" || recipe == "synth-layered";
+        match self {
+            Takers::All => true,
+            Takers::Synth => synth,
+            Takers::Layered => recipe == "synth-layered",
+            Takers::Sweep => recipe == "sweep",
+            Takers::Load => recipe == "load",
+            Takers::Sized => synth || recipe.starts_with("procedural:"),
+        }
+    }
+}
+
+/// One field of an `[[exemplar]]` entry: the recipes that take it, whether they need it,
+/// the values it allows and the value a new one starts with. The manifest's checks and the
+/// TUI's field picker read this one table.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FieldRule {
+    /// The key.
+    pub key: &'static str,
+    /// The recipes that take it.
+    pub takers: Takers,
+    /// Whether those recipes need it.
+    pub required: bool,
+    /// What values it allows, in words.
+    pub allowed: String,
+    /// A new field's value (TOML).
+    pub start: String,
+}
+
+/// Every entry field but `name`, `recipe` and `steps`, in the order a picker lists them.
+pub fn field_rules() -> Vec<FieldRule> {
+    use crate::sweep::{AMPLITUDE, FREQUENCY, JITTER, SKIN_WIDTH};
+    use crate::synth::SynthParams;
+    let rule = |key, takers, required, allowed: String, start: &str| FieldRule {
+        key,
+        takers,
+        required,
+        allowed,
+        start: start.to_string(),
+    };
+    let image = "an image file, relative to the manifest's folder".to_string();
+    let axis = "\"x\", \"y\" or \"z\"".to_string();
+    let (levels, side) = (SynthParams::LEVELS, SynthParams::EXEMPLAR_SIDE);
+    vec![
+        rule("size", Takers::Sized, true, format!("N or [x, y, z], each 1 to {MAX_SIDE}"), "64"),
+        rule("seed", Takers::All, false, "a whole number, 0 or more".into(), "1"),
+        rule(
+            "type",
+            Takers::All,
+            false,
+            "\"0\", \"1-a\", \"1-b\", \"2-a\", \"2-b\", \"2-c\" or \"2-d\"".into(),
+            "\"0\"",
+        ),
+        rule("image", Takers::Synth, true, image.clone(), "\"\""),
+        rule("image", Takers::Sweep, true, image.clone(), "\"\""),
+        rule("levels", Takers::Synth, false, format!("{} to {}", levels.0, levels.1), "3"),
+        rule("max_exemplar", Takers::Synth, false, format!("{} to {} pixels", side.0, side.1), "128"),
+        rule("ey", Takers::Synth, false, format!("{image} (the cut across y)"), "\"\""),
+        rule("ez", Takers::Synth, false, format!("{image} (the cut across z)"), "\"\""),
+        rule("depth_image", Takers::Layered, false, format!("{image}, grey: each pixel's depth"), "\"\""),
+        rule("length", Takers::Sweep, true, format!("1 to {MAX_SIDE} voxels along the axis"), "64"),
+        rule("axis", Takers::Sweep, true, axis.clone(), "\"z\""),
+        rule("depth_axis", Takers::Sweep, false, axis, "\"z\""),
+        rule(
+            "noise",
+            Takers::Sweep,
+            false,
+            format!(
+                "[amplitude {}-{}, frequency {}-{}] or with a jitter {}-{}",
+                AMPLITUDE.0, AMPLITUDE.1, FREQUENCY.0, FREQUENCY.1, JITTER.0, JITTER.1
+            ),
+            "[2.0, 4.0]",
+        ),
+        rule(
+            "skin",
+            Takers::Sweep,
+            false,
+            "a colour (\"#5a3a1a\" or \"0.35,0.23,0.1\") or an image file".into(),
+            "\"#5a3a1a\"",
+        ),
+        rule("skin_width", Takers::Sweep, false, format!("{} to {} voxels", SKIN_WIDTH.0, SKIN_WIDTH.1), "2.0"),
+        rule("skin_noise", Takers::Sweep, false, format!("{} to {} voxels", SKIN_WIDTH.0, SKIN_WIDTH.1), "0.0"),
+        rule("displacement", Takers::Sweep, false, format!("{image}, grey relief"), "\"\""),
+        rule("volume", Takers::Load, true, "a volume file (exr, nrrd, vol, png, vdb, dds)".into(), "\"\""),
+        rule("masks", Takers::All, false, "a list of \"splotch\" and \"layered\"".into(), "[\"splotch\"]"),
+        rule("mask_falloff", Takers::All, false, "more than 0, less than 0.5".into(), "0.075"),
+        rule(
+            "exports",
+            Takers::All,
+            false,
+            format!("a list of {}", EXPORTS.map(|e| format!("\"{e}\"")).join(", ")),
+            "[\"nrrd\"]",
+        ),
+    ]
+}
+
+/// The fields `recipe` takes, in the table's order.
+pub fn fields_of(recipe: &str) -> Vec<FieldRule> {
+    field_rules().into_iter().filter(|r| r.takers.take(recipe)).collect()
+}
+
+/// The fields an entry sets (besides `name`, `recipe` and `steps`).
+fn set_fields(raw: &RawExemplar) -> Vec<&'static str> {
+    let options = [
+        ("size", raw.size.is_some()),
+        ("type", raw.texture_type.is_some()),
+        ("image", raw.image.is_some()),
+        ("length", raw.length.is_some()),
+        ("axis", raw.axis.is_some()),
+        ("depth_axis", raw.depth_axis.is_some()),
+        ("noise", raw.noise.is_some()),
+        ("skin", raw.skin.is_some()),
+        ("skin_width", raw.skin_width.is_some()),
+        ("skin_noise", raw.skin_noise.is_some()),
+        ("displacement", raw.displacement.is_some()),
+        ("ey", raw.ey.is_some()),
+        ("ez", raw.ez.is_some()),
+        ("depth_image", raw.depth_image.is_some()),
+        ("levels", raw.levels.is_some()),
+        ("max_exemplar", raw.max_exemplar.is_some()),
+        ("volume", raw.volume.is_some()),
+    ];
+    options.iter().filter(|(_, set)| *set).map(|(key, _)| *key).collect()
+}
+
+/// An error when the entry sets a field its recipe does not take (the table says which).
+fn check_fields(raw: &RawExemplar) -> Result<()> {
+    let takes = fields_of(&raw.recipe);
+    match set_fields(raw).into_iter().find(|key| !takes.iter().any(|r| r.key == *key)) {
+        None => Ok(()),
+        Some(key) => {
+            let mut keys: Vec<&str> = takes.iter().map(|r| r.key).collect();
+            keys.dedup();
+            Err(Error::invalid(format!(
+                "{key} does not apply to recipe {:?}; its fields: {}",
+                raw.recipe,
+                keys.join(", ")
+            )))
+        }
     }
 }
 
@@ -446,6 +640,7 @@ fn validate(raw: RawExemplar, folder: &Path) -> Result<Entry> {
             }
         },
     };
+    check_fields(&raw)?;
     if matches!(source, Source::Procedural(_) | Source::Synth(_)) && dims.is_none() {
         return Err(Error::invalid(format!("size is missing; recipe {} needs size = N or [x, y, z]", raw.recipe)));
     }
@@ -652,7 +847,7 @@ mod tests {
         let (entries, errors) = parse_plan_lenient(text, Path::new("."));
         assert_eq!(entries.iter().map(|e| e.name.as_str()).collect::<Vec<_>>(), ["a"]);
         assert_eq!(errors.len(), 2, "{errors:?}");
-        assert!(errors[0].starts_with("line 6: exemplar[1] (b), line 8: recipe"), "{errors:?}");
+        assert!(errors[0].starts_with("line 6: entry 2 (b), line 8: recipe"), "{errors:?}");
         assert!(errors[1].contains("line 11") && errors[1].contains("used twice"), "{errors:?}");
         let (none, broken) = parse_plan_lenient("[[exemplar]\n", Path::new("."));
         assert!(none.is_empty() && broken[0].contains("invalid manifest"));
@@ -667,25 +862,25 @@ mod tests {
             ("depth_axis = \"z\"\nskin = \"#000000\"\nskin_width = 1e9", "line 9: skin_width = 1000000000"),
             (
                 "[[exemplar.steps]]\nscatter = \"s.obj\"\ncolor = \"#000000\"\ncount = 10000000",
-                "line 10: steps[0]: count = 10000000 is out of range; allowed: 1 to 2000",
+                "line 10: step 1: count = 10000000 is out of range; allowed: 1 to 2000",
             ),
             (
                 "[[exemplar.steps]]\nblur = \"1,1,1\"\nradius = 1e9",
-                "line 9: steps[0]: radius = 1000000000 is out of range; allowed: 0.1 to 64",
+                "line 9: step 1: radius = 1000000000 is out of range; allowed: 0.1 to 64",
             ),
-            ("[[exemplar.steps]]\nblur = \"1,1,1\"\nradius = 2\nstrength = 3", "line 10: steps[0]: strength = 3"),
+            ("[[exemplar.steps]]\nblur = \"1,1,1\"\nradius = 2\nstrength = 3", "line 10: step 1: strength = 3"),
             (
                 "[[exemplar.steps]]\nstamp = \"s.obj\"\nat = \"1,1,1\"\nscale = \"0\"\ncolor = \"#000000\"",
-                "line 10: steps[0]: scale = \"0\" is out of range",
+                "line 10: step 1: scale = \"0\" is out of range",
             ),
             (
                 "[[exemplar.steps]]\nscatter = \"s.obj\"\ncolor = \"#000000\"\ncount = 1\nregion = \"box:0,0,0,1e30,1,1\"",
-                "line 11: steps[0]: region box",
+                "line 11: step 1: region box",
             ),
         ];
         for (body, expected) in cases {
             let err = plan(&format!("{head}{body}\n")).unwrap_err().to_string();
-            assert!(err.starts_with("line 1: exemplar[0] (k), "), "{err}");
+            assert!(err.starts_with("line 1: entry 1 (k), "), "{err}");
             assert!(err.contains(expected), "{body}: {err}");
         }
         let synth = "[[exemplar]]\nname = \"s\"\nrecipe = \"synth\"\nimage = \"i.png\"\nsize = 8\nmax_exemplar = 0\n";
@@ -773,17 +968,48 @@ mod tests {
             ("name = \"a\"\nrecipe = \"procedural:marble\"\nsize = 8\ntype = \"3\"", "type: unknown texture type"),
             (
                 "name = \"a\"\nrecipe = \"procedural:marble\"\nsize = 8\n[[exemplar.steps]]\nradius = 2",
-                "steps[0]: each step needs exactly one",
+                "step 1: each step needs exactly one",
             ),
             (
                 "name = \"a\"\nrecipe = \"procedural:marble\"\nsize = 8\n[[exemplar.steps]]\nstamp = \"s.obj\"\ncolor = \"#000000\"",
-                "steps[0]: at is missing",
+                "step 1: at is missing",
             ),
         ];
         for (body, expected) in cases {
             let err = plan(&format!("[[exemplar]]\n{body}\n")).unwrap_err().to_string();
             assert!(err.contains(expected), "{body}: {err}");
-            assert!(err.contains("exemplar[0]") || err.contains("invalid manifest"), "{err}");
+            assert!(err.contains("entry 1") || err.contains("invalid manifest"), "{err}");
+        }
+    }
+
+    /// A field its recipe does not take is refused with the recipe's fields; the table
+    /// lists every field the raw entry reads.
+    #[test]
+    fn a_field_the_recipe_does_not_take_is_named_with_the_ones_it_does() {
+        let text = "[[exemplar]]\nname = \"s\"\nrecipe = \"procedural:marble\"\nsize = 8\nlength = 4\n";
+        let err = parse_plan(text, Path::new(".")).unwrap_err().to_string();
+        assert!(err.contains("length does not apply to recipe \"procedural:marble\"; its fields: size, seed"), "{err}");
+        let keys: Vec<&str> = field_rules().iter().map(|r| r.key).collect();
+        for key in ["size", "type", "image", "length", "axis", "noise", "levels", "volume", "masks", "exports"] {
+            assert!(keys.contains(&key), "{key}");
+        }
+        assert!(fields_of("load").iter().any(|r| r.key == "volume" && r.required));
+        assert!(!fields_of("sweep").iter().any(|r| r.key == "levels"));
+    }
+
+    /// A value of the wrong kind reads in the user's words, not the reader's.
+    #[test]
+    fn wrong_kinds_of_value_are_said_plainly() {
+        let base = "[[exemplar]]\nname = \"s\"\nrecipe = \"procedural:marble\"\n";
+        for (field, says) in [
+            ("size = 8\nseed = -5", "seed must be a whole number, 0 or more, got -5"),
+            ("size = -5", "size must be one number or three"),
+            ("size = \"big\"", "size must be one number or three"),
+            ("size = 8\nmask_falloff = \"x\"", "must be a number, got string \"x\""),
+        ] {
+            let err = parse_plan(&format!("{base}{field}\n"), Path::new(".")).unwrap_err().to_string();
+            let plain = says.split_once(' ').map_or(says, |(_, rest)| rest);
+            assert!(err.contains(plain) && !err.contains("expected"), "{field}: {err}");
         }
     }
 }

@@ -59,6 +59,10 @@ pub struct Job<'a> {
     pub start: Option<&'a [f32]>,
 }
 
+/// The share of an iteration's time its search takes (the rest: blending and balancing
+/// colours), for progress that moves evenly.
+const SEARCH_SHARE: f64 = 0.8;
+
 /// Run the synthesis; returns the finest level's samples.
 pub fn run(job: &Job, params: &SynthParams, seed: u64, progress: &dyn Progress) -> Result<Vec<f32>> {
     let pyramids = prepare(job, params, progress)?;
@@ -95,9 +99,16 @@ pub fn run(job: &Job, params: &SynthParams, seed: u64, progress: &dyn Progress) 
                 seed: pass_seed(seed, level, iteration),
                 fresh: level > 0 && iteration == 0 && job.init == Init::Random,
             };
-            let (found, energy) = search(&grid, &matches, &setup, progress).ok_or(Error::Cancelled)?;
-            matches = found;
             let stage = format!("level {}/{}, iteration {}", level + 1, levels.len(), iteration + 1);
+            let part = crate::progress::Part {
+                whole: progress,
+                stage: format!("{stage}: searching"),
+                from: (done / total_work) as f32,
+                span: (SEARCH_SHARE * work[level] / total_work) as f32,
+            };
+            let (found, energy) = search(&grid, &matches, &setup, &part).ok_or(Error::Cancelled)?;
+            matches = found;
+            done += SEARCH_SHARE * work[level];
             progress.update(&format!("{stage}: searched"), (done / total_work) as f32);
             grid.data = optimize(&grid, &matches, ex, &histograms(&ex, params), power);
             if params.histogram_strength > 0.0 {
@@ -113,7 +124,7 @@ pub fn run(job: &Job, params: &SynthParams, seed: u64, progress: &dyn Progress) 
             if progress.cancelled() {
                 return Err(Error::Cancelled);
             }
-            done += work[level];
+            done += (1.0 - SEARCH_SHARE) * work[level];
             progress.update(&format!("{stage}: optimized"), (done / total_work) as f32);
             let mean = energy / work[level];
             if (previous - mean) < params.tolerance as f64 * previous {

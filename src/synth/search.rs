@@ -64,7 +64,8 @@ fn near(ex: &Prepared, a: u32, b: u32) -> bool {
 type SliceMatches = ([Vec<(f32, u32)>; 3], f64);
 
 /// Search every voxel; returns new matches per axis and the summed distance, or `None`
-/// when `progress` asks to stop (polled before each z-slice).
+/// when `progress` asks to stop (polled before each z-slice; told the share of slices
+/// searched after each).
 pub fn search(
     grid: &Grid,
     previous: &[Matches; 3],
@@ -72,9 +73,15 @@ pub fn search(
     progress: &dyn Progress,
 ) -> Option<([Matches; 3], f64)> {
     let [dx, dy, dz] = grid.dims;
+    let searched = std::sync::atomic::AtomicUsize::new(0);
     let slices: Vec<Option<SliceMatches>> = (0..dz)
         .into_par_iter()
-        .map(|z| (!progress.cancelled()).then(|| search_slice(grid, previous, setup, z)))
+        .map(|z| {
+            let found = (!progress.cancelled()).then(|| search_slice(grid, previous, setup, z))?;
+            let count = searched.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+            progress.update("searching", count as f32 / dz as f32);
+            Some(found)
+        })
         .collect();
     let slices: Vec<SliceMatches> = slices.into_iter().collect::<Option<_>>()?;
     let mut out: [Matches; 3] = Default::default();

@@ -278,6 +278,25 @@ pub fn set(text: &str, name: &str, key: &str, value: &str) -> Result<String, Str
     Ok(doc.to_string())
 }
 
+/// The manifest without field `key` of exemplar `name` (a top-level field; steps are
+/// removed whole with [`remove_step`]).
+pub fn unset(text: &str, name: &str, key: &str) -> Result<String, String> {
+    let mut doc = parse(text)?;
+    let entry = entry_mut(&mut doc, name)?;
+    entry.remove(key).ok_or_else(|| format!("{name} has no field {key}"))?;
+    Ok(doc.to_string())
+}
+
+/// The line (from 1) where exemplar `name`'s `name = ...` stands, for an outside editor.
+pub fn line_of(text: &str, name: &str) -> usize {
+    let quoted = format!("{name:?}");
+    let at = text.lines().position(|l| {
+        let l = l.trim_start();
+        l.starts_with("name") && l.split_once('=').is_some_and(|(k, v)| k.trim() == "name" && v.trim() == quoted)
+    });
+    at.map_or(1, |i| i + 1)
+}
+
 /// The manifest with `steps` appended to exemplar `name`'s `[[exemplar.steps]]`, each a
 /// `stamp` or `scatter` of the seed mesh `file` in the dark seed colour.
 pub fn append_steps(text: &str, name: &str, steps: &[super::model::StampStep], file: &str) -> Result<String, String> {
@@ -345,7 +364,7 @@ fn step_table(step: &super::model::StampStep, file: &str) -> toml_edit::Table {
         StampStep::Scatter { count, scale, seed } => {
             t.insert("scatter", toml_edit::value(file));
             t.insert("count", toml_edit::value(*count as i64));
-            t.insert("scale", toml_edit::value(format!("{:.4}..{:.4}", scale.0, scale.1)));
+            t.insert("scale", toml_edit::value(format!("{:.2}..{:.2}", scale.0, scale.1)));
             t.insert("seed", toml_edit::value(*seed as i64));
         }
     }

@@ -28,6 +28,10 @@ pub fn editor_ready(model: &mut Model, result: Result<String, String>) -> Vec<Ef
         }
         Ok(text) => {
             model.outside = false;
+            let folder = model.manifest.parent().unwrap_or(Path::new(".")).to_path_buf();
+            if let Err(e) = check(&text, &folder, &editor.name) {
+                model.status = format!("{} has a mistake: {e}", editor.name);
+            }
             editor.saved = text.clone();
             editor.text = Some(text);
             preview(editor)
@@ -204,19 +208,140 @@ pub fn step(model: &mut Model, remove: bool, earlier: bool) -> Vec<Effect> {
             model,
             &folder,
             edit::remove_step(&text, &name, index),
-            format!("removed step {index}; previewing"),
+            format!("removed step {}; previewing", index + 1),
         );
     }
     let moved = edit::move_step(&text, &name, index, earlier);
     let to = moved.as_ref().map(|m| m.1).unwrap_or(index);
     let offset = fields[editor.selected..].iter().take_while(|f| edit::step_of(&f.key) == Some(index)).count();
-    let effects = keep(model, &folder, moved.map(|m| m.0), format!("moved step {index} to {to}; previewing"));
+    let effects =
+        keep(model, &folder, moved.map(|m| m.0), format!("moved step {} to {}; previewing", index + 1, to + 1));
     // the same field of the moved step stays selected
     reselect(model, |fields, selected| {
         let end = fields.iter().rposition(|f| edit::step_of(&f.key) == Some(to)).map_or(selected, |e| e + 1);
         end.saturating_sub(offset)
     });
     effects
+}
+
+/// The entry's recipe and the fields it can add (the manifest's table of fields, less
+/// those set).
+fn addable(text: &str, name: &str) -> (String, Vec<manifest::FieldRule>) {
+    let fields = edit::fields(text, name).unwrap_or_default();
+    let recipe = recipe_of(&fields);
+    let mut rules = manifest::fields_of(&recipe);
+    rules.retain(|r| !fields.iter().any(|f| f.key == r.key));
+    rules.dedup_by(|a, b| a.key == b.key);
+    (recipe, rules)
+}
+
+/// The entry's recipe, as its `recipe` field reads (without quotes).
+fn recipe_of(fields: &[edit::Field]) -> String {
+    fields.iter().find(|f| f.key == "recipe").map_or(String::new(), |f| f.value.trim_matches('"').to_string())
+}
+
+/// `+`: the picker of fields the entry's recipe takes and it does not set.
+pub fn pick_field(model: &mut Model) {
+    let Screen::Editor(editor) = &mut model.screen else { return };
+    let Some(text) = &editor.text else { return };
+    let (recipe, rules) = addable(text, &editor.name);
+    if rules.is_empty() {
+        model.status = format!("{} sets every field recipe {recipe:?} takes", editor.name);
+        return;
+    }
+    editor.picker = Some(0);
+    model.status = "choose a field to add: enter adds it with the value shown, esc closes".into();
+}
+
+/// The picker's rows (key, what it allows, the value it starts with), for the view.
+pub fn picker_rows(editor: &Editor) -> Vec<manifest::FieldRule> {
+    editor.text.as_deref().map(|t| addable(t, &editor.name).1).unwrap_or_default()
+}
+
+/// Move the picker's choice by `rows`.
+pub fn picker_move(model: &mut Model, rows: i64) {
+    let Screen::Editor(editor) = &mut model.screen else { return };
+    let count = picker_rows(editor).len() as i64;
+    if let Some(row) = &mut editor.picker {
+        *row = (*row as i64).saturating_add(rows).clamp(0, (count - 1).max(0)) as usize;
+    }
+}
+
+/// Enter in the picker: the chosen field is added with its start value (a file field starts
+/// as the entry's image), selected, and its value opened for typing.
+pub fn picker_add(model: &mut Model) -> Vec<Effect> {
+    let folder = model.manifest.parent().unwrap_or(Path::new(".")).to_path_buf();
+    let Screen::Editor(editor) = &mut model.screen else { return Vec::new() };
+    let (Some(row), Some(text)) = (editor.picker.take(), editor.text.clone()) else { return Vec::new() };
+    let Some(rule) = picker_rows(editor).into_iter().nth(row) else { return Vec::new() };
+    let image = edit::fields(&text, &editor.name).unwrap_or_default().into_iter().find(|f| f.key == "image");
+    let start = match image {
+        Some(image) if rule.start == "\"\"" => image.value,
+        _ => rule.start.clone(),
+    };
+    let name = editor.name.clone();
+    let effects =
+        keep(model, &folder, edit::set(&text, &name, rule.key, &start), format!("added {} = {start}", rule.key));
+    let Screen::Editor(editor) = &mut model.screen else { return effects };
+    let fields = editor.text.as_deref().map(|t| edit::fields(t, &name).unwrap_or_default()).unwrap_or_default();
+    if let Some(at) = fields.iter().position(|f| f.key == rule.key) {
+        editor.selected = at;
+        editor.input = Some(fields[at].value.as_str().into());
+        model.status = format!("{} = {start} added: type its value ({}), enter keeps it", rule.key, rule.allowed);
+    }
+    effects
+}
+
+/// `-`: remove the selected field, unless the entry needs it.
+pub fn remove_field(model: &mut Model) -> Vec<Effect> {
+    let folder = model.manifest.parent().unwrap_or(Path::new(".")).to_path_buf();
+    let Screen::Editor(editor) = &mut model.screen else { return Vec::new() };
+    let Some(text) = editor.text.clone() else { return Vec::new() };
+    let fields = edit::fields(&text, &editor.name).unwrap_or_default();
+    let Some(field) = fields.get(editor.selected) else { return Vec::new() };
+    let needed = manifest::fields_of(&recipe_of(&fields)).into_iter().any(|r| r.key == field.key && r.required);
+    let refusal = match field.key.as_str() {
+        "name" | "recipe" => Some("the name and the recipe make the entry (d on the library deletes it)".to_string()),
+        key if edit::step_of(key).is_some() => Some("a step's fields go with their step: x removes the step".into()),
+        key if needed => Some(format!("{key} is needed by this recipe: change its value instead")),
+        _ => None,
+    };
+    if let Some(why) = refusal {
+        model.status = why;
+        return Vec::new();
+    }
+    let (name, key) = (editor.name.clone(), field.key.clone());
+    let effects = keep(model, &folder, edit::unset(&text, &name, &key), format!("removed {key}; previewing"));
+    if let Screen::Editor(editor) = &mut model.screen {
+        editor.selected = editor.selected.min(fields.len().saturating_sub(2));
+    }
+    effects
+}
+
+/// `o`: the manifest in an outside editor at the entry's line, once the editor's edits are
+/// saved (it opens the file as it is on disk).
+pub fn outside(model: &mut Model) -> Vec<Effect> {
+    let Screen::Editor(editor) = &model.screen else { return Vec::new() };
+    let Some(text) = &editor.text else { return Vec::new() };
+    if *text != editor.saved {
+        model.status = "save your edits first (s): the outside editor opens the file as it is on disk".into();
+        return Vec::new();
+    }
+    vec![Effect::EditOutside(edit::line_of(text, &editor.name))]
+}
+
+/// Back from the outside editor: the manifest is read again, checked, and the list too.
+pub fn outside_edited(model: &mut Model, result: Result<(), String>) -> Vec<Effect> {
+    let Screen::Editor(editor) = &mut model.screen else { return Vec::new() };
+    editor.text = None;
+    editor.undo.clear();
+    editor.redo.clear();
+    let name = editor.name.clone();
+    model.status = match result {
+        Ok(()) => format!("read the manifest as the outside editor left it ({name})"),
+        Err(e) => e,
+    };
+    vec![Effect::ReadManifest, Effect::Reload(name)]
 }
 
 /// The manifest parser's verdict on entry `name` of `text` (other entries' mistakes are
@@ -306,8 +431,7 @@ fn rebased(model: &mut Model, theirs: String, saving: bool) -> Vec<Effect> {
         }
         None => {
             editor.conflict = Some(Box::new(super::model::Conflict { theirs, saving, both: false }));
-            model.status =
-                format!("{} changed on disk too: m keeps yours, t takes the file's, b shows both", editor.name);
+            model.status = "changed on disk: m keeps yours, t takes the file's, b both".to_string();
             Vec::new()
         }
     }
@@ -367,6 +491,7 @@ pub fn ask_save_as(model: &mut Model) {
     model.prompt = Some(super::model::Prompt {
         purpose: super::model::Purpose::SaveAs,
         input: path.display().to_string().as_str().into(),
+        note: String::new(),
     });
     model.status = "save the manifest as a new file beside it (an existing file is never replaced)".into();
 }
@@ -418,11 +543,8 @@ pub fn saved(model: &mut Model, result: Result<String, String>) {
             editor.saved = written;
             let (name, valid) = (editor.name.clone(), editor.error.is_none());
             super::update::mark_changed(model, &name, valid);
-            let kept = if merged { ", with the file's other changes kept:" } else { "" };
-            model.status = format!(
-                "saved{kept} {}; {name} changed since its last build (b rebuilds it)",
-                model.manifest.display()
-            );
+            let kept = if merged { " with the file's other changes kept" } else { "" };
+            model.status = format!("saved{kept}; b on the library builds {name} as it is now");
         }
         (Ok(_), Screen::Exemplar(view)) => {
             if let Some(stamp) = &mut view.stamp {
@@ -434,7 +556,11 @@ pub fn saved(model: &mut Model, result: Result<String, String>) {
             model.status = format!("saved the steps into {}", model.manifest.display());
         }
         (Ok(_), _) => model.status = format!("saved {}", model.manifest.display()),
-        (Err(e), Screen::Editor(_)) => model.status = format!("not saved: {e}; S saves under another name"),
+        // the manifest's path is in the title: the reason comes first
+        (Err(e), Screen::Editor(_)) => {
+            let e = e.replace(&format!("{}: ", model.manifest.display()), "");
+            model.status = format!("not saved (S saves under another name): {e}")
+        }
         (Err(e), _) => model.status = format!("not saved: {e}"),
     }
 }
@@ -764,8 +890,61 @@ mod tests {
         update(&mut m, Message::Down);
         type_value(&mut m, "20");
         update(&mut m, Message::Back);
-        assert!(matches!(m.screen, Screen::Editor(_)) && m.status.starts_with("unsaved"));
+        assert!(matches!(m.screen, Screen::Editor(_)) && m.status.starts_with("esc again leaves without saving; unsaved"));
         update(&mut m, Message::Back);
         assert!(matches!(m.screen, Screen::Library));
+    }
+
+    /// `+` lists the fields the recipe takes that the entry does not set, with what each
+    /// allows; enter adds the chosen one and opens it for typing; `-` removes a field, but
+    /// not one the entry needs.
+    #[test]
+    fn fields_are_added_from_the_table_and_removed() {
+        let mut m = editing();
+        update(&mut m, Message::PickField);
+        let rows = picker_rows(editor(&m));
+        let keys: Vec<&str> = rows.iter().map(|r| r.key).collect();
+        assert_eq!(keys, ["type", "masks", "mask_falloff", "exports"], "marble takes these, and sets size and seed");
+        assert!(rows[1].allowed.contains("splotch") && rows[1].start == "[\"splotch\"]", "{:?}", rows[1]);
+        update(&mut m, Message::Jump(1));
+        update(&mut m, Message::Commit);
+        let e = editor(&m);
+        assert!(e.picker.is_none() && e.text.as_deref().unwrap().contains("masks = [\"splotch\"]"), "{:?}", e.text);
+        let fields = edit::fields(e.text.as_deref().unwrap(), "m").unwrap();
+        assert_eq!(fields[e.selected].key, "masks");
+        assert_eq!(e.input.as_ref().map(|i| i.value()), Some("[\"splotch\"]"), "its value opens for typing");
+        update(&mut m, Message::Cancel);
+        // size is needed by a procedural recipe; seed is not
+        let at = |m: &Model, key: &str| {
+            edit::fields(editor(m).text.as_deref().unwrap(), "m").unwrap().iter().position(|f| f.key == key).unwrap()
+        };
+        let row = at(&m, "size");
+        let Screen::Editor(e) = &mut m.screen else { panic!() };
+        e.selected = row;
+        update(&mut m, Message::RemoveField);
+        assert!(m.status.contains("size is needed"), "{}", m.status);
+        let row = at(&m, "seed");
+        let Screen::Editor(e) = &mut m.screen else { panic!() };
+        e.selected = row;
+        update(&mut m, Message::RemoveField);
+        assert!(!editor(&m).text.as_deref().unwrap().contains("seed"), "{:?}", editor(&m).text);
+        assert!(editor(&m).text.as_deref().unwrap().starts_with("# my library"), "comments stay");
+        // the outside editor opens the file as saved
+        assert!(update(&mut m, Message::OutsideEditor).is_empty());
+        assert!(m.status.contains("save your edits first"), "{}", m.status);
+    }
+
+    /// `o` opens the saved manifest at the entry's line; back from it, the manifest and the
+    /// list are read again and the entry checked.
+    #[test]
+    fn the_outside_editor_opens_at_the_entry_and_its_result_is_read() {
+        let mut m = editing();
+        assert_eq!(update(&mut m, Message::OutsideEditor), vec![Effect::EditOutside(3)]);
+        let effects = update(&mut m, Message::OutsideEdited(Ok(())));
+        assert_eq!(effects, vec![Effect::ReadManifest, Effect::Reload("m".into())]);
+        assert!(editor(&m).text.is_none(), "the editor waits for the file as it is now");
+        let broken = TEXT.replace("size = 16", "size = 0");
+        update(&mut m, Message::EditorReady(Ok(broken)));
+        assert!(m.status.starts_with("m has a mistake") && m.status.contains("size"), "{}", m.status);
     }
 }

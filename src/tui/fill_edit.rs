@@ -71,7 +71,7 @@ fn change(model: &mut Model, what: impl FnOnce(&mut FillEdit, Vec3) -> Result<St
             }
             match newly_ignored(&filled, &before, &edit.spec).as_slice() {
                 [] => format!("{done}; r refills with it, w writes the fill spec"),
-                notes => format!("{done}, but {}", notes.join("; ")),
+                notes => format!("{}; {done}", notes.join("; ")),
             }
         }
         Err(why) => why,

@@ -23,6 +23,15 @@ fn unless(keys: &'static str, action: &'static str, why_not: Option<&'static str
     Hint { keys, action, why_not }
 }
 
+/// Why the key named `name` (as the bar writes keys: `b`, `enter`, `esc`) does nothing
+/// now, when the bar shows it dimmed: its keys, action and reason.
+pub fn why_dimmed(model: &Model, name: &str) -> Option<String> {
+    hints(model).into_iter().find_map(|h| {
+        let why = h.why_not?;
+        h.keys.split(['/', ' ', ',']).any(|k| k == name).then(|| format!("{} {}: {why}", h.keys, h.action))
+    })
+}
+
 /// The hints of the screen on top of `model`, most used first (`?` help and `q` quit stay
 /// at the right of the status line).
 pub fn hints(model: &Model) -> Vec<Hint> {
@@ -30,36 +39,40 @@ pub fn hints(model: &Model) -> Vec<Hint> {
         let (enter, esc) = match prompt.purpose {
             super::model::Purpose::Rename => ("rename", "keep the name"),
             super::model::Purpose::SaveAs => ("save as", "do not save"),
+            super::model::Purpose::Filter => ("keep the filter", "show every entry"),
         };
         return vec![hint("enter", enter), hint("esc", esc), hint("ctrl-u", "clear")];
     }
     match &model.screen {
         Screen::Library => library(model),
         Screen::Exemplar(view) if view.stamp.is_some() => vec![
+            hint("enter", "stamp"),
             hint("arrows/pgup/pgdn", "move"),
             hint("r/R", "turn"),
             hint("+/-", "scale"),
-            hint("enter", "stamp"),
-            hint("n", "scatter"),
-            hint("o", "seed mesh"),
-            hint("u", "undo"),
             hint("s", "save"),
             hint("m", "leave"),
+            hint("n", "scatter"),
+            hint("u", "undo"),
+            hint("o", "seed mesh"),
         ],
         Screen::Exemplar(view) => {
             let loading = view.volume.is_none().then_some("loading");
             vec![
                 hint("x/y/z", "axis"),
                 hint("arrows", "slice"),
-                hint("c", "channel"),
-                hint("+/-", "zoom"),
-                unless("a", "masks", view.layers.is_empty().then_some("no masks built")),
                 unless("f", "fill", loading),
-                unless("m", "stamp", loading),
                 unless("p", "photo", loading),
                 unless("E", "export", loading),
                 hint("esc", "back"),
+                unless("a", "masks", view.layers.is_empty().then_some("no masks built")),
+                unless("m", "stamp", loading),
+                hint("c", "channel"),
+                hint("+/-", "zoom"),
             ]
+        }
+        Screen::Editor(editor) if editor.picker.is_some() => {
+            vec![hint("up/down", "field"), hint("enter", "add it"), hint("esc", "close")]
         }
         Screen::Editor(editor) if editor.input.is_some() => {
             vec![hint("enter", "keep the value"), hint("esc", "drop it"), hint("ctrl-u", "clear")]
@@ -75,7 +88,7 @@ pub fn hints(model: &Model) -> Vec<Hint> {
         }
         Screen::New(_) => vec![hint("up/down", "kind"), hint("enter", "take it"), hint("esc", "back")],
         Screen::Compare(view) => {
-            let settle = view.before_after.is_none().then_some("two exemplars");
+            let settle = view.before_after.is_none().then_some("only beside a previous build: V");
             vec![
                 hint("x/y/z", "axis"),
                 hint("arrows", "both slices"),
@@ -86,12 +99,29 @@ pub fn hints(model: &Model) -> Vec<Hint> {
         }
         Screen::Fill(view) => {
             let filling = view.filled.is_none().then_some("filling");
-            vec![unless("x/y/z", "cut axis", filling), unless("arrows", "move the cut", filling), hint("esc", "back")]
+            vec![
+                unless("x/y/z", "cut", filling),
+                unless("arrows", "move", filling),
+                unless("s/S", "stroke", filling),
+                unless("d", "depth", filling),
+                unless("p", "paste", filling),
+                unless("r", "refill", filling),
+                unless("w", "write spec", filling),
+                unless("v", "field/guided", filling),
+                hint("esc", "back"),
+                unless("u", "undo", filling),
+                unless("E", "export", filling),
+                unless("c", "depth map", filling),
+                unless("o", "load spec", filling),
+            ]
         }
     }
 }
 
 fn library(model: &Model) -> Vec<Hint> {
+    if model.first_run {
+        return vec![hint("enter", "start a library here"), hint("q", "quit")];
+    }
     let item = model.items.get(model.selected);
     let state = item.map(|i| &i.state);
     let open = match state {
@@ -107,22 +137,31 @@ fn library(model: &Model) -> Vec<Hint> {
         Some(BuildState::Broken(_)) => Some("a mistake: e"),
         _ => None,
     };
-    let building_all = model.items.iter().any(|i| i.state.busy()).then_some("building");
-    let changed = model.items.iter().any(|i| matches!(i.state, BuildState::Changed(..)));
+    let busy = model.items.iter().any(|i| i.state.busy());
     let none = item.is_none().then_some("no entry");
-    vec![
+    let building_all = busy.then_some("building").or(none);
+    let stale = model.items.iter().any(|i| matches!(i.state, BuildState::Changed(..) | BuildState::NotBuilt));
+    let mut keys = vec![
         unless("enter", "open", open),
         unless("b", "build", build),
-        unless("B", "build all", building_all),
         unless("e", "edit", none),
+        hint("n", "new"),
+        unless("B", "build all", building_all),
+        unless("R", "build changed", none.or((!stale).then_some("all built, none changed"))),
+        hint("/", "filter"),
+        unless("v", "compare", open.map(|_| "not built")),
         unless("c", "copy", none),
         unless("d", "delete", none),
         unless("r", "rename", none),
-        hint("n", "new"),
-        unless("v", "compare", open.map(|_| "not built")),
         unless("V", "before/after", (!item.is_some_and(|i| i.previous)).then_some("no previous build")),
-        unless("R", "rebuild changed", (!changed).then_some("none changed")),
-    ]
+    ];
+    if busy {
+        keys.insert(0, hint("esc", "cancel builds"));
+    }
+    if !model.errors.is_empty() {
+        keys.insert(1, hint("[/]", "scroll mistakes"));
+    }
+    keys
 }
 
 fn editing(editor: &Editor) -> Vec<Hint> {
@@ -138,13 +177,16 @@ fn editing(editor: &Editor) -> Vec<Hint> {
     vec![
         unless("enter", "edit", loading),
         unless("s", "save", (!unsaved).then_some("no changes")),
+        unless("+", "add field", loading),
+        unless("-", "remove field", loading),
+        unless("o", "$EDITOR", loading.or(unsaved.then_some("save first"))),
         unless("u", "undo", editor.undo.is_empty().then_some("nothing to undo")),
+        hint("esc", "back"),
         unless("r", "redo", editor.redo.is_empty().then_some("nothing to redo")),
         unless("a", "add blur", loading),
         unless("t/n", "add stamp/scatter", loading),
         unless("x", "remove step", not_step),
         unless("K/J", "move step", not_step),
-        hint("esc", "back"),
     ]
 }
 

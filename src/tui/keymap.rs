@@ -16,6 +16,13 @@ pub fn key(screen: &Screen, event: KeyEvent) -> Option<Message> {
     if let Screen::Editor(Editor { input: Some(_), .. }) = screen {
         return typing(event);
     }
+    if let Screen::Editor(Editor { picker: Some(_), .. }) = screen {
+        return match event.code {
+            KeyCode::Enter => Some(Message::Commit),
+            KeyCode::Esc => Some(Message::Cancel),
+            code => scrolling(code, -1).map(Message::Jump),
+        };
+    }
     if let (Screen::Editor(Editor { conflict: Some(_), .. }), KeyCode::Char(c @ ('m' | 't' | 'b'))) =
         (screen, event.code)
     {
@@ -23,6 +30,7 @@ pub fn key(screen: &Screen, event: KeyEvent) -> Option<Message> {
     }
     let common = match event.code {
         KeyCode::Char('?') => Some(Message::Help),
+        KeyCode::Char('M') => Some(Message::ShowLog),
         KeyCode::Char('q') => Some(Message::Quit),
         KeyCode::Esc => Some(Message::Back),
         _ => None,
@@ -72,8 +80,40 @@ fn new_entry(code: KeyCode) -> Option<Message> {
     }
 }
 
+/// A key's name as the key bar writes it (`b`, `enter`, `esc`), for keys the bar can show.
+pub fn key_name(code: KeyCode) -> Option<String> {
+    match code {
+        KeyCode::Char(c) => Some(c.to_string()),
+        KeyCode::Enter => Some("enter".into()),
+        KeyCode::Esc => Some("esc".into()),
+        KeyCode::Backspace => Some("backspace".into()),
+        _ => None,
+    }
+}
+
+/// Rows a page key moves in lists and overlays.
+pub const PAGE: i64 = 10;
+
+/// Rows that take a list or an overlay to its end.
+pub const END: i64 = 1 << 40;
+
+/// Keys that scroll an overlay or move a list: arrows and j/k a row, pgup/pgdn a page,
+/// g/G and home/end to an end; `up` is what moving up means.
+fn scrolling(code: KeyCode, up: i64) -> Option<i64> {
+    match code {
+        KeyCode::Up | KeyCode::Char('k') => Some(up),
+        KeyCode::Down | KeyCode::Char('j') => Some(-up),
+        KeyCode::PageUp => Some(up * PAGE),
+        KeyCode::PageDown => Some(-up * PAGE),
+        KeyCode::Home | KeyCode::Char('g') => Some(up * END),
+        KeyCode::End | KeyCode::Char('G') => Some(-up * END),
+        _ => None,
+    }
+}
+
 /// The message a key means while the help is shown: `/` searches, typed keys edit the
-/// search, esc clears it (or closes the help), `?` closes it; other keys do nothing.
+/// search, esc clears it (or closes the help), `?` closes it, the scrolling keys scroll it;
+/// other keys do nothing.
 pub fn help_key(help: &Help, event: KeyEvent) -> Option<Message> {
     if event.modifiers.contains(KeyModifiers::CONTROL) && event.code == KeyCode::Char('c') {
         return Some(Message::Quit);
@@ -85,14 +125,27 @@ pub fn help_key(help: &Help, event: KeyEvent) -> Option<Message> {
         (true, KeyCode::Char(c)) => Some(Message::HelpType(Some(c))),
         (false, KeyCode::Char('?')) => Some(Message::Help),
         (false, KeyCode::Char('q')) => Some(Message::Quit),
-        _ => None,
+        (_, code) => scrolling(code, -1).map(Message::Scroll),
+    }
+}
+
+/// The message a key means while the message log is shown: it scrolls, `M` or esc closes it.
+pub fn log_key(event: KeyEvent) -> Option<Message> {
+    if event.modifiers.contains(KeyModifiers::CONTROL) && event.code == KeyCode::Char('c') {
+        return Some(Message::Quit);
+    }
+    match event.code {
+        KeyCode::Esc | KeyCode::Char('M') => Some(Message::ShowLog),
+        KeyCode::Char('q') => Some(Message::Quit),
+        code => scrolling(code, -1).map(Message::Scroll),
     }
 }
 
 fn library(code: KeyCode) -> Option<Message> {
+    if let Some(rows) = scrolling(code, -1) {
+        return Some(Message::Jump(rows));
+    }
     match code {
-        KeyCode::Up | KeyCode::Char('k') => Some(Message::Up),
-        KeyCode::Down | KeyCode::Char('j') => Some(Message::Down),
         KeyCode::Enter => Some(Message::Open),
         KeyCode::Char('b') => Some(Message::Build),
         KeyCode::Char('B') => Some(Message::BuildAll),
@@ -105,8 +158,9 @@ fn library(code: KeyCode) -> Option<Message> {
         KeyCode::Char('v') => Some(Message::Compare),
         KeyCode::Char('V') => Some(Message::BeforeAfter),
         KeyCode::Char('u') => Some(Message::Undo),
-        KeyCode::PageDown => Some(Message::ScrollErrors(3)),
-        KeyCode::PageUp => Some(Message::ScrollErrors(-3)),
+        KeyCode::Char(']') => Some(Message::ScrollErrors(3)),
+        KeyCode::Char('[') => Some(Message::ScrollErrors(-3)),
+        KeyCode::Char('/') => Some(Message::Filter),
         _ => None,
     }
 }
@@ -157,6 +211,9 @@ fn editor(code: KeyCode) -> Option<Message> {
         KeyCode::Char('x') => Some(Message::RemoveStep),
         KeyCode::Char('K') => Some(Message::MoveStep(true)),
         KeyCode::Char('J') => Some(Message::MoveStep(false)),
+        KeyCode::Char('+') => Some(Message::PickField),
+        KeyCode::Char('-') => Some(Message::RemoveField),
+        KeyCode::Char('o') => Some(Message::OutsideEditor),
         _ => None,
     }
 }
@@ -220,9 +277,12 @@ pub const SECTIONS: [Section; 9] = [
         "library",
         &[
             ("up/down, j/k", "choose an exemplar"),
+            ("g/G, home/end", "the first / the last exemplar"),
+            ("pgup/pgdn", "a page up / down"),
+            ("/", "filter the list by name (esc in it clears)"),
             ("enter", "open its slices"),
             ("b / B", "build it / build all"),
-            ("R", "rebuild those changed since their last build"),
+            ("R", "build those changed since their last build or never built"),
             ("c", "copy the entry (right after it, NAME-2)"),
             ("d d", "delete the entry (built files stay)"),
             ("r", "rename the entry (enter keeps, esc drops)"),
@@ -231,21 +291,22 @@ pub const SECTIONS: [Section; 9] = [
             ("V", "its previous build beside the new one"),
             ("e", "edit its recipe"),
             ("u", "undo the last copy, delete, rename or new entry"),
-            ("pgup/pgdn", "scroll the manifest's mistakes"),
+            ("[ / ]", "scroll the manifest's mistakes"),
         ],
     ),
     (
         "slices",
         &[
             ("x, y, z", "choose the slice axis"),
-            ("arrows, hjkl", "move the slice (pgup/pgdn: 8)"),
+            ("arrows, hjkl, pgup/pgdn", "move the slice (pgup/pgdn: 8 at a time)"),
             ("c", "cycle colour and single channels"),
-            ("+/-", "zoom"),
+            ("+/-, =", "zoom in / out (= as +)"),
             ("a", "show the masks in turn"),
             ("p", "its photo beside the slice, same pixel scale, with quality figures"),
             ("f", "fill a shape with it"),
             ("m", "stamp mode"),
             ("E", "export: every format, contact sheet, this slice"),
+            ("backspace", "back to the library"),
         ],
     ),
     (
@@ -269,6 +330,9 @@ pub const SECTIONS: [Section; 9] = [
             ("enter", "edit it (enter keeps, esc drops)"),
             ("s", "save the manifest (changes made to it meanwhile are kept)"),
             ("S", "save it as a new file beside it"),
+            ("+", "add a field: its range and first value shown"),
+            ("-", "remove the field under the cursor"),
+            ("o", "the manifest in $VISUAL / $EDITOR at this entry"),
             ("m / t / b", "entry changed on disk too: keep mine / take the file's / show both"),
             ("u / r", "undo / redo"),
             ("a", "add a blur step"),
@@ -281,7 +345,7 @@ pub const SECTIONS: [Section; 9] = [
         "fill preview",
         &[
             ("x, y, z", "choose the cut axis"),
-            ("arrows, hjkl", "move the cut (pgup/pgdn: more)"),
+            ("arrows, hjkl, pgup/pgdn", "move the cut (pgup/pgdn: 5 at a time)"),
             ("E", "export the cut as a 512x512 PNG"),
             ("H J K L", "move the cursor on the cut (or click)"),
             ("s / S", "add the cursor to a stroke / end the stroke"),
@@ -289,30 +353,32 @@ pub const SECTIONS: [Section; 9] = [
             ("[ / ]", "lower / raise the depth new points get"),
             ("g", "the faces nearest the cursor get that depth"),
             ("p", "a manual paste at the cursor"),
-            ("t, +/-", "turn / scale the last paste"),
+            ("t, +/-, =", "turn / scale the last paste (= as +)"),
             ("u", "undo the last constraint"),
             ("c", "the depth field as a colour map"),
             ("v", "the texture, the frame field, a guided cut"),
             ("r", "fill again with the constraints"),
             ("w", "write the fill spec and the shape"),
             ("o", "load the constraints of a written fill spec"),
+            ("backspace", "back to the slices"),
         ],
     ),
     (
         "new exemplar",
         &[
             ("up/down, j/k", "choose a recipe kind, or a file (or a seed mesh)"),
-            ("enter, l", "take it; in the picker, open the folder"),
-            ("backspace, h", "the folder above"),
+            ("enter, l, right", "take it; in the picker, open the folder"),
+            ("backspace, h, left", "the folder above"),
         ],
     ),
     (
         "compare",
         &[
             ("x, y, z", "choose the axis of both slices"),
-            ("arrows, hjkl", "move both slices (pgup/pgdn: 8)"),
+            ("arrows, hjkl, pgup/pgdn", "move both slices (pgup/pgdn: 8 at a time)"),
             ("a", "keep the new build (before/after)"),
             ("d", "discard it: the previous build comes back"),
+            ("backspace", "back to the library"),
         ],
     ),
     (
@@ -330,7 +396,8 @@ pub const SECTIONS: [Section; 9] = [
         &[
             ("esc", "back (asks if work is unsaved)"),
             ("ctrl-r", "read the manifest again after a change on disk"),
-            ("?", "this help; / searches it"),
+            ("?", "this help; / searches it, arrows and pgup/pgdn scroll it"),
+            ("M", "the message log: every status shown"),
             ("q, ctrl-c", "quit (asks if work is unsaved)"),
         ],
     ),
@@ -418,7 +485,9 @@ mod tests {
     #[test]
     fn keys_mean_different_things_per_screen() {
         assert!(matches!(key(&Screen::Library, press(KeyCode::Char('b'))), Some(Message::Build)));
-        assert!(matches!(key(&Screen::Library, press(KeyCode::Down)), Some(Message::Down)));
+        assert!(matches!(key(&Screen::Library, press(KeyCode::Down)), Some(Message::Jump(1))));
+        assert!(matches!(key(&Screen::Library, press(KeyCode::Char('G'))), Some(Message::Jump(n)) if n == END));
+        assert!(matches!(key(&Screen::Library, press(KeyCode::PageUp)), Some(Message::Jump(n)) if n == -PAGE));
         assert!(key(&Screen::Library, press(KeyCode::Char('x'))).is_none());
         assert!(matches!(key(&Screen::Library, press(KeyCode::Char('c'))), Some(Message::Duplicate)));
         assert!(matches!(key(&Screen::Library, press(KeyCode::Char('d'))), Some(Message::Delete)));
@@ -446,5 +515,82 @@ mod tests {
         assert!(matches!(typed(KeyCode::Char('u'), KeyModifiers::CONTROL), Some(Message::Input(DeleteLine))));
         assert!(matches!(typed(KeyCode::Char('w'), KeyModifiers::CONTROL), Some(Message::Input(DeletePrevWord))));
         assert!(matches!(key(&editing(Some("")), press(KeyCode::Enter)), Some(Message::Commit)));
+    }
+
+    /// The key names a help row's keys stand for: `arrows` for the four arrows, `hjkl` for
+    /// its letters, `H J K L`, `x, y, z`, `a / b` and `a/b` for each.
+    fn named(keys: &str) -> Vec<String> {
+        if keys == "/" {
+            return vec![keys.to_string()];
+        }
+        keys.split([',', ' ', '/'])
+            .filter(|k| !k.is_empty())
+            .flat_map(|k| match k {
+                "arrows" => ["up", "down", "left", "right"].map(String::from).to_vec(),
+                "hjkl" => ["h", "j", "k", "l"].map(String::from).to_vec(),
+                "ctrl-c" | "ctrl-r" => vec![k.to_string()],
+                _ => vec![k.to_lowercase().replace("pgup", "pageup").replace("pgdn", "pagedown"), k.to_string()],
+            })
+            .collect()
+    }
+
+    /// Every key a screen answers to is in its help section (or `everywhere`), so the help
+    /// and docs/tui.md's tables (checked against the help above) match the keymap.
+    #[test]
+    fn every_key_a_screen_answers_to_is_in_its_help() {
+        use super::super::model::ExemplarView;
+        let mut codes: Vec<(KeyCode, String)> =
+            (b'!'..=b'~').map(|c| (KeyCode::Char(c as char), (c as char).to_string())).collect();
+        for (code, name) in [
+            (KeyCode::Enter, "enter"),
+            (KeyCode::Esc, "esc"),
+            (KeyCode::Backspace, "backspace"),
+            (KeyCode::Up, "up"),
+            (KeyCode::Down, "down"),
+            (KeyCode::Left, "left"),
+            (KeyCode::Right, "right"),
+            (KeyCode::PageUp, "pageup"),
+            (KeyCode::PageDown, "pagedown"),
+            (KeyCode::Home, "home"),
+            (KeyCode::End, "end"),
+        ] {
+            codes.push((code, name.to_string()));
+        }
+        let screens = [
+            Screen::Library,
+            Screen::Exemplar(ExemplarView::new("a")),
+            Screen::Editor(Editor::default()),
+            Screen::Fill(super::super::model::FillView {
+                name: "a".into(),
+                filled: None,
+                axis: Axis::Z,
+                offset: 0.0,
+                from: None,
+                edit: None,
+            }),
+            Screen::New(super::super::new_entry::NewEntry { kind: 0, picker: None, pick_for: None }),
+            Screen::Compare(super::super::model::CompareView {
+                sides: [0, 1].map(|_| super::super::model::Side { label: "a".into(), volume: None, quality: None }),
+                axis: Axis::Z,
+                position: 0.5,
+                before_after: None,
+            }),
+        ];
+        let mut unlisted = Vec::new();
+        for screen in &screens {
+            let section = section_of(screen);
+            let listed: Vec<String> = SECTIONS
+                .iter()
+                .filter(|s| s.0 == section || s.0 == "everywhere")
+                .flat_map(|s| s.1.iter().flat_map(|(keys, _)| named(keys)))
+                .collect();
+            let missing: Vec<&String> = codes
+                .iter()
+                .filter(|(code, name)| key(screen, press(*code)).is_some() && !listed.contains(name))
+                .map(|(_, n)| n)
+                .collect();
+            unlisted.extend(missing.into_iter().map(|n| format!("{section}: {n}")));
+        }
+        assert!(unlisted.is_empty(), "keys that act but the help does not list: {unlisted:?}");
     }
 }

@@ -55,6 +55,28 @@ pub enum Message {
     ScrollErrors(i32),
     /// Toggle the help overlay.
     Help,
+    /// Toggle the message log.
+    ShowLog,
+    /// In the editor: open the picker of fields the entry can add.
+    PickField,
+    /// In the editor: remove the selected field.
+    RemoveField,
+    /// In the editor: open the manifest at the entry in `$VISUAL` / `$EDITOR`.
+    OutsideEditor,
+    /// The outside editor closed: its exit, or why it could not run.
+    OutsideEdited(Result<(), String>),
+    /// Scroll the help or the message log by this many lines (a large number: to an end).
+    Scroll(i64),
+    /// Move the library selection by this many rows (a large number: to an end).
+    Jump(i64),
+    /// Start typing the library list's filter.
+    Filter,
+    /// Show this in the status row (why a dimmed key does nothing now).
+    Say(String),
+    /// A second passed: the time since the UI started.
+    Tick(std::time::Duration),
+    /// The terminal has these many columns and rows.
+    Resized(u16, u16),
     /// In the help: start typing a search (`/`), or stop typing and keep it (enter).
     HelpSearch,
     /// In the help: add a character to the search, or remove the last one (`None`).
@@ -244,6 +266,11 @@ pub enum Effect {
     Build(Vec<String>),
     /// Read the manifest text for the editor.
     ReadManifest,
+    /// Start a library: write an empty manifest where none is.
+    StartLibrary,
+    /// Suspend the UI and edit the manifest in `$VISUAL` / `$EDITOR` at this line (run
+    /// by the UI's own thread, which owns the terminal).
+    EditOutside(usize),
     /// Build a low-resolution preview of exemplar `name` from manifest `text`.
     Preview {
         /// The exemplar.

@@ -35,7 +35,7 @@ use crate::error::{Error, Result};
 use crate::io;
 use crate::library::{self, Freshness, Observer, Outcome};
 use crate::volume::{Axis, Volume};
-use crossterm::event::{self, Event, KeyEventKind};
+use crossterm::event::{self, Event, KeyEventKind, KeyModifiers};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -119,8 +119,13 @@ pub fn run(manifest: &Path, output: &Path) -> Result<()> {
              build the library without it with `solidtex build`, or see `solidtex --help`",
         ));
     }
-    let (items, errors) = load_items(manifest, output);
+    let first_run = !manifest.exists();
+    let (items, errors) = if first_run { Default::default() } else { load_items(manifest, output) };
     let mut model = Model::new(manifest.to_path_buf(), output.to_path_buf(), items, errors);
+    if first_run {
+        model.first_run = true;
+        model.status = format!("no library at {} yet: enter starts one", manifest.display());
+    }
     model.read_only = read_only(manifest, output);
     if !model.read_only.is_empty() {
         model.status = model.read_only.join("; ");
@@ -197,22 +202,40 @@ fn event_loop(
     let fail = |e: std::io::Error| Error::io("terminal", e);
     let mut regions = mouse::Regions::default();
     let mut looked = std::time::Instant::now();
+    let opened = looked;
+    if let Ok(size) = terminal.size() {
+        dispatch(terminal, update(model, Message::Resized(size.width, size.height)), model, send)?;
+    }
     while !model.quit {
-        // Once a second: has someone else changed the manifest?
+        // Once a second: the clock moves on; has someone else changed the manifest?
         if looked.elapsed() >= Duration::from_secs(1) {
             looked = std::time::Instant::now();
+            dispatch(terminal, update(model, Message::Tick(opened.elapsed())), model, send)?;
             if !model.outside && changed_outside(&model.manifest) {
-                start(update(model, Message::ChangedOnDisk), model, send);
+                dispatch(terminal, update(model, Message::ChangedOnDisk), model, send)?;
             }
         }
         terminal.draw(|f| view::draw_with(f, model, graphics.as_deref_mut(), &mut regions)).map_err(fail)?;
+        let mut dimmed = None;
         let message = if event::poll(Duration::from_millis(100)).map_err(fail)? {
             match event::read().map_err(fail)? {
                 Event::Key(key) if key.kind == KeyEventKind::Press => match (&model.help, &model.prompt) {
                     (Some(help), _) => keymap::help_key(help, key),
                     (None, Some(_)) => keymap::typing(key),
-                    (None, None) => keymap::key(&model.screen, key),
+                    (None, None) if model.log_view.is_some() => keymap::log_key(key),
+                    (None, None) => {
+                        // a dimmed key says why it did nothing (when it did nothing)
+                        dimmed = keymap::key_name(key.code)
+                            .filter(|_| key.modifiers.difference(KeyModifiers::SHIFT).is_empty())
+                            .and_then(|name| keybar::why_dimmed(model, &name));
+                        keymap::key(&model.screen, key)
+                    }
                 },
+                Event::Resize(w, h) => {
+                    // a full redraw: nothing of the old layout stays on screen
+                    terminal.clear().map_err(fail)?;
+                    Some(Message::Resized(w, h))
+                }
                 Event::Mouse(m) if model.help.is_none() && model.prompt.is_none() => {
                     mouse::message(&model.screen, &regions, m)
                 }
@@ -221,14 +244,71 @@ fn event_loop(
         } else {
             None
         };
+        let before = model.status.clone();
         if let Some(message) = message {
-            start(update(model, message), model, send);
+            dispatch(terminal, update(model, message), model, send)?;
+        }
+        if let Some(why) = dimmed.take().filter(|_| model.status == before) {
+            dispatch(terminal, update(model, Message::Say(why)), model, send)?;
         }
         while let Ok(message) = receive.try_recv() {
-            start(update(model, message), model, send);
+            dispatch(terminal, update(model, message), model, send)?;
         }
     }
     Ok(())
+}
+
+/// Run effects: editing the manifest outside on this thread (it owns the terminal), the
+/// others in workers.
+fn dispatch(
+    terminal: &mut ratatui::DefaultTerminal,
+    effects: Vec<Effect>,
+    model: &mut Model,
+    send: &Sender<Message>,
+) -> Result<()> {
+    let (outside, rest): (Vec<Effect>, Vec<Effect>) =
+        effects.into_iter().partition(|e| matches!(e, Effect::EditOutside(_)));
+    start(rest, model, send);
+    for effect in outside {
+        if let Effect::EditOutside(line) = effect {
+            let result = edit_outside(terminal, &model.manifest, line);
+            dispatch(terminal, update(model, Message::OutsideEdited(result)), model, send)?;
+        }
+    }
+    Ok(())
+}
+
+/// Suspend the UI, edit `manifest` at `line` in `$VISUAL` or `$EDITOR` (vi when neither is
+/// set), and take the terminal back.
+fn edit_outside(
+    terminal: &mut ratatui::DefaultTerminal,
+    manifest: &Path,
+    line: usize,
+) -> std::result::Result<(), String> {
+    let editor = ["VISUAL", "EDITOR"]
+        .iter()
+        .filter_map(|v| std::env::var(v).ok())
+        .find(|e| !e.trim().is_empty())
+        .unwrap_or_else(|| "vi".into());
+    restore_terminal();
+    // through the shell, so an editor given with its options (`code -w`) runs as written
+    let status = std::process::Command::new("sh")
+        .arg("-c")
+        .arg(format!("{editor} +{line} \"$1\""))
+        .arg("solidtex")
+        .arg(manifest)
+        .status();
+    *terminal = ratatui::init();
+    OPEN.store(true, Ordering::SeqCst);
+    if MOUSE.load(Ordering::SeqCst) {
+        let _ = crossterm::execute!(std::io::stdout(), crossterm::event::EnableMouseCapture);
+    }
+    let _ = terminal.clear();
+    match status {
+        Ok(s) if s.success() => Ok(()),
+        Ok(s) => Err(format!("{editor} ended with {s}; the manifest is read as it is now")),
+        Err(e) => Err(format!("cannot run {editor} ($VISUAL / $EDITOR): {e}")),
+    }
 }
 
 /// Run effects in worker threads that report back through `send`. A worker that panics
@@ -264,6 +344,10 @@ fn work(effect: Effect, send: &Sender<Message>, manifest: &Path, output: &Path) 
             let _ = send.send(Message::Loaded(name, result));
         }
         Effect::Build(names) => build(&manifest, &output, names, send),
+        Effect::EditOutside(_) => {}
+        Effect::StartLibrary => {
+            let _ = send.send(Message::EntriesChanged(start_library(&manifest)));
+        }
         Effect::ReadManifest => {
             let text = read_manifest(&manifest).map_err(|e| e.to_string());
             let _ = send.send(Message::EditorReady(text));
@@ -416,6 +500,32 @@ fn change_entry(manifest: &Path, output: &Path, change: &EntryChange) -> Changed
     }
     let (items, errors) = load_items(manifest, output);
     Ok(message::Change { items, errors, select, status, inverse: Some(inverse) })
+}
+
+/// The first lines of a library started in the UI.
+const NEW_MANIFEST: &str = "# A solidtex library: one [[exemplar]] table per solid texture (docs/manifest.md).\n\
+# `solidtex build` builds them into the output folder; in `solidtex tui`, n adds one.\n";
+
+/// Write an empty manifest at `manifest` (its folder made if missing); a file there is
+/// never replaced.
+fn start_library(manifest: &Path) -> Changed {
+    let folder = new_entry::manifest_folder(manifest);
+    std::fs::create_dir_all(&folder).map_err(|e| format!("cannot make the folder {}: {e}", folder.display()))?;
+    let mut file = std::fs::File::options()
+        .write(true)
+        .create_new(true)
+        .open(manifest)
+        .map_err(|e| format!("cannot start a library at {}: {e}", manifest.display()))?;
+    std::io::Write::write_all(&mut file, NEW_MANIFEST.as_bytes())
+        .map_err(|e| format!("cannot write {}: {e}", manifest.display()))?;
+    *KNOWN.lock().unwrap_or_else(|e| e.into_inner()) = Some(NEW_MANIFEST.to_string());
+    Ok(message::Change {
+        items: Vec::new(),
+        errors: Vec::new(),
+        select: String::new(),
+        status: format!("started a library at {}: n adds your first exemplar", manifest.display()),
+        inverse: None,
+    })
 }
 
 /// The manifest text the UI last read or wrote, to tell a change made outside from its
@@ -849,7 +959,13 @@ mod tests {
             let exported = super::export(&m.output, name, v, *axis, *index).unwrap();
             update(&mut m, Message::Exported(Ok(exported)));
         }
-        assert!(m.status.contains("exported 7 files into") && m.status.contains("ramp.slice-y2.png"), "{}", m.status);
+        assert!(
+            m.status.contains("exported 7 files: ")
+                && m.status.contains("ramp.slice-y2.png")
+                && m.status.contains(" into "),
+            "{}",
+            m.status
+        );
         assert!(m.status.contains("not ramp.vol (") && m.status.contains("cubes only"), "{}", m.status);
         let folder = m.output.join("exports/ramp");
         assert!(!folder.join("ramp.vol").exists());

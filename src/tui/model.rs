@@ -157,6 +157,8 @@ pub struct Editor {
     pub undo: Vec<String>,
     /// Undone texts, newest last.
     pub redo: Vec<String>,
+    /// The field picker, when open: the row chosen among the fields the entry can add.
+    pub picker: Option<usize>,
     /// The low-resolution preview of the current text.
     pub preview: Option<Arc<Volume>>,
     /// Counts edits, so a late preview of an older text is dropped.
@@ -325,8 +327,27 @@ pub struct Model {
     pub prompt: Option<Prompt>,
     /// The entry `v` marked to compare with the next one `v` is pressed on.
     pub mark: Option<String>,
-    /// One line of status at the bottom.
+    /// One line of status at the bottom (cut to the screen's width; whole in the log).
     pub status: String,
+    /// Seconds the status has been shown; it clears after [`STATUS_SECONDS`].
+    pub status_age: u32,
+    /// Every status shown, oldest first (at most [`LOG_LINES`]).
+    pub log: Vec<String>,
+    /// The message log overlay, when shown: the first line on screen.
+    pub log_view: Option<usize>,
+    /// The library list shows only entries whose name holds this (any case).
+    pub filter: String,
+    /// Time since the UI started, as the last tick said.
+    pub now: std::time::Duration,
+    /// The builds asked for since the queue was last empty, for `done/total`, elapsed time and
+    /// an estimate.
+    pub batch: Option<Batch>,
+    /// No manifest at [`Model::manifest`] yet: the library screen offers to start one.
+    pub first_run: bool,
+    /// The terminal's columns and rows.
+    pub size: (u16, u16),
+    /// A rename sent to the manifest: its prompt comes back, as typed, if it is refused.
+    pub renaming: Option<Prompt>,
     /// Leave the program.
     pub quit: bool,
     /// The manifest changed on disk since this UI last read or wrote it (Ctrl-R reloads).
@@ -344,6 +365,23 @@ pub struct Model {
     pub previews: std::collections::BTreeMap<String, (String, Arc<Volume>)>,
 }
 
+/// How long a status stays in the status row.
+pub const STATUS_SECONDS: u32 = 12;
+
+/// The most lines the message log keeps.
+pub const LOG_LINES: usize = 500;
+
+/// Builds asked for together (one `b`, `B` or `R`, and those queued while they run).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Batch {
+    /// The entries asked for.
+    pub total: usize,
+    /// Those finished (built, failed or cancelled).
+    pub done: usize,
+    /// When the first was asked for ([`Model::now`]).
+    pub started: std::time::Duration,
+}
+
 /// A line typed at the bottom of the screen.
 #[derive(Debug, Clone)]
 pub struct Prompt {
@@ -351,6 +389,8 @@ pub struct Prompt {
     pub purpose: Purpose,
     /// What is typed.
     pub input: tui_input::Input,
+    /// Why the last value typed was refused (shown before the prompt).
+    pub note: String,
 }
 
 /// What a prompt is for.
@@ -360,6 +400,8 @@ pub enum Purpose {
     Rename,
     /// The file the editor saves the manifest as (when the manifest cannot be written).
     SaveAs,
+    /// The library list's filter (the list narrows as it is typed).
+    Filter,
 }
 
 /// The help overlay: the keys of every screen, the one on top first, filtered by a query.
@@ -369,15 +411,18 @@ pub struct Help {
     pub query: String,
     /// Whether keys type into the query (after `/`).
     pub typing: bool,
+    /// The first line on screen.
+    pub scroll: usize,
 }
 
 impl Model {
     /// A model over `items`.
     pub fn new(manifest: PathBuf, output: PathBuf, items: Vec<Item>, errors: Vec<String>) -> Model {
+        // what needs doing first: the status row cuts a long line at its end
         let mut status = format!("{} exemplar(s) in {}", items.len(), manifest.display());
         let changed = items.iter().filter(|i| matches!(i.state, BuildState::Changed(..))).count();
         if changed > 0 {
-            status += &format!("; {changed} changed since their last build (select one to see why)");
+            status = format!("{changed} changed since their last build (select one to see why); {status}");
         }
         Model {
             manifest,
@@ -390,7 +435,16 @@ impl Model {
             screen: Screen::Library,
             help: None,
             prompt: None,
+            log: vec![status.clone()],
             status,
+            status_age: 0,
+            log_view: None,
+            filter: String::new(),
+            now: Default::default(),
+            batch: None,
+            first_run: false,
+            size: (80, 24),
+            renaming: None,
             quit: false,
             outside: false,
             undo: Vec::new(),
@@ -399,5 +453,11 @@ impl Model {
             progress: Default::default(),
             previews: Default::default(),
         }
+    }
+
+    /// The rows of the library list: indices into `items` of the entries the filter keeps.
+    pub fn visible(&self) -> Vec<usize> {
+        let filter = self.filter.to_lowercase();
+        (0..self.items.len()).filter(|&i| self.items[i].name.to_lowercase().contains(&filter)).collect()
     }
 }

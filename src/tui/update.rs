@@ -1,15 +1,64 @@
 //! `update`: the only place the model changes. Pure: returns the work to start.
 
 use super::message::{Effect, EntryChange, Message, SharedFill};
-use super::model::{BuildState, Confirm, ExemplarView, Model, Prompt, Purpose, Screen};
+use super::model::{
+    Batch, BuildState, Confirm, ExemplarView, LOG_LINES, Model, Prompt, Purpose, STATUS_SECONDS, Screen,
+};
 use super::{compare, editing, fill_edit, new_entry, stamping};
 use crate::volume::Axis;
 
 /// Apply `message` to `model`; returns the effects to run.
 pub fn update(model: &mut Model, message: Message) -> Vec<Effect> {
+    let before = model.status.clone();
     let mut effects = handle(model, message);
     effects.extend(fill_edit::overlay_due(model));
+    if model.status != before {
+        noted(model);
+    }
     effects
+}
+
+/// Whether the editor's field picker is open.
+fn picking(model: &Model) -> bool {
+    matches!(&model.screen, Screen::Editor(e) if e.picker.is_some())
+}
+
+/// A new status: shown afresh, and kept in the log with the time it came.
+fn noted(model: &mut Model) {
+    model.status_age = 0;
+    if model.status.is_empty() {
+        return;
+    }
+    let seconds = model.now.as_secs();
+    model.log.push(format!("{:02}:{:02} {}", seconds / 60, seconds % 60, model.status));
+    if model.log.len() > LOG_LINES {
+        model.log.drain(..model.log.len() - LOG_LINES);
+    }
+}
+
+/// A second passed: the status clears once it has been up [`STATUS_SECONDS`] (a question
+/// waiting for its answer stays).
+fn tick(model: &mut Model, now: std::time::Duration) {
+    model.now = now;
+    model.status_age = model.status_age.saturating_add(1);
+    if model.status_age >= STATUS_SECONDS && model.confirm.is_none() && model.prompt.is_none() {
+        model.status.clear();
+    }
+}
+
+/// Scroll the help or the message log by `rows`, within its lines.
+fn scroll(model: &mut Model, rows: i64) {
+    // a page key moves by what the overlay shows
+    let page = (i64::from(model.size.1) - 5).max(1);
+    let rows = if rows.abs() == super::keymap::PAGE { rows.signum() * page } else { rows };
+    let moved = |at: usize, most: usize| (at as i64).saturating_add(rows).clamp(0, most as i64) as usize;
+    if let Some(help) = &mut model.help {
+        let most = super::view::help_scroll_most(&model.screen, &help.query, model.size);
+        help.scroll = moved(help.scroll.min(most), most);
+    } else if let Some(first) = model.log_view {
+        let most = super::view::log_scroll_most(&model.log, model.size);
+        model.log_view = Some(moved(first.min(most), most));
+    }
 }
 
 fn handle(model: &mut Model, message: Message) -> Vec<Effect> {
@@ -18,6 +67,27 @@ fn handle(model: &mut Model, message: Message) -> Vec<Effect> {
     match message {
         Message::Quit => quit(model, asked),
         Message::Help => model.help = if model.help.is_some() { None } else { Some(Default::default()) },
+        Message::ShowLog => {
+            model.log_view = match model.log_view {
+                Some(_) => None,
+                None => Some(super::view::log_scroll_most(&model.log, model.size)),
+            }
+        }
+        Message::Scroll(rows) => scroll(model, rows),
+        Message::Jump(rows) if matches!(model.screen, Screen::Library) => select(model, rows),
+        Message::Jump(rows) => editing::picker_move(model, rows),
+        Message::PickField => editing::pick_field(model),
+        Message::RemoveField => return editing::remove_field(model),
+        Message::OutsideEditor => return editing::outside(model),
+        Message::OutsideEdited(result) => return editing::outside_edited(model, result),
+        Message::Filter if matches!(model.screen, Screen::Library) => {
+            model.prompt =
+                Some(Prompt { purpose: Purpose::Filter, input: model.filter.as_str().into(), note: String::new() });
+        }
+        Message::Filter => {}
+        Message::Say(text) => model.status = text,
+        Message::Tick(now) => tick(model, now),
+        Message::Resized(w, h) => model.size = (w, h),
         Message::HelpSearch => {
             if let Some(help) = &mut model.help {
                 help.typing = !help.typing;
@@ -29,6 +99,7 @@ fn handle(model: &mut Model, message: Message) -> Vec<Effect> {
                     Some(c) => help.query.push(c),
                     None => _ = help.query.pop(),
                 }
+                help.scroll = 0;
             }
         }
         Message::Back => return back(model, asked),
@@ -50,6 +121,7 @@ fn handle(model: &mut Model, message: Message) -> Vec<Effect> {
         Message::Up => select(model, -1),
         Message::Down => select(model, 1),
         Message::Open => return open(model),
+        Message::New if model.first_run => model.status = "no library here yet: enter starts one".into(),
         Message::New if matches!(model.screen, Screen::Library) => new_entry::start(model),
         Message::New | Message::Parent => {}
         Message::Listed(folder, result) => return new_entry::listed(model, &folder, result),
@@ -65,6 +137,12 @@ fn handle(model: &mut Model, message: Message) -> Vec<Effect> {
         Message::Duplicate => return change_entry(model, false, asked),
         Message::Delete => return change_entry(model, true, asked),
         Message::EntriesChanged(result) => {
+            model.first_run &= result.is_err();
+            // a refused rename: the prompt again, with the name as typed
+            if let (Some(mut retry), Err(why)) = (model.renaming.take(), &result) {
+                retry.note = why.clone();
+                model.prompt = Some(retry);
+            }
             new_entry::added(model, result.is_ok());
             entries_changed(model, result)
         }
@@ -109,13 +187,35 @@ fn handle(model: &mut Model, message: Message) -> Vec<Effect> {
         Message::Commit if model.prompt.as_ref().is_some_and(|p| p.purpose == Purpose::SaveAs) => {
             return editing::save_as(model);
         }
+        Message::Commit if model.prompt.as_ref().is_some_and(|p| p.purpose == Purpose::Filter) => {
+            model.prompt = None;
+            filtered(model);
+        }
         Message::Commit if model.prompt.is_some() => return finish_rename(model),
+        Message::Commit if picking(model) => return editing::picker_add(model),
+        Message::Cancel if picking(model) => {
+            if let Screen::Editor(e) = &mut model.screen {
+                e.picker = None;
+            }
+        }
         Message::Input(request) if model.prompt.is_some() => {
-            model.prompt.as_mut().expect("checked").input.handle(request);
+            let prompt = model.prompt.as_mut().expect("checked");
+            prompt.input.handle(request);
+            if prompt.purpose == Purpose::Filter {
+                model.filter = prompt.input.value().to_string();
+                filtered(model);
+            }
         }
         Message::Cancel if model.prompt.is_some() => {
             let purpose = model.prompt.take().expect("checked").purpose;
-            model.status = if purpose == Purpose::Rename { "the name stays" } else { "not saved" }.into();
+            model.status = match purpose {
+                Purpose::Rename => "the name stays".into(),
+                Purpose::SaveAs => "not saved".into(),
+                Purpose::Filter => {
+                    model.filter.clear();
+                    format!("every entry shown ({})", model.items.len())
+                }
+            };
         }
         Message::SaveAs => editing::ask_save_as(model),
         Message::SavedAs(result) => editing::saved_as(model, result),
@@ -193,7 +293,7 @@ fn handle(model: &mut Model, message: Message) -> Vec<Effect> {
         }
         Message::StampMode if stamps_unsaved(model) && asked != Some(Confirm::StampOff) => {
             model.confirm = Some(Confirm::StampOff);
-            model.status = "unsaved stamps: s saves them as steps, m again leaves stamp mode without saving".into();
+            model.status = "m again leaves stamp mode without saving; unsaved stamps: s saves them as steps".into();
         }
         Message::StampMode => return stamping::toggle(model),
         Message::SeedLoaded(result) => stamping::seed_loaded(model, result),
@@ -222,11 +322,15 @@ fn handle(model: &mut Model, message: Message) -> Vec<Effect> {
 fn exported(result: Result<(String, Vec<String>, Vec<String>), String>) -> String {
     match result {
         Ok((folder, files, skipped)) => {
-            let mut text = format!("exported {} files into {folder}: {}", files.len(), files.join(", "));
+            // the files first: a long folder is what the status row cuts (M shows it whole)
+            let mut text = match &files[..] {
+                [one] => format!("exported {one}"),
+                _ => format!("exported {} files: {}", files.len(), files.join(", ")),
+            };
             if !skipped.is_empty() {
                 text += &format!("; not {}", skipped.join(", not "));
             }
-            text
+            text + &format!(" into {folder}")
         }
         Err(e) => format!("nothing exported: {e}"),
     }
@@ -315,13 +419,14 @@ fn start_rename(model: &mut Model) {
         return;
     };
     model.status = format!("new name for {name} (enter renames, esc keeps it)");
-    model.prompt = Some(Prompt { purpose: Purpose::Rename, input: name.as_str().into() });
+    model.prompt = Some(Prompt { purpose: Purpose::Rename, input: name.as_str().into(), note: String::new() });
 }
 
 /// Enter in the rename prompt: rename the entry in the manifest (the worker refuses a name
 /// the manifest does not allow or one taken, and says why).
 fn finish_rename(model: &mut Model) -> Vec<Effect> {
-    let new = model.prompt.take().map(|p| p.input.value().to_string()).unwrap_or_default();
+    model.renaming = model.prompt.take();
+    let new = model.renaming.as_ref().map(|p| p.input.value().to_string()).unwrap_or_default();
     let Some(name) = model.items.get(model.selected).map(|i| i.name.clone()) else { return Vec::new() };
     if new == name {
         model.status = "the name stays".into();
@@ -371,7 +476,7 @@ fn quit(model: &mut Model, asked: Option<Confirm>) {
     match unsaved(model) {
         Some((what, how)) if asked != Some(Confirm::Quit) => {
             model.confirm = Some(Confirm::Quit);
-            model.status = format!("unsaved {what}: {how}, q again quits without saving");
+            model.status = format!("q again quits without saving; unsaved {what}: {how}");
         }
         _ => model.quit = true,
     }
@@ -391,6 +496,9 @@ fn back(model: &mut Model, asked: Option<Confirm>) -> Vec<Effect> {
         } else {
             model.help = None;
         }
+    } else if on_library && !model.filter.is_empty() {
+        model.filter.clear();
+        model.status = format!("every entry shown ({})", model.items.len());
     } else if on_library && model.items.iter().any(|i| i.state.busy()) {
         model.status = "cancelling the running builds; their previous outputs are kept".into();
         return vec![Effect::CancelBuilds];
@@ -398,7 +506,7 @@ fn back(model: &mut Model, asked: Option<Confirm>) -> Vec<Effect> {
         model.status = "this is the library, the first screen: q quits".into();
     } else if let Some((what, how)) = unsaved(model).filter(|_| asked != Some(Confirm::Leave)) {
         model.confirm = Some(Confirm::Leave);
-        model.status = format!("unsaved {what}: {how}, esc again leaves without saving");
+        model.status = format!("esc again leaves without saving; unsaved {what}: {how}");
     } else if let Screen::Fill(super::model::FillView { from: Some(view), .. }) = &mut model.screen {
         let view = std::mem::replace(view, Box::new(ExemplarView::new("")));
         model.status = format!("back to {}", view.name);
@@ -413,19 +521,52 @@ fn back(model: &mut Model, asked: Option<Confirm>) -> Vec<Effect> {
 }
 
 fn select(model: &mut Model, step: i64) {
-    let (row, count) = match &mut model.screen {
-        Screen::Editor(e) => {
-            let count = e.text.as_deref().and_then(|t| super::edit::fields(t, &e.name).ok()).map_or(0, |f| f.len());
-            (&mut e.selected, count)
-        }
-        _ => (&mut model.selected, model.items.len()),
-    };
-    *row = (*row as i64 + step).clamp(0, count.saturating_sub(1) as i64) as usize;
-    if let (Screen::Library, Some(item)) = (&model.screen, model.items.get(model.selected))
-        && let BuildState::Changed(_, why) = &item.state
-    {
-        model.status = format!("{} changed since its last build ({why}): b rebuilds it", item.name);
+    if let Screen::Editor(e) = &mut model.screen {
+        let count = e.text.as_deref().and_then(|t| super::edit::fields(t, &e.name).ok()).map_or(0, |f| f.len());
+        e.selected = (e.selected as i64).saturating_add(step).clamp(0, count.saturating_sub(1) as i64) as usize;
+        return;
     }
+    let rows = model.visible();
+    let Some(&last) = rows.last() else { return };
+    let at = rows.iter().position(|&i| i >= model.selected).unwrap_or(rows.len() - 1) as i64;
+    let to = at.saturating_add(step).clamp(0, rows.len() as i64 - 1) as usize;
+    let before = model.selected;
+    model.selected = rows.get(to).copied().unwrap_or(last);
+    if model.selected != before {
+        model.status = about(&model.items[model.selected]);
+    }
+}
+
+/// What the status row says when an entry is selected: why it needs a build or why it
+/// failed, else nothing (a message about the entry left would be stale).
+fn about(item: &super::model::Item) -> String {
+    match &item.state {
+        BuildState::Changed(_, why) => format!("{} changed since its last build ({why}): b rebuilds it", item.name),
+        BuildState::Failed(e, _) => format!("{} failed: {e}", item.name),
+        BuildState::Broken(e) => format!("{} has a mistake (e opens it): {e}", item.name),
+        _ => String::new(),
+    }
+}
+
+/// The filter changed: the selection moves onto the first entry it keeps when the selected
+/// one is hidden, and the status says how many are shown.
+fn filtered(model: &mut Model) {
+    let rows = model.visible();
+    if !rows.contains(&model.selected)
+        && let Some(&first) = rows.first()
+    {
+        model.selected = first;
+    }
+    model.status = if model.filter.is_empty() {
+        format!("every entry shown ({})", model.items.len())
+    } else {
+        format!(
+            "{} of {} entries hold {:?} (/ changes it, esc in it clears it)",
+            rows.len(),
+            model.items.len(),
+            model.filter
+        )
+    };
 }
 
 fn showing_mask(model: &Model) -> bool {
@@ -553,8 +694,16 @@ fn with_view(model: &mut Model, f: impl FnOnce(&mut ExemplarView)) {
 /// A click on row `row` of the library or the editor's fields: select it; a click on the
 /// selected row opens it (the library) or edits it (the editor).
 fn click(model: &mut Model, row: usize) -> Vec<Effect> {
+    if matches!(model.screen, Screen::Library) {
+        let Some(&item) = model.visible().get(row) else { return Vec::new() };
+        if item == model.selected {
+            return update(model, Message::Open);
+        }
+        model.selected = item;
+        model.status = about(&model.items[item]);
+        return Vec::new();
+    }
     let current = match &model.screen {
-        Screen::Library if row < model.items.len() => model.selected,
         Screen::Editor(e) if e.input.is_none() => e.selected,
         _ => return Vec::new(),
     };
@@ -583,6 +732,9 @@ fn move_slice(view: &mut ExemplarView, step: i64) {
 }
 
 fn open(model: &mut Model) -> Vec<Effect> {
+    if model.first_run {
+        return vec![Effect::StartLibrary];
+    }
     let Some(item) = model.items.get(model.selected) else { return Vec::new() };
     if let BuildState::Broken(reason) = &item.state {
         model.status = format!("{} has a mistake (e opens it to fix): {reason}", item.name);
@@ -617,11 +769,11 @@ fn build(model: &mut Model, all: bool) -> Vec<Effect> {
     queue(model, names)
 }
 
-/// `R`: build the entries changed since their last build.
+/// `R`: build the entries changed since their last build and those never built.
 fn build_changed(model: &mut Model) -> Vec<Effect> {
-    let names = wanted(model, |_, state| matches!(state, BuildState::Changed(..)));
+    let names = wanted(model, |_, state| matches!(state, BuildState::Changed(..) | BuildState::NotBuilt));
     if names.is_empty() {
-        model.status = "no entry changed since its last build".into();
+        model.status = "every entry is built and none changed since".into();
         return Vec::new();
     }
     queue(model, names)
@@ -638,6 +790,10 @@ fn wanted(model: &Model, pick: impl Fn(usize, &BuildState) -> bool) -> Vec<Strin
 /// Marks `names` waiting for their turn (the worker says when it starts) and starts it.
 fn queue(model: &mut Model, names: Vec<String>) -> Vec<Effect> {
     let waiting = model.items.iter().any(|i| i.state.busy());
+    match &mut model.batch {
+        Some(batch) if waiting => batch.total += names.len(),
+        _ => model.batch = Some(Batch { total: names.len(), done: 0, started: model.now }),
+    }
     for item in model.items.iter_mut().filter(|i| names.contains(&i.name)) {
         item.state = BuildState::Queued;
     }
@@ -670,13 +826,14 @@ fn loaded(model: &mut Model, name: &str, result: Result<std::sync::Arc<crate::vo
 
 fn built(model: &mut Model, name: &str, result: Result<crate::tui::model::Item, String>) {
     model.progress.remove(name);
+    finished_one(model);
     if let Some(item) = model.items.iter_mut().find(|i| i.name == name) {
         match result {
             Ok(row) => {
                 match &row.state {
                     BuildState::Built(kind) => model.status = format!("built {name} (measured type {kind})"),
                     BuildState::Failed(e, true) => {
-                        model.status = format!("{name} failed: {e}; its earlier build stays (enter opens it)")
+                        model.status = format!("{name} failed; its earlier build stays (enter opens it): {e}")
                     }
                     BuildState::Failed(e, false) => model.status = format!("{name} failed: {e}"),
                     _ => {}
@@ -695,6 +852,7 @@ fn built(model: &mut Model, name: &str, result: Result<crate::tui::model::Item, 
 /// left it (that output is kept).
 fn cancelled(model: &mut Model, name: &str, row: crate::tui::model::Item) {
     model.progress.remove(name);
+    finished_one(model);
     model.previews.remove(name);
     let kept = matches!(row.state, BuildState::Built(_) | BuildState::Changed(..));
     if let Some(item) = model.items.iter_mut().find(|i| i.name == name) {
@@ -707,9 +865,24 @@ fn cancelled(model: &mut Model, name: &str, row: crate::tui::model::Item) {
     };
 }
 
+/// One build of the batch ended; the batch ends with the last.
+fn finished_one(model: &mut Model) {
+    if let Some(batch) = &mut model.batch {
+        batch.done = (batch.done + 1).min(batch.total);
+        if batch.done == batch.total {
+            model.batch = None;
+        }
+    }
+}
+
 /// Mark exemplar `name` as changed since its last build (its recipe was saved; `valid`:
 /// the saved entry passed the manifest rules, so a broken one is now buildable).
 pub fn mark_changed(model: &mut Model, name: &str, valid: bool) {
+    if valid {
+        // its mistake is fixed: the list of the manifest's mistakes drops it
+        let own = format!("({name})");
+        model.errors.retain(|e| !e.contains(&own));
+    }
     for item in model.items.iter_mut().filter(|i| i.name == name) {
         match &item.state {
             BuildState::Built(kind) => item.state = BuildState::Changed(kind.clone(), "its recipe was saved".into()),
@@ -742,6 +915,86 @@ mod tests {
 
     /// `p` reads the photos once and toggles them beside the slice; an entry made without
     /// one says why and stays on its three slices.
+    /// The status belongs to what is on screen: selecting another entry replaces a message
+    /// about the last one, a message clears after its time, and the log keeps them all.
+    #[test]
+    fn the_status_follows_the_selection_times_out_and_is_logged() {
+        let mut m = model();
+        update(&mut m, Message::Built("a".into(), Err("no such photo".into())));
+        assert!(m.status.starts_with("a failed"), "{}", m.status);
+        update(&mut m, Message::Jump(1));
+        assert_eq!((m.selected, m.status.as_str()), (1, ""), "the message about a left with it");
+        update(&mut m, Message::Jump(-1));
+        assert!(m.status.starts_with("a failed: no such photo"), "the failed entry says why: {}", m.status);
+        for s in 1..STATUS_SECONDS {
+            update(&mut m, Message::Tick(std::time::Duration::from_secs(u64::from(s))));
+        }
+        assert!(!m.status.is_empty(), "shown {} s", STATUS_SECONDS - 1);
+        update(&mut m, Message::Tick(std::time::Duration::from_secs(99)));
+        assert!(m.status.is_empty(), "cleared after {STATUS_SECONDS} s");
+        let logged: Vec<_> = m.log.iter().filter(|l| l.contains("a failed")).collect();
+        assert_eq!(logged.len(), 2, "{:?}", m.log);
+        assert!(logged[0].starts_with("00:00 "), "{:?}", logged);
+        update(&mut m, Message::ShowLog);
+        assert!(m.log_view.is_some());
+        update(&mut m, Message::ShowLog);
+        assert!(m.log_view.is_none());
+    }
+
+    /// g/G, pgup/pgdn and the filter move the selection among the entries shown; esc in the
+    /// filter shows them all again.
+    #[test]
+    fn the_list_jumps_and_filters() {
+        let mut m = model();
+        let names = ["c", "kiwi", "kiwi-2", "marble", "oak"];
+        for n in names {
+            m.items.push(Item { name: n.into(), ..m.items[0].clone() });
+        }
+        update(&mut m, Message::Jump(crate::tui::keymap::END));
+        assert_eq!(m.selected, 6);
+        update(&mut m, Message::Jump(-crate::tui::keymap::PAGE));
+        assert_eq!(m.selected, 0);
+        update(&mut m, Message::Filter);
+        for c in "KIWI".chars() {
+            update(&mut m, Message::Input(tui_input::InputRequest::InsertChar(c)));
+        }
+        assert_eq!(m.visible(), [3, 4]);
+        assert_eq!(m.selected, 3, "the selection moves onto the first entry shown");
+        update(&mut m, Message::Commit);
+        assert!(m.prompt.is_none() && m.filter == "KIWI" && m.status.contains("2 of 7"), "{}", m.status);
+        update(&mut m, Message::Jump(crate::tui::keymap::END));
+        assert_eq!(m.selected, 4);
+        update(&mut m, Message::Select(0));
+        assert_eq!(m.selected, 3, "a click picks the row as shown");
+        update(&mut m, Message::Filter);
+        update(&mut m, Message::Cancel);
+        assert_eq!((m.filter.as_str(), m.visible().len()), ("", 7));
+    }
+
+    /// Builds asked together count done/total, and a refused rename gives its prompt back.
+    #[test]
+    fn a_batch_counts_its_builds_and_a_refused_rename_keeps_the_name_typed() {
+        let mut m = model();
+        update(&mut m, Message::Tick(std::time::Duration::from_secs(5)));
+        update(&mut m, Message::BuildAll);
+        assert_eq!(m.batch, Some(Batch { total: 2, done: 0, started: std::time::Duration::from_secs(5) }));
+        update(&mut m, Message::Built("a".into(), Err("x".into())));
+        assert_eq!(m.batch.as_ref().map(|b| b.done), Some(1));
+        update(&mut m, Message::Built("b".into(), Err("x".into())));
+        assert_eq!(m.batch, None);
+        update(&mut m, Message::Rename);
+        update(&mut m, Message::Input(tui_input::InputRequest::InsertChar('x')));
+        let effects = update(&mut m, Message::Commit);
+        assert_eq!(effects, vec![Effect::ChangeEntry(EntryChange::Rename("a".into(), "ax".into()))]);
+        update(&mut m, Message::EntriesChanged(Err("the name \"ax\" is taken".into())));
+        assert_eq!(m.prompt.as_ref().map(|p| p.input.value()), Some("ax"));
+        assert!(m.prompt.as_ref().is_some_and(|p| p.note.contains("is taken")));
+        // a mistake fixed and saved leaves the list of the manifest's mistakes
+        m.errors = vec!["lib.toml: line 9: entry 2 (b): size is missing".into(), "line 1: entry 3 (c): x".into()];
+        mark_changed(&mut m, "b", true);
+        assert_eq!(m.errors, ["line 1: entry 3 (c): x"]);
+    }
+
     #[test]
     fn p_shows_the_photo_beside_the_slice() {
         let mut m = model();
@@ -842,13 +1095,17 @@ mod tests {
         assert!(m.quit);
     }
 
-    /// R builds only the entries changed since their last build; a build asked while
-    /// another runs waits its turn, and says so.
+    /// R builds the entries changed since their last build and those never built; a build
+    /// asked while another runs waits its turn, and says so.
     #[test]
     fn r_rebuilds_the_changed_entries_and_later_builds_wait_their_turn() {
         let mut m = model();
+        m.items[1].state = BuildState::Built("0".into());
         assert!(update(&mut m, Message::BuildChanged).is_empty());
-        assert!(m.status.contains("no entry changed"), "{}", m.status);
+        assert!(m.status.contains("every entry is built and none changed"), "{}", m.status);
+        m.items[1].state = BuildState::NotBuilt;
+        assert_eq!(update(&mut m, Message::BuildChanged), vec![Effect::Build(vec!["b".into()])]);
+        m = model();
         m.items[0].state = BuildState::Changed("0".into(), "the recipe changed".into());
         update(&mut m, Message::Down);
         assert_eq!(update(&mut m, Message::Build), vec![Effect::Build(vec!["b".into()])]);
@@ -1004,7 +1261,7 @@ mod tests {
         assert_eq!(update(&mut m, Message::Save), vec![save]);
         let theirs = format!("# noted\n{}", base.replace("size = 8", "size = 12"));
         update(&mut m, Message::SaveConflict(theirs.clone()));
-        assert!(m.status.contains("a changed on disk too: m keeps yours"), "{}", m.status);
+        assert!(m.status.contains("changed on disk: m keeps yours"), "{}", m.status);
         update(&mut m, Message::Resolve('b'));
         let Screen::Editor(e) = &m.screen else { panic!("the editor") };
         assert!(e.conflict.as_ref().is_some_and(|c| c.both));
@@ -1049,7 +1306,7 @@ mod tests {
         assert!(m.undo.is_empty());
         let row = Item { state: BuildState::Failed("no image".into(), true), ..m.items[0].clone() };
         update(&mut m, Message::Built("a".into(), Ok(row)));
-        assert!(m.status.contains("a failed: no image; its earlier build stays"), "{}", m.status);
+        assert!(m.status.contains("a failed; its earlier build stays (enter opens it): no image"), "{}", m.status);
         assert_eq!(update(&mut m, Message::Open), vec![Effect::Load("a".into())]);
         assert!(matches!(&m.screen, Screen::Exemplar(v) if v.older));
         let mut m = model();

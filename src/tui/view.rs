@@ -38,23 +38,22 @@ pub fn draw_with(
         frame.render_widget(Paragraph::new(text), area);
         return;
     }
-    // A long status (an error with its reason) gets as many lines as it needs, up to four,
-    // beside the key hints rather than under them.
     let status_text = match &model.prompt {
+        Some(p) if p.purpose == super::model::Purpose::Rename && !p.note.is_empty() => {
+            format!("new name: {}_  refused: {}", p.input.value(), p.note)
+        }
         Some(p) if p.purpose == super::model::Purpose::Rename => {
             format!("new name: {}_  (enter renames, esc keeps the name)", p.input.value())
+        }
+        Some(p) if p.purpose == super::model::Purpose::Filter => {
+            format!("filter: {}_  (enter keeps it, esc shows every entry)", p.input.value())
         }
         Some(p) => format!("save as: {}_  (enter saves, esc does not)", p.input.value()),
         None => model.status.clone(),
     };
-    let status_lines = wrapped_lines(&status_text, area.width.saturating_sub(16)).clamp(1, 4);
-    let hints = key_bar(model);
-    let hint_width: usize = hints.iter().map(|s| s.content.chars().count()).sum();
-    let bar_lines = hint_width.div_ceil(usize::from(area.width).max(1)).clamp(1, 2) as u16;
     let [main, bar, status] =
-        Layout::vertical([Constraint::Min(3), Constraint::Length(bar_lines), Constraint::Length(status_lines)])
-            .areas(area);
-    frame.render_widget(Paragraph::new(Line::from(hints)).wrap(Wrap { trim: true }), bar);
+        Layout::vertical([Constraint::Min(3), Constraint::Length(1), Constraint::Length(1)]).areas(area);
+    frame.render_widget(Paragraph::new(Line::from(key_bar(model, bar.width))), bar);
     match &model.screen {
         Screen::Library => library(frame, model, main, regions),
         Screen::Exemplar(view) if view.beside_photo => {
@@ -67,36 +66,77 @@ pub fn draw_with(
         Screen::New(entry) => super::view_new::new_entry(frame, entry, main, regions, graphics),
         Screen::Compare(view) => super::view_compare::compare(frame, view, main),
     }
-    let [left, right] = Layout::horizontal([Constraint::Min(10), Constraint::Length(16)]).areas(status);
-    let text = Paragraph::new(status_text).style(Style::new().fg(Color::Gray)).wrap(Wrap { trim: false });
-    frame.render_widget(text, left);
-    frame.render_widget(Paragraph::new(" ? help  q quit").style(Style::new().fg(Color::DarkGray)), right);
+    let [left, right] =
+        Layout::horizontal([Constraint::Min(10), Constraint::Length(OVERLAY_KEYS.len() as u16)]).areas(status);
+    let shown = cut(status_text.lines().next().unwrap_or_default(), left.width);
+    frame.render_widget(Paragraph::new(shown).style(Style::new().fg(Color::Gray)), left);
+    frame.render_widget(Paragraph::new(OVERLAY_KEYS).style(Style::new().fg(Color::DarkGray)), right);
     if let Some(h) = &model.help {
         help(frame, area, &model.screen, h);
+    } else if let Some(first) = model.log_view {
+        log(frame, area, &model.log, first);
     }
 }
 
-/// The screen's keys (one line, two when they do not fit): key, what it does; a key that
-/// cannot act now dimmed, with the reason.
-fn key_bar(model: &Model) -> Vec<Span<'static>> {
+/// The keys at the right of the status row, on every screen.
+const OVERLAY_KEYS: &str = " ? help  M log  q quit";
+
+/// `text` in at most `width` columns: cut at the end with `…` when longer (the message log
+/// keeps it whole).
+pub fn cut(text: &str, width: u16) -> String {
+    let width = usize::from(width);
+    if text.chars().count() <= width {
+        return text.to_string();
+    }
+    let kept: String = text.chars().take(width.saturating_sub(1)).collect();
+    format!("{kept}…")
+}
+
+/// A title in at most `width` columns (a box's width less its corners): shortened in the
+/// middle with `…`, so its start and its end (a file's name, a state) both stay.
+pub fn fitted(title: &str, width: u16) -> String {
+    let most = usize::from(width.saturating_sub(2));
+    let count = title.chars().count();
+    if count <= most {
+        return title.to_string();
+    }
+    let head = most.saturating_sub(1) / 3;
+    let tail = most.saturating_sub(1) - head;
+    let start: String = title.chars().take(head).collect();
+    let end: String = title.chars().skip(count - tail).collect();
+    format!("{start}…{end}")
+}
+
+/// The screen's keys in one row of `width` columns, most used first: a key that cannot
+/// act now is dimmed (pressing it says why), and `…` ends the row when keys are left out
+/// (the help lists them all).
+fn key_bar(model: &Model, width: u16) -> Vec<Span<'static>> {
     let mut spans: Vec<Span> = Vec::new();
-    for h in super::keybar::hints(model) {
-        spans.push(Span::raw(" "));
-        match h.why_not {
-            None => {
-                spans.push(Span::styled(h.keys, Style::new().fg(Color::Yellow)));
-                spans.push(Span::styled(format!(" {} ", h.action), Style::new().fg(Color::Gray)));
-            }
-            Some(why) => {
-                let dim = Style::new().fg(Color::DarkGray);
-                spans.push(Span::styled(format!("{} {} ({why}) ", h.keys, h.action), dim));
-            }
+    let mut used = 0;
+    let hints = super::keybar::hints(model);
+    let count = hints.len();
+    for (k, h) in hints.into_iter().enumerate() {
+        let action = format!(" {} ", h.action);
+        let wide = 1 + h.keys.chars().count() + action.chars().count();
+        let room = usize::from(width).saturating_sub(if k + 1 < count { 2 } else { 0 });
+        if used + wide > room {
+            spans.push(Span::styled(" …", Style::new().fg(Color::DarkGray)));
+            break;
         }
+        used += wide;
+        spans.push(Span::raw(" "));
+        let (key, text) = match h.why_not {
+            None => (Style::new().fg(Color::Yellow), Style::new().fg(Color::Gray)),
+            Some(_) => (Style::new().fg(Color::DarkGray), Style::new().fg(Color::DarkGray)),
+        };
+        spans.push(Span::styled(h.keys, key));
+        spans.push(Span::styled(action, text));
     }
     spans
 }
 
 fn library(frame: &mut Frame, model: &Model, area: Rect, regions: &mut Regions) {
+    let rows = model.visible();
     let mut title = format!(" solidtex library: {} ", model.manifest.display());
     if model.outside {
         title += "(changed on disk: Ctrl-R reloads) ";
@@ -104,7 +144,22 @@ fn library(frame: &mut Frame, model: &Model, area: Rect, regions: &mut Regions) 
     if !model.read_only.is_empty() {
         title += "(read-only) ";
     }
-    let block = Block::default().borders(Borders::ALL).title(title);
+    if let Some(at) = rows.iter().position(|&i| i == model.selected) {
+        title += &format!("{}/{} ", at + 1, rows.len());
+    }
+    if !model.filter.is_empty() {
+        title += &format!("filter {:?} ({} of {}) ", model.filter, rows.len(), model.items.len());
+    }
+    if model.first_run || model.items.is_empty() {
+        return first_run(frame, model, area, &title);
+    }
+    let block = Block::default().borders(Borders::ALL).title(fitted(&title, area.width));
+    let block = match &model.batch {
+        Some(batch) => {
+            block.title_bottom(Line::styled(batch_line(model, batch), Style::new().fg(Color::Yellow)).right_aligned())
+        }
+        None => block,
+    };
     let area = if model.errors.is_empty() {
         area
     } else {
@@ -117,17 +172,18 @@ fn library(frame: &mut Frame, model: &Model, area: Rect, regions: &mut Regions) 
         let hidden = wrapped.saturating_sub(lines - 2);
         let scroll = (model.error_scroll as u16).min(hidden);
         let more = if hidden > 0 {
-            format!("lines {}-{} of {wrapped}, PgUp/PgDn scroll; ", scroll + 1, scroll + lines - 2)
+            format!("lines {}-{} of {wrapped}, [ ] scroll; ", scroll + 1, scroll + lines - 2)
         } else {
             String::new()
         };
         let title = format!(" the manifest has {} error(s) ({more}the other exemplars work) ", model.errors.len());
-        let box_ = Block::default().borders(Borders::ALL).title(title);
+        let box_ = Block::default().borders(Borders::ALL).title(fitted(&title, errors.width));
         let paragraph = Paragraph::new(text).wrap(ratatui::widgets::Wrap { trim: false }).scroll((scroll, 0));
         frame.render_widget(paragraph.block(box_), errors);
         list
     };
-    let rows = model.items.iter().enumerate().map(|(i, item)| {
+    let table_rows = rows.iter().map(|&i| {
+        let item = &model.items[i];
         let size = item.size.map(|[x, y, z]| format!("{x}x{y}x{z}")).unwrap_or_else(|| "-".into());
         let declared = item.declared.clone().unwrap_or_else(|| "-".into());
         let (state, measured) = match &item.state {
@@ -159,7 +215,9 @@ fn library(frame: &mut Frame, model: &Model, area: Rect, regions: &mut Regions) 
         Constraint::Length(7),
         Constraint::Min(10),
     ];
-    let block = match model.items.get(model.selected).and_then(|i| Some((i, i.quality.as_ref()?))) {
+    // while builds run their count takes the bottom line
+    let quality = model.items.get(model.selected).filter(|_| model.batch.is_none());
+    let block = match quality.and_then(|i| Some((i, i.quality.as_ref()?))) {
         Some((item, q)) => {
             let colour = if q.in_range() { Color::Green } else { Color::Red };
             let verdict = if q.in_range() { "in range".to_string() } else { format!("out of range: {}", q.verdict()) };
@@ -181,8 +239,9 @@ fn library(frame: &mut Frame, model: &Model, area: Rect, regions: &mut Regions) 
     let inner = block.inner(table);
     let rows_area = Rect { y: inner.y + 1, height: inner.height.saturating_sub(1), ..inner };
     // the table scrolls to keep the selected row in view
-    let mut state = ratatui::widgets::TableState::default().with_selected(Some(model.selected));
-    frame.render_stateful_widget(Table::new(rows, widths).header(header).block(block), table, &mut state);
+    let at = rows.iter().position(|&i| i == model.selected);
+    let mut state = ratatui::widgets::TableState::default().with_selected(at);
+    frame.render_stateful_widget(Table::new(table_rows, widths).header(header).block(block), table, &mut state);
     regions.list = Some(List { area: rows_area, first: state.offset() });
     if let Some((rect, (level, volume))) = side {
         let block = Block::default().borders(Borders::ALL).title(format!(" level {level} (z middle) "));
@@ -192,6 +251,41 @@ fn library(frame: &mut Frame, model: &Model, area: Rect, regions: &mut Regions) 
             frame.render_widget(HalfBlocks { image: &image, channel: 0, overlay: None, scale: None }, inner);
         }
     }
+}
+
+/// The library when it has no entry yet: how to start one.
+fn first_run(frame: &mut Frame, model: &Model, area: Rect, title: &str) {
+    let text = if model.first_run {
+        vec![
+            Line::from(format!("There is no library at {} yet.", model.manifest.display())),
+            Line::from(""),
+            Line::from("Press enter to start one there (an empty manifest with a comment on its format),"),
+            Line::from("then n to add your first exemplar from a photo, a cross-section or a recipe."),
+            Line::from("q quits and writes nothing."),
+        ]
+    } else {
+        vec![
+            Line::from("This library has no exemplar yet."),
+            Line::from(""),
+            Line::from("Press n to add your first exemplar: a photo to synthesize a solid from,"),
+            Line::from("a cross-section to sweep, a volume file, or a procedural recipe."),
+        ]
+    };
+    let block = Block::default().borders(Borders::ALL).title(fitted(title, area.width));
+    frame.render_widget(Paragraph::new(text).wrap(Wrap { trim: false }).block(block), area);
+}
+
+/// Builds asked for together: `building 2/5 · 0:45 · about 1:10 left`.
+fn batch_line(model: &Model, batch: &super::model::Batch) -> String {
+    let running: f32 = model.progress.values().map(|(_, f)| f.clamp(0.0, 1.0)).sum();
+    let share = ((batch.done as f32 + running) / batch.total.max(1) as f32).clamp(0.0, 1.0);
+    let elapsed = model.now.saturating_sub(batch.started).as_secs_f32();
+    let clock = |s: f32| format!("{}:{:02}", s as u64 / 60, s as u64 % 60);
+    let mut line = format!(" building {}/{} · {}", batch.done + 1, batch.total, clock(elapsed));
+    if share > 0.02 && elapsed >= 2.0 {
+        line += &format!(" · about {} left", clock(elapsed * (1.0 - share) / share));
+    }
+    line + " "
 }
 
 /// A build's state as a one-line gauge: `level 2/3 ####---- 48%`.
@@ -236,13 +330,10 @@ fn exemplar(
             let shown = view.layers.get(view.layer).map_or("exemplar", |l| l.0.as_str());
             let zoom = if view.zoom > 1 { format!(" x{}", view.zoom) } else { String::new() };
             let older = if view.older { " (earlier build: the latest failed)" } else { "" };
-            format!(
-                " {}{older} {shown}{zoom}  (x/y/z, arrows, c channel, +/- zoom, a masks, f fill, m stamp) ",
-                view.name
-            )
+            format!(" {}{older} {shown}{zoom} ", view.name)
         }
     };
-    let block = Block::default().borders(Borders::ALL).title(title);
+    let block = Block::default().borders(Borders::ALL).title(fitted(&title, area.width));
     let inner = block.inner(area);
     frame.render_widget(block, area);
     let Some(volume) = &view.volume else {
@@ -267,7 +358,7 @@ fn exemplar(
             d[k] - 1
         );
         let style = if active { Style::new().fg(Color::Yellow) } else { Style::new() };
-        let block = Block::default().borders(Borders::ALL).title(label).border_style(style);
+        let block = Block::default().borders(Borders::ALL).title(fitted(&label, panel.width)).border_style(style);
         let slice_area = block.inner(*panel);
         frame.render_widget(block, *panel);
         let Ok(full) = volume.slice(axis, view.index[k]) else { continue };
@@ -333,7 +424,8 @@ fn beside_photo(frame: &mut Frame, view: &ExemplarView, quality: Option<&crate::
         Some(_) => Color::Red,
         None => Color::Reset,
     };
-    let block = Block::default().borders(Borders::ALL).title(Line::styled(title, Style::new().fg(colour)));
+    let block =
+        Block::default().borders(Borders::ALL).title(Line::styled(fitted(&title, area.width), Style::new().fg(colour)));
     let inner = block.inner(area);
     frame.render_widget(block, area);
     let (Some(volume), Some(Ok(photos))) = (&view.volume, &view.photos) else {
@@ -447,42 +539,103 @@ pub fn wrapped_lines(text: &str, width: u16) -> u16 {
     text.lines().map(|l| l.chars().count().div_ceil(width).max(1)).sum::<usize>().min(u16::MAX as usize) as u16
 }
 
-/// The help overlay: the keys of the screen on top first, then the others, those matching
-/// the search with the match highlighted; the search line at the bottom.
-fn help(frame: &mut Frame, area: Rect, screen: &Screen, state: &Help) {
-    let sections = super::keymap::help_rows(screen, &state.query);
+/// The help's lines: the keys of the screen on top first, then the others, those matching
+/// the search with the match highlighted.
+fn help_text(screen: &Screen, query: &str) -> (Vec<Line<'static>>, usize) {
+    let sections = super::keymap::help_rows(screen, query);
+    let keys_wide = sections.iter().flat_map(|(_, rows)| rows.iter()).map(|(k, _)| k.chars().count()).max();
+    let wide = keys_wide.unwrap_or(0) + 2;
     let mut text: Vec<Line> = Vec::new();
     for (title, rows) in &sections {
         text.push(Line::from(Span::styled(*title, Style::new().add_modifier(Modifier::BOLD))));
         for (keys, action) in rows {
             let mut spans = vec![Span::raw("  ")];
-            spans.extend(marked(&format!("{keys:<14}"), &state.query));
-            spans.extend(marked(action, &state.query));
+            spans.extend(marked(&format!("{keys:<wide$}"), query));
+            spans.extend(marked(action, query));
             text.push(Line::from(spans));
         }
     }
     if sections.is_empty() {
-        text.push(Line::from(format!("no key matches '{}'", state.query)));
+        text.push(Line::from(format!("no key matches '{query}'")));
     }
+    let widest = sections.iter().flat_map(|(_, rows)| rows.iter()).map(|(_, a)| a.chars().count() + wide + 4).max();
+    (text, widest.unwrap_or(40))
+}
+
+/// Rows of an overlay of `lines` lines in a terminal `height` rows high that show lines
+/// (its borders and its bottom line take three).
+fn overlay_rows(lines: usize, height: u16) -> usize {
+    (lines + 3).min(usize::from(height)).saturating_sub(3)
+}
+
+/// The furthest the help scrolls on a terminal of `size`.
+pub fn help_scroll_most(screen: &Screen, query: &str, size: (u16, u16)) -> usize {
+    let lines = help_text(screen, query).0.len();
+    lines.saturating_sub(overlay_rows(lines, size.1))
+}
+
+/// The furthest the message log scrolls on a terminal of `size`.
+pub fn log_scroll_most(log: &[String], size: (u16, u16)) -> usize {
+    log_rows(log, size.0).len().saturating_sub(usize::from(size.1).saturating_sub(3))
+}
+
+/// The message log's rows on a terminal `width` columns wide: each message whole, its
+/// continuation rows indented under its text.
+fn log_rows(log: &[String], width: u16) -> Vec<String> {
+    let wide = usize::from(width.saturating_sub(2)).max(12);
+    let mut rows = Vec::new();
+    for message in log {
+        let chars: Vec<char> = message.chars().collect();
+        rows.push(chars.iter().take(wide).collect());
+        for chunk in chars.get(wide..).unwrap_or_default().chunks(wide - 6) {
+            rows.push(format!("      {}", chunk.iter().collect::<String>()));
+        }
+    }
+    rows
+}
+
+/// The help overlay, scrolled to `state.scroll`; the search and where the view is at the
+/// bottom.
+fn help(frame: &mut Frame, area: Rect, screen: &Screen, state: &Help) {
+    let (text, widest) = help_text(screen, &state.query);
     let search = match (state.typing, state.query.is_empty()) {
         (true, _) => format!("/{}_  (enter keeps it, esc clears)", state.query),
         (false, false) => format!("/{}  (/ changes it, esc clears)", state.query),
         (false, true) => "/ search  esc close".to_string(),
     };
-    let widest = sections.iter().flat_map(|(_, rows)| rows.iter()).map(|(_, a)| a.chars().count() + 20).max();
-    let (w, h) = ((widest.unwrap_or(40).max(60) as u16).min(area.width), (text.len() as u16 + 3).min(area.height));
+    let rows = overlay_rows(text.len(), area.height);
+    let first = state.scroll.min(text.len().saturating_sub(rows));
+    let w = (widest.max(60) as u16).min(area.width);
+    let h = (rows + 3) as u16;
     let rect = Rect::new(area.x + (area.width - w) / 2, area.y + (area.height - h) / 2, w, h);
-    let [body, bottom] = Layout::vertical([Constraint::Min(1), Constraint::Length(1)]).areas(Rect::new(
-        rect.x + 1,
-        rect.y + 1,
-        rect.width.saturating_sub(2),
-        rect.height.saturating_sub(2),
-    ));
     let title = format!(" keys: {} ", super::keymap::section_of(screen));
+    overlay(frame, rect, &title, text, first, &search);
+}
+
+/// The message log: every status shown, newest last, scrolled to `first`.
+fn log(frame: &mut Frame, area: Rect, log: &[String], first: usize) {
+    let rows = usize::from(area.height).saturating_sub(3);
+    let lines = log_rows(log, area.width);
+    let first = first.min(lines.len().saturating_sub(rows));
+    let text: Vec<Line> = lines.into_iter().map(Line::from).collect();
+    overlay(frame, area, " messages (newest last) ", text, first, "M or esc closes");
+}
+
+/// An overlay box: `text` from line `first`, and a bottom line with `note` and, when the
+/// text is longer than the box, which lines show and how to scroll.
+fn overlay(frame: &mut Frame, rect: Rect, title: &str, text: Vec<Line>, first: usize, note: &str) {
+    let inner = Rect::new(rect.x + 1, rect.y + 1, rect.width.saturating_sub(2), rect.height.saturating_sub(2));
+    let [body, bottom] = Layout::vertical([Constraint::Min(1), Constraint::Length(1)]).areas(inner);
+    let total = text.len();
+    let shown = usize::from(body.height).min(total);
+    let mut line = note.to_string();
+    if shown < total {
+        line += &format!("  lines {}-{} of {total}: up/down, pgup/pgdn, g/G scroll", first + 1, first + shown);
+    }
     frame.render_widget(Clear, rect);
-    frame.render_widget(Block::default().borders(Borders::ALL).title(title), rect);
-    frame.render_widget(Paragraph::new(text), body);
-    frame.render_widget(Paragraph::new(search).style(Style::new().fg(Color::Yellow)), bottom);
+    frame.render_widget(Block::default().borders(Borders::ALL).title(fitted(title, rect.width)), rect);
+    frame.render_widget(Paragraph::new(text).scroll((first as u16, 0)), body);
+    frame.render_widget(Paragraph::new(cut(&line, bottom.width)).style(Style::new().fg(Color::Yellow)), bottom);
 }
 
 /// `text` as spans, the first match of `query` (any case) highlighted.
@@ -556,7 +709,7 @@ mod tests {
         let (text, _) = screen(&m, 80, 24);
         assert!(text.contains("level 2/3 ####---- 48%") && text.contains("waiting (queued)"), "{text}");
         let (text, _) = screen(&m, 140, 24);
-        assert!(text.contains("R rebuild changed (none changed)"), "{text}");
+        assert!(text.contains("esc cancel builds") && text.contains("R build changed"), "{text}");
         m.items[0].state = BuildState::Built("1-b".into());
         m.selected = 1;
         let level =
@@ -581,19 +734,23 @@ mod tests {
         assert!(text.contains("keys: library") && text.contains("cycle colour"), "{text}");
         assert!(text.contains("/ search  esc close"), "{text}");
         // a search keeps the matching keys, highlighted, and says how to change it
-        m.help = Some(Help { query: "Zoom".into(), typing: false });
+        m.help = Some(Help { query: "Zoom".into(), typing: false, scroll: 0 });
         let (text, buffer) = screen(&m, 80, 40);
         assert!(text.contains("zoom") && !text.contains("cycle colour"), "{text}");
         assert!(text.contains("/Zoom  (/ changes it, esc clears)"), "{text}");
         let highlighted =
             buffer.content().iter().filter(|c| c.bg == Color::Yellow).map(|c| c.symbol()).collect::<String>();
         assert_eq!(highlighted, "zoom");
-        m.help = Some(Help { query: "qqq".into(), typing: true });
+        m.help = Some(Help { query: "qqq".into(), typing: true, scroll: 0 });
         let (text, _) = screen(&m, 80, 40);
         assert!(text.contains("no key matches 'qqq'") && text.contains("/qqq_"), "{text}");
         // the rename prompt shows what is typed, and the key bar its keys
         m.help = None;
-        m.prompt = Some(crate::tui::model::Prompt { purpose: crate::tui::model::Purpose::Rename, input: "ab".into() });
+        m.prompt = Some(crate::tui::model::Prompt {
+            purpose: crate::tui::model::Purpose::Rename,
+            input: "ab".into(),
+            note: String::new(),
+        });
         let (text, _) = screen(&m, 80, 24);
         assert!(text.contains("new name: ab_") && text.contains("keep the name"), "{text}");
     }
@@ -626,14 +783,14 @@ mod tests {
             .filter(|p| buffer[*p].fg == Color::Rgb(255, 0, 0))
             .count();
         assert!(red > 100, "{red} red half-blocks");
-        let m2 = Model { errors: vec!["lib.toml: line 9: exemplar[2] (a): size is missing".into()], ..model() };
+        let m2 = Model { errors: vec!["lib.toml: line 9: entry 3 (a): size is missing".into()], ..model() };
         let (text, _) = screen(&m2, 80, 24);
         assert!(text.contains("size is missing") && text.contains("the manifest has 1 error(s)"), "{text}");
         assert!(text.contains("kiwi") && text.contains("marble"), "the valid exemplars stay listed: {text}");
         let many = (1..=12).map(|i| format!("lib.toml: line {i}: exemplar[{i}] (e{i}): size is missing")).collect();
         let mut m3 = Model { errors: many, ..model() };
         let (text, _) = screen(&m3, 80, 24);
-        assert!(text.contains("PgUp/PgDn scroll") && text.contains("(e1)") && !text.contains("(e12)"), "{text}");
+        assert!(text.contains("[ ] scroll") && text.contains("(e1)") && !text.contains("(e12)"), "{text}");
         crate::tui::update(&mut m3, crate::tui::Message::ScrollErrors(30));
         let (text, _) = screen(&m3, 80, 24);
         assert!(text.contains("(e12)") && !text.contains("(e1)"), "scrolled to the last error: {text}");
@@ -670,17 +827,124 @@ mod tests {
         assert!(tr > tb && bb > br, "top ({tr}, {tb}) is high z, bottom ({br}, {bb}) low z");
     }
 
-    /// A long status is shown whole, over several lines, and the key hints stay readable.
+    /// A long status takes one row, cut with `…` (the log keeps it whole), beside the keys
+    /// every screen has.
     #[test]
-    fn a_long_status_wraps_instead_of_running_into_the_hints() {
+    fn a_long_status_is_one_row_cut_and_whole_in_the_log() {
         let mut m = model();
         let reason =
-            "line 43: steps[0]: count = 4000 is out of range; allowed: 1 to 2000 (the most seeds one scatter places)";
-        m.status = format!("not saved: {reason}");
+            "line 43: step 1: count = 4000 is out of range; allowed: 1 to 2000 (the most seeds one scatter places)";
+        crate::tui::update(&mut m, crate::tui::Message::Say(format!("not saved: {reason}")));
         let (text, _) = screen(&m, 80, 24);
-        let flat: String = text.lines().map(str::trim_end).collect::<Vec<_>>().join(" ");
-        assert!(flat.contains("the most seeds one") && flat.contains("scatter places)"), "{text}");
-        assert!(text.contains("? help  q quit"), "{text}");
+        let last = text.lines().last().unwrap();
+        assert!(last.starts_with("not saved: line 43") && last.contains('…'), "{last}");
+        assert!(last.ends_with(OVERLAY_KEYS), "{last}");
+        assert!(!text.contains("scatter places"), "{text}");
+        assert!(m.log.last().unwrap().ends_with("scatter places)"), "{:?}", m.log);
+        // the log shows it whole, wrapped under its text
+        crate::tui::update(&mut m, crate::tui::Message::ShowLog);
+        let (text, _) = screen(&m, 80, 24);
+        assert!(text.contains("messages (newest last)") && text.contains("scatter places)"), "{text}");
+        assert!(text.contains("│      "), "continuation rows are indented: {text}");
+    }
+
+    /// Every screen the designer can reach, with enough in it to fill its key bar.
+    fn every_screen() -> Vec<(&'static str, Model)> {
+        use crate::tui::model::{CompareView, Editor, FillView, Side};
+        let volume = Arc::new(Volume::from_fn([8; 3], Channel::rgb(), |x, _, _, o| o.fill(x as f32 / 8.0)).unwrap());
+        let long_name = "a_very_long_exemplar_name_that_will_not_fit_in_a_narrow_title_bar_at_all";
+        let mut library = model();
+        library.manifest = PathBuf::from(format!("/home/designer/projects/solids/{long_name}/exemplars/library.toml"));
+        library.errors = vec!["lib.toml: line 9: entry 3 (a): size is missing".into()];
+        let view = ExemplarView { volume: Some(volume.clone()), index: [4; 3], ..ExemplarView::new(long_name) };
+        let mut stamp = Model { screen: Screen::Exemplar(view.clone()), ..model() };
+        let seed = Arc::new(crate::sections::seed_mesh(32, 32).unwrap());
+        crate::tui::update(&mut stamp, crate::tui::Message::SeedLoaded(Ok((seed, None))));
+        let text = "[[exemplar]]\nname = \"m\"\nrecipe = \"procedural:marble\"\nsize = 16\n".to_string();
+        let editor = Editor { name: "m".into(), text: Some(text.clone()), saved: text, ..Editor::default() };
+        let picker = Editor { picker: Some(1), ..editor.clone() };
+        let fill = FillView {
+            name: long_name.into(),
+            filled: Some(Arc::new(crate::tui::fill_edit::tests::filled_cube(None))),
+            axis: Axis::Z,
+            offset: 0.0,
+            from: None,
+            edit: None,
+        };
+        let side = |label: &str| Side { label: label.into(), volume: Some(Ok(volume.clone())), quality: None };
+        let compare = CompareView {
+            sides: [side("kiwi before"), side("kiwi after")],
+            axis: Axis::Z,
+            position: 0.5,
+            before_after: Some("kiwi".into()),
+        };
+        let on = |screen: Screen| Model { screen, ..model() };
+        let mut help = model();
+        help.help = Some(Help::default());
+        let mut empty = model();
+        empty.items.clear();
+        let mut first = empty.clone();
+        first.first_run = true;
+        vec![
+            ("library", library),
+            ("exemplar", on(Screen::Exemplar(view))),
+            ("stamp", stamp),
+            ("editor", on(Screen::Editor(editor))),
+            ("picker", on(Screen::Editor(picker))),
+            ("fill", on(Screen::Fill(fill))),
+            ("new", on(Screen::New(crate::tui::new_entry::NewEntry { kind: 0, picker: None, pick_for: None }))),
+            ("compare", on(Screen::Compare(compare))),
+            ("help", help),
+            ("empty", empty),
+            ("first run", first),
+        ]
+    }
+
+    /// At 80, 100 and 200 columns every screen keeps its key bar to one row holding the
+    /// screen's first keys, the status to one row (a long one cut with `…`) with the keys
+    /// every screen has, and box titles within their boxes.
+    #[test]
+    fn every_screen_fits_80_100_and_200_columns() {
+        let status = "building marble: level 3/3, iteration 2 of 2, searching the exemplar for the best matching neighbourhoods of every voxel";
+        for (name, mut m) in every_screen().into_iter().filter(|(name, _)| *name != "help") {
+            m.status = status.into();
+            for w in [80u16, 100, 200] {
+                let (text, _) = screen(&m, w, 24);
+                let rows: Vec<&str> = text.lines().collect();
+                let (bar, last) = (rows[22], rows[23]);
+                let first = crate::tui::keybar::hints(&m)[0].keys;
+                assert!(bar.trim_start().starts_with(first), "{name} at {w}: key bar {bar:?}");
+                assert!(!bar.contains('│') && !bar.contains('─'), "{name} at {w}: the bar overlaps a box: {bar:?}");
+                assert!(
+                    rows[21].contains('─') || rows[21].trim().is_empty() || name == "help",
+                    "{name} at {w}: {text}"
+                );
+                assert!(last.ends_with(OVERLAY_KEYS), "{name} at {w}: status row {last:?}");
+                let cut = status.chars().count() + OVERLAY_KEYS.len() > usize::from(w);
+                assert_eq!(last.contains('…'), cut, "{name} at {w}: status row {last:?}");
+                for row in &rows {
+                    let corners = row.chars().filter(|c| matches!(c, '┌' | '┐')).count();
+                    assert!(corners % 2 == 0, "{name} at {w}: a title ran over its box's corner: {row:?}");
+                }
+            }
+        }
+    }
+
+    /// At 80x24 the help scrolls to its last section; the bottom line says where it is.
+    #[test]
+    fn the_help_scrolls_to_its_last_section_at_80x24() {
+        let mut m = model();
+        crate::tui::update(&mut m, crate::tui::Message::Resized(80, 24));
+        crate::tui::update(&mut m, crate::tui::Message::Help);
+        let (text, _) = screen(&m, 80, 24);
+        assert!(!text.contains("quit (asks if work is unsaved)") && text.contains("lines 1-"), "{text}");
+        crate::tui::update(&mut m, crate::tui::Message::Scroll(crate::tui::keymap::END));
+        let (text, _) = screen(&m, 80, 24);
+        assert!(text.contains("everywhere") && text.contains("quit (asks if work is unsaved)"), "{text}");
+        // one row up from the end shows one row less of it
+        crate::tui::update(&mut m, crate::tui::Message::Scroll(-1));
+        let (up, _) = screen(&m, 80, 24);
+        assert!(!up.contains("quit (asks if work is unsaved)") && up.contains("everywhere"), "{up}");
     }
 
     #[test]
@@ -699,7 +963,7 @@ mod tests {
         let (text, _) = screen(&m, 80, 24);
         assert!(text.contains("recipe: m [modified]"), "{text}");
         assert!(text.contains("recipe = \"procedural:marble\"") && text.contains("size = 0_"), "{text}");
-        assert!(text.contains("size 0 is not allowed") && text.contains("s save"), "{text}");
+        assert!(text.contains("size 0 is not allowed") && text.contains("enter keep the value"), "{text}");
         // A failed preview says so beside the last good picture.
         let Screen::Editor(e) = &mut m.screen else { panic!("the editor") };
         e.preview = Some(Arc::new(Volume::new([8; 3], Channel::rgb()).unwrap()));
@@ -722,7 +986,7 @@ mod tests {
             edit: None,
         });
         let (text, buffer) = screen(&m, 80, 24);
-        assert!(text.contains("fill preview: marble  cut across z at +0.00"), "{text}");
+        assert!(text.contains("fill: marble, cut z +0.00"), "{text}");
         let cells: Vec<(u16, u16)> = (0..80u16).flat_map(|x| (0..24u16).map(move |y| (x, y))).collect();
         let painted = cells.iter().filter(|p| matches!(buffer[**p].fg, Color::Rgb(..))).count();
         assert!(painted > 300, "{painted} cells of the cut");

@@ -22,8 +22,7 @@ pub fn editor(frame: &mut Frame, editor: &Editor, area: Rect, regions: &mut supe
         both(frame, &editor.name, mine, &conflict.theirs, area);
         return;
     }
-    let hint = " enter edit  s save  u undo  r redo  esc back ";
-    let block = Block::default().borders(Borders::ALL).title(title).title_bottom(hint);
+    let block = Block::default().borders(Borders::ALL).title(super::view::fitted(&title, area.width));
     let inner = block.inner(area);
     frame.render_widget(block, area);
     let Some(text) = &editor.text else {
@@ -50,6 +49,32 @@ pub fn editor(frame: &mut Frame, editor: &Editor, area: Rect, regions: &mut supe
         frame.render_widget(message.block(Block::default().borders(Borders::TOP)), area);
     }
     preview(frame, editor, right);
+    if let Some(row) = editor.picker {
+        picker(frame, editor, row, area);
+    }
+}
+
+/// The field picker over the editor: the fields the entry can add, what each allows and the
+/// value it starts with.
+fn picker(frame: &mut Frame, editor: &Editor, row: usize, area: Rect) {
+    let rules = super::editing::picker_rows(editor);
+    let lines: Vec<Line> = rules
+        .iter()
+        .enumerate()
+        .map(|(i, r)| {
+            let text = format!("{:<13} {} (starts as {})", r.key, r.allowed, r.start);
+            let text = super::view::cut(&text, area.width.saturating_sub(2));
+            let style = if i == row { Style::new().add_modifier(Modifier::REVERSED) } else { Style::new() };
+            Line::styled(text, style)
+        })
+        .collect();
+    let h = (lines.len() as u16 + 2).min(area.height);
+    let rect = Rect::new(area.x, area.y + (area.height - h) / 2, area.width, h);
+    let offset = (row + 3).saturating_sub(usize::from(h.saturating_sub(2))) as u16;
+    let title = super::view::fitted(" add a field: enter adds it, esc closes ", rect.width);
+    frame.render_widget(ratatui::widgets::Clear, rect);
+    let block = Block::default().borders(Borders::ALL).title(title);
+    frame.render_widget(Paragraph::new(lines).scroll((offset, 0)).block(block), rect);
 }
 
 /// The entry as the editor has it beside the entry as the file has it now.
@@ -115,8 +140,11 @@ fn preview(frame: &mut Frame, editor: &Editor, area: Rect) {
     let top = Layout::horizontal([Constraint::Ratio(1, 2); 2]).split(panels[0]);
     let d = volume.dims();
     for (panel, axis) in [top[0], top[1], panels[1]].iter().zip([Axis::Z, Axis::Y, Axis::X]) {
+        let [label, picture] = Layout::vertical([Constraint::Length(1), Constraint::Min(0)]).areas(*panel);
+        let text = format!("{axis} = {} of {}", d[axis.index()] / 2, d[axis.index()]);
+        frame.render_widget(Paragraph::new(text).style(Style::new().fg(Color::DarkGray)), label);
         if let Ok(image) = volume.slice(axis, d[axis.index()] / 2) {
-            frame.render_widget(HalfBlocks { image: &image, channel: 0, overlay: None, scale: None }, *panel);
+            frame.render_widget(HalfBlocks { image: &image, channel: 0, overlay: None, scale: None }, picture);
         }
     }
 }
@@ -125,29 +153,26 @@ fn preview(frame: &mut Frame, editor: &Editor, area: Rect) {
 pub fn fill(frame: &mut Frame, view: &FillView, area: Rect, regions: &mut super::mouse::Regions) {
     let placed = view.edit.as_ref().map_or(String::new(), |e| {
         let changed = view.filled.as_ref().is_some_and(|f| f.spec != e.spec);
-        format!(
-            "  {} stroke(s) {} depth pt(s) {} face group(s) {} paste(s), depth {:.2}{}",
-            e.spec.directions.len(),
-            e.spec.depth.points.len(),
-            e.spec.depth.faces.len(),
-            e.spec.pastes.len(),
-            e.depth,
-            if e.pending {
-                " [making the field or guided cut...]"
-            } else if e.refilling {
-                " [filling again...]"
-            } else if changed {
-                " [r refills]"
-            } else {
-                ""
-            }
-        )
+        let counts = [
+            (e.spec.directions.len(), "stroke(s)"),
+            (e.spec.depth.points.len(), "depth pt(s)"),
+            (e.spec.depth.faces.len(), "group(s)"),
+            (e.spec.pastes.len(), "paste(s)"),
+        ];
+        let placed: String = counts.iter().filter(|(n, _)| *n > 0).map(|(n, what)| format!(", {n} {what}")).collect();
+        let state = if e.pending {
+            " [making the field or guided cut...]"
+        } else if e.refilling {
+            " [filling again...]"
+        } else if changed {
+            " [r refills]"
+        } else {
+            ""
+        };
+        format!("{placed}, depth {:.2}{state}", e.depth)
     });
-    let title = format!(" fill preview: {}  cut across {} at {:+.2}{placed} ", view.name, view.axis, view.offset);
-    let block = Block::default()
-        .borders(Borders::ALL)
-        .title(title)
-        .title_bottom(" x/y/z cut axis  arrows move  HJKL cursor  s/S stroke  d depth  g faces  p paste  c depth map  v field/guided  r refill  w write ");
+    let title = format!(" fill: {}, cut {} {:+.2}{placed} ", view.name, view.axis, view.offset);
+    let block = Block::default().borders(Borders::ALL).title(super::view::fitted(&title, area.width));
     let inner = block.inner(area);
     frame.render_widget(block, area);
     let Some(filled) = &view.filled else {
@@ -222,32 +247,63 @@ impl Widget for CutWidget<'_> {
             }
         }
         let Some(edit) = edit else { return };
-        let mut mark = |p: Vec3, symbol: &str, colour: Color| {
+        // the cell a point near the plane (within 8 pixels of it) falls in
+        let cell_of = |p: Vec3| -> Option<(f32, f32)> {
             let (normal, rel) = (plane.right.cross(plane.down).normalize(), p - plane.origin);
-            // only what lies near the plane: within 8 pixels of it
             if normal.dot(rel).abs() > 8.0 * plane.right.length() {
-                return;
+                return None;
             }
             let x = plane.right.dot(rel) / plane.right.length_squared();
             let y = plane.down.dot(rel) / plane.down.length_squared() / 2.0;
-            if x >= 0.0
-                && y >= 0.0
-                && (x as usize) < size
-                && (y as usize) < size / 2
-                && let Some(cell) = buf.cell_mut((area.x + x as u16, area.y + y as u16))
-            {
-                cell.set_symbol(symbol).set_fg(colour).set_bg(Color::Black);
+            (x >= 0.0 && y >= 0.0 && (x as usize) < size && (y as usize) < size / 2).then_some((x, y))
+        };
+        let mut marked: Vec<(u16, u16)> = Vec::new();
+        let mut mark = |p: Vec3, symbol: &str, colour: Color| {
+            if let Some((x, y)) = cell_of(p) {
+                let at = (area.x + x as u16, area.y + y as u16);
+                if let Some(cell) = buf.cell_mut(at) {
+                    cell.set_symbol(symbol).set_fg(colour).set_bg(Color::Black);
+                    marked.push(at);
+                }
             }
         };
         let spec = &edit.spec;
-        spec.directions.iter().flatten().for_each(|p| mark(*p, "•", Color::Yellow));
-        edit.stroke.iter().for_each(|p| mark(*p, "•", Color::LightRed));
+        let strokes = spec.directions.iter().map(|s| (s, Color::Yellow)).chain([(&edit.stroke, Color::LightRed)]);
+        for (stroke, colour) in strokes {
+            // a stroke is a line of dots ending in an arrow the way it was drawn
+            for pair in stroke.windows(2) {
+                for k in 1..8 {
+                    mark(pair[0].lerp(pair[1], k as f32 / 8.0), "·", colour);
+                }
+            }
+            stroke.iter().for_each(|p| mark(*p, "•", colour));
+            if let [.., from, to] = &stroke[..]
+                && let (Some(a), Some(b)) = (cell_of(*from), cell_of(*to))
+            {
+                mark(*to, arrow(b.0 - a.0, b.1 - a.1), colour);
+            }
+        }
         spec.depth.points.iter().for_each(|(p, _)| mark(*p, "◆", Color::Cyan));
         spec.depth.faces.iter().for_each(|f| mark(f.at, "■", Color::Green));
         spec.pastes.iter().for_each(|p| mark(p.at, "✚", Color::Magenta));
         let (cx, cy) = ((edit.cursor[0] * size as f32) as u16, (edit.cursor[1] * size as f32 / 2.0) as u16);
-        if let Some(cell) = buf.cell_mut((area.x + cx.min(size as u16 - 1), area.y + cy.min((size / 2) as u16 - 1))) {
-            cell.set_symbol("+").set_fg(Color::White).set_bg(Color::Black);
+        let at = (area.x + cx.min(size as u16 - 1), area.y + cy.min((size / 2) as u16 - 1));
+        // on a mark the cursor lights the mark's cell instead of hiding it
+        let on_mark = marked.contains(&at);
+        if let Some(cell) = buf.cell_mut(at) {
+            if on_mark {
+                cell.set_bg(Color::White);
+            } else {
+                cell.set_symbol("+").set_fg(Color::White).set_bg(Color::Black);
+            }
         }
     }
+}
+
+/// The arrow nearest the direction (`dx` right, `dy` down, in cells; a cell is twice as
+/// tall as wide).
+fn arrow(dx: f32, dy: f32) -> &'static str {
+    const ARROWS: [&str; 8] = ["→", "↘", "↓", "↙", "←", "↖", "↑", "↗"];
+    let angle = (2.0 * dy).atan2(dx).rem_euclid(std::f32::consts::TAU);
+    ARROWS[((angle / std::f32::consts::FRAC_PI_4).round() as usize) % 8]
 }

@@ -56,7 +56,7 @@ fn files(
     graphics: Option<&mut Graphics>,
 ) {
     let title = format!(" {what}: {} ", picker.folder.display());
-    let block = Block::default().borders(Borders::ALL).title(title);
+    let block = Block::default().borders(Borders::ALL).title(super::view::fitted(&title, area.width));
     let inner = block.inner(area);
     frame.render_widget(block, area);
     let [list, photo] = Layout::horizontal([Constraint::Percentage(40), Constraint::Percentage(60)]).areas(inner);

@@ -147,7 +147,7 @@ fn build_rejects_a_bad_manifest_by_name() {
     std::fs::write(&manifest, "[[exemplar]]\nname = \"x\"\nrecipe = \"procedural:lava\"\nsize = 8\n").unwrap();
     let out = at(dir.path(), "lib");
     let run = solidtex(&["build", &manifest.to_string_lossy(), "-o", &out]);
-    crate::support::assert_fails(&run, &["lib.toml", "exemplar[0] (x)", "lava", "allowed"]);
+    crate::support::assert_fails(&run, &["lib.toml", "entry 1 (x)", "lava", "allowed"]);
     assert!(!dir.path().join("lib").exists());
 }
 

@@ -140,13 +140,13 @@ fn shard_arguments_are_checked_and_taken_from_the_scheduler() {
 #[test]
 fn each_invalid_manifest_gets_its_own_clear_message() {
     let cases = [
-        ("unknown-recipe.toml", vec!["line 2: exemplar[0] (a)", "recipe = \"weave\"", "allowed"]),
-        ("unknown-mask.toml", vec!["line 2: exemplar[0] (a)", "masks: \"blob\"", "allowed: splotch, layered"]),
+        ("unknown-recipe.toml", vec!["line 2: entry 1 (a)", "recipe = \"weave\"", "allowed"]),
+        ("unknown-mask.toml", vec!["line 2: entry 1 (a)", "masks: \"blob\"", "allowed: splotch, layered"]),
         ("unknown-step.toml", vec!["unknown field `smudge`", "line"]),
-        ("wrong-type.toml", vec!["exemplar[0] (a)", "type", "\"3-a\"", "allowed: 0, 1-a"]),
+        ("wrong-type.toml", vec!["entry 1 (a)", "type", "\"3-a\"", "allowed: 0, 1-a"]),
         ("size-out-of-range.toml", vec!["size = [4096, 4096, 4096]", "1..=512"]),
         ("missing-input.toml", vec!["no-such-image.png", "FAILED a"]),
-        ("duplicate-id.toml", vec!["line 6: exemplar[1].name = \"a\" is used twice"]),
+        ("duplicate-id.toml", vec!["line 6: entry 2: name = \"a\" is used twice"]),
         ("bad-size.toml", vec!["size = [8, 8]", "one number or three"]),
         ("wrong-value-type.toml", vec!["size", "line 5"]),
     ];
@@ -372,7 +372,7 @@ fn a_name_too_long_for_a_file_is_refused_at_once() {
         .unwrap();
         let run = solidtex(&["build", &manifest.to_string_lossy(), "-o", &out]);
         let says = format!("({length} bytes) is too long: a name has at most 200 bytes");
-        crate::support::assert_fails(&run, &["long.toml", "exemplar[0]", "name = \"nnnn", &says]);
+        crate::support::assert_fails(&run, &["long.toml", "entry 1", "name = \"nnnn", &says]);
         assert!(stderr(&run).len() < 400, "{}", stderr(&run));
     }
     assert!(!dir.path().join("out").exists());

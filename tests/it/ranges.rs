@@ -105,7 +105,7 @@ fn a_manifest_value_out_of_range_names_file_line_field_value_and_range() {
     let run = build(&manifest, &dir.path().join("out"));
     let err = stderr(&run);
     assert_eq!(run.status.code(), Some(1), "{err}");
-    for needle in ["lib.toml", "line 10", "exemplar[0] (k)", "count = 10000000", "allowed: 1 to 2000"] {
+    for needle in ["lib.toml", "line 10", "entry 1 (k)", "count = 10000000", "allowed: 1 to 2000"] {
         assert!(err.contains(needle), "{needle:?} not in {err}");
     }
     assert!(!dir.path().join("out").join("k.exr").exists());
@@ -122,7 +122,7 @@ fn a_vol_export_of_a_volume_that_is_not_a_cube_fails_with_the_manifest_and_write
     let run = build(&manifest, &out);
     let err = stderr(&run);
     assert_eq!(run.status.code(), Some(1), "{err}");
-    for needle in ["lib.toml", "line 5", "exemplar[0] (flat)", "\"vol\" needs a cube", "8x8x4", "cubes only"] {
+    for needle in ["lib.toml", "line 5", "entry 1 (flat)", "\"vol\" needs a cube", "8x8x4", "cubes only"] {
         assert!(err.contains(needle), "{needle:?} not in {err}");
     }
     let left: Vec<String> = if out.exists() { listing(&out) } else { Vec::new() };
