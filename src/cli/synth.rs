@@ -130,13 +130,17 @@ struct Bar {
     bar: ProgressBar,
     verbose: bool,
     started: Instant,
+    /// The stage printed last (`-v` prints each stage once, not each step within it).
+    printed: std::sync::Mutex<String>,
 }
 
 impl Progress for Bar {
     fn update(&self, stage: &str, fraction: f32) {
         self.bar.set_position((fraction.clamp(0.0, 1.0) * 1000.0) as u64);
         self.bar.set_message(stage.to_string());
-        if self.verbose {
+        let mut printed = self.printed.lock().unwrap_or_else(|e| e.into_inner());
+        if self.verbose && *printed != stage {
+            *printed = stage.to_string();
             self.bar.suspend(|| {
                 tell!("{:>8.3} s  {:>5.1} %  {stage}", self.started.elapsed().as_secs_f64(), fraction * 100.0)
             });
@@ -209,7 +213,7 @@ pub fn run(args: &SynthArgs) -> Result<()> {
         synth::check_start(&params, ex.channels(), args.layered).map_err(|e| e.in_file(path))?;
     }
     let started = Instant::now();
-    let bar = Bar { bar: ProgressBar::new(1000), verbose: args.verbose, started };
+    let bar = Bar { bar: ProgressBar::new(1000), verbose: args.verbose, started, printed: Default::default() };
     bar.bar.set_style(
         ProgressStyle::with_template("{elapsed:>4} [{bar:40}] {percent:>3}% {msg}").expect("valid template"),
     );

@@ -890,7 +890,9 @@ mod tests {
         update(&mut m, Message::Down);
         type_value(&mut m, "20");
         update(&mut m, Message::Back);
-        assert!(matches!(m.screen, Screen::Editor(_)) && m.status.starts_with("esc again leaves without saving; unsaved"));
+        assert!(
+            matches!(m.screen, Screen::Editor(_)) && m.status.starts_with("esc again leaves without saving; unsaved")
+        );
         update(&mut m, Message::Back);
         assert!(matches!(m.screen, Screen::Library));
     }
