@@ -498,6 +498,7 @@ pub fn field_rules() -> Vec<FieldRule> {
     let (levels, side) = (SynthParams::LEVELS, SynthParams::EXEMPLAR_SIDE);
     vec![
         rule("size", Takers::Sized, true, format!("N or [x, y, z], each 1 to {MAX_SIDE}"), "64"),
+        rule("size", Takers::Sweep, false, format!("the size the sweep must make, each side 1 to {MAX_SIDE}"), "64"),
         rule("seed", Takers::All, false, "a whole number, 0 or more".into(), "1"),
         rule(
             "type",
@@ -995,6 +996,8 @@ mod tests {
         }
         assert!(fields_of("load").iter().any(|r| r.key == "volume" && r.required));
         assert!(!fields_of("sweep").iter().any(|r| r.key == "levels"));
+        assert!(fields_of("sweep").iter().any(|r| r.key == "size" && !r.required), "a sweep's size is checked");
+        assert!(!fields_of("load").iter().any(|r| r.key == "size"));
     }
 
     /// A value of the wrong kind reads in the user's words, not the reader's.
