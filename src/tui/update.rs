@@ -444,6 +444,13 @@ fn entries_changed(model: &mut Model, result: super::message::Changed) {
             let row = change.items.iter().position(|i| i.name == change.select).unwrap_or(model.selected);
             model.selected = row.min(change.items.len().saturating_sub(1));
             (model.items, model.errors, model.status) = (change.items, change.errors, change.status);
+            // the selection stays among the entries the filter shows
+            let shown = model.visible();
+            if !shown.contains(&model.selected)
+                && let Some(&first) = shown.first()
+            {
+                model.selected = first;
+            }
             model.undo.extend(change.inverse);
             model.outside = false;
         }
