@@ -436,7 +436,7 @@ fn cached_level(folder: &Path, setup: &Setup, bar: &super::fill::Bar) -> Result<
     let key = synth::fingerprint(setup);
     let path = guided_cache::path(folder, key);
     let slots = setup.exemplars.slot_counts(level);
-    let voxel = |slot| setup.voxel(level, slot);
+    let voxel = |slot, shown| setup.restored(level, slot, shown);
     let stale = match guided_cache::read(&path, key, setup.level_dims()[level], slots, voxel)? {
         Cached::Good(found) => return Ok(found),
         Cached::Stale(why) => Some(why),

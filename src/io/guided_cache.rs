@@ -3,9 +3,10 @@
 //!
 //! ```text
 //!  file  DIR/guided-<key as 16 hex digits>.cache
-//!  "solidtex guided cache 2\n"  key u64  level u32  dims 3 x u32   (little-endian)
+//!  "solidtex guided cache 3\n"  key u64  level u32  dims 3 x u32   (little-endian)
 //!  checksum: blake3 of the header above and the body below, 32 bytes
-//!  per voxel, x fastest: its centre slot per plane, 3 x u32
+//!  per voxel, x fastest: its centre slot per plane, 3 x u32, and the plane it shows,
+//!  u8 (3: the mean of the three)
 //! ```
 //!
 //! The solid cube synthesized from plain exemplars is kept beside it, under a key of the
@@ -20,23 +21,23 @@
 //!
 //! A file of either name that does not hold its key is not overwritten: the run stops and
 //! names it. A file that holds its key (solidtex wrote it) but whose checksum, size or
-//! values are wrong, or that an older solidtex wrote (version 1, no checksum), is
-//! [`Cached::Stale`]: the caller rebuilds and rewrites it.
+//! values are wrong, or that an older solidtex wrote (an earlier version of the format),
+//! is [`Cached::Stale`]: the caller rebuilds and rewrites it.
 
 use super::atomic;
 use crate::error::{Error, Result};
-use crate::synth::coords::Voxel;
+use crate::synth::coords::{MEAN, Voxel};
 use crate::synth::region::{Mask, Sparse};
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 
-const MAGIC: &[u8] = b"solidtex guided cache 2\n";
-const OLD_MAGIC: &[u8] = b"solidtex guided cache 1\n";
+const MAGIC: &[u8] = b"solidtex guided cache 3\n";
+const OLD_MAGICS: &[&[u8]] = &[b"solidtex guided cache 1\n", b"solidtex guided cache 2\n"];
 const HEADER: usize = 24 + 8 + 4 + 12;
-const PER_VOXEL: usize = 12;
+const PER_VOXEL: usize = 13;
 
 const CUBE_MAGIC: &[u8] = b"solidtex guided cube 2\n";
-const OLD_CUBE_MAGIC: &[u8] = b"solidtex guided cube 1\n";
+const OLD_CUBE_MAGICS: &[&[u8]] = &[b"solidtex guided cube 1\n"];
 const CUBE_HEADER: usize = 23 + 8 + 4 + 4;
 
 /// Bytes of the checksum that follows a header.
@@ -84,7 +85,7 @@ fn read_checked(
     file.take((header + CHECKSUM) as u64).read_to_end(&mut head).map_err(|e| Error::io(path, e))?;
     let Some(owner) = head.get(..header).and_then(&ours) else { return Ok(None) };
     if owner == Owner::Older {
-        return Ok(Some(Cached::Stale("from an older solidtex (no checksum)".to_string())));
+        return Ok(Some(Cached::Stale("from an older solidtex (an earlier format)".to_string())));
     }
     let expected = (header + CHECKSUM + body) as u64;
     if size != expected {
@@ -104,15 +105,15 @@ fn read_checked(
 enum Owner {
     /// This version of the format.
     Current,
-    /// Version 1, without a checksum.
+    /// An earlier version of the format.
     Older,
 }
 
-/// Which version of `magic` (this one, or the version-1 `old`) `header` starts with.
-fn owner(header: &[u8], magic: &[u8], old: &[u8]) -> Option<Owner> {
+/// Which version of the format (`magic`, or one of the earlier `old`) `header` starts with.
+fn owner(header: &[u8], magic: &[u8], old: &[&[u8]]) -> Option<Owner> {
     if header.starts_with(magic) {
         Some(Owner::Current)
-    } else if header.starts_with(old) {
+    } else if old.iter().any(|o| header.starts_with(o)) {
         Some(Owner::Older)
     } else {
         None
@@ -157,7 +158,7 @@ pub fn cube_path(folder: &Path, key: u64) -> PathBuf {
 pub fn read_cube(path: &Path, key: u64, side: usize, channels: usize, range: (f32, f32)) -> Result<Cached<Vec<f32>>> {
     let ours = |h: &[u8]| {
         let fits = le_u64(h, 23) == key && le_u32(h, 31) == side && le_u32(h, 35) == channels;
-        owner(h, CUBE_MAGIC, OLD_CUBE_MAGIC).filter(|_| fits)
+        owner(h, CUBE_MAGIC, OLD_CUBE_MAGICS).filter(|_| fits)
     };
     let found = read_checked(path, CUBE_HEADER, 4 * side * side * side * channels, ours)?.ok_or_else(|| {
         Error::file(
@@ -197,18 +198,18 @@ pub fn path(folder: &Path, key: u64) -> PathBuf {
 
 /// The level cached under `key`: `(level, values)`, or an error naming the file when it is
 /// not solidtex's cache of `key`. Every slot is checked against `slots[plane]` (the level's
-/// exemplar centre counts); `voxel` makes a voxel of its slots.
+/// exemplar centre counts); `voxel` makes a voxel of its slots and shown plane.
 pub fn read(
     path: &Path,
     key: u64,
     dims: [usize; 3],
     slots: [usize; 3],
-    voxel: impl Fn([u32; 3]) -> Voxel + Sync,
+    voxel: impl Fn([u32; 3], u8) -> Voxel + Sync,
 ) -> Result<Cached<(usize, Sparse<Voxel>)>> {
     let count: usize = dims.iter().product();
     let ours = |h: &[u8]| {
         let fits = le_u64(h, 24) == key && [36, 40, 44].map(|at| le_u32(h, at)) == dims;
-        owner(h, MAGIC, OLD_MAGIC).filter(|_| fits)
+        owner(h, MAGIC, OLD_MAGICS).filter(|_| fits)
     };
     let found = read_checked(path, HEADER, count * PER_VOXEL, ours)?.ok_or_else(|| {
         Error::file(
@@ -221,12 +222,16 @@ pub fn read(
         let level = le_u32(&bytes, 32);
         let body = &bytes[HEADER + CHECKSUM..];
         let value = |i: usize| [0, 4, 8].map(|o| le_u32(body, i * PER_VOXEL + o) as u32);
+        let shown = |i: usize| body[i * PER_VOXEL + 12];
         let bad = (0..count).map(value).position(|v| (0..3).any(|a| v[a] as usize >= slots[a]));
         if let Some(i) = bad {
             return damaged(format!("voxel {i} holds a pixel outside the exemplar"));
         }
+        if let Some(i) = (0..count).position(|i| shown(i) > MEAN) {
+            return damaged(format!("voxel {i} shows plane {}, not 0-{MEAN}", shown(i)));
+        }
         let mask = Mask::full(dims);
-        Cached::Good((level, Sparse::compute(&mask, |v| voxel(value(mask.index(v))))))
+        Cached::Good((level, Sparse::compute(&mask, |v| voxel(value(mask.index(v)), shown(mask.index(v))))))
     }))
 }
 
@@ -248,6 +253,7 @@ pub fn write(path: &Path, key: u64, level: usize, values: &Sparse<Voxel>) -> Res
         for s in v.slot {
             body.extend_from_slice(&s.to_le_bytes());
         }
+        body.push(v.shown);
     }
     write_checked(path, &fields, &body)
 }
@@ -315,7 +321,7 @@ mod tests {
             assert!(found.contains("value 5") && found.contains("outside -1 to 2"), "{found}");
         }
         let mut old = good.clone();
-        old[..OLD_CUBE_MAGIC.len()].copy_from_slice(OLD_CUBE_MAGIC);
+        old[..OLD_CUBE_MAGICS[0].len()].copy_from_slice(OLD_CUBE_MAGICS[0]);
         old.drain(CUBE_HEADER..body);
         std::fs::write(&path, old).unwrap();
         assert!(stale_why(read_cube(&path, 7, 2, 3, RANGE).unwrap()).contains("older solidtex"));
@@ -323,18 +329,20 @@ mod tests {
         assert_eq!(read_cube(&path, 7, 2, 3, RANGE).unwrap(), Cached::Good(colours));
     }
 
-    /// A coarse level reads back as written; another key or grid is refused by name; a
-    /// flipped byte or a slot outside the exemplar makes it stale.
+    /// A coarse level reads back as written, the plane each voxel shows with it; another
+    /// key or grid is refused by name; a flipped byte, a slot outside the exemplar, a shown
+    /// plane past the mean or the format before it makes it stale.
     #[test]
     fn a_level_reads_back_and_a_damaged_one_is_stale() {
         let dir = tempfile::tempdir().unwrap();
         let path = path(dir.path(), 9);
         let dims = [3, 2, 2];
-        let voxel = |slot: [u32; 3]| Voxel { slot, ..Voxel::default() };
+        let voxel = |slot: [u32; 3], shown: u8| Voxel { slot, shown, ..Voxel::default() };
         let read = |key, dims, slots| read(&path, key, dims, slots, voxel);
         assert!(matches!(read(9, dims, [20; 3]).unwrap(), Cached::Missing));
         let mask = Mask::full(dims);
-        let values = Sparse::compute(&mask, |v| voxel([v[0] as u32, v[1] as u32 + 4, v[2] as u32 + 8]));
+        let values =
+            Sparse::compute(&mask, |v| voxel([v[0] as u32, v[1] as u32 + 4, v[2] as u32 + 8], (v[0] % 4) as u8));
         write(&path, 9, 2, &values).unwrap();
         let Cached::Good((level, back)) = read(9, dims, [20; 3]).unwrap() else { panic!("not good") };
         assert_eq!(level, 2);
@@ -346,6 +354,18 @@ mod tests {
             assert!(err.contains("guided-") && err.contains("does not overwrite"), "{err}");
         }
         assert!(stale_why(read(9, dims, [20, 20, 9]).unwrap()).contains("outside the exemplar"));
+        let good = std::fs::read(&path).unwrap();
+        let mut past = good.clone();
+        past[HEADER + CHECKSUM + 12] = MEAN + 1;
+        let sum = checksum(&past[..HEADER], &past[HEADER + CHECKSUM..]);
+        past[HEADER..HEADER + CHECKSUM].copy_from_slice(&sum);
+        std::fs::write(&path, past).unwrap();
+        assert!(stale_why(read(9, dims, [20; 3]).unwrap()).contains("shows plane 4"));
+        let mut older = good.clone();
+        older[..MAGIC.len()].copy_from_slice(OLD_MAGICS[1]);
+        std::fs::write(&path, older).unwrap();
+        assert!(stale_why(read(9, dims, [20; 3]).unwrap()).contains("older solidtex"));
+        std::fs::write(&path, good).unwrap();
         let mut flipped = std::fs::read(&path).unwrap();
         flipped[HEADER + CHECKSUM + 5] ^= 0x80;
         std::fs::write(&path, flipped).unwrap();

@@ -6,8 +6,10 @@
 //! Every voxel holds a coordinate triple: a pixel of each plane's exemplar (the planes
 //! orthogonal to its frame's x, y and z axes), whose crossbars agree ([`super::triples`]).
 //! It shows **one** exemplar pixel, never a blend: after a correction, the pixel of the
-//! triple member whose neighbourhood agrees best with the voxel's neighbours in its plane
-//! (before the first correction, plane x's). A cut through the solid is then made of
+//! triple member whose neighbourhood agrees best with the voxel's neighbours in its plane;
+//! a child of a finer level starts showing the plane its parent shows (the coarsest
+//! level's start, and with labels every start, shows the mean of the three, which favours
+//! no plane). A cut through the solid is then made of
 //! exemplar pixels copied in coherent patches, so its edges are as sharp as the photo's
 //! and a label image stays labels; the mean of three pixels that seldom agree on a photo
 //! was soft (docs/guided.md, "Two exemplars").
@@ -20,8 +22,9 @@
 //!  each pass       the voxel's three n x n neighbourhoods sampled in the planes of its
 //!                  frame; candidates: each 3 x 3 in-plane neighbour's whole triple moved
 //!                  back by its offset (Eq. 4), the candidate triples of the pixel it
-//!                  predicts (Zhang et al.'s reduced set), the voxel's own triple and one
-//!                  random one; the least summed PCA distance wins
+//!                  predicts (Zhang et al.'s reduced set; at the finest level its best
+//!                  two), the voxel's own triple and one random one; the least summed
+//!                  PCA distance wins
 //! ```
 //!
 //! With a solid exemplar ([`super::cube`]) a voxel holds one place in the cube instead:
@@ -61,7 +64,7 @@ pub struct Options {
     pub coarse_passes: usize,
     /// Correction passes at every finer level.
     pub passes: usize,
-    /// k-coherence set size.
+    /// Candidate triples per exemplar pixel (the finest level offers at most [`FINEST_TRIPLES`]).
     pub k: usize,
     /// Most PCA dimensions.
     pub max_dims: usize,
@@ -78,6 +81,12 @@ pub struct Options {
     /// photo, balancing the coarse levels lengthens its features (their layout is fixed
     /// there, and an over-used colour is moved in long runs).
     pub balance_every_level: bool,
+    /// A child of a finer level starts showing the plane its parent shows (else the mean
+    /// of its planes' pixels). On photos this keeps features at the photo's size (the
+    /// mean is soft and draws matches to smooth patches, which spread); a label
+    /// exemplar's phases kept fewer pieces from the mean (the channels truth: 1.9 times
+    /// the truth's pieces against 2.4, over three seeds).
+    pub keep_shown_plane: bool,
 }
 
 impl Default for Options {
@@ -93,6 +102,7 @@ impl Default for Options {
             layered: false,
             histogram: 0.0,
             balance_every_level: false,
+            keep_shown_plane: true,
         }
     }
 }
@@ -135,7 +145,12 @@ pub struct Voxel {
     pub slot: [u32; 3],
     /// Its colour: one of the three pixels (the first channels; see [`MAX_CHANNELS`]).
     pub colour: [f32; MAX_CHANNELS],
+    /// The plane whose pixel it shows, or [`MEAN`].
+    pub shown: u8,
 }
+
+/// [`Voxel::shown`] of a voxel showing the mean of its planes' pixels (or a cube's colour).
+pub const MEAN: u8 = 3;
 
 /// Most exemplar channels (colour with alpha, a feature mask, depth).
 pub const MAX_CHANNELS: usize = 6;
@@ -387,10 +402,15 @@ impl Setup<'_> {
     /// The value of `values` at the voxel nearest to `p`, wrapped or clamped per axis.
     #[inline]
     fn read(&self, values: &Sparse<Voxel>, p: Vec3) -> Voxel {
-        let mut v = nearest(p);
+        self.read_voxel(values, nearest(p))
+    }
+
+    /// The value of `values` at voxel `v`, wrapped or clamped per axis.
+    #[inline(always)]
+    fn read_voxel(&self, values: &Sparse<Voxel>, mut v: [i64; 3]) -> Voxel {
         for (a, c) in v.iter_mut().enumerate() {
             if self.wrap[a] {
-                *c = c.rem_euclid(values.dims[a] as i64);
+                *c = wrapped(*c, values.dims[a] as i64);
             }
         }
         values.at(v)
@@ -405,14 +425,15 @@ impl Setup<'_> {
         if self.options.layered { 0..2 } else { 0..3 }
     }
 
-    /// The voxel of `level` holding `slot` before its corrections (initialized,
-    /// upsampled, read from a cache): the mean of its matched planes' pixels, which
-    /// favours no plane (or the cube's colour). Corrections show one pixel.
+    /// The voxel of `level` holding `slot` where no plane is chosen yet (the coarsest
+    /// level's start, a child of a parent showing the mean, a value read from a cache):
+    /// the mean of its matched planes' pixels, which favours no plane (or the cube's
+    /// colour). Corrections show one pixel.
     pub fn voxel(&self, level: usize, slot: [u32; 3]) -> Voxel {
         let mut colour = [0.0; MAX_CHANNELS];
         if let Some(cube) = &self.exemplars.cube {
             colour[..cube.channels].copy_from_slice(cube.at(level, slot.map(i64::from)));
-            return Voxel { slot, colour };
+            return Voxel { slot, colour, shown: MEAN };
         }
         let share = 1.0 / self.planes().len() as f32;
         for a in self.planes() {
@@ -422,7 +443,7 @@ impl Setup<'_> {
                 *o += c * share;
             }
         }
-        Voxel { slot, colour }
+        Voxel { slot, colour, shown: MEAN }
     }
 
     /// The voxel of `level` holding `slot`, showing plane `a`'s pixel.
@@ -431,7 +452,16 @@ impl Setup<'_> {
         let ex = self.exemplar(a, level);
         let p = ex.centres[slot[a] as usize] as usize;
         colour[..ex.channels].copy_from_slice(&ex.colours[p * ex.channels..(p + 1) * ex.channels]);
-        Voxel { slot, colour }
+        Voxel { slot, colour, shown: a as u8 }
+    }
+
+    /// The voxel of `level` holding `slot` and showing plane `shown` (or [`MEAN`]), as a
+    /// run left it: e.g. read back from a cache.
+    pub fn restored(&self, level: usize, slot: [u32; 3], shown: u8) -> Voxel {
+        match shown {
+            MEAN => self.voxel(level, slot),
+            a => self.showing(level, slot, usize::from(a)),
+        }
     }
 }
 
@@ -640,12 +670,16 @@ pub fn fingerprint(setup: &Setup) -> u64 {
     setup.dims.iter().for_each(|d| add(*d as u64));
     setup.wrap.iter().for_each(|w| add(u64::from(*w)));
     let o = setup.options;
-    [o.levels, o.n, o.coarse_n, o.coarse_passes, o.passes, o.k, o.max_dims, usize::from(o.layered)]
-        .iter()
-        .for_each(|v| add(*v as u64));
+    let flags = usize::from(o.layered) | usize::from(o.keep_shown_plane) << 1;
+    [o.levels, o.n, o.coarse_n, o.coarse_passes, o.passes, o.k, o.max_dims, flags].iter().for_each(|v| add(*v as u64));
     add(setup.seed);
     h
 }
+
+/// Triples a predicted pixel offers at the finest level (its best by crossbars; the
+/// coarser levels offer all `k`): the layout is settled there, and two gave the photos and
+/// the channels truth the same figures as six in 30 % less time (docs/synthesis.md).
+const FINEST_TRIPLES: usize = 2;
 
 /// Side of the blocks the coarsest level starts coherent in.
 const BLOCK: usize = 8;
@@ -691,7 +725,10 @@ fn upsampled(setup: &Setup, level: usize, parents: &Sparse<Voxel>, v: [usize; 3]
         let y = 2 * ((at / coarse.width) as i64 - pad[0]) + local[sa].round() as i64 + pad[1];
         fine.clamped_slot(x, y) as u32
     });
-    setup.voxel(level, slot)
+    // a child shows the plane its parent shows: a correction's neighbourhoods then see
+    // exemplar pixels, not the mean of three (soft, it drew matches to smooth patches that
+    // spread: features 1.2-1.5 times the photo's length on granite, 1.1-1.3 this way)
+    if setup.options.keep_shown_plane { setup.restored(level, slot, parent.shown) } else { setup.voxel(level, slot) }
 }
 
 /// One correction of voxel `v` of `level` from the previous version `before`, candidates
@@ -709,34 +746,43 @@ fn corrected(
     }
     let frame = setup.frame(level, v);
     let here = Vec3::from_array(v.map(|c| c as f32));
-    let at = |p: Vec3| setup.read(before, p);
+    let centre = v.map(|c| c as i64);
+    // the voxel at in-plane offset (dx, dy) of plane `a`, and its position; on the grid's
+    // own axes by integers (the same voxel the rounded position gives)
+    let sample = |a: usize, dx: i64, dy: i64| -> (Voxel, Vec3) {
+        let (pa, sa) = Axis::ALL[a].plane_axes();
+        if setup.frames.is_none() {
+            let mut q = centre;
+            q[pa] += dx;
+            q[sa] += dy;
+            return (setup.read_voxel(before, q), Vec3::new(q[0] as f32, q[1] as f32, q[2] as f32));
+        }
+        let p = here + frame.col(pa) * dx as f32 + frame.col(sa) * dy as f32;
+        (setup.read(before, p), p)
+    };
     let channels = setup.exemplar(0, level).channels;
     let scale = (1usize << (setup.options.levels - 1 - level)) as f32;
     let depth = setup.exemplars.depth.zip(setup.depth);
-    let mut vector = Vec::with_capacity(setup.options.n * setup.options.n * channels);
-    let mut queries: [Vec<f32>; 3] = Default::default();
-    for (a, query) in queries.iter_mut().enumerate().take(setup.planes().end) {
-        let ex = setup.exemplar(a, level);
-        let (pa, sa) = Axis::ALL[a].plane_axes();
-        let (u, w) = (frame.col(pa), frame.col(sa));
-        let (n, h) = (ex.n, ex.half() as f32);
-        vector.clear();
-        for dy in 0..n {
-            for dx in 0..n {
-                let p = here + u * (dx as f32 - h) + w * (dy as f32 - h);
-                let mut colour = at(p).colour;
-                if let Some((d, grid)) = depth {
-                    colour[d] = grid.at(p * scale);
-                }
-                vector.extend(colour[..channels].iter().zip(&ex.weights).map(|(c, k)| c * k));
-            }
-        }
-        query.resize(ex.pca.dims, 0.0);
-        ex.pca.project_centring(&mut vector, query);
-    }
     // neighbours propose the same triples and pixels again and again: each is weighed once
     SCRATCH.with_borrow_mut(|scratch| {
-        let Scratch { distances, triples: seen, predicted } = scratch;
+        let Scratch { distances, triples: seen, predicted, vector, queries } = scratch;
+        for (a, query) in queries.iter_mut().enumerate().take(setup.planes().end) {
+            let ex = setup.exemplar(a, level);
+            let (n, h) = (ex.n as i64, ex.half() as i64);
+            vector.clear();
+            for dy in 0..n {
+                for dx in 0..n {
+                    let (voxel, p) = sample(a, dx - h, dy - h);
+                    let mut colour = voxel.colour;
+                    if let Some((d, grid)) = depth {
+                        colour[d] = grid.at(p * scale);
+                    }
+                    vector.extend(colour[..channels].iter().zip(&ex.weights).map(|(c, k)| c * k));
+                }
+            }
+            query.resize(ex.pca.dims, 0.0);
+            ex.pca.project_centring(vector, query);
+        }
         distances.iter_mut().for_each(Table::start);
         predicted.iter_mut().for_each(Table::start);
         seen.start();
@@ -768,13 +814,13 @@ fn corrected(
             }
         };
         let triples = &setup.exemplars.triples[level];
+        let offered = if level + 1 == setup.options.levels { triples.k.min(FINEST_TRIPLES) } else { triples.k };
         for a in setup.planes() {
             let ex = setup.exemplar(a, level);
             let (pa, sa) = Axis::ALL[a].plane_axes();
-            let (u, w) = (frame.col(pa), frame.col(sa));
             for ey in -1i64..=1 {
                 for ex_ in -1i64..=1 {
-                    let neighbour = at(here + u * ex_ as f32 + w * ey as f32);
+                    let neighbour = sample(a, ex_, ey).0;
                     // the neighbour's whole triple, each plane shifted back by the offset (Eq. 4)
                     let mut offset = [0i64; 3];
                     offset[pa] = ex_;
@@ -782,11 +828,11 @@ fn corrected(
                     if let Some(t) = shifted(setup, level, neighbour, offset) {
                         consider(t);
                     }
-                    let source = ex.centres[neighbour.slot[a] as usize] as usize;
-                    let (x, y) = ((source % ex.width) as i64 - ex_, (source / ex.width) as i64 - ey);
+                    let (sx, sy) = ex.slot_xy(neighbour.slot[a] as usize);
+                    let (x, y) = (sx - ex_, sy - ey);
                     let pixel = ex.clamped_slot(x, y);
                     if !predicted[a].contains_else_add(pixel as u32) {
-                        for &t in triples.of(a, pixel) {
+                        for &t in &triples.of(a, pixel)[..offered] {
                             consider(t);
                         }
                     }
@@ -924,6 +970,20 @@ fn cube_corrected(
     setup.voxel(level, best.1)
 }
 
+/// `c` wrapped into `0..d` (a division only when `c` lies more than one period out:
+/// neighbourhoods reach a few voxels past the grid, and the search reads them by the
+/// hundred per voxel).
+#[inline]
+fn wrapped(c: i64, d: i64) -> i64 {
+    if c < 0 {
+        if c >= -d { c + d } else { c.rem_euclid(d) }
+    } else if c >= d {
+        if c < 2 * d { c - d } else { c.rem_euclid(d) }
+    } else {
+        c
+    }
+}
+
 /// The voxel nearest to `p` (halves round up): a float-to-integer conversion of a value
 /// made positive, which is several times cheaper than `round` where neighbourhoods are
 /// sampled. Positions lie within the grid and its reach, far above -4096.
@@ -939,6 +999,10 @@ struct Scratch {
     distances: [Table<u32, f32>; 3],
     triples: Table<[u32; 3], ()>,
     predicted: [Table<u32, ()>; 3],
+    /// One plane's neighbourhood before its projection.
+    vector: Vec<f32>,
+    /// Each plane's projected neighbourhood.
+    queries: [Vec<f32>; 3],
 }
 
 thread_local! {
@@ -948,6 +1012,8 @@ thread_local! {
         distances: [Table::new(), Table::new(), Table::new()],
         triples: Table::new(),
         predicted: [Table::new(), Table::new(), Table::new()],
+        vector: Vec::new(),
+        queries: Default::default(),
     });
 }
 
@@ -1042,8 +1108,8 @@ fn shifted(setup: &Setup, level: usize, value: Voxel, offset: [i64; 3]) -> Optio
     for (b, slot) in out.iter_mut().enumerate() {
         let ex = setup.exemplar(b, level);
         let (pb, sb) = Axis::ALL[b].plane_axes();
-        let p = ex.centres[value.slot[b] as usize] as usize;
-        let (x, y) = ((p % ex.width) as i64 - offset[pb], (p / ex.width) as i64 - offset[sb]);
+        let (px, py) = ex.slot_xy(value.slot[b] as usize);
+        let (x, y) = (px - offset[pb], py - offset[sb]);
         let h = ex.half() as i64;
         if x < h || y < h || x > (ex.width - ex.n) as i64 + h || y > (ex.height - ex.n) as i64 + h {
             return None;
@@ -1153,6 +1219,7 @@ mod tests {
             k: 3,
             max_dims: 8,
             balance_every_level: false,
+            keep_shown_plane: true,
             layered: false,
             histogram: 0.0,
         }
@@ -1181,6 +1248,27 @@ mod tests {
         const SIDE: usize = 64;
         let (exemplars, frames) = world(SIDE);
         cut_equals_whole(&setup(&exemplars, &frames, SIDE));
+    }
+
+    /// After the coarsest level's passes a voxel shows one plane's pixel, and each of its
+    /// children starts showing the same plane's pixel, not the mean of the three.
+    #[test]
+    fn a_child_shows_the_plane_its_parent_shows() {
+        let (exemplars, frames) = world(32);
+        let setup = setup(&exemplars, &frames, 32);
+        let mut masks = plan(&setup, &Mask::full([32; 3]), 0);
+        masks.truncate(1);
+        let coarse = run(&setup, &masks, None, &crate::progress::NoProgress).unwrap().values;
+        let shown = |v: [usize; 3]| coarse.at(v.map(|c| c as i64)).shown;
+        let parents: Vec<[usize; 3]> = (0..16 * 16 * 16).map(|i| [i % 16, i / 16 % 16, i / 256]).collect();
+        assert!(parents.iter().all(|&p| shown(p) < MEAN), "every corrected voxel shows one plane");
+        let planes: std::collections::BTreeSet<u8> = parents.iter().map(|&p| shown(p)).collect();
+        assert!(planes.len() > 1, "the planes shown vary: {planes:?}");
+        for p in parents.iter().step_by(37) {
+            let child = upsampled(&setup, 1, &coarse, p.map(|c| 2 * c + 1));
+            assert_eq!(child.shown, shown(*p));
+            assert_eq!(child, setup.showing(1, child.slot, usize::from(child.shown)));
+        }
     }
 
     /// The same with a solid exemplar.

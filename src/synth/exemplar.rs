@@ -43,6 +43,9 @@ pub struct Prepared {
     pub n: usize,
     /// Pixel index of every valid centre, row-major.
     pub centres: Vec<u32>,
+    /// Pixel column and row of every valid centre (the search's inner loops read these
+    /// instead of dividing a pixel index by the width).
+    pub centre_xy: Vec<[u32; 2]>,
     /// The PCA projection of neighbourhood vectors.
     pub pca: Pca,
     /// The projected neighbourhood of every centre, one row per slot.
@@ -77,6 +80,7 @@ impl Prepared {
         let centres: Vec<u32> = (h..=height - opt.n + h)
             .flat_map(|y| (h..=width - opt.n + h).map(move |x| (y * width + x) as u32))
             .collect();
+        let centre_xy = centres.iter().map(|&c| [c % width as u32, c / width as u32]).collect();
         let mut prepared = Prepared {
             width,
             height,
@@ -85,6 +89,7 @@ impl Prepared {
             weights: weights.to_vec(),
             n: opt.n,
             centres,
+            centre_xy,
             pca: Pca { input: 0, dims: 0, mean: vec![], basis: vec![], explained: 0.0 },
             projected: LineRows::new(&[], 1),
             coherence: Vec::new(),
@@ -139,6 +144,13 @@ impl Prepared {
         let (vw, vh) = ((self.width + 1 - self.n) as i64, (self.height + 1 - self.n) as i64);
         let h = self.half() as i64;
         ((y - h).clamp(0, vh - 1) * vw + (x - h).clamp(0, vw - 1)) as usize
+    }
+
+    /// The pixel column and row of the centre in `slot`.
+    #[inline]
+    pub fn slot_xy(&self, slot: usize) -> (i64, i64) {
+        let [x, y] = self.centre_xy[slot];
+        (i64::from(x), i64::from(y))
     }
 
     /// The projected neighbourhood of the centre in `slot`.

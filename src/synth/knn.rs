@@ -1,5 +1,6 @@
-//! An exact k-nearest-neighbour kd-tree over points of any (runtime) dimension.
-//! Ties are broken by the lower point index, so answers never depend on build order.
+//! A k-nearest-neighbour kd-tree over points of any (runtime) dimension: exact, or among
+//! the first points a search weighs within a budget. An exact search breaks ties by the
+//! lower point index, so its answers never depend on build order.
 
 /// A kd-tree over `count` points of `dims` f32 values each.
 #[derive(Debug, Clone)]
@@ -77,40 +78,63 @@ impl KdTree {
 
     /// The `k` nearest points to `query`, nearest first.
     pub fn nearest(&self, query: &[f32], k: usize) -> Vec<Hit> {
+        self.nearest_within(query, k, usize::MAX)
+    }
+
+    /// The `k` nearest points to `query` among about the first `budget` the search
+    /// weighs, nearest first: the query's own cell first, then the cells beside it, so a
+    /// budget of a few leaves finds most true neighbours in a fraction of the time (a tree
+    /// over many dimensions otherwise weighs most of its points before it can prove the
+    /// answer exact).
+    pub fn nearest_within(&self, query: &[f32], k: usize, budget: usize) -> Vec<Hit> {
         let mut best: Vec<Hit> = Vec::with_capacity(k + 1);
         if !self.nodes.is_empty() && k > 0 {
             let mut offsets = vec![0.0; self.dims];
-            self.visit(0, query, k, &mut best, 0.0, &mut offsets);
+            let mut search = Search { query, k, best: &mut best, offsets: &mut offsets, left: budget };
+            self.visit(0, &mut search, 0.0);
         }
         best
     }
 
     /// Search below `node`, whose cell lies at squared distance at least `reach` from the
-    /// query; `offsets` holds the per-axis query-to-cell offsets that make up `reach`
-    /// (Arya and Mount's incremental distance: a tighter bound than the split plane alone).
-    fn visit(&self, node: u32, query: &[f32], k: usize, best: &mut Vec<Hit>, reach: f32, offsets: &mut [f32]) {
+    /// query; `search.offsets` holds the per-axis query-to-cell offsets that make up
+    /// `reach` (Arya and Mount's incremental distance: a tighter bound than the split
+    /// plane alone).
+    fn visit(&self, node: u32, search: &mut Search, reach: f32) {
         match self.nodes[node as usize] {
             Node::Leaf { start, end } => {
                 for at in start..end {
-                    let d = squared(self.point(at), query);
-                    insert(best, k, (d, self.order[at as usize]));
+                    let d = squared(self.point(at), search.query);
+                    insert(search.best, search.k, (d, self.order[at as usize]));
                 }
+                search.left = search.left.saturating_sub((end - start) as usize);
             }
             Node::Split { axis, value, left, right } => {
                 let axis = axis as usize;
-                let diff = query[axis] - value;
+                let diff = search.query[axis] - value;
                 let (near, far) = if diff < 0.0 { (left, right) } else { (right, left) };
-                self.visit(near, query, k, best, reach, offsets);
-                let old = offsets[axis];
+                self.visit(near, search, reach);
+                let old = search.offsets[axis];
                 let far_reach = reach - old * old + diff * diff;
-                if best.len() < k || far_reach <= best[best.len() - 1].0 {
-                    offsets[axis] = diff;
-                    self.visit(far, query, k, best, far_reach, offsets);
-                    offsets[axis] = old;
+                let full = search.best.len() == search.k;
+                if search.left > 0 && (!full || far_reach <= search.best[search.k - 1].0) {
+                    search.offsets[axis] = diff;
+                    self.visit(far, search, far_reach);
+                    search.offsets[axis] = old;
                 }
             }
         }
     }
+}
+
+/// One search's state: the query, how many it wants, the best so far, the offsets of the
+/// current cell, and how many more points it may weigh.
+struct Search<'a> {
+    query: &'a [f32],
+    k: usize,
+    best: &'a mut Vec<Hit>,
+    offsets: &'a mut [f32],
+    left: usize,
 }
 
 /// Squared Euclidean distance, summed in eight independent lanes (the search's hottest
@@ -168,5 +192,28 @@ mod tests {
             all.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
             assert_eq!(got, all[..4].to_vec());
         }
+    }
+
+    /// Within a budget of eight leaves, a search over 4,000 uniform points in 6 dimensions
+    /// (no structure to help it: 146 of 200 measured) finds the exact nearest point for
+    /// most queries and always as many points as asked, nearest first; a budget of every
+    /// point is the exact search.
+    #[test]
+    fn a_budget_of_a_few_leaves_finds_most_nearest_points() {
+        let dims = 6;
+        let value = |i: usize| (crate::noise::mix64(i as u64) % 10_000) as f32 / 10_000.0;
+        let points: Vec<f32> = (0..4000 * dims).map(value).collect();
+        let tree = KdTree::build(points.clone(), dims);
+        let mut right = 0;
+        for q in 0..200 {
+            let query: Vec<f32> = (0..dims).map(|j| value(1_000_000 + q * dims + j)).collect();
+            let exact = tree.nearest(&query, 8);
+            let within = tree.nearest_within(&query, 8, 8 * LEAF);
+            assert_eq!(within.len(), 8);
+            assert!(within.windows(2).all(|w| w[0].0 <= w[1].0), "nearest first");
+            right += usize::from(within[0] == exact[0]);
+            assert_eq!(tree.nearest_within(&query, 8, usize::MAX), exact);
+        }
+        assert!(right >= 130, "{right} of 200 queries found the nearest point");
     }
 }

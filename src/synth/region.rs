@@ -166,10 +166,11 @@ impl<T: Copy + Default + Send + Sync> Sparse<T> {
     }
 
     /// The value at voxel `v` clamped into the grid; `T::default()` where nothing is stored.
-    #[inline]
+    #[inline(always)]
     pub fn at(&self, v: [i64; 3]) -> T {
-        let c = [0, 1, 2].map(|a| v[a].clamp(0, self.dims[a] as i64 - 1) as usize);
-        let b = c.map(|x| x / BRICK);
+        let clamped = |a: usize| v[a].clamp(0, self.dims[a] as i64 - 1) as usize;
+        let c = [clamped(0), clamped(1), clamped(2)];
+        let b = [c[0] / BRICK, c[1] / BRICK, c[2] / BRICK];
         let slot = self.table[b[0] + self.bricks[0] * (b[1] + self.bricks[1] * b[2])];
         if slot == u32::MAX {
             return T::default();

@@ -12,15 +12,31 @@
 //!
 //! For pixel p of plane a: the `WIDE` pixels of plane b nearest by the crossbar on the axis
 //! a and b share, the same for plane c, and of those pairs the `k` whose summed three
-//! crossbar distances are least.
+//! crossbar distances are least. The nearest crossbars are found among a shortlist by
+//! their leading PCA dimensions (a tree over 20 dimensions visits most of its leaves).
 
 use crate::synth::exemplar::Prepared;
 use crate::synth::knn::KdTree;
+use crate::synth::pca::Pca;
 use crate::volume::Axis;
 use rayon::prelude::*;
+use std::sync::Arc;
 
 /// Pixels of each other plane considered per pixel before pairing.
 const WIDE: usize = 8;
+
+/// Leading PCA dimensions of the crossbar trees; each search takes [`SHORTLIST`] points
+/// by them and keeps the [`WIDE`] nearest by whole crossbars.
+const TREE_DIMS: usize = 6;
+
+/// Points a crossbar search takes by its leading dimensions.
+const SHORTLIST: usize = 2 * WIDE;
+
+/// Points a crossbar search weighs before it settles for the best found.
+const BUDGET: usize = 8 * SHORTLIST;
+
+/// Most crossbars the PCA of a plane's crossbars is fitted on (evenly strided).
+const PCA_SAMPLES: usize = 4096;
 
 /// The candidate triples of one pyramid level.
 #[derive(Debug, Clone)]
@@ -32,33 +48,72 @@ pub struct Triples {
     pub sets: [Vec<[u32; 3]>; 3],
 }
 
+/// The crossbars of one plane along one axis, and a tree over their leading PCA
+/// dimensions.
+struct Bars {
+    /// `n` weighted pixels per centre, one centre after another.
+    values: Vec<f32>,
+    /// Values per crossbar.
+    width: usize,
+    pca: Pca,
+    tree: KdTree,
+}
+
+impl Bars {
+    fn new(values: Vec<f32>, width: usize) -> Bars {
+        let stride = (values.len() / width / PCA_SAMPLES).max(1);
+        let sample: Vec<f32> = values.chunks_exact(width).step_by(stride).flatten().copied().collect();
+        let pca = Pca::fit(&sample, width, 1.0, TREE_DIMS);
+        let mut low = vec![0.0; pca.dims];
+        let mut points = Vec::with_capacity(values.len() / width * pca.dims);
+        for bar in values.chunks_exact(width) {
+            pca.project(bar, &mut low);
+            points.extend_from_slice(&low);
+        }
+        let tree = KdTree::build(points, pca.dims);
+        Bars { values, width, pca, tree }
+    }
+
+    /// The crossbar of centre `slot`.
+    fn of(&self, slot: usize) -> &[f32] {
+        &self.values[slot * self.width..][..self.width]
+    }
+
+    /// The [`WIDE`] crossbars nearest to `query` (a crossbar of another plane along the
+    /// same axis): a shortlist by the leading dimensions, ranked by whole crossbars.
+    fn nearest(&self, query: &[f32]) -> Vec<(f32, u32)> {
+        let mut low = vec![0.0; self.pca.dims];
+        self.pca.project(query, &mut low);
+        let mut hits: Vec<(f32, u32)> = self
+            .tree
+            .nearest_within(&low, SHORTLIST, BUDGET)
+            .into_iter()
+            .map(|(_, i)| (crate::synth::exemplar::squared(query, self.of(i as usize)), i))
+            .collect();
+        hits.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
+        hits.truncate(WIDE);
+        hits
+    }
+}
+
 impl Triples {
     /// The candidate triples of `planes` (one level of each plane's exemplar).
     pub fn new(planes: [&Prepared; 3], k: usize) -> Triples {
-        let bars = [0, 1, 2].map(|p| [0, 1, 2].map(|axis| (axis != p).then(|| crossbars(planes[p], p, axis))));
-        let trees = [0, 1, 2].map(|p| {
-            [0, 1, 2]
-                .map(|axis| bars[p][axis].as_ref().map(|b| KdTree::build(b.clone(), planes[p].n * planes[p].channels)))
-        });
+        let bars = all_bars(planes);
+        let bar = |p: usize, axis: usize| bars[p][axis].as_deref().expect("a plane's own axes");
         let sets = [0, 1, 2].map(|a| {
             let (b, c) = others(a);
-            let width = planes[a].n * planes[a].channels;
             (0..planes[a].centres.len())
                 .into_par_iter()
                 .flat_map_iter(|slot| {
-                    let mine =
-                        |axis: usize| &bars[a][axis].as_ref().expect("a plane's own axes")[slot * width..][..width];
                     // plane b shares axis c with a; plane c shares axis b
-                    let near_b = trees[b][c].as_ref().expect("shared axis").nearest(mine(c), WIDE);
-                    let near_c = trees[c][b].as_ref().expect("shared axis").nearest(mine(b), WIDE);
-                    let bar = |p: usize, axis: usize, s: u32| {
-                        let w = planes[p].n * planes[p].channels;
-                        &bars[p][axis].as_ref().expect("a plane's own axes")[s as usize * w..][..w]
-                    };
+                    let near_b = bar(b, c).nearest(bar(a, c).of(slot));
+                    let near_c = bar(c, b).nearest(bar(a, b).of(slot));
                     let mut pairs: Vec<(f32, u32, u32)> = Vec::with_capacity(WIDE * WIDE);
                     for &(db, sb) in &near_b {
                         for &(dc, sc) in &near_c {
-                            let across = crate::synth::exemplar::squared(bar(b, a, sb), bar(c, a, sc));
+                            let across =
+                                crate::synth::exemplar::squared(bar(b, a).of(sb as usize), bar(c, a).of(sc as usize));
                             pairs.push((db + dc + across, sb, sc));
                         }
                     }
@@ -93,6 +148,26 @@ fn others(a: usize) -> (usize, usize) {
         1 => (0, 2),
         _ => (0, 1),
     }
+}
+
+/// Per plane and axis of it, its crossbars ([`Bars`]); planes showing the same image
+/// share the crossbars of the same direction (rows or columns), built once.
+fn all_bars(planes: [&Prepared; 3]) -> [[Option<Arc<Bars>>; 3]; 3] {
+    let mut made: Vec<((usize, bool), Arc<Bars>)> = Vec::new();
+    [0, 1, 2].map(|p| {
+        [0, 1, 2].map(|axis| {
+            if axis == p {
+                return None;
+            }
+            let key = (std::ptr::from_ref(planes[p]) as usize, axis == Axis::ALL[p].plane_axes().0);
+            if let Some((_, bars)) = made.iter().find(|(k, _)| *k == key) {
+                return Some(bars.clone());
+            }
+            let bars = Arc::new(Bars::new(crossbars(planes[p], p, axis), planes[p].n * planes[p].channels));
+            made.push((key, bars.clone()));
+            Some(bars)
+        })
+    })
 }
 
 /// The crossbar along `axis` of every centre of plane `p`'s exemplar: `n` weighted pixels

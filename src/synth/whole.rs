@@ -6,8 +6,10 @@
 //!  frames      the grid's axes; neighbourhoods wrap around the grid where it tiles
 //!  layered     rows run along z: the two planes holding z are matched, their Depth
 //!              channel against z / (Z - 1)
-//!  labels      exemplars of at most 16 colours: two rounds of settling (each voxel
-//!              shows the pixel of its triple most of its face neighbours show)
+//!  labels      exemplars of at most 16 colours: every level starts from the mean of
+//!              the planes' pixels (photos: a child shows its parent's plane), and two
+//!              rounds of settling (each voxel shows the pixel of its triple most of its
+//!              face neighbours show)
 //!  balance     homogeneous solids: candidates in colours the solid holds too much of
 //!              cost more, counted per parity sub-pass ([`super::occupancy`]; `--histogram`),
 //!              at the finest level (labels: at every level)
@@ -54,6 +56,7 @@ pub fn options(params: &SynthParams, layered: bool) -> Options {
         layered,
         histogram: if layered { 0.0 } else { BALANCE * params.histogram_strength },
         balance_every_level: false,
+        keep_shown_plane: true,
     }
 }
 
@@ -66,11 +69,21 @@ pub fn synthesize(
     seed: u64,
     progress: &dyn Progress,
 ) -> Result<Vec<f32>> {
-    let featured = images.map(with_edge_distance);
-    let featured: Vec<Image2d> = featured.into_iter().collect::<Result<_>>()?;
+    // an image given for several planes is prepared once, and the planes share it
+    let mut featured: Vec<Image2d> = Vec::new();
+    let mut of_plane = [0; 3];
+    for (a, image) in images.iter().enumerate() {
+        of_plane[a] = match (0..a).find(|&b| std::ptr::eq(images[b], *image)) {
+            Some(b) => of_plane[b],
+            None => {
+                featured.push(with_edge_distance(image)?);
+                featured.len() - 1
+            }
+        };
+    }
     let labels = images.iter().all(|image| super::edges::is_labels(image));
-    let options = Options { balance_every_level: labels, ..options(params, layered) };
-    let exemplars = Exemplars::prepare([&featured[0], &featured[1], &featured[2]], &options)?;
+    let options = Options { balance_every_level: labels, keep_shown_plane: !labels, ..options(params, layered) };
+    let exemplars = Exemplars::prepare(of_plane.map(|i| &featured[i]), &options)?;
     let dims = params.size;
     let depth = layered.then(|| depth_along_z(dims[2]));
     let wrap = [params.tileable, params.tileable, params.tileable && !layered];
