@@ -235,10 +235,11 @@ pub fn caught<T>(work: impl FnOnce() -> Result<T>) -> Result<T> {
     })
 }
 
-/// One entry's progress, passed to its recipe.
+/// One entry's progress, passed to its recipe; it keeps the warnings for the record.
 struct EntryProgress<'a> {
     name: &'a str,
     observer: &'a dyn Observer,
+    warnings: std::sync::Mutex<Vec<String>>,
 }
 
 impl Progress for EntryProgress<'_> {
@@ -251,6 +252,7 @@ impl Progress for EntryProgress<'_> {
     }
 
     fn warn(&self, message: &str) {
+        self.warnings.lock().unwrap_or_else(|e| e.into_inner()).push(message.to_string());
         self.observer.warn(self.name, message);
     }
 
@@ -280,7 +282,7 @@ fn build_entry(
     }
     let outputs = files::outputs(entry);
     ledger.claim(&outputs)?;
-    let progress = EntryProgress { name: &entry.name, observer };
+    let progress = EntryProgress { name: &entry.name, observer, warnings: Default::default() };
     let volume = recipe::make_with(entry, &progress)?;
     if progress.cancelled() {
         return Err(Error::Cancelled);
@@ -302,6 +304,7 @@ fn build_entry(
         seconds: started.elapsed().as_secs_f64(),
         files: cache::written(output, entry)?,
         quality: recipe::glance(entry, &volume),
+        warnings: progress.warnings.into_inner().unwrap_or_else(|e| e.into_inner()),
     };
     cache::write_record(output, &record)?;
     Ok(Outcome::Built(record))
@@ -458,18 +461,20 @@ fn write_report(output: &Path, ledger: &Ledger, rows: &[Row]) -> Result<()> {
     );
     let mut html = String::from(
         "<!doctype html><meta charset=utf-8><title>Exemplar library</title>\
-         <style>body{font-family:sans-serif;background:#222;color:#eee}td,th{padding:4px 10px}img{width:280px}</style>\
+         <style>body{font-family:sans-serif;background:#222;color:#eee}td,th{padding:4px 10px}img{width:280px}\
+         .warning{color:#fc6}</style>\
          <h1>Exemplar library</h1><table><tr><th>exemplar<th>size<th>declared<th>classified<th>build<th>sheet\n",
     );
     for row in rows {
         let recorded = |r: &Record, when: String| {
             let [x, y, z] = r.dims;
+            let warned = r.warnings.iter().map(|w| format!("; warning: {w}")).collect::<String>();
             (
                 r.name.clone(),
                 format!("{x}x{y}x{z}"),
                 r.declared.clone().unwrap_or("-".into()),
                 r.classified.clone(),
-                when,
+                when + &warned,
             )
         };
         let none = |name: &str, why: String| (name.to_string(), "-".into(), "-".into(), "-".into(), why);
@@ -482,10 +487,18 @@ fn write_report(output: &Path, ledger: &Ledger, rows: &[Row]) -> Result<()> {
             Row::NotBuilt(name) => none(name, "not built".into()),
         };
         let sheet = files::sheet(&name);
-        md += &format!("| {name} | {size} | {declared} | {classified} | {build} | ![{name}]({sheet}) |\n");
+        md += &format!(
+            "| {name} | {size} | {declared} | {classified} | {} | ![{name}]({sheet}) |\n",
+            build.replace('|', "\\|")
+        );
+        let escaped = |t: &str| t.replace('&', "&amp;").replace('<', "&lt;");
+        let mut parts = build.split("; warning: ");
+        let mut cell = escaped(parts.next().unwrap_or_default());
+        for warning in parts {
+            cell += &format!("<br><span class=warning>warning: {}</span>", escaped(warning));
+        }
         html += &format!(
-            "<tr><td>{name}<td>{size}<td>{declared}<td>{classified}<td>{}<td><img src=\"{sheet}\" alt=\"{name}\">\n",
-            build.replace('<', "&lt;")
+            "<tr><td>{name}<td>{size}<td>{declared}<td>{classified}<td>{cell}<td><img src=\"{sheet}\" alt=\"{name}\">\n"
         );
     }
     html += "</table>\n";

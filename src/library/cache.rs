@@ -48,6 +48,10 @@ pub struct Record {
     /// the photos.
     #[serde(default)]
     pub quality: Option<crate::quality::Glance>,
+    /// The warnings the build gave (e.g. a photo whose features run one way), kept so the
+    /// report shows them on later, cached builds too.
+    #[serde(default)]
+    pub warnings: Vec<String>,
 }
 
 /// One file with its size and hash.
@@ -383,6 +387,7 @@ mod tests {
             seconds: 0.0,
             files: Vec::new(),
             quality: None,
+            warnings: Vec::new(),
         };
         assert_eq!(changed(&keys[0], &record), "the input p.png changed");
     }

@@ -385,7 +385,8 @@ fn a_name_too_long_for_a_file_is_refused_at_once() {
 }
 
 /// One image whose features run one way, asked for a homogeneous solid, gets the directional
-/// warning in a build (on the error stream, named by entry) and in the editor's preview
+/// warning in a build (on the error stream, named by entry), in the library report (also
+/// after a second build that took the entry from the cache) and in the editor's preview
 /// (for the terminal UI's status line); an image without a direction gets none.
 #[test]
 fn a_directional_photo_is_warned_about_in_builds_and_previews() {
@@ -411,6 +412,19 @@ fn a_directional_photo_is_warned_about_in_builds_and_previews() {
     assert!(err.contains("warning: grain:") && err.contains("features run one way"), "{err}");
     assert!(err.contains("synth-layered"), "the advice names the manifest's keys: {err}");
     assert!(!err.contains("warning: checks:"), "{err}");
+    for build in ["first", "cached"] {
+        if build == "cached" {
+            let again = solidtex(&["build", &manifest.to_string_lossy(), "-o", &at(dir.path(), "out")]);
+            assert!(again.status.success() && !stderr(&again).contains("warning:"), "{}", stderr(&again));
+        }
+        let md = std::fs::read_to_string(dir.path().join("out/report.md")).unwrap();
+        let row =
+            |name: &str| md.lines().find(|l| l.starts_with(&format!("| {name} |"))).unwrap_or_default().to_string();
+        assert!(row("grain").contains("warning: ") && row("grain").contains("features run one way"), "{build}: {md}");
+        assert!(!row("checks").contains("warning"), "{build}: {md}");
+        let html = std::fs::read_to_string(dir.path().join("out/report.html")).unwrap();
+        assert!(html.contains("<span class=warning>warning: ") && html.contains("features run one way"), "{html}");
+    }
     let (_, warnings) = solidtex::library::recipe::preview(&manifest, "grain", &text).unwrap();
     assert!(warnings.iter().any(|w| w.contains("features run one way")), "{warnings:?}");
 }
