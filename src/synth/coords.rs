@@ -719,10 +719,10 @@ fn upsampled(setup: &Setup, level: usize, parents: &Sparse<Voxel>, v: [usize; 3]
     let slot = [0, 1, 2].map(|a| {
         let (coarse, fine) = (setup.exemplar(a, level - 1), setup.exemplar(a, level));
         let (pa, sa) = Axis::ALL[a].plane_axes();
-        let at = coarse.centres[parent.slot[a] as usize] as usize;
+        let (px, py) = coarse.slot_xy(parent.slot[a] as usize);
         let pad = [level - 1, level].map(|l| pad_rows(&setup.options, l) as i64);
-        let x = 2 * (at % coarse.width) as i64 + local[pa].round() as i64;
-        let y = 2 * ((at / coarse.width) as i64 - pad[0]) + local[sa].round() as i64 + pad[1];
+        let x = 2 * px + local[pa].round() as i64;
+        let y = 2 * (py - pad[0]) + local[sa].round() as i64 + pad[1];
         fine.clamped_slot(x, y) as u32
     });
     // a child shows the plane its parent shows: a correction's neighbourhoods then see

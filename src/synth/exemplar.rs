@@ -98,9 +98,7 @@ impl Prepared {
         };
         let vectors = prepared.all_vectors();
         let m = opt.n * opt.n * channels;
-        let stride = (prepared.centres.len() / PCA_SAMPLES).max(1);
-        let sample: Vec<f32> = vectors.chunks_exact(m).step_by(stride).flatten().copied().collect();
-        prepared.pca = Pca::fit(&sample, m, opt.variance, opt.max_dims);
+        prepared.pca = fit_sampled(&vectors, m, opt.variance, opt.max_dims);
         prepared.projected = LineRows::new(&project_all(&prepared.pca, &vectors, m), prepared.pca.dims);
         let low = prepared.pca.dims.min(LOOKUP_DIMS);
         prepared.lookup = KdTree::build(prepared.projected.packed(low), low);
@@ -179,9 +177,8 @@ impl Prepared {
         (0..self.centres.len())
             .into_par_iter()
             .flat_map_iter(|slot| {
-                let me = self.centres[slot];
                 let here = self.projection(slot);
-                let (mx, my) = ((me as usize % self.width) as i64, (me as usize / self.width) as i64);
+                let (mx, my) = self.slot_xy(slot);
                 let mut hits: Vec<(f32, u32)> = tree
                     .nearest(&here[..low], 2 * k + 6)
                     .into_iter()
@@ -189,8 +186,7 @@ impl Prepared {
                     .collect();
                 hits.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
                 let others = hits.into_iter().map(|(_, i)| i).filter(move |&i| {
-                    let p = self.centres[i as usize] as usize;
-                    let (px, py) = ((p % self.width) as i64, (p / self.width) as i64);
+                    let (px, py) = self.slot_xy(i as usize);
                     (px - mx).abs().max((py - my).abs()) >= away
                 });
                 let mut set: Vec<u32> = std::iter::once(slot as u32).chain(others).take(k).collect();
@@ -251,7 +247,16 @@ impl Clone for LineRows {
     }
 }
 
-fn project_all(pca: &Pca, vectors: &[f32], m: usize) -> Vec<f32> {
+/// A PCA of row-major `vectors` of length `m`, fitted on at most [`PCA_SAMPLES`] of them
+/// (evenly strided).
+pub(crate) fn fit_sampled(vectors: &[f32], m: usize, variance: f32, max_dims: usize) -> Pca {
+    let stride = (vectors.len() / m / PCA_SAMPLES).max(1);
+    let sample: Vec<f32> = vectors.chunks_exact(m).step_by(stride).flatten().copied().collect();
+    Pca::fit(&sample, m, variance, max_dims)
+}
+
+/// Every vector of `vectors` (length `m` each) projected by `pca`, in parallel.
+pub(crate) fn project_all(pca: &Pca, vectors: &[f32], m: usize) -> Vec<f32> {
     let dims = pca.dims;
     let mut out = vec![0.0; vectors.len() / m * dims];
     out.par_chunks_mut(dims * 256).zip(vectors.par_chunks(m * 256)).for_each(|(o, v)| {

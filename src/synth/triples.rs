@@ -15,7 +15,7 @@
 //! crossbar distances are least. The nearest crossbars are found among a shortlist by
 //! their leading PCA dimensions (a tree over 20 dimensions visits most of its leaves).
 
-use crate::synth::exemplar::Prepared;
+use crate::synth::exemplar::{Prepared, fit_sampled, project_all};
 use crate::synth::knn::KdTree;
 use crate::synth::pca::Pca;
 use crate::volume::Axis;
@@ -34,9 +34,6 @@ const SHORTLIST: usize = 2 * WIDE;
 
 /// Points a crossbar search weighs before it settles for the best found.
 const BUDGET: usize = 8 * SHORTLIST;
-
-/// Most crossbars the PCA of a plane's crossbars is fitted on (evenly strided).
-const PCA_SAMPLES: usize = 4096;
 
 /// The candidate triples of one pyramid level.
 #[derive(Debug, Clone)]
@@ -61,16 +58,8 @@ struct Bars {
 
 impl Bars {
     fn new(values: Vec<f32>, width: usize) -> Bars {
-        let stride = (values.len() / width / PCA_SAMPLES).max(1);
-        let sample: Vec<f32> = values.chunks_exact(width).step_by(stride).flatten().copied().collect();
-        let pca = Pca::fit(&sample, width, 1.0, TREE_DIMS);
-        let mut low = vec![0.0; pca.dims];
-        let mut points = Vec::with_capacity(values.len() / width * pca.dims);
-        for bar in values.chunks_exact(width) {
-            pca.project(bar, &mut low);
-            points.extend_from_slice(&low);
-        }
-        let tree = KdTree::build(points, pca.dims);
+        let pca = fit_sampled(&values, width, 1.0, TREE_DIMS);
+        let tree = KdTree::build(project_all(&pca, &values, width), pca.dims);
         Bars { values, width, pca, tree }
     }
 
