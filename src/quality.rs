@@ -91,6 +91,9 @@ pub struct Report {
     pub histograms: Vec<HistogramDistance>,
     /// For layered volumes.
     pub layered: Option<LayeredQuality>,
+    /// How coherently the volume copies its exemplars, as the coordinate core recorded it
+    /// in the volume's provenance ([`crate::synth::patches`]); `None` for other volumes.
+    pub patches: Option<crate::synth::patches::Patches>,
 }
 
 /// Measure `volume` against its exemplars: one per axis (`None`: not measured).
@@ -125,7 +128,8 @@ pub fn assess(volume: &Volume, exemplars: [Option<&Image2d>; 3], layered: bool) 
     }
     let histograms = histogram_distances(volume, first, &picks);
     let layered = layered.then(|| layered_quality(volume, &best)).transpose()?;
-    Ok(Report { axes, sharpness, lines, histograms, layered })
+    let patches = crate::synth::patches::Patches::of_meta(&volume.meta);
+    Ok(Report { axes, sharpness, lines, histograms, layered, patches })
 }
 
 /// The figures a designer reads at a glance (the cheap part of [`assess`]): per axis the
@@ -163,6 +167,13 @@ impl Report {
             }
         }
         out.extend(self.lines.iter().flat_map(crate::lines::Lines::outside_bands));
+        use crate::synth::patches::LARGEST_PATCH_MOST as MOST;
+        if let Some(p) = self.patches.filter(|p| p.largest > MOST) {
+            out.push(format!(
+                "largest coherent patch {:.3} of the exemplar's area (allowed at most {MOST})",
+                p.largest
+            ));
+        }
         for h in self.histograms.iter().filter(|h| !within(h.distance, (0.0, HISTOGRAM_TARGET))) {
             out.push(format!(
                 "{} histogram distance {:.3} (allowed at most {HISTOGRAM_TARGET})",

@@ -44,8 +44,9 @@ fn text(r: &Report) -> String {
     let mut out = format!("{}\n  dims      {x} x {y} x {z} ({} voxels)\n", r.file, x * y * z);
     out += &format!("  channels  {}\n", r.channels.join(", "));
     out += &format!("  type      {}\n", r.texture_type.as_deref().unwrap_or("not set"));
+    let width = r.provenance.iter().map(|(k, _)| k.len()).max().unwrap_or(0).max(9);
     for (k, v) in &r.provenance {
-        out += &format!("  {k:<9} {v}\n");
+        out += &format!("  {k:<width$} {v}\n");
     }
     out += "  channel        mean     std     min     max  histogram (16 bins over 0..1)\n";
     for s in &r.stats {

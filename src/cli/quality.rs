@@ -120,6 +120,15 @@ fn table(r: &Report) -> String {
     for h in &r.histograms {
         out += &format!("  {:<12} {:.4}\n", h.channel, h.distance);
     }
+    if let Some(p) = &r.patches {
+        out += &format!(
+            "coherent patches (recorded by the synthesis; target: largest at most {} of the exemplar)\n  \
+             coherent neighbour pairs {:.3}\n  largest patch           {:.3}\n",
+            crate::synth::patches::LARGEST_PATCH_MOST,
+            p.coherent_pairs,
+            p.largest
+        );
+    }
     if let Some(l) = &r.layered {
         out += &format!(
             "layered\n  depth error     {:.4}\n  depth monotonic {}{}\n  sweeping index  {:.4} (share of voxels whose x and y matches coincide)\n",

@@ -645,6 +645,23 @@ pub fn samples(setup: &Setup, values: &Sparse<Voxel>, with_depth: bool) -> Resul
     Ok(data)
 }
 
+/// The patch figures of the finest level's `values` over its whole grid
+/// ([`super::patches`]); `None` with a solid exemplar (its places are not pixels).
+pub fn patches(setup: &Setup, values: &Sparse<Voxel>) -> Option<super::patches::Patches> {
+    if setup.exemplars.cube.is_some() {
+        return None;
+    }
+    let level = setup.options.levels - 1;
+    let pad = 2 * pad_rows(&setup.options, level);
+    let areas = [0, 1, 2].map(|a| {
+        let ex = setup.exemplar(a, level);
+        ex.width * ex.height.saturating_sub(pad)
+    });
+    super::patches::measure(values.dims, setup.planes(), areas, |a, v| {
+        setup.exemplar(a, level).slot_xy(values.at(v.map(|c| c as i64)).slot[a] as usize)
+    })
+}
+
 /// A key of everything a synthesis depends on (exemplars, field, grid, seed, settings):
 /// the cache's name for its levels.
 pub fn fingerprint(setup: &Setup) -> u64 {

@@ -28,6 +28,7 @@ pub(crate) mod knn;
 pub mod occupancy;
 mod optimize;
 mod params;
+pub mod patches;
 mod pca;
 pub mod region;
 mod search;
@@ -64,7 +65,7 @@ pub fn synthesize(ex: Exemplars, params: &SynthParams, seed: u64, progress: &dyn
     let ez = ex.z.unwrap_or(ey);
     let images = [ex.x, ey, ez];
     check_exemplars(&images, &["Ex", "Ey", "Ez"], params)?;
-    let data = if blends(params) {
+    let (data, patches) = if blends(params) {
         let weights = vec![1.0; ex.x.channel_count()];
         let start = start_samples(params, ex.x.channels(), false)?;
         let job = Job {
@@ -74,7 +75,7 @@ pub fn synthesize(ex: Exemplars, params: &SynthParams, seed: u64, progress: &dyn
             anti_sweeping: false,
             start: start.as_deref(),
         };
-        driver::run(&job, params, seed, progress)?
+        (driver::run(&job, params, seed, progress)?, None)
     } else {
         whole::synthesize(images, false, params, seed, progress)?
     };
@@ -83,7 +84,7 @@ pub fn synthesize(ex: Exemplars, params: &SynthParams, seed: u64, progress: &dyn
         (_, None) => TextureType::T1a,
         _ => TextureType::T2a,
     };
-    finish(params, ex.x.channels().to_vec(), data, kind, "synth", seed)
+    finish(params, ex.x.channels().to_vec(), data, patches, kind, "synth", seed)
 }
 
 /// Synthesize a layered (type 1-b) solid texture from one exemplar parallel to the
@@ -100,7 +101,7 @@ pub fn synthesize_layered(
 ) -> Result<Volume> {
     check_exemplars(&[exemplar], &["exemplar"], params)?;
     let with_depth = add_depth(exemplar, depth)?;
-    let data = if blends(params) {
+    let (data, patches) = if blends(params) {
         let mut weights = vec![1.0; exemplar.channel_count()];
         weights.push(layered.depth_weight);
         let start = start_samples(params, exemplar.channels(), true)?;
@@ -111,11 +112,11 @@ pub fn synthesize_layered(
             anti_sweeping: layered.anti_sweeping,
             start: start.as_deref(),
         };
-        driver::run(&job, params, seed, progress)?
+        (driver::run(&job, params, seed, progress)?, None)
     } else {
         whole::synthesize([&with_depth; 3], true, params, seed, progress)?
     };
-    finish(params, with_depth.channels().to_vec(), data, TextureType::T1b, "synth-layered", seed)
+    finish(params, with_depth.channels().to_vec(), data, patches, TextureType::T1b, "synth-layered", seed)
 }
 
 /// Whether the blend core runs: asked for, or to refine a start volume.
@@ -127,6 +128,7 @@ fn finish(
     params: &SynthParams,
     channels: Vec<Channel>,
     data: Vec<f32>,
+    patches: Option<patches::Patches>,
     kind: TextureType,
     recipe: &str,
     seed: u64,
@@ -136,6 +138,10 @@ fn finish(
     meta.set("seed", seed.to_string());
     meta.set("levels", params.levels.to_string());
     meta.set("core", if blends(params) { Core::Blend } else { Core::Coordinates }.to_string());
+    if let Some(p) = patches {
+        meta.set(patches::COHERENT_PAIRS_KEY, format!("{:.4}", p.coherent_pairs));
+        meta.set(patches::LARGEST_KEY, format!("{:.4}", p.largest));
+    }
     Ok(Volume::from_data(params.size, channels, data)?.with_meta(meta))
 }
 

@@ -13,12 +13,14 @@
 //!  balance     homogeneous solids: candidates in colours the solid holds too much of
 //!              cost more, counted per parity sub-pass ([`super::occupancy`]; `--histogram`),
 //!              at the finest level (labels: at every level)
-//!  output      each voxel's shown pixel (a layered solid adds its Depth)
+//!  output      each voxel's shown pixel (a layered solid adds its Depth), and the
+//!              patch figures ([`super::patches`]) for the volume's provenance
 //! ```
 
 use super::coords::{self, Exemplars, Options, Setup};
 use super::edges::with_edge_distance;
 use super::params::SynthParams;
+use super::patches::Patches;
 use super::region::Mask;
 use crate::error::Result;
 use crate::guided::field::ScalarGrid;
@@ -61,14 +63,15 @@ pub fn options(params: &SynthParams, layered: bool) -> Options {
 }
 
 /// Synthesize `params.size` voxels from `images` (orthogonal to x, y, z; layered: rows
-/// along z, a Depth channel last): the samples, x fastest, with the images' channels.
+/// along z, a Depth channel last): the samples, x fastest, with the images' channels, and
+/// how coherently they copy the images ([`super::patches`]).
 pub fn synthesize(
     images: [&Image2d; 3],
     layered: bool,
     params: &SynthParams,
     seed: u64,
     progress: &dyn Progress,
-) -> Result<Vec<f32>> {
+) -> Result<(Vec<f32>, Option<Patches>)> {
     // an image given for several planes is prepared once, and the planes share it
     let mut featured: Vec<Image2d> = Vec::new();
     let mut of_plane = [0; 3];
@@ -94,7 +97,7 @@ pub fn synthesize(
             out.values = coords::settled(&setup, &out.values);
         }
     }
-    coords::samples(&setup, &out.values, true)
+    Ok((coords::samples(&setup, &out.values, true)?, coords::patches(&setup, &out.values)))
 }
 
 /// The depth `z / (Z - 1)` over a grid `z_dim` voxels deep (finest voxel coordinates).

@@ -101,3 +101,38 @@ fn the_balance_holds_the_colour_distribution() {
     assert!((strong - expected).abs() <= 0.015, "at strength 4 {strong:.3}, the exemplars' mean {expected:.3}");
     assert!(off < on && on < strong && strong - off >= 0.01, "shares {off:.3}, {on:.3}, {strong:.3} at 0, 1, 4");
 }
+
+/// A coordinate solid records how coherently it copies its exemplar (docs/synthesis.md,
+/// "Coherent patches"): some neighbours coherent, no cut a tile of the exemplar; the blend
+/// records nothing; `quality --check` names a largest patch above a quarter of the
+/// exemplar's area.
+#[test]
+fn a_coordinate_solid_records_its_coherent_patches_and_quality_checks_them() {
+    let truth = generate(Recipe::Marble, [64; 3], 4).unwrap();
+    let [x, ..] = central_slices(&truth);
+    let ex = Exemplars { x: &x, y: None, z: None };
+    let params = SynthParams { levels: 2, ..coordinates([32; 3]) };
+    let coords = synthesize(ex, &params, 3, &NoProgress).unwrap();
+    let figure = |key: &str| coords.meta.get(key).and_then(|v| v.parse::<f64>().ok());
+    let (pairs, largest) = (figure("coherent_pairs").unwrap(), figure("largest_patch").unwrap());
+    assert!(pairs > 0.05 && pairs < 0.95, "coherent pairs {pairs}");
+    assert!(largest > 1.0 / 4096.0 && largest <= 0.25, "largest patch {largest} of the exemplar's area");
+    let blend = synthesize(ex, &SynthParams { size: [32; 3], levels: 2, ..SynthParams::default() }, 3, &NoProgress);
+    assert_eq!(blend.unwrap().meta.get("largest_patch"), None);
+
+    let dir = tempfile::tempdir().unwrap();
+    let (photo, tiled) = (dir.path().join("x.png"), dir.path().join("tiled.exr"));
+    solidtex::io::write_image(&photo, &x).unwrap();
+    let mut forged = coords.clone();
+    forged.meta.set("largest_patch", "0.5");
+    solidtex::io::write_volume(&tiled, &forged).unwrap();
+    let (p, t) = (photo.to_string_lossy().into_owned(), tiled.to_string_lossy().into_owned());
+    let out = solidtex(&["quality", &t, "--exemplar", &p]);
+    assert!(out.status.success());
+    let table = String::from_utf8_lossy(&out.stdout).into_owned();
+    assert!(table.contains("largest patch           0.500"), "{table}");
+    let checked = solidtex(&["quality", &t, "--exemplar", &p, "--check"]);
+    assert!(!checked.status.success());
+    let said = crate::support::stderr(&checked);
+    assert!(said.contains("largest coherent patch 0.500 of the exemplar's area (allowed at most 0.25)"), "{said}");
+}
