@@ -7,7 +7,8 @@
 #   SYNTH_FLAGS given to every synth run, e.g. "--core coordinates"
 # Photos whose name holds "strata" or "layered" are synthesized with --layered.
 # One line per photo and per control; `check` counts the figures `quality --check` finds
-# outside their bands (docs/synthesis.md, "Checking a volume").
+# outside their bands (docs/synthesis.md, "Checking a volume"); a coordinate-core volume adds
+# its coherent neighbour pairs and largest patch ("Coherent patches").
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 data=$(realpath -m "${1:-$root/../shared/data/images}")
@@ -32,8 +33,10 @@ line = ('lines %s pieces %s top3 %s share %s' % (lines[0]['lines']['name'],
         span([l['lines']['pieces_ratio'] for l in lines]), span([l['lines']['top3_ratio'] for l in lines]),
         span([l['lines']['share_ratio'] for l in lines]))) if lines else 'no line structure'
 outside = check.split(' figure')[0].split()[-1] if 'outside' in check else '0'
-print('%-34s %6ss  gradient %s  length %s  %s  check %s' % (label, took, span([a['gradient_ratio'] for a in s]),
-      span([a['length_ratio'] for a in s]), line, outside))
+p = report.get('patches')
+patches = '  coherent %.2f largest %.3f' % (p['coherent_pairs'], p['largest']) if p else ''
+print('%-34s %6ss  gradient %s  length %s  %s  check %s%s' % (label, took, span([a['gradient_ratio'] for a in s]),
+      span([a['length_ratio'] for a in s]), line, outside, patches))
 PY
 }
 measure() { # label volume exemplar-args... ; prints the summary line
