@@ -48,6 +48,9 @@ pub struct Locator {
     near: Vec<OnceLock<Near>>,
 }
 
+/// The nearest face found so far: squared distance, its tet, the face.
+type Best = (f32, u32, u32);
+
 /// The faces that can be nearest to a point of a cell: (squared distance from the cell to
 /// the face's box, face), nearest boxes first.
 type Near = Box<[(f32, u32)]>;
@@ -215,6 +218,13 @@ impl Locator {
     /// Where `p` takes its texture; `None` for a point that is not finite or a mesh
     /// without tets.
     pub fn locate(&self, p: Vec3) -> Option<Location> {
+        self.locate_near(p, &mut None)
+    }
+
+    /// [`Locator::locate`] for a point near the last one located with the same `hint`: the
+    /// search for the nearest boundary face starts from the face found then (the answer is
+    /// the same; the search stops sooner), and `hint` keeps the face found now.
+    pub fn locate_near(&self, p: Vec3, hint: &mut Option<u32>) -> Option<Location> {
         if !p.is_finite() {
             return None;
         }
@@ -224,31 +234,36 @@ impl Locator {
                 return Some(Location { tet: t, weights, inside: true });
             }
         }
-        let tet = self.nearest_face(p)?;
+        let mut best = None;
+        if let Some(f) = *hint {
+            self.nearest_of(&[f], p, &mut best);
+        }
+        let (_, tet, face) = self.nearest_face(p, best)?;
+        *hint = Some(face);
         Some(Location { tet, weights: self.weights(tet, p), inside: false })
     }
 
-    /// The tet of the boundary face nearest `p` (the lowest tet among equals).
-    fn nearest_face(&self, p: Vec3) -> Option<u32> {
+    /// The boundary face nearest `p` (the lowest tet among equals), searched from `best`:
+    /// (squared distance, tet, face).
+    fn nearest_face(&self, p: Vec3, mut best: Option<Best>) -> Option<Best> {
         let cell = self.cells.index(self.cells.of(p));
-        let mut best: Option<(f32, u32)> = None;
         if self.cells.holds(p) && self.busy[cell] != NONE {
             let near = self.near[self.busy[cell] as usize].get_or_init(|| self.near_cell(cell));
             for &(gap, f) in near.iter() {
-                if best.is_some_and(|(b, _)| gap > b) {
+                if best.is_some_and(|(b, ..)| gap > b) {
                     break;
                 }
                 self.nearest_of(std::slice::from_ref(&f), p, &mut best);
             }
-            return best.map(|(_, t)| t);
+            return best;
         }
         self.search_rings(p, &mut best);
-        best.map(|(_, t)| t)
+        best
     }
 
     /// The nearest face by growing rings of cells around `p` until no cell left can hold a
     /// nearer face (for points far from the faces).
-    fn search_rings(&self, p: Vec3, best: &mut Option<(f32, u32)>) {
+    fn search_rings(&self, p: Vec3, best: &mut Option<Best>) {
         let centre = self.cells.of(p).map(|c| c as i64);
         let dims = self.cells.dims.map(|d| d as i64);
         for r in 0.. {
@@ -270,21 +285,22 @@ impl Locator {
                     bound = bound.min(self.cells.lo[k] + (hi[k] + 1) as f32 * self.cells.side - p[k]);
                 }
             }
-            if bound == f32::INFINITY || best.is_some_and(|(d, _)| d <= bound * bound.abs()) {
+            if bound == f32::INFINITY || best.is_some_and(|(d, ..)| d <= bound * bound.abs()) {
                 break;
             }
         }
     }
 
-    /// Keeps in `best` (squared distance, tet) the nearer of it and the faces `list`.
-    fn nearest_of(&self, list: &[u32], p: Vec3, best: &mut Option<(f32, u32)>) {
-        for face in list.iter().map(|&f| &self.faces[f as usize]) {
-            if best.is_some_and(|(b, _)| face.box_distance(p) > b) {
+    /// Keeps in `best` the nearer of it and the faces `list` (the lower tet among equals).
+    fn nearest_of(&self, list: &[u32], p: Vec3, best: &mut Option<Best>) {
+        for &f in list {
+            let face = &self.faces[f as usize];
+            if best.is_some_and(|(b, ..)| face.box_distance(p) > b) {
                 continue;
             }
             let d = p.distance_squared(closest_on_triangle(p, face.corners));
-            if best.is_none_or(|(b, t)| d < b || (d == b && face.tet < t)) {
-                *best = Some((d, face.tet));
+            if best.is_none_or(|(b, t, _)| d < b || (d == b && face.tet < t)) {
+                *best = Some((d, face.tet, f));
             }
         }
     }
@@ -351,5 +367,24 @@ mod tests {
             assert!(back.distance(p) < 1e-5, "the weights extend the tet's map to {p}");
         }
         assert_eq!(locator.locate(Vec3::NAN), None);
+    }
+
+    /// A walk around the lattice with a hint finds what each point alone finds, whether the
+    /// hint is the last point's face, a far face or none.
+    #[test]
+    fn a_hint_changes_no_answer() {
+        let mesh = cube_lattice([4, 4, 4], 0.25);
+        let locator = Locator::new(&mesh);
+        let mut hint = None;
+        for i in 0..400 {
+            let a = i as f32 * 0.05;
+            let p = Vec3::new(0.5 + 0.62 * a.cos(), 0.5 + 0.62 * a.sin(), (i % 23) as f32 / 22.0 * 1.2 - 0.1);
+            let alone = locator.locate(p);
+            assert_eq!(locator.locate_near(p, &mut hint), alone, "{p}");
+            if i % 50 == 0 {
+                hint = Some((i / 50) as u32 % locator.faces.len() as u32);
+            }
+        }
+        assert!(hint.is_some(), "points outside leave their face as the hint");
     }
 }

@@ -160,6 +160,12 @@ impl LstModel {
         self.locator().locate(p)
     }
 
+    /// [`LstModel::locate`] for a point near the last one located with the same `hint`
+    /// ([`Locator::locate_near`]).
+    pub fn locate_near(&self, p: Vec3, hint: &mut Option<u32>) -> Option<Location> {
+        self.locator().locate_near(p, hint)
+    }
+
     /// The model's locator, made on first use: call it before many threads locate points,
     /// so that it is made once, in parallel, rather than waited for.
     pub fn locator(&self) -> &Locator {

@@ -460,6 +460,27 @@ pub fn shade_at(model: &LstModel, textures: &Textures, at: &Location) -> [f32; 4
     shade(textures, lazy_layers(model, at.tet as usize), at.weights, !at.inside).0
 }
 
+/// The layers of the tet a run of neighbouring points falls in, made once for the run
+/// (neighbouring pixels of a view mostly share their tet).
+#[derive(Default)]
+pub struct TetLayers {
+    tet: Option<u32>,
+    layers: Vec<Layer>,
+}
+
+impl TetLayers {
+    /// [`shade_at`], with the layers of `at`'s tet kept for the next point in the same tet.
+    pub fn shade_at(&mut self, model: &LstModel, textures: &Textures, at: &Location) -> [f32; 4] {
+        if self.tet != Some(at.tet) {
+            self.tet = Some(at.tet);
+            self.layers.clear();
+            self.layers.extend(model.tet_patches[at.tet as usize].iter().map(|&p| layer(model, at.tet as usize, p)));
+        }
+        let layers = (self.layers.iter().rev().copied(), self.layers.first().copied());
+        shade(textures, layers, at.weights, !at.inside).0
+    }
+}
+
 /// Composites the layers at barycentric point `b`, top first; also the patch that
 /// contributes most. A point `extended` past its tet reads each texture at the nearest
 /// point of the texture cube, so a patch's mask does not end at the tet's face.

@@ -12,7 +12,7 @@
 
 use super::locate::Location;
 use super::model::LstModel;
-use super::render::{BACKGROUND, Textures, shade_at, shade_point};
+use super::render::{BACKGROUND, TetLayers, Textures, shade_at, shade_point};
 use crate::error::Result;
 use crate::mesh::Mesh;
 use crate::render::{Rgb8, to_u8};
@@ -90,31 +90,52 @@ impl Frame {
     /// instead of the solid texture.
     pub fn shade_with_skin(&self, models: &[(&LstModel, &Textures)], hits: &[Option<Hit>], skin: Option<Skin>) -> Rgb8 {
         let light = self.light();
-        let colours: Vec<[u8; 3]> = hits
-            .par_iter()
-            .map(|hit| match hit {
-                None => BACKGROUND,
-                Some(h) => {
-                    let (model, textures) = models[h.model as usize];
-                    // located once for the skin's depth test and the colour
-                    let at = model.locate(h.point);
-                    let on_skin = skin.and_then(|s| s.colour_at(model, h.model as usize, h.point, at.as_ref()));
-                    let Some(c) =
-                        on_skin.map(|[r, g, b]| [r, g, b, 1.0]).or_else(|| at.map(|at| shade_at(model, textures, &at)))
-                    else {
-                        return BACKGROUND;
-                    };
-                    let lit = 0.35 + 0.65 * h.normal.dot(light).max(0.0);
-                    [c[0], c[1], c[2]].map(|v| to_u8(v * lit))
-                }
+        // a row at a time: neighbouring pixels mostly fall in one tet, whose layers are
+        // then made once
+        let rows: Vec<Vec<[u8; 3]>> = hits
+            .par_chunks(self.size.max(1))
+            .map(|row| {
+                let mut near = vec![];
+                near.resize_with(models.len(), Near::default);
+                row.iter().map(|hit| self.colour_of(models, hit.as_ref(), skin, light, &mut near)).collect()
             })
             .collect();
         let mut out = Rgb8::new(self.size, self.size, BACKGROUND);
-        for (i, c) in colours.into_iter().enumerate() {
+        for (i, c) in rows.into_iter().flatten().enumerate() {
             out.put(i % self.size, i / self.size, c);
         }
         out
     }
+
+    /// The lit colour of one pixel's `hit` (`near`: per model, what its last pixel found).
+    fn colour_of(
+        &self,
+        models: &[(&LstModel, &Textures)],
+        hit: Option<&Hit>,
+        skin: Option<Skin>,
+        light: Vec3,
+        near: &mut [Near],
+    ) -> [u8; 3] {
+        let Some(h) = hit else { return BACKGROUND };
+        let (model, textures) = models[h.model as usize];
+        let last = &mut near[h.model as usize];
+        // located once for the skin's depth test and the colour
+        let at = model.locate_near(h.point, &mut last.face);
+        let on_skin = skin.and_then(|s| s.colour_at(model, h.model as usize, h.point, at.as_ref()));
+        let colour =
+            on_skin.map(|[r, g, b]| [r, g, b, 1.0]).or_else(|| at.map(|at| last.layers.shade_at(model, textures, &at)));
+        let Some(c) = colour else { return BACKGROUND };
+        let lit = 0.35 + 0.65 * h.normal.dot(light).max(0.0);
+        [c[0], c[1], c[2]].map(|v| to_u8(v * lit))
+    }
+}
+
+/// What a model's last pixel of a row found: the boundary face nearest its point and its
+/// tet's layers (neighbouring pixels mostly share both).
+#[derive(Default)]
+struct Near {
+    face: Option<u32>,
+    layers: TetLayers,
 }
 
 /// Where the rays of a picture cross a model's input surface: per pixel, the depths at
