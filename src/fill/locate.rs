@@ -235,7 +235,7 @@ impl Locator {
             }
         }
         let mut best = None;
-        if let Some(f) = *hint {
+        if let Some(f) = hint.filter(|&f| (f as usize) < self.faces.len()) {
             self.nearest_of(&[f], p, &mut best);
         }
         let (_, tet, face) = self.nearest_face(p, best)?;
@@ -370,7 +370,7 @@ mod tests {
     }
 
     /// A walk around the lattice with a hint finds what each point alone finds, whether the
-    /// hint is the last point's face, a far face or none.
+    /// hint is the last point's face, a far face, no face of the mesh or none.
     #[test]
     fn a_hint_changes_no_answer() {
         let mesh = cube_lattice([4, 4, 4], 0.25);
@@ -383,6 +383,9 @@ mod tests {
             assert_eq!(locator.locate_near(p, &mut hint), alone, "{p}");
             if i % 50 == 0 {
                 hint = Some((i / 50) as u32 % locator.faces.len() as u32);
+            }
+            if i == 125 {
+                hint = Some(u32::MAX);
             }
         }
         assert!(hint.is_some(), "points outside leave their face as the hint");
