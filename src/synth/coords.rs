@@ -123,6 +123,13 @@ impl Options {
         if level == 0 { self.coarse_passes } else { self.passes }
     }
 
+    /// Candidate triples kept per exemplar pixel at `level` (0: coarsest): `k`, at most
+    /// [`FINEST_TRIPLES`] at the finest level (the fewer kept, the smaller the table each
+    /// correction reads at random).
+    pub fn triples_at(&self, level: usize) -> usize {
+        if level + 1 == self.levels { self.k.min(FINEST_TRIPLES) } else { self.k }
+    }
+
     /// The neighbourhood side at `level` (0: coarsest).
     pub fn n_at(&self, level: usize) -> usize {
         if level == 0 { self.coarse_n } else { self.n }
@@ -237,7 +244,7 @@ impl Exemplars {
         }
         let planes = [planes[0].clone(), planes[1].clone(), planes[2].clone()];
         let triples = (0..options.levels)
-            .map(|l| Triples::new([&planes[0][l], &planes[1][l], &planes[2][l]], options.k))
+            .map(|l| Triples::new([&planes[0][l], &planes[1][l], &planes[2][l]], options.triples_at(l)))
             .collect();
         let depth = channels.iter().position(|c| *c == Channel::Depth);
         if depth.is_some_and(|d| d + 1 != channels.len()) {
@@ -831,7 +838,6 @@ fn corrected(
             }
         };
         let triples = &setup.exemplars.triples[level];
-        let offered = if level + 1 == setup.options.levels { triples.k.min(FINEST_TRIPLES) } else { triples.k };
         for a in setup.planes() {
             let ex = setup.exemplar(a, level);
             let (pa, sa) = Axis::ALL[a].plane_axes();
@@ -849,7 +855,7 @@ fn corrected(
                     let (x, y) = (sx - ex_, sy - ey);
                     let pixel = ex.clamped_slot(x, y);
                     if !predicted[a].contains_else_add(pixel as u32) {
-                        for &t in &triples.of(a, pixel)[..offered] {
+                        for &t in triples.of(a, pixel) {
                             consider(t);
                         }
                     }
