@@ -473,8 +473,7 @@ impl TetLayers {
     pub fn shade_at(&mut self, model: &LstModel, textures: &Textures, at: &Location) -> [f32; 4] {
         if self.tet != Some(at.tet) {
             self.tet = Some(at.tet);
-            self.layers.clear();
-            self.layers.extend(model.tet_patches[at.tet as usize].iter().map(|&p| layer(model, at.tet as usize, p)));
+            self.layers = layers_of(model, at.tet as usize);
         }
         let layers = (self.layers.iter().rev().copied(), self.layers.first().copied());
         shade(textures, layers, at.weights, !at.inside).0

@@ -466,19 +466,14 @@ fn write_report(output: &Path, ledger: &Ledger, rows: &[Row]) -> Result<()> {
          <h1>Exemplar library</h1><table><tr><th>exemplar<th>size<th>declared<th>classified<th>build<th>sheet\n",
     );
     for row in rows {
-        let recorded = |r: &Record, when: String| {
+        fn recorded(r: &Record, when: String) -> (String, String, String, String, String, &[String]) {
             let [x, y, z] = r.dims;
-            let warned = r.warnings.iter().map(|w| format!("; warning: {w}")).collect::<String>();
-            (
-                r.name.clone(),
-                format!("{x}x{y}x{z}"),
-                r.declared.clone().unwrap_or("-".into()),
-                r.classified.clone(),
-                when + &warned,
-            )
-        };
-        let none = |name: &str, why: String| (name.to_string(), "-".into(), "-".into(), "-".into(), why);
-        let (name, size, declared, classified, build) = match row {
+            let size = format!("{x}x{y}x{z}");
+            let declared = r.declared.clone().unwrap_or("-".into());
+            (r.name.clone(), size, declared, r.classified.clone(), when, &r.warnings)
+        }
+        let none = |name: &str, why: String| (name.to_string(), "-".into(), "-".into(), "-".into(), why, &[][..]);
+        let (name, size, declared, classified, build, warnings) = match row {
             Row::Now(Outcome::Built(r)) => recorded(r, format!("{:.2} s", r.seconds)),
             Row::Now(Outcome::Cached(r)) => recorded(r, "cached".into()),
             Row::Earlier(r) => recorded(r, "earlier build".into()),
@@ -487,14 +482,14 @@ fn write_report(output: &Path, ledger: &Ledger, rows: &[Row]) -> Result<()> {
             Row::NotBuilt(name) => none(name, "not built".into()),
         };
         let sheet = files::sheet(&name);
+        let warned: String = warnings.iter().map(|w| format!("; warning: {w}")).collect();
         md += &format!(
             "| {name} | {size} | {declared} | {classified} | {} | ![{name}]({sheet}) |\n",
-            build.replace('|', "\\|")
+            format!("{build}{warned}").replace('|', "\\|")
         );
         let escaped = |t: &str| t.replace('&', "&amp;").replace('<', "&lt;");
-        let mut parts = build.split("; warning: ");
-        let mut cell = escaped(parts.next().unwrap_or_default());
-        for warning in parts {
+        let mut cell = escaped(&build);
+        for warning in warnings {
             cell += &format!("<br><span class=warning>warning: {}</span>", escaped(warning));
         }
         html += &format!(
