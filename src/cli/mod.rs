@@ -30,6 +30,7 @@ mod snapshot;
 mod surface;
 mod synth;
 mod types;
+pub mod web;
 
 use clap::{Parser, Subcommand};
 use std::path::PathBuf;
@@ -206,6 +207,9 @@ pub enum Command {
     /// Take filled models (or a surface skin) out as a glTF 2.0 binary (.glb): the surface with
     /// vertex colours or a texture atlas, for Blender, game engines and web viewers.
     Export(export::ExportArgs),
+    /// Volumes, filled models or a skin as one self-contained HTML page with an interactive
+    /// 3D view (WebGL2): slices and cut-aways, the model's surface, its inside, translucent.
+    Web(web::WebArgs),
     /// Grow a 2D exemplar over a mesh's surface (Turk 2001): a .ply with vertex colours.
     Surface(surface::SurfaceArgs),
     /// Draw the frame field of sketch-guided synthesis (Zhang 2011) on a cut as a PNG.
@@ -256,6 +260,7 @@ pub fn run(command: Command) -> crate::Result<()> {
         Command::View(args) => fill::run_view(&args),
         Command::Render(args) => fill::run_render(&args),
         Command::Export(args) => export::run(&args),
+        Command::Web(args) => web::run(&args),
         Command::Surface(args) => surface::run(&args),
         Command::Field(args) => guided::run(&args),
         Command::Guided(args) => guided::run_guided(&args),

@@ -571,6 +571,13 @@ pub fn stack_outlines(models: &[(&LstModel, &Textures)], view: &View, step: Vec3
     models.iter().map(|(m, _)| Outlines::new(&m.surface, view, step, count)).collect()
 }
 
+/// Where [`bake`] puts its grid: the model-space corner of voxel (0, 0, 0)'s cell and one
+/// voxel's side.
+pub fn bake_grid(models: &[(&LstModel, &Textures)], res: usize) -> (Vec3, f32) {
+    let (lo, hi) = bounds(models);
+    (lo, (hi - lo).max_element() / res as f32)
+}
+
 /// Samples models into a volume of `res` voxels along the longest side of their box: R, G,
 /// B, then the `carried` channels, then A (1 inside); a stack of axis-aligned cuts.
 pub fn bake(models: &[(&LstModel, &Textures)], carried: &[Carried], res: usize, budget: u64) -> Result<Volume> {
@@ -585,8 +592,8 @@ pub fn bake(models: &[(&LstModel, &Textures)], carried: &[Carried], res: usize, 
             models.len()
         )));
     }
-    let (lo, hi) = bounds(models);
-    let step = (hi - lo).max_element() / res as f32;
+    let (lo, step) = bake_grid(models, res);
+    let hi = bounds(models).1;
     let dims = ((hi - lo) / step).ceil().as_uvec3().max(glam::UVec3::ONE).to_array().map(|d| d as usize);
     let channels: Vec<Channel> = [Channel::R, Channel::G, Channel::B]
         .into_iter()

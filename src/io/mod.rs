@@ -33,6 +33,7 @@ mod png_file;
 pub mod snapshot_file;
 pub mod values;
 mod vdb;
+pub mod web;
 
 pub use atlas::layout as atlas_layout;
 pub use atomic::{check_folder, read_text, write_bytes, write_folder};

@@ -22,4 +22,5 @@ mod support;
 mod surface;
 mod synth;
 mod tour;
+mod web;
 mod yardstick;

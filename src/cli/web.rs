@@ -1,0 +1,162 @@
+//! `solidtex web`: volumes, filled models or a skin as one self-contained HTML page with an
+//! interactive 3D view (see docs/viewer.md).
+
+use super::fill::{Loaded, load_models, pairs};
+use crate::error::{Error, Result};
+use crate::fill::render;
+use crate::io::{self, web};
+use crate::volume::Volume;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// The arguments of `solidtex web`.
+#[derive(Debug, clap::Args)]
+pub struct WebArgs {
+    /// Volumes (.exr, .nrrd, .vol, .png, .dds, .vdb, a PNG folder; a picker chooses among
+    /// them), or filled models (.lst, shown together), or one skin (.ply from `solidtex
+    /// surface`).
+    #[arg(required = true)]
+    pub inputs: Vec<PathBuf>,
+    /// Voxels along the longest side of the 3D texture baked from filled models, 16 to 256
+    /// (lowered until the page fits --max-mb).
+    #[arg(long, default_value_t = 128)]
+    pub res: usize,
+    /// Largest page for filled models, in megabytes (1 to 64).
+    #[arg(long, default_value_t = 8)]
+    pub max_mb: usize,
+    /// The page's title (default: the inputs' names).
+    #[arg(long)]
+    pub title: Option<String>,
+    /// The .html page to write.
+    #[arg(short, long)]
+    pub output: PathBuf,
+}
+
+/// The largest grid side a page holds: WebGL2 promises 3D textures up to 256 per side.
+pub const MAX_SIDE: usize = 256;
+
+/// What the inputs are.
+enum Kind {
+    Volumes,
+    Models,
+    Skin,
+}
+
+/// Run `solidtex web`.
+pub fn run(args: &WebArgs) -> Result<()> {
+    io::values::within("--res", args.res, 16, MAX_SIDE).map_err(super::commands::usage)?;
+    io::values::within("--max-mb", args.max_mb, 1, 64).map_err(super::commands::usage)?;
+    let inputs: Vec<&Path> = args.inputs.iter().map(PathBuf::as_path).collect();
+    io::guard::file_output(&args.output, &inputs, &["html", "htm"], "an HTML page")?;
+    let title = args.title.clone().unwrap_or_else(|| {
+        let names: Vec<String> = inputs.iter().map(|p| stem(p)).collect();
+        names.join(", ")
+    });
+    let started = Instant::now();
+    let (page, what) = match kind(&inputs)? {
+        Kind::Volumes => volumes(&inputs, &title)?,
+        Kind::Models => models(args, &title)?,
+        Kind::Skin => skin(inputs[0], &title)?,
+    };
+    io::write_bytes(&args.output, page.as_bytes())?;
+    tell!(
+        "wrote {} ({what}; {:.1} MB) in {:.2} s; open it in a browser",
+        args.output.display(),
+        page.len() as f64 / 1e6,
+        started.elapsed().as_secs_f64()
+    );
+    Ok(())
+}
+
+/// The page of `volume`, as `build` writes one for each exemplar.
+pub fn volume_page(name: &str, volume: &Volume) -> Result<String> {
+    fits(Path::new(name), volume)?;
+    web::volumes_page(name, &[web::NamedVolume { name: name.to_string(), volume }])
+}
+
+fn stem(path: &Path) -> String {
+    path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| path.display().to_string())
+}
+
+fn extension(path: &Path) -> String {
+    path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase()).unwrap_or_default()
+}
+
+/// All models, one skin, or all volumes; a mix is a usage error.
+fn kind(inputs: &[&Path]) -> Result<Kind> {
+    let count = |ext: &str| inputs.iter().filter(|p| extension(p) == ext).count();
+    let (lst, ply) = (count("lst"), count("ply"));
+    match (lst, ply) {
+        (0, 0) => Ok(Kind::Volumes),
+        (n, 0) if n == inputs.len() => Ok(Kind::Models),
+        (0, 1) if inputs.len() == 1 => Ok(Kind::Skin),
+        _ => Err(Error::usage(format!(
+            "give volumes, or filled models (.lst), or one skin (.ply), not a mix: {}",
+            inputs.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", ")
+        ))),
+    }
+}
+
+/// A grid the page can hold.
+fn fits(path: &Path, volume: &Volume) -> Result<()> {
+    let dims = volume.dims();
+    if dims.iter().any(|d| *d > MAX_SIDE) {
+        return Err(Error::file(
+            path,
+            format!(
+                "is {}x{}x{} voxels; a web page holds volumes up to {MAX_SIDE} per side (what WebGL2 promises)",
+                dims[0], dims[1], dims[2]
+            ),
+        ));
+    }
+    Ok(())
+}
+
+fn volumes(inputs: &[&Path], title: &str) -> Result<(String, String)> {
+    let budget = io::budget_from_env()?;
+    let read: Vec<Volume> = inputs.iter().map(|p| io::read_volume(p, budget)).collect::<Result<_>>()?;
+    for (path, volume) in inputs.iter().zip(&read) {
+        fits(path, volume)?;
+    }
+    let named: Vec<web::NamedVolume> =
+        inputs.iter().zip(&read).map(|(p, volume)| web::NamedVolume { name: stem(p), volume }).collect();
+    let page = web::volumes_page(title, &named)?;
+    Ok((page, format!("{} volume{}", read.len(), if read.len() == 1 { "" } else { "s" })))
+}
+
+/// Filled models: baked at `--res`, lowered until the page fits `--max-mb`.
+fn models(args: &WebArgs, title: &str) -> Result<(String, String)> {
+    let loaded = load_models(&args.inputs)?;
+    let cap = args.max_mb * 1_000_000;
+    let mut res = args.res;
+    loop {
+        let (page, dims) = models_at(&loaded, &args.inputs, title, res)?;
+        if page.len() <= cap {
+            return Ok((page, format!("{} model(s), baked {}x{}x{}", loaded.len(), dims[0], dims[1], dims[2])));
+        }
+        let smaller = ((res as f64) * (cap as f64 / page.len() as f64).cbrt() * 0.95) as usize;
+        if smaller < 16 {
+            return Err(Error::usage(format!(
+                "the page would be {:.1} MB even at --res {res}; allow more with --max-mb",
+                page.len() as f64 / 1e6
+            )));
+        }
+        tell!("a bake at --res {res} makes a {:.1} MB page; trying --res {smaller}", page.len() as f64 / 1e6);
+        res = smaller;
+    }
+}
+
+fn models_at(loaded: &[Loaded], paths: &[PathBuf], title: &str, res: usize) -> Result<(String, [usize; 3])> {
+    let models = pairs(loaded);
+    let baked = render::bake(&models, &[], res, io::budget_from_env()?)?;
+    let (lo, step) = render::bake_grid(&models, res);
+    let surfaces = paths.iter().zip(loaded).map(|(p, l)| (stem(p), &l.model.surface)).collect();
+    let scene = web::ModelScene { baked: &baked, lo, step, surfaces };
+    Ok((web::models_page(title, &scene)?, baked.dims()))
+}
+
+fn skin(path: &Path, title: &str) -> Result<(String, String)> {
+    let coloured = io::mesh_file::read_coloured_ply(path)?;
+    let page = web::skin_page(title, &coloured.mesh, &coloured.colours)?;
+    Ok((page, format!("a skin of {} triangles", coloured.mesh.triangles.len())))
+}
