@@ -480,7 +480,7 @@ pub(super) fn load_models(paths: &[PathBuf]) -> Result<Vec<Loaded>> {
     paths.iter().map(|p| load_model(p)).collect()
 }
 
-pub(super) fn pairs(loaded: &[Loaded]) -> Vec<(&LstModel, &Textures)> {
+fn pairs(loaded: &[Loaded]) -> Vec<(&LstModel, &Textures)> {
     loaded.iter().map(|l| (&l.model, &l.textures)).collect()
 }
 

@@ -1,9 +1,11 @@
 //! `solidtex web`: volumes, filled models or a skin as one self-contained HTML page with an
 //! interactive 3D view (see docs/viewer.md).
 
-use super::fill::{Loaded, load_models, pairs};
+use super::fill::{Loaded, load_models};
 use crate::error::{Error, Result};
-use crate::fill::render;
+use crate::fill::LstModel;
+use crate::fill::render::Textures;
+use crate::io::web::MAX_SIDE;
 use crate::io::{self, web};
 use crate::volume::Volume;
 use std::path::{Path, PathBuf};
@@ -19,7 +21,7 @@ pub struct WebArgs {
     pub inputs: Vec<PathBuf>,
     /// Voxels along the longest side of the 3D texture baked from filled models, 16 to 256
     /// (lowered until the page fits --max-mb).
-    #[arg(long, default_value_t = 128)]
+    #[arg(long, default_value_t = web::FILL_RES)]
     pub res: usize,
     /// Largest page for filled models, in megabytes (1 to 64).
     #[arg(long, default_value_t = 8)]
@@ -31,9 +33,6 @@ pub struct WebArgs {
     #[arg(short, long)]
     pub output: PathBuf,
 }
-
-/// The largest grid side a page holds: WebGL2 promises 3D textures up to 256 per side.
-pub const MAX_SIDE: usize = 256;
 
 /// What the inputs are.
 enum Kind {
@@ -68,12 +67,6 @@ pub fn run(args: &WebArgs) -> Result<()> {
     Ok(())
 }
 
-/// The page of `volume`, as `build` writes one for each exemplar.
-pub fn volume_page(name: &str, volume: &Volume) -> Result<String> {
-    fits(Path::new(name), volume)?;
-    web::volumes_page(name, &[web::NamedVolume { name: name.to_string(), volume }])
-}
-
 fn stem(path: &Path) -> String {
     path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| path.display().to_string())
 }
@@ -97,29 +90,23 @@ fn kind(inputs: &[&Path]) -> Result<Kind> {
     }
 }
 
-/// A grid the page can hold.
-fn fits(path: &Path, volume: &Volume) -> Result<()> {
-    let dims = volume.dims();
-    if dims.iter().any(|d| *d > MAX_SIDE) {
-        return Err(Error::file(
-            path,
-            format!(
-                "is {}x{}x{} voxels; a web page holds volumes up to {MAX_SIDE} per side (what WebGL2 promises)",
-                dims[0], dims[1], dims[2]
-            ),
-        ));
-    }
-    Ok(())
-}
-
 fn volumes(inputs: &[&Path], title: &str) -> Result<(String, String)> {
     let budget = io::budget_from_env()?;
     let read: Vec<Volume> = inputs.iter().map(|p| io::read_volume(p, budget)).collect::<Result<_>>()?;
+    let mut shown = Vec::with_capacity(read.len());
     for (path, volume) in inputs.iter().zip(&read) {
-        fits(path, volume)?;
+        let (small, k) = web::within_side(volume, MAX_SIDE)?;
+        if k > 1 {
+            let [x, y, z] = small.dims();
+            tell!(
+                "{} is larger than {MAX_SIDE} per side: the page shows one voxel in {k} along each axis ({x}x{y}x{z})",
+                path.display()
+            );
+        }
+        shown.push(small);
     }
     let named: Vec<web::NamedVolume> =
-        inputs.iter().zip(&read).map(|(p, volume)| web::NamedVolume { name: stem(p), volume }).collect();
+        inputs.iter().zip(&shown).map(|(p, volume)| web::NamedVolume { name: stem(p), volume }).collect();
     let page = web::volumes_page(title, &named)?;
     Ok((page, format!("{} volume{}", read.len(), if read.len() == 1 { "" } else { "s" })))
 }
@@ -147,12 +134,10 @@ fn models(args: &WebArgs, title: &str) -> Result<(String, String)> {
 }
 
 fn models_at(loaded: &[Loaded], paths: &[PathBuf], title: &str, res: usize) -> Result<(String, [usize; 3])> {
-    let models = pairs(loaded);
-    let baked = render::bake(&models, &[], res, io::budget_from_env()?)?;
-    let (lo, step) = render::bake_grid(&models, res);
-    let surfaces = paths.iter().zip(loaded).map(|(p, l)| (stem(p), &l.model.surface)).collect();
-    let scene = web::ModelScene { baked: &baked, lo, step, surfaces };
-    Ok((web::models_page(title, &scene)?, baked.dims()))
+    let names: Vec<String> = paths.iter().map(|p| stem(p)).collect();
+    let models: Vec<(&str, &LstModel, &Textures)> =
+        names.iter().zip(loaded).map(|(n, l)| (n.as_str(), &l.model, &l.textures)).collect();
+    web::fill_page(title, &models, res, io::budget_from_env()?)
 }
 
 fn skin(path: &Path, title: &str) -> Result<(String, String)> {

@@ -8,6 +8,8 @@
 //! `DecompressionStream`. See docs/viewer.md.
 
 use crate::error::{Error, Result};
+use crate::fill::LstModel;
+use crate::fill::render::{self, Textures};
 use crate::mesh::Mesh;
 use crate::render::to_u8;
 use crate::volume::{Channel, Volume};
@@ -42,6 +44,40 @@ pub struct ModelScene<'a> {
     pub surfaces: Vec<(String, &'a Mesh)>,
 }
 
+/// The largest grid side a page holds: WebGL2 promises 3D textures up to 256 per side.
+pub const MAX_SIDE: usize = 256;
+
+/// The grid side of the 3D view a library report shows of each exemplar.
+pub const PREVIEW_SIDE: usize = 128;
+
+/// `volume` at every k-th voxel along each axis, k the smallest whole number that brings
+/// its longest side to `most` or below (k = 1: the volume itself): (volume, k).
+pub fn within_side(volume: &Volume, most: usize) -> Result<(std::borrow::Cow<'_, Volume>, usize)> {
+    let dims = volume.dims();
+    let k = dims.iter().max().copied().unwrap_or(1).div_ceil(most.max(1)).max(1);
+    if k == 1 {
+        return Ok((std::borrow::Cow::Borrowed(volume), 1));
+    }
+    let small = dims.map(|d| d.div_ceil(k));
+    let mut data = Vec::with_capacity(small.iter().product::<usize>() * volume.channel_count());
+    for z in 0..small[2] {
+        for y in 0..small[1] {
+            for x in 0..small[0] {
+                data.extend_from_slice(volume.voxel(x * k, y * k, z * k));
+            }
+        }
+    }
+    Ok((std::borrow::Cow::Owned(Volume::from_data(small, volume.channels().to_vec(), data)?), k))
+}
+
+/// The page a library build writes beside each exemplar: its volume at up to
+/// [`PREVIEW_SIDE`] voxels per side.
+pub fn preview_page(name: &str, volume: &Volume) -> Result<String> {
+    let (shown, k) = within_side(volume, PREVIEW_SIDE)?;
+    let title = if k == 1 { name.to_string() } else { format!("{name} (one voxel in {k} along each axis)") };
+    volumes_page(&title, &[NamedVolume { name: name.to_string(), volume: &shown }])
+}
+
 /// A page of one or more volumes (a picker chooses among them).
 pub fn volumes_page(title: &str, volumes: &[NamedVolume]) -> Result<String> {
     let items = volumes.iter().map(|v| grid(&v.name, v.volume)).collect::<Result<Vec<_>>>()?;
@@ -56,6 +92,25 @@ pub fn models_page(title: &str, scene: &ModelScene) -> Result<String> {
     let meshes: Vec<Value> =
         scene.surfaces.iter().map(|(name, mesh)| mesh_entry(name, mesh, None)).collect::<Result<_>>()?;
     page(title, json!({ "kind": "models", "grid": baked, "meshes": meshes }))
+}
+
+/// Voxels along the longest side of a fill's baked 3D texture, unless asked otherwise.
+pub const FILL_RES: usize = 128;
+
+/// The page of filled models, each (name, model, colour textures), baked at `res` voxels
+/// along the longest side of their box: (page, the baked grid's dims).
+pub fn fill_page(
+    title: &str,
+    models: &[(&str, &LstModel, &Textures)],
+    res: usize,
+    budget: u64,
+) -> Result<(String, [usize; 3])> {
+    let pairs: Vec<(&LstModel, &Textures)> = models.iter().map(|(_, m, t)| (*m, *t)).collect();
+    let baked = render::bake(&pairs, &[], res, budget)?;
+    let (lo, step) = render::bake_grid(&pairs, res);
+    let surfaces = models.iter().map(|(name, m, _)| (name.to_string(), &m.surface)).collect();
+    let page = models_page(title, &ModelScene { baked: &baked, lo, step, surfaces })?;
+    Ok((page, baked.dims()))
 }
 
 /// A page of one skin: a mesh with a colour per vertex.
@@ -204,6 +259,17 @@ mod tests {
         let red: Vec<u8> = (0..12).map(|i| to_u8(i as f32 / 11.0)).collect();
         assert_eq!(&bytes[..12], &red[..]);
         assert!(bytes[12..24].iter().all(|b| *b == 128) && bytes[36..].iter().all(|b| *b == 64));
+    }
+
+    #[test]
+    fn a_large_volume_is_shown_at_every_kth_voxel() {
+        let data = (0..5 * 3 * 2).map(|i| i as f32).collect();
+        let volume = Volume::from_data([5, 3, 2], vec![Channel::R], data).unwrap();
+        let (same, k) = within_side(&volume, 5).unwrap();
+        assert_eq!((same.dims(), k), ([5, 3, 2], 1));
+        let (small, k) = within_side(&volume, 2).unwrap();
+        assert_eq!((small.dims(), k), ([2, 1, 1], 3));
+        assert_eq!(small.data(), [0.0, 3.0]);
     }
 
     #[test]

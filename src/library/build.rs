@@ -289,6 +289,7 @@ fn build_entry(
     }
     io::write_volume(&files::volume(output, &entry.name), &volume)?;
     io::write_rgb8(&output.join(files::sheet(&entry.name)), &crate::render::sheet(&volume, &entry.name))?;
+    io::write_bytes(&output.join(files::view(&entry.name)), io::web::preview_page(&entry.name, &volume)?.as_bytes())?;
     recipe::extras(entry, &volume, output)?;
     ledger.record(&outputs)?;
     let classified =
@@ -457,12 +458,12 @@ fn batches<'a>(entries: &[&'a Entry], budget: u64) -> Vec<Vec<&'a Entry>> {
 /// `report.md` and `report.html`: one row per exemplar with its sheet.
 fn write_report(output: &Path, ledger: &Ledger, rows: &[Row]) -> Result<()> {
     let mut md = String::from(
-        "# Exemplar library\n\n| exemplar | size | declared | classified | build | sheet |\n|---|---|---|---|---|---|\n",
+        "# Exemplar library\n\n| exemplar | size | declared | classified | build | sheet | 3D |\n|---|---|---|---|---|---|---|\n",
     );
     let mut html = String::from(
         "<!doctype html><meta charset=utf-8><title>Exemplar library</title>\
          <style>body{font-family:sans-serif;background:#222;color:#eee}td,th{padding:4px 10px}img{width:280px}\
-         .warning{color:#fc6}</style>\
+         .warning{color:#fc6}iframe{border:0;width:640px;height:440px}a{color:#9cf}</style>\
          <h1>Exemplar library</h1><table><tr><th>exemplar<th>size<th>declared<th>classified<th>build<th>sheet\n",
     );
     for row in rows {
@@ -481,11 +482,13 @@ fn write_report(output: &Path, ledger: &Ledger, rows: &[Row]) -> Result<()> {
             Row::Now(Outcome::Cancelled(name)) => none(name, "cancelled".into()),
             Row::NotBuilt(name) => none(name, "not built".into()),
         };
-        let sheet = files::sheet(&name);
+        let (sheet, view) = (files::sheet(&name), files::view(&name));
+        let has_view = output.join(&view).is_file();
         let warned: String = warnings.iter().map(|w| format!("; warning: {w}")).collect();
         md += &format!(
-            "| {name} | {size} | {declared} | {classified} | {} | ![{name}]({sheet}) |\n",
-            format!("{build}{warned}").replace('|', "\\|")
+            "| {name} | {size} | {declared} | {classified} | {} | ![{name}]({sheet}) | {} |\n",
+            format!("{build}{warned}").replace('|', "\\|"),
+            if has_view { format!("[3D view]({view})") } else { "-".into() }
         );
         let escaped = |t: &str| t.replace('&', "&amp;").replace('<', "&lt;");
         let mut cell = escaped(&build);
@@ -493,14 +496,26 @@ fn write_report(output: &Path, ledger: &Ledger, rows: &[Row]) -> Result<()> {
             cell += &format!("<br><span class=warning>warning: {}</span>", escaped(warning));
         }
         html += &format!(
-            "<tr><td>{name}<td>{size}<td>{declared}<td>{classified}<td>{cell}<td><img src=\"{sheet}\" alt=\"{name}\">\n"
+            "<tr><td>{name}<td>{size}<td>{declared}<td>{classified}<td>{cell}<td><img src=\"{sheet}\" alt=\"{name}\">{}\n",
+            if has_view { viewer_cell(&view) } else { String::new() }
         );
     }
     html += "</table>\n";
+    html += VIEWER_SCRIPT;
     io::write_bytes(&output.join(REPORTS[0]), md.as_bytes())?;
     io::write_bytes(&output.join(REPORTS[1]), html.as_bytes())?;
     ledger.record(&REPORTS.map(String::from))
 }
+
+/// A report row's 3D view: opened in place (the page loads only then) or in a tab of its own.
+fn viewer_cell(view: &str) -> String {
+    format!("<br><details data-view=\"{view}\"><summary>3D view</summary></details><a href=\"{view}\">open alone</a>")
+}
+
+/// Loads a row's 3D view into a frame the first time it is opened.
+const VIEWER_SCRIPT: &str = "<script>for (const d of document.querySelectorAll('details[data-view]')) \
+    d.addEventListener('toggle', () => { if (d.open && !d.querySelector('iframe')) { \
+    const f = document.createElement('iframe'); f.src = d.dataset.view; d.append(f); } });</script>\n";
 
 #[cfg(test)]
 mod tests {

@@ -17,6 +17,11 @@ pub fn sheet(name: &str) -> String {
     format!("{name}.sheet.png")
 }
 
+/// The 3D view (a `solidtex web` page) of exemplar `name`.
+pub fn view(name: &str) -> String {
+    format!("{name}.view.html")
+}
+
 /// The cache record of exemplar `name`, relative to the output folder.
 pub fn record(name: &str) -> String {
     format!("{CACHE}/{name}.json")
@@ -51,12 +56,13 @@ pub fn export(output: &Path, name: &str, format: &str) -> PathBuf {
 }
 
 /// Every file and folder an entry's build writes, relative to the output folder, in a
-/// fixed order (the volume, the sheet, the exports, the masks; not the cache record).
+/// fixed order (the volume, the sheet, the 3D view, the exports, the masks; not the cache
+/// record).
 pub fn outputs(entry: &Entry) -> Vec<String> {
     let name = &entry.name;
     let here = Path::new("");
     let relative = |p: PathBuf| p.to_string_lossy().into_owned();
-    let mut files = vec![relative(volume(here, name)), sheet(name)];
+    let mut files = vec![relative(volume(here, name)), sheet(name), view(name)];
     files.extend(entry.exports.iter().map(|e| relative(export(here, name, e))));
     for kind in &entry.masks {
         files.push(match kind {
@@ -77,7 +83,10 @@ mod tests {
         let text = "[[exemplar]]\nname = \"m\"\nrecipe = \"procedural:marble\"\nsize = 8\n\
                     exports = [\"nrrd\", \"slices\"]\nmasks = [\"splotch\", \"layered\"]\n";
         let plan = parse_plan(text, Path::new(".")).unwrap();
-        assert_eq!(outputs(&plan.entries[0]), ["m.exr", "m.sheet.png", "m.nrrd", "m_slices", "m.mask.exr", "m.masks"]);
+        assert_eq!(
+            outputs(&plan.entries[0]),
+            ["m.exr", "m.sheet.png", "m.view.html", "m.nrrd", "m_slices", "m.mask.exr", "m.masks"]
+        );
         assert_eq!(layer_mask(Path::new("out"), "m", Layer::Inner), Path::new("out/m.masks/inner.exr"));
         assert_eq!(record("m"), ".cache/m.json");
     }

@@ -64,6 +64,7 @@ pub fn hints(model: &Model) -> Vec<Hint> {
                 unless("f", "fill", loading),
                 unless("p", "photo", loading),
                 unless("E", "export", loading),
+                unless("W", "3D", loading),
                 hint("esc", "back"),
                 unless("a", "masks", view.layers.is_empty().then_some("no masks built")),
                 unless("m", "stamp", loading),
@@ -111,6 +112,7 @@ pub fn hints(model: &Model) -> Vec<Hint> {
                 hint("esc", "back"),
                 unless("u", "undo", filling),
                 unless("E", "export", filling),
+                unless("W", "3D", filling),
                 unless("c", "depth map", filling),
                 unless("o", "load spec", filling),
             ]

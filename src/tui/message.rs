@@ -129,6 +129,11 @@ pub enum Message {
     Peeked(PathBuf, Result<Arc<crate::volume::Image2d>, String>),
     /// Export the exemplar on screen.
     Export,
+    /// Write the 3D view (a `solidtex web` page) of the exemplar or fill on screen and open it.
+    WebView,
+    /// A 3D view was written: what to tell (its path, and whether a browser took it); or
+    /// why it was not.
+    WebWritten(Result<String, String>),
     /// An export finished: the folder, the files written and the formats that cannot hold
     /// the volume (with the reason); or why it failed.
     Exported(Result<(String, Vec<String>, Vec<String>), String>),
@@ -314,6 +319,9 @@ pub enum Effect {
     /// Write the fill preview's cut of exemplar `name` (across the axis, at the offset) as a
     /// 512² PNG into `OUTPUT/exports/`.
     ExportCut(String, SharedFill, Axis, f32),
+    /// Write the 3D view of exemplar `name` (its volume or its fill preview) into
+    /// `OUTPUT/exports/` and open it in a browser.
+    WebView(String, WebSubject),
     /// List a folder's folders and the files of this kind, for the picker.
     List(PathBuf, super::new_entry::FileKind),
     /// Read a photo (shrunk) for the picker's preview.
@@ -342,6 +350,15 @@ pub enum Effect {
 /// A fill preview handed to a worker; two are equal when they are the same one.
 #[derive(Debug, Clone)]
 pub struct SharedFill(pub Arc<super::model::FillPreview>);
+
+/// What a 3D view shows.
+#[derive(Debug, Clone, PartialEq)]
+pub enum WebSubject {
+    /// An exemplar's volume.
+    Volume(Arc<Volume>),
+    /// A fill preview.
+    Fill(SharedFill),
+}
 
 impl PartialEq for SharedFill {
     fn eq(&self, other: &SharedFill) -> bool {

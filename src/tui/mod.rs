@@ -403,6 +403,11 @@ fn work(effect: Effect, send: &Sender<Message>, manifest: &Path, output: &Path) 
             let result = export_cut(&output, &name, &filled.0, axis, offset).map_err(|e| e.to_string());
             let _ = send.send(Message::Exported(result));
         }
+        Effect::WebView(name, subject) => {
+            let browser = std::env::var("BROWSER").ok();
+            let result = web_view(&output, &name, &subject, browser.as_deref()).map_err(|e| e.to_string());
+            let _ = send.send(Message::WebWritten(result));
+        }
         Effect::List(folder, kind) => {
             let _ = send.send(Message::Listed(folder.clone(), list_folder(&folder, kind)));
         }
@@ -734,6 +739,54 @@ fn export_cut(output: &Path, name: &str, filled: &FillPreview, axis: Axis, offse
     Ok((folder.display().to_string(), vec![file], Vec::new()))
 }
 
+/// Writes the 3D view of `subject` as `view.html` in `OUTPUT/exports/NAME.view/` (a fill's
+/// in `NAME.fill-view/`), a folder solidtex replaces only as a whole and only while it holds
+/// just what solidtex wrote there, and opens it in `browser` (`$BROWSER`) or `xdg-open`:
+/// what to tell.
+fn web_view(output: &Path, name: &str, subject: &message::WebSubject, browser: Option<&str>) -> Result<String> {
+    let (folder, page) = match subject {
+        message::WebSubject::Volume(volume) => (format!("{name}.view"), io::web::preview_page(name, volume)?),
+        message::WebSubject::Fill(filled) => {
+            let model = [(name, &filled.0.model, &filled.0.textures)];
+            let budget = io::budget_from_env()?;
+            (format!("{name}.fill-view"), io::web::fill_page(name, &model, io::web::FILL_RES, budget)?.0)
+        }
+    };
+    let folder = exports(output)?.join(folder);
+    io::write_folder(&folder, |dir| io::write_bytes(&dir.join("view.html"), page.as_bytes()))?;
+    let path = folder.join("view.html");
+    Ok(match open_in_browser(&path, browser) {
+        Some(program) => format!("wrote {}; opened it with {program}", path.display()),
+        None => format!("wrote {}; open it in a browser (no $BROWSER or xdg-open here)", path.display()),
+    })
+}
+
+/// Hands `path` to `browser` (a command; `%s` stands for the path, else it comes last) or
+/// else to `xdg-open`, detached and silent: the program that started, if one did.
+fn open_in_browser(path: &Path, browser: Option<&str>) -> Option<String> {
+    let given = browser.and_then(|b| b.split(':').next()).filter(|b| !b.trim().is_empty());
+    for command in given.into_iter().chain(["xdg-open"]) {
+        let mut words = command.split_whitespace();
+        let program = words.next()?;
+        let mut args: Vec<std::ffi::OsString> =
+            words.map(|w| w.replace("%s", &path.to_string_lossy()).into()).collect();
+        if !command.contains("%s") {
+            args.push(path.into());
+        }
+        let started = std::process::Command::new(program)
+            .args(&args)
+            .stdin(std::process::Stdio::null())
+            .stdout(std::process::Stdio::null())
+            .stderr(std::process::Stdio::null())
+            .spawn();
+        if let Ok(mut child) = started {
+            std::thread::spawn(move || child.wait());
+            return Some(program.to_string());
+        }
+    }
+    None
+}
+
 /// `STEM.EXT` in `folder`, or the first of `STEM-2.EXT`, `STEM-3.EXT` ... that is free: an
 /// export never replaces a file.
 fn free_name(folder: &Path, stem: &str, ext: &str) -> String {
@@ -935,6 +988,33 @@ mod tests {
     /// `E` on the slices writes every format, the contact sheet and the slice on screen
     /// into OUTPUT/exports/NAME/, replacing its own export; a folder there holding a file
     /// solidtex did not write is refused, and that file stays.
+    #[test]
+    fn w_writes_the_3d_view_and_hands_it_to_the_browser() {
+        use crate::tui::model::{ExemplarView, Model, Screen};
+        use crate::volume::{Channel, Volume};
+        let dir = tempfile::tempdir().unwrap();
+        let volume = Volume::from_fn([6, 5, 4], Channel::rgb(), |x, _, _, o| o.fill(x as f32 / 5.0)).unwrap();
+        let mut m = Model::new(dir.path().join("lib.toml"), dir.path().join("out"), Vec::new(), Vec::new());
+        let mut view = ExemplarView::new("ramp");
+        m.screen = Screen::Exemplar(view.clone());
+        assert!(update(&mut m, Message::WebView).is_empty() && m.status.contains("loading"), "{}", m.status);
+        view.volume = Some(std::sync::Arc::new(volume));
+        m.screen = Screen::Exemplar(view);
+        let effects = update(&mut m, Message::WebView);
+        let [Effect::WebView(name, subject)] = &effects[..] else { panic!("{effects:?}") };
+        let page = m.output.join("exports/ramp.view/view.html");
+        let told = super::web_view(&m.output, name, subject, Some("true")).unwrap();
+        assert!(told.contains(&page.display().to_string()) && told.contains("opened it with true"), "{told}");
+        let text = std::fs::read_to_string(&page).unwrap();
+        assert!(text.starts_with("<!doctype html>") && text.contains("\"dims\":[6,5,4]"));
+        let told = super::web_view(&m.output, name, subject, Some("no-such-browser-here")).unwrap();
+        assert!(told.contains("opened it with xdg-open") || told.contains("open it in a browser"), "{told}");
+        std::fs::write(page.with_file_name("notes.txt"), "mine").unwrap();
+        let refused = super::web_view(&m.output, name, subject, Some("true")).unwrap_err().to_string();
+        assert!(refused.contains("ramp.view"), "a folder holding a person's file is left alone: {refused}");
+        assert_eq!(std::fs::read_to_string(page.with_file_name("notes.txt")).unwrap(), "mine");
+    }
+
     #[test]
     fn e_exports_the_volume_in_every_format_beside_the_slice_on_screen() {
         use crate::tui::model::{ExemplarView, Model, Screen};

@@ -1,6 +1,6 @@
 //! `update`: the only place the model changes. Pure: returns the work to start.
 
-use super::message::{Effect, EntryChange, Message, SharedFill};
+use super::message::{Effect, EntryChange, Message, SharedFill, WebSubject};
 use super::model::{
     Batch, BuildState, Confirm, ExemplarView, LOG_LINES, Model, Prompt, Purpose, STATUS_SECONDS, Screen,
 };
@@ -175,6 +175,8 @@ fn handle(model: &mut Model, message: Message) -> Vec<Effect> {
         Message::EditorReady(result) => return editing::editor_ready(model, result),
         Message::Rename => start_rename(model),
         Message::Export => return export(model),
+        Message::WebView => return web_view(model),
+        Message::WebWritten(result) => model.status = result.unwrap_or_else(|e| format!("no 3D view: {e}")),
         Message::Exported(result) => model.status = exported(result),
         Message::SpecWritten(spec, result) => {
             if result.is_ok() {
@@ -358,6 +360,7 @@ fn from_key(message: &Message) -> bool {
             | Message::BuildProgress(..)
             | Message::BuildStarted(_)
             | Message::Exported(_)
+            | Message::WebWritten(_)
             | Message::BuildWarning(..)
             | Message::WorkerFailed(_)
             | Message::SpecWritten(..)
@@ -410,6 +413,28 @@ fn export(model: &mut Model) -> Vec<Effect> {
     let index = view.index[view.axis.index()];
     model.status = format!("exporting {}", view.name);
     vec![Effect::Export(view.name.clone(), volume, view.axis, index)]
+}
+
+/// `W`: the 3D view of the exemplar or fill preview on screen, once it is there.
+fn web_view(model: &mut Model) -> Vec<Effect> {
+    let (name, subject) = match &model.screen {
+        Screen::Fill(view) => match view.filled.clone() {
+            Some(filled) => (view.name.clone(), WebSubject::Fill(SharedFill(filled))),
+            None => return waiting(model, "the fill is still running"),
+        },
+        Screen::Exemplar(view) => match view.volume.clone() {
+            Some(volume) => (view.name.clone(), WebSubject::Volume(volume)),
+            None => return waiting(model, "the volume is still loading"),
+        },
+        _ => return Vec::new(),
+    };
+    model.status = format!("writing the 3D view of {name}");
+    vec![Effect::WebView(name, subject)]
+}
+
+fn waiting(model: &mut Model, why: &str) -> Vec<Effect> {
+    model.status = why.into();
+    Vec::new()
 }
 
 /// `r` on the library: a prompt for the selected entry's new name, its name filled in.

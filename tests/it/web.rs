@@ -148,11 +148,36 @@ fn bad_input_to_web_is_refused_and_nothing_is_written() {
     assert!(solidtex(&["make", "marble", "--size", "257x2x2", "-o", &big]).status.success());
     let fruit = draw(d, "fruit");
     assert_usage(&solidtex(&["web", &volume, &fruit.replace(".obj", ".lst"), "-o", &page]), &["not a mix"]);
-    assert_fails(&solidtex(&["web", &big, "-o", &page]), &["big.exr", "257x2x2", "256"]);
+    let run = solidtex(&["web", &big, "-o", &at(d, "big.html")]);
+    assert!(
+        run.status.success() && stderr(&run).contains("one voxel in 2 along each axis (129x1x1)"),
+        "{}",
+        stderr(&run)
+    );
     assert_usage(&solidtex(&["web", &volume, "--res", "8", "-o", &page]), &["--res", "16"]);
     assert_usage(&solidtex(&["web", &volume, "-o", &at(d, "v.png")]), &["v.png", "html"]);
     let before = std::fs::read(&volume).unwrap();
     assert_usage(&solidtex(&["web", &volume, "-o", &volume]), &["v.exr"]);
     assert_eq!(std::fs::read(&volume).unwrap(), before, "an input is never overwritten");
     assert!(!Path::new(&page).exists(), "nothing is written on bad input");
+}
+
+#[test]
+fn a_library_build_writes_a_3d_view_of_each_exemplar_that_its_report_opens() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let manifest = at(d, "lib.toml");
+    std::fs::write(&manifest, "[[exemplar]]\nname = \"m\"\nrecipe = \"procedural:marble\"\nsize = 32\n").unwrap();
+    let out = d.join("out");
+    let run = solidtex(&["build", &manifest, "-o", &out.to_string_lossy()]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let report = std::fs::read_to_string(out.join("report.html")).unwrap();
+    assert!(report.contains("<details data-view=\"m.view.html\">"), "{report}");
+    let markdown = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(markdown.contains("[3D view](m.view.html)"), "{markdown}");
+    let page = out.join("m.view.html").to_string_lossy().into_owned();
+    let Some(shown) = opened(&page, json!({ "snapshots": [[2, 5], [0, 31]] })) else { return };
+    snapshots_match(&shown, &out.join("m.exr").to_string_lossy(), d);
+    let report = out.join("report.html").to_string_lossy().into_owned();
+    opened(&report, json!({ "report": true }));
 }

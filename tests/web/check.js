@@ -7,7 +7,8 @@
 //   {"page": "/abs/view.html", "keys": ["c"], "snapshots": [[2, 10]], "drag": 2, "fps": 30,
 //    "screenshot": "/abs/shot.png"}
 // ("drag": the slice or cut axis to drag, or null; "screenshot": the page after the keys and
-// the interaction, optional).
+// the interaction, optional; "report": true when "page" is a library report, whose first 3D
+// view is opened and checked).
 const fs = require('fs');
 const puppeteer = require('puppeteer-core');
 
@@ -35,10 +36,16 @@ async function check(browser, plan) {
   page.on('console', (m) => m.type() === 'error' && report.console_errors.push(m.text()));
   page.on('pageerror', (e) => report.page_errors.push(String(e)));
   await page.goto('file://' + plan.page, { waitUntil: 'load' });
-  await page.waitForFunction(() => window.solidtex && (window.solidtex.firstFrameMs || window.solidtex.failure), {
+  let viewer = page;
+  if (plan.report) {
+    // A library report: open the first row's 3D view, then check the page inside it.
+    await page.click('details summary');
+    viewer = await (await page.waitForSelector('details iframe')).contentFrame();
+  }
+  await viewer.waitForFunction(() => window.solidtex && (window.solidtex.firstFrameMs || window.solidtex.failure), {
     timeout: 120000,
   });
-  const view = (f, ...args) => page.evaluate(f, ...args);
+  const view = (f, ...args) => viewer.evaluate(f, ...args);
   report.failure = await view(() => window.solidtex.failure || null);
   if (report.failure) return report;
   report.first_frame_ms = await view(() => window.solidtex.firstFrameMs);
