@@ -386,6 +386,7 @@
       centre: [0, 0, 0],
       radius: 0.87,
       grid: () => current().grid,
+      costly: () => false,
       handles: slabs,
       draw(vp) {
         const it = current(), grey = it.layers[state.layer].planes.length === 1, mvp = mul(vp, it.grid.toWorld);
@@ -484,6 +485,7 @@
       centre: scale(add(lo, hi), 0.5),
       radius: Math.hypot(...sub(hi, lo)) / 2,
       grid: () => box,
+      costly: () => state.translucent,
       handles: caps,
       draw(vp) {
         const h = hole();
@@ -493,7 +495,7 @@
           gl.enable(gl.CULL_FACE);
           gl.cullFace(gl.FRONT);
           RAYS.use({ uMVP: mul(vp, box.toWorld), uTex: 0, uEyeBox: box.fromWorld(eye()), uSize: size,
-            uBack: BACKGROUND, uOpacity: state.opacity, uStep: Math.max(...size) / (2 * Math.max(...dims)),
+            uBack: BACKGROUND, uOpacity: state.opacity, uStep: Math.max(...size) / Math.max(...dims),
             uLevels: state.levels, uIDensity: state.density, ...region(h) });
           drawPoints(faces(NO_HOLE).flatMap((f) => outward(f.axis, f.t)), gl.TRIANGLES);
           gl.disable(gl.CULL_FACE);
@@ -539,6 +541,7 @@
       centre: scale(add(m.lo, m.hi), 0.5),
       radius: Math.hypot(...sub(m.hi, m.lo)) / 2,
       grid: () => null,
+      costly: () => false,
       handles: () => [],
       draw(vp) {
         SURFACE.use({ uVP: vp, uITextured: 0, uEye: eye() });
@@ -562,8 +565,17 @@
       requestAnimationFrame(() => { queued = false; render(); });
     }
   }
+  // While the view moves, a scene that costs much per pixel (the translucent one) draws at
+  // half resolution; a full one follows once it rests.
+  let moving = 0, settle = null;
+  function moved() {
+    moving = performance.now();
+    clearTimeout(settle);
+    settle = setTimeout(redraw, 250);
+  }
   function render() {
-    const dpr = window.devicePixelRatio || 1;
+    const coarse = scene.costly() && performance.now() - moving < 200;
+    const dpr = (window.devicePixelRatio || 1) * (coarse ? 0.5 : 1);
     const w = Math.max(1, Math.round(canvas.clientWidth * dpr)), h = Math.max(1, Math.round(canvas.clientHeight * dpr));
     if (canvas.width !== w || canvas.height !== h) { canvas.width = w; canvas.height = h; }
     gl.bindFramebuffer(gl.FRAMEBUFFER, null);
@@ -678,6 +690,7 @@
       camera.yaw -= dx * 0.4;
       camera.pitch = Math.max(-89, Math.min(89, camera.pitch + dy * 0.4));
     }
+    moved();
     redraw();
   });
   const release = () => (drag = null);
@@ -686,6 +699,7 @@
   canvas.addEventListener('wheel', (e) => {
     e.preventDefault();
     camera.dist *= Math.exp(Math.max(-1, Math.min(1, e.deltaY * 0.001)));
+    moved();
     redraw();
   }, { passive: false });
   canvas.addEventListener('contextmenu', (e) => e.preventDefault());
@@ -693,6 +707,7 @@
     if (e.target instanceof HTMLInputElement || e.target instanceof HTMLSelectElement || e.ctrlKey || e.metaKey) return;
     const k = e.key.toLowerCase();
     if (k === 'f') frame();
+    else if (k === 'h') $('panel').hidden = !$('panel').hidden;
     else if (!scene.key(k)) return;
     redraw();
   });
@@ -719,13 +734,15 @@
     if (s.kind === 'volumes') scene = volumesScene(await Promise.all(s.volumes.map((v) => unpack(v.data))), s.volumes);
     else if (s.kind === 'models') scene = modelsScene(s.grid, await unpack(s.grid.data), await Promise.all(s.meshes.map(mesh)));
     else scene = skinScene(await Promise.all(s.meshes.map(mesh)));
-    const keys = [['drag', 'orbit'], ['shift-drag', 'pan'], ['wheel', 'zoom'], ['f', 'frame'], ...scene.keys];
+    const keys = [['drag', 'orbit'], ['shift-drag', 'pan'], ['wheel', 'zoom'], ['f', 'frame'], ...scene.keys,
+      ['h', 'hide this panel']];
     $('keys').innerHTML = keys.map(([k, what]) => `<b>${k}</b> ${what}`).join(' \u00b7 ');
     scene.controls(panel);
     frame();
     render();
     api.firstFrameMs = performance.now();
-    say(s.kind === 'models' ? `baked ${s.grid.dims.join('\u00d7')} voxels` : '');
+    say(s.kind === 'models' ? `baked ${s.grid.dims.join('\u00d7')} voxels`
+      : s.kind === 'volumes' ? s.volumes.map((v) => `${v.name}: ${v.dims.join('\u00d7')}, ${v.channels.join(' ')}`).join(' \u00b7 ') : '');
   })().catch((e) => fail(String(e.message || e)));
 
   // ---- what tests use ----
