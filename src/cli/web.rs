@@ -47,10 +47,7 @@ pub fn run(args: &WebArgs) -> Result<()> {
     io::values::within("--max-mb", args.max_mb, 1, 64).map_err(super::commands::usage)?;
     let inputs: Vec<&Path> = args.inputs.iter().map(PathBuf::as_path).collect();
     io::guard::file_output(&args.output, &inputs, &["html", "htm"], "an HTML page")?;
-    let title = args.title.clone().unwrap_or_else(|| {
-        let names: Vec<String> = inputs.iter().map(|p| stem(p)).collect();
-        names.join(", ")
-    });
+    let title = args.title.clone().unwrap_or_else(|| names(&inputs).join(", "));
     let started = Instant::now();
     let (page, what) = match kind(&inputs)? {
         Kind::Volumes => volumes(&inputs, &title)?,
@@ -65,6 +62,14 @@ pub fn run(args: &WebArgs) -> Result<()> {
         started.elapsed().as_secs_f64()
     );
     Ok(())
+}
+
+/// What the page calls each input: its file's stem, or its path as given where two stems
+/// are alike.
+fn names(inputs: &[&Path]) -> Vec<String> {
+    let stems: Vec<String> = inputs.iter().map(|p| stem(p)).collect();
+    let alike = |s: &String| stems.iter().filter(|t| *t == s).count() > 1;
+    stems.iter().zip(inputs).map(|(s, p)| if alike(s) { p.display().to_string() } else { s.clone() }).collect()
 }
 
 fn stem(path: &Path) -> String {
@@ -83,6 +88,7 @@ fn kind(inputs: &[&Path]) -> Result<Kind> {
         (0, 0) => Ok(Kind::Volumes),
         (n, 0) if n == inputs.len() => Ok(Kind::Models),
         (0, 1) if inputs.len() == 1 => Ok(Kind::Skin),
+        (0, n) if n == inputs.len() => Err(Error::usage(format!("{n} skins given; a page shows one skin (.ply)"))),
         _ => Err(Error::usage(format!(
             "give volumes, or filled models (.lst), or one skin (.ply), not a mix: {}",
             inputs.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", ")
@@ -103,10 +109,16 @@ fn volumes(inputs: &[&Path], title: &str) -> Result<(String, String)> {
                 path.display()
             );
         }
-        shown.push(small);
+        shown.push((small, k));
     }
-    let named: Vec<web::NamedVolume> =
-        inputs.iter().zip(&shown).map(|(p, volume)| web::NamedVolume { name: stem(p), volume }).collect();
+    let named: Vec<web::NamedVolume> = names(inputs)
+        .into_iter()
+        .zip(&shown)
+        .map(|(name, (volume, k))| {
+            let name = if *k > 1 { format!("{name} (1 voxel in {k})") } else { name };
+            web::NamedVolume { name, volume }
+        })
+        .collect();
     let page = web::volumes_page(title, &named)?;
     Ok((page, format!("{} volume{}", read.len(), if read.len() == 1 { "" } else { "s" })))
 }
@@ -134,7 +146,8 @@ fn models(args: &WebArgs, title: &str) -> Result<(String, String)> {
 }
 
 fn models_at(loaded: &[Loaded], paths: &[PathBuf], title: &str, res: usize) -> Result<(String, [usize; 3])> {
-    let names: Vec<String> = paths.iter().map(|p| stem(p)).collect();
+    let inputs: Vec<&Path> = paths.iter().map(PathBuf::as_path).collect();
+    let names = names(&inputs);
     let models: Vec<(&str, &LstModel, &Textures)> =
         names.iter().zip(loaded).map(|(n, l)| (n.as_str(), &l.model, &l.textures)).collect();
     web::fill_page(title, &models, res, io::budget_from_env()?)

@@ -496,7 +496,8 @@ fn write_report(output: &Path, ledger: &Ledger, rows: &[Row]) -> Result<()> {
             cell += &format!("<br><span class=warning>warning: {}</span>", escaped(warning));
         }
         html += &format!(
-            "<tr><td>{name}<td>{size}<td>{declared}<td>{classified}<td>{cell}<td><img src=\"{sheet}\" alt=\"{name}\">{}\n",
+            "<tr><td>{name}<td>{size}<td>{declared}<td>{classified}<td>{cell}<td>{}{}\n",
+            if output.join(&sheet).is_file() { format!("<img src=\"{sheet}\" alt=\"{name}\">") } else { "-".into() },
             if has_view { viewer_cell(&view) } else { String::new() }
         );
     }

@@ -4,7 +4,7 @@
 //! and the wheel.
 
 use crate::fill::{draw, fill, spec};
-use crate::support::{assert_fails, assert_usage, at, solidtex, stderr};
+use crate::support::{assert_usage, at, solidtex, stderr};
 use base64::Engine;
 use serde_json::{Value, json};
 use std::path::Path;

@@ -269,18 +269,33 @@
     const y = rad(camera.yaw), p = rad(camera.pitch);
     return add(camera.target, scale([Math.sin(y) * Math.cos(p), Math.sin(p), Math.cos(y) * Math.cos(p)], camera.dist));
   }
+  // The picture's centre sits in the middle of what the panel leaves free: a shift in
+  // canvas pixels to the right.
+  function shift() {
+    const panelBox = $('panel');
+    return panelBox.hidden || canvas.clientWidth < 2.2 * panelBox.offsetWidth ? 0 : (panelBox.offsetWidth + 8) / 2;
+  }
   function viewProjection(width, height) {
     const r = scene.radius;
     const near = Math.max(camera.dist - 2 * r, camera.dist * 0.01), far = camera.dist + 2 * r;
-    return mul(perspective(camera.fov, width / height, near, far), lookAt(eye(), camera.target, [0, 1, 0]));
+    const moved = new Float32Array([1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, (2 * shift()) / canvas.clientWidth, 0, 0, 1]);
+    return mul(moved, mul(perspective(camera.fov, width / height, near, far), lookAt(eye(), camera.target, [0, 1, 0])));
   }
+  // The whole scene's sphere in the part of the picture the panel leaves free.
   function frame() {
     camera.target = scene.centre.slice();
-    camera.dist = (scene.radius / Math.sin(camera.fov / 2)) * 1.05;
+    const free = Math.max(1, canvas.clientWidth - 2 * shift()) / Math.max(1, canvas.clientHeight);
+    const half = Math.min(camera.fov / 2, Math.atan(Math.tan(camera.fov / 2) * free));
+    camera.dist = (scene.radius / Math.sin(half)) * 1.02;
+  }
+  function zoom(factor) {
+    const r = scene.radius;
+    camera.dist = Math.min(20 * r, Math.max(0.25 * r, camera.dist * factor));
   }
   // The world ray through a canvas point (CSS pixels).
   function ray(x, y) {
     const w = canvas.clientWidth, h = canvas.clientHeight;
+    x -= shift();
     const e = eye(), f = norm(sub(camera.target, e)), right = norm(cross(f, [0, 1, 0])), up = cross(right, f);
     const t = Math.tan(camera.fov / 2), sx = ((2 * x) / w - 1) * t * (w / h), sy = (1 - (2 * y) / h) * t;
     return { origin: e, dir: norm(add(f, add(scale(right, sx), scale(up, sy)))) };
@@ -292,6 +307,14 @@
     return (index + 0.5) / grid.dims[axis];
   }
   const NO_HOLE = { lo: [3, 3, 3], hi: [4, 4, 4] };
+  // Light on the faces across x, y and z, so the planes of a corner read apart.
+  const SHADE = [0.84, 0.93, 1];
+  // A hole a quarter voxel smaller: the outer faces overlap the cut faces' edges instead of
+  // leaving a crack of background between them.
+  function inset(hole, grid) {
+    const e = grid.dims.map((d) => 0.25 / d);
+    return { lo: hole.lo.map((v, a) => v + e[a]), hi: hole.hi.map((v, a) => v - e[a]) };
+  }
   // The corner of the box facing the eye beyond the three slice planes.
   function corner(grid, at) {
     const e = grid.fromWorld(eye()), lo = [], hi = [];
@@ -314,8 +337,12 @@
     return { lo, hi };
   }
   function makeGrid(dims, toWorld) {
-    const inv = [toWorld[0], toWorld[5], toWorld[10]], origin = [toWorld[12], toWorld[13], toWorld[14]];
-    return { dims, toWorld, fromWorld: (p) => [0, 1, 2].map((a) => (p[a] - origin[a]) / inv[a]) };
+    const origin = [toWorld[12], toWorld[13], toWorld[14]];
+    // toWorld sends each box axis along one world axis: find which, and its scale.
+    const column = (a) => [toWorld[4 * a], toWorld[4 * a + 1], toWorld[4 * a + 2]];
+    const along = [0, 1, 2].map((a) => column(a).findIndex((v) => v !== 0));
+    const fromWorld = (p) => [0, 1, 2].map((a) => (p[along[a]] - origin[along[a]]) / column(a)[along[a]]);
+    return { dims, toWorld, fromWorld };
   }
   // Draw slices: each {axis, index, lo, hi, inside}.
   function drawSlabs(mvp, texture, grid, grey, slabs, shade) {
@@ -347,6 +374,7 @@
       const lo = h.lo || [0, 0, 0], hi = h.hi || [1, 1, 1];
       if ([0, 1, 2].every((a) => a === h.axis || (p[a] >= lo[a] - 1e-6 && p[a] <= hi[a] + 1e-6))) best = { s, axis: h.axis, p };
     }
+    if (best && scene.holds && !scene.holds(best.p)) return null;
     return best && { axis: best.axis, box: best.p };
   }
   // Canvas pixels (CSS) per voxel when moving a handle along its axis from box point `p`.
@@ -366,9 +394,10 @@
     const state = { which: 0, layer: 0, at: [0, 0, 0], cut: 'slices' };
     const items = volumes.map((v, i) => {
       const dims = v.dims, size = dims.map((d) => d / Math.max(...dims));
-      // Box y and z point down and away in the world (y up): the z = 0 face seen from
-      // the front shows rows top to bottom, as `solidtex slice` writes them.
-      const toWorld = boxMatrix([-size[0] / 2, size[1] / 2, size[2] / 2], [size[0], -size[1], -size[2]]);
+      // Box z is the world's up (y), box y points away (-z): the view from the (+x, +y,
+      // +z) corner is the contact sheet's cut-away corner.
+      const toWorld = new Float32Array([size[0], 0, 0, 0, 0, 0, -size[1], 0, 0, size[2], 0, 0,
+        -size[0] / 2, -size[2] / 2, size[1] / 2, 1]);
       const count = dims[0] * dims[1] * dims[2];
       const textures = v.layers.map((l) => texture3d(dims, layerBytes(data[i], count, l), l.planes.length === 1, false));
       return { name: v.name, grid: makeGrid(dims, toWorld), layers: v.layers, textures };
@@ -382,17 +411,19 @@
       const hole = corner(g, state.at);
       return [0, 1, 2].map((axis) => ({ axis, t: sliceT(g, axis, state.at[axis]), ...faceOfHole(axis, hole) }));
     };
+    const extent = (it) => it.grid.dims.map((d) => d / Math.max(...it.grid.dims));
     return {
       centre: [0, 0, 0],
-      radius: 0.87,
+      get radius() { return Math.hypot(...extent(current())) / 2; },
+      view: [135, 30],
       grid: () => current().grid,
       costly: () => false,
       handles: slabs,
       draw(vp) {
         const it = current(), grey = it.layers[state.layer].planes.length === 1, mvp = mul(vp, it.grid.toWorld);
         const tex = it.textures[state.layer];
-        if (state.cut === 'corner') drawSlabs(mvp, tex, it.grid, grey, faces(corner(it.grid, state.at)), [0.82, 1, 0.91]);
-        drawSlabs(mvp, tex, it.grid, grey, slabs(), null);
+        if (state.cut === 'corner') drawSlabs(mvp, tex, it.grid, grey, faces(inset(corner(it.grid, state.at), it.grid)), SHADE);
+        drawSlabs(mvp, tex, it.grid, grey, slabs(), state.cut === 'corner' ? SHADE : null);
         if (state.cut === 'corner') return;
         LINES.use({ uMVP: mvp, uColour: [0.55, 0.55, 0.6] });
         drawPoints(BOX_EDGES, gl.LINES);
@@ -467,6 +498,10 @@
     const alpha = grid.channels.indexOf('A');
     const rgba = layerBytes(bytes, count, grid.layers[0], alpha);
     const exact = texture3d(dims, rgba, false, false);
+    const inside = (b) => {
+      const v = b.map((t, a) => Math.min(dims[a] - 1, Math.max(0, Math.floor(t * dims[a]))));
+      return rgba[4 * (v[0] + dims[0] * (v[1] + dims[1] * v[2])) + 3] >= 128;
+    };
     grow(rgba, dims, 2);
     const smooth = texture3d(dims, rgba, false, true);
     let lo = [Infinity, Infinity, Infinity], hi = [-Infinity, -Infinity, -Infinity];
@@ -484,9 +519,12 @@
     return {
       centre: scale(add(lo, hi), 0.5),
       radius: Math.hypot(...sub(hi, lo)) / 2,
+      view: [30, 20],
       grid: () => box,
       costly: () => state.translucent,
       handles: caps,
+      // A cut face is held only where it shows material.
+      holds: (box) => inside(box),
       draw(vp) {
         const h = hole();
         gl.activeTexture(gl.TEXTURE0);
@@ -504,7 +542,7 @@
         gl.bindTexture(gl.TEXTURE_3D, smooth);
         SURFACE.use({ uVP: vp, uTex: 0, uITextured: 1, uLo: grid.lo, uSize: size, uEye: eye(), ...region(h) });
         meshes.forEach(drawMesh);
-        drawSlabs(mul(vp, box.toWorld), exact, box, false, caps(), null);
+        drawSlabs(mul(vp, box.toWorld), exact, box, false, caps(), state.cut === 'corner' ? SHADE : null);
       },
       snapshot(axis, index, draw) {
         const [a, b] = [[1, 2], [0, 2], [0, 1]][axis];
@@ -526,11 +564,15 @@
       },
       controls(panel) {
         panel.buttons([['whole', 'none'], ['plane', 'plane'], ['corner', 'corner']], () => state.cut, (v) => (state.cut = v));
-        panel.buttons([['x', 0], ['y', 1], ['z', 2]], () => state.axis, (v) => (state.axis = v));
-        ['x', 'y', 'z'].forEach((name, axis) => panel.range(name, () => dims[axis] - 1, () => state.at[axis], (v) => (state.at[axis] = v)));
+        panel.buttons([['x', 0], ['y', 1], ['z', 2]], () => state.axis, (v) => (state.axis = v), () => state.cut === 'plane');
+        const cutting = (axis) => () => state.cut === 'corner' || (state.cut === 'plane' && state.axis === axis);
+        ['x', 'y', 'z'].forEach((name, axis) =>
+          panel.range(name, () => dims[axis] - 1, () => state.at[axis], (v) => (state.at[axis] = v), cutting(axis)));
         panel.buttons([['surface', false], ['translucent', true]], () => state.translucent, (v) => (state.translucent = v));
-        panel.range('opacity', () => 100, () => Math.round(state.opacity * 100), (v) => (state.opacity = Math.min(v, 99.99) / 100));
-        panel.select('density', ['uniform', 'dark', 'light'], () => state.density, (i) => (state.density = i));
+        const seeThrough = () => state.translucent;
+        panel.range('opacity', () => 100, () => Math.round(state.opacity * 100),
+          (v) => (state.opacity = Math.min(v, 99.99) / 100), seeThrough);
+        panel.select('density', ['uniform', 'dark', 'light'], () => state.density, (i) => (state.density = i), seeThrough);
       },
     };
   }
@@ -540,6 +582,7 @@
     return {
       centre: scale(add(m.lo, m.hi), 0.5),
       radius: Math.hypot(...sub(m.hi, m.lo)) / 2,
+      view: [30, 20],
       grid: () => null,
       costly: () => false,
       handles: () => [],
@@ -623,40 +666,48 @@
     const root = $('controls'), refreshers = [];
     const changed = (set) => (value) => { set(value); redraw(); };
     return {
-      select(name, options, get, set) {
+      select(name, options, get, set, when) {
         const label = document.createElement('label'), select = document.createElement('select');
         label.append(name, select);
         root.append(label);
         const list = () => (typeof options === 'function' ? options() : options);
-        select.onchange = () => changed(set)(select.selectedIndex);
+        select.onchange = () => { changed(set)(select.selectedIndex); select.blur(); };
         refreshers.push(() => {
+          label.hidden = when ? !when() : false;
           const names = list();
           if (select.options.length !== names.length || [...select.options].some((o, i) => o.text !== names[i]))
             select.replaceChildren(...names.map((n) => new Option(n)));
           select.selectedIndex = get();
         });
       },
-      buttons(choices, get, set) {
+      buttons(choices, get, set, when) {
         const row = document.createElement('div');
         row.className = 'row';
         const made = choices.map(([text, value]) => {
           const b = document.createElement('button');
           b.textContent = text;
-          b.onclick = () => changed(set)(value);
+          b.onclick = () => { changed(set)(value); b.blur(); };
           row.append(b);
           return [b, value];
         });
         root.append(row);
-        refreshers.push(() => made.forEach(([b, v]) => b.classList.toggle('on', get() === v)));
+        refreshers.push(() => {
+          row.hidden = when ? !when() : false;
+          made.forEach(([b, v]) => b.classList.toggle('on', get() === v));
+        });
       },
-      range(name, max, get, set) {
+      range(name, max, get, set, when) {
         const label = document.createElement('label'), input = document.createElement('input'), out = document.createElement('span');
         input.type = 'range';
         input.min = 0;
         label.append(name, input, out);
         root.append(label);
         input.oninput = () => changed(set)(Number(input.value));
-        refreshers.push(() => { input.max = max(); input.value = get(); out.textContent = get(); });
+        input.onchange = () => input.blur();
+        refreshers.push(() => {
+          label.hidden = when ? !when() : false;
+          input.max = max(); input.value = get(); out.textContent = get();
+        });
       },
       refresh: () => refreshers.forEach((r) => r()),
     };
@@ -668,7 +719,8 @@
     canvas.focus();
     canvas.setPointerCapture(e.pointerId);
     const grid = scene.grid();
-    const hit = grid && !e.shiftKey && e.button === 0 ? pick(grid, scene.handles(), e.offsetX, e.offsetY) : null;
+    const free = e.shiftKey || e.altKey || e.ctrlKey || e.button !== 0;
+    const hit = grid && !free ? pick(grid, scene.handles(), e.offsetX, e.offsetY) : null;
     drag = { x: e.offsetX, y: e.offsetY, pan: e.shiftKey || e.button !== 0, hit, moved: 0 };
     if (hit) drag.axisPx = screenAxis(grid, hit.axis, hit.box);
   });
@@ -698,7 +750,7 @@
   canvas.addEventListener('pointercancel', release);
   canvas.addEventListener('wheel', (e) => {
     e.preventDefault();
-    camera.dist *= Math.exp(Math.max(-1, Math.min(1, e.deltaY * 0.001)));
+    zoom(Math.exp(Math.max(-1, Math.min(1, e.deltaY * 0.001))));
     moved();
     redraw();
   }, { passive: false });
@@ -707,11 +759,15 @@
     if (e.target instanceof HTMLInputElement || e.target instanceof HTMLSelectElement || e.ctrlKey || e.metaKey) return;
     const k = e.key.toLowerCase();
     if (k === 'f') frame();
-    else if (k === 'h') $('panel').hidden = !$('panel').hidden;
+    else if (k === 'h') showPanel($('panel').hidden);
     else if (!scene.key(k)) return;
     redraw();
   });
   window.addEventListener('resize', redraw);
+  function showPanel(shown) {
+    $('panel').hidden = !shown;
+    $('hint').hidden = shown;
+  }
 
   function fail(message) {
     $('fail').hidden = false;
@@ -738,11 +794,14 @@
       ['h', 'hide this panel']];
     $('keys').innerHTML = keys.map(([k, what]) => `<b>${k}</b> ${what}`).join(' \u00b7 ');
     scene.controls(panel);
+    [camera.yaw, camera.pitch] = scene.view;
+    if (canvas.clientWidth < 700 || canvas.clientHeight < 480) showPanel(false);
     frame();
     render();
     api.firstFrameMs = performance.now();
     say(s.kind === 'models' ? `baked ${s.grid.dims.join('\u00d7')} voxels`
-      : s.kind === 'volumes' ? s.volumes.map((v) => `${v.name}: ${v.dims.join('\u00d7')}, ${v.channels.join(' ')}`).join(' \u00b7 ') : '');
+      : s.kind === 'volumes' ? s.volumes.map((v) => `${v.name}: ${v.dims.join('\u00d7')}, ${v.channels.join(' ')}`).join(' \u00b7 ')
+      : `${s.meshes[0].vertices} vertices, ${s.meshes[0].triangles} triangles`);
   })().catch((e) => fail(String(e.message || e)));
 
   // ---- what tests use ----
