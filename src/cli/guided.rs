@@ -50,6 +50,8 @@ struct Guide {
     tets: TetMesh,
     field: FrameField,
     depth: Vec<(Vec3, f32)>,
+    /// The spec's depth axes (polylines at depth 1).
+    axes: Vec<Vec<Vec3>>,
     frames: usize,
     solve_ms: f64,
 }
@@ -64,7 +66,8 @@ fn guide(mesh: &Path, spec: &Path, tets: Option<usize>) -> Result<Guide> {
     let frames = sketched_frames(&constraints.directions, &constraints.depth).map_err(|e| e.in_file(spec))?;
     let field = solve(&tet_mesh, &frames)?;
     let solve_ms = started.elapsed().as_secs_f64() * 1000.0;
-    Ok(Guide { surface, tets: tet_mesh, field, depth: constraints.depth, frames: frames.len(), solve_ms })
+    let axes = fill.depth.axes.clone();
+    Ok(Guide { surface, tets: tet_mesh, field, depth: constraints.depth, axes, frames: frames.len(), solve_ms })
 }
 
 fn check_tets(tets: Option<usize>) -> Result<()> {
@@ -95,7 +98,43 @@ pub fn run(args: &FieldArgs) -> Result<()> {
         g.frames,
         g.solve_ms
     );
+    let turns = field_turns(&g, &view)?;
+    tell!(
+        "  as `guided --res {TURN_RES}` reads it, the frames turn by at most {:.1}° between neighbouring pixels of the cut; \
+         {} of {} pairs by more than {TURN_LIMIT}° (pairs within two voxels of a depth axis left out)",
+        turns.largest,
+        turns.over,
+        turns.pairs
+    );
     Ok(())
+}
+
+/// The grid resolution and the largest turn `field` reports the frames' turns at.
+const TURN_RES: usize = 256;
+const TURN_LIMIT: f32 = 30.0;
+
+/// How sharply the field, sampled as `guided --res 256` samples it, turns across `view`'s
+/// pixels inside the model, away from the spec's depth axes.
+fn field_turns(g: &Guide, view: &View) -> Result<crate::guided::field::Turns> {
+    let domain = Domain::around(g.surface.bounds(), TURN_RES)?;
+    let frames = solid::frames_over(&g.tets, &g.field, &domain);
+    let inside = crate::fill::render::field_cut(&g.tets, &vec![0.0; g.tets.vertices.len()], view);
+    let to_grid = |p: Vec3| (p - domain.origin) / domain.voxel - 0.5;
+    let points: Vec<Option<Vec3>> = (0..view.width * view.height)
+        .map(|i| inside[i].map(|_| to_grid(view.point(i % view.width, i / view.width))))
+        .collect();
+    let near_axis = |p: Vec3| {
+        let at = domain.origin + (p + 0.5) * domain.voxel;
+        g.axes.iter().any(|line| line.windows(2).any(|w| segment_distance(at, w[0], w[1]) <= 2.0 * domain.voxel))
+    };
+    Ok(crate::guided::field::turns(&frames, &points, view.width, TURN_LIMIT, near_axis))
+}
+
+/// The distance from `p` to the segment from `a` to `b`.
+fn segment_distance(p: Vec3, a: Vec3, b: Vec3) -> f32 {
+    let ab = b - a;
+    let t = ((p - a).dot(ab) / ab.length_squared().max(f32::MIN_POSITIVE)).clamp(0.0, 1.0);
+    p.distance(a + ab * t)
 }
 
 /// The arguments of `solidtex guided`.

@@ -224,6 +224,46 @@ impl FrameGrid {
     }
 }
 
+/// How sharply a frame grid turns across a cut: each point's frame (`points`, row by row,
+/// `width` per row, in the grid's coordinates; `None` outside the model) against its right
+/// and lower neighbours'.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Turns {
+    /// The largest angle between neighbouring frames, in degrees.
+    pub largest: f32,
+    /// Neighbour pairs turning by more than the limit asked.
+    pub over: usize,
+    /// Neighbour pairs compared.
+    pub pairs: usize,
+}
+
+/// The turns of `grid`'s frames between 4-neighbouring `points` (see [`Turns`]), leaving out
+/// pairs where `exempt` holds for either point (near a declared singular axis).
+pub fn turns(
+    grid: &FrameGrid,
+    points: &[Option<Vec3>],
+    width: usize,
+    limit: f32,
+    exempt: impl Fn(Vec3) -> bool + Sync,
+) -> Turns {
+    let frames: Vec<Option<Quat>> =
+        points.par_iter().map(|p| p.filter(|p| !exempt(*p)).map(|p| Quat::from_mat3(&grid.at(p)))).collect();
+    let angle = |a: Quat, b: Quat| 2.0 * a.dot(b).abs().min(1.0).acos().to_degrees();
+    let mut out = Turns { largest: 0.0, over: 0, pairs: 0 };
+    for (i, a) in frames.iter().enumerate() {
+        let Some(a) = a else { continue };
+        let right = (i % width + 1 < width).then(|| frames[i + 1]).flatten();
+        let below = frames.get(i + width).copied().flatten();
+        for b in [right, below].into_iter().flatten() {
+            let turn = angle(*a, b);
+            out.largest = out.largest.max(turn);
+            out.pairs += 1;
+            out.over += usize::from(turn > limit);
+        }
+    }
+    out
+}
+
 /// A scalar field (the model's depth) sampled at the corners of a regular grid, read by
 /// trilinear interpolation.
 #[derive(Debug, Clone, PartialEq)]
@@ -401,6 +441,22 @@ fn integrate(flow: &[Option<Vec2>], noise: &[f32], (w, h): (usize, usize), start
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Frames turning a quarter turn between two columns of corners: the pairs across it
+    /// count, unless exempt; a uniform grid turns nowhere.
+    #[test]
+    fn turns_count_the_neighbours_whose_frames_differ() {
+        let quarter = Vec4::from(Quat::from_rotation_z(std::f32::consts::FRAC_PI_2));
+        let corners = (0..4 * 4 * 2).map(|i| if i % 4 >= 2 { quarter } else { Vec4::W }).collect();
+        let grid = FrameGrid { lo: Vec3::ZERO, step: 1.0, dims: [4, 4, 2], corners };
+        let points: Vec<Option<Vec3>> = (0..16).map(|i| Some(Vec3::new((i % 4) as f32, (i / 4) as f32, 0.0))).collect();
+        let turned = turns(&grid, &points, 4, 30.0, |_| false);
+        assert_eq!((turned.over, turned.pairs), (4, 24), "{turned:?}");
+        assert!((turned.largest - 90.0).abs() < 0.1, "{turned:?}");
+        assert_eq!(turns(&grid, &points, 4, 30.0, |p| p.x >= 2.0).over, 0, "exempt points count nowhere");
+        let uniform = FrameGrid { corners: vec![Vec4::W; 32], ..grid };
+        assert_eq!(turns(&uniform, &points, 4, 30.0, |_| false).largest, 0.0);
+    }
 
     /// A ramp rising by 1 over 10 units spans 10, whichever way it runs and however
     /// finely it is sampled; a constant spans nothing.

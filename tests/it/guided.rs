@@ -24,6 +24,17 @@ fn the_field_of_a_kiwi_spec_follows_its_stroke_on_a_cut() {
         }
     }
     assert!(red >= 30, "{red} of 36 pixels along the axis show x as red");
+    assert!(stderr(&run).contains("the frames turn by at most"), "{}", stderr(&run));
+
+    // one straight stroke and no depth: the same frame everywhere, no turn anywhere
+    let straight = crate::fill::spec(
+        d,
+        "straight.toml",
+        "exemplar = \"kiwi\"\n[[direction]]\npoints = [[-0.5, 0, 0], [0.5, 0, 0]]\n",
+    );
+    let run = solidtex(&["field", &fruit, "--spec", &straight, "--size", "96", "-o", &at(d, "straight.png")]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    assert!(stderr(&run).contains("at most 0.0° between neighbouring pixels of the cut; 0 of "), "{}", stderr(&run));
 
     let bare = crate::fill::spec(d, "bare.toml", "exemplar = \"kiwi\"\n");
     let run = solidtex(&["field", &fruit, "--spec", &bare, "-o", &at(d, "bare.png")]);
