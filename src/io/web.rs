@@ -126,12 +126,6 @@ pub fn skin_page(title: &str, mesh: &Mesh, colours: &[[f32; 3]]) -> Result<Strin
     page(title, json!({ "kind": "skin", "meshes": [skin] }))
 }
 
-/// The bytes of the data a page embeds (after compression, before base64): what its size
-/// budget counts.
-pub fn grid_bytes(volume: &Volume) -> Result<usize> {
-    Ok(packed(&planes(volume))?.len())
-}
-
 /// The HTML page: the template with the title, the script and the data filled in.
 fn page(title: &str, data: Value) -> Result<String> {
     let data = json!({ "title": title, "scene": data });

@@ -69,8 +69,7 @@
     const ints = [gl.INT, gl.INT_VEC2, gl.INT_VEC3, gl.INT_VEC4, gl.SAMPLER_3D];
     for (let i = 0; i < gl.getProgramParameter(p, gl.ACTIVE_UNIFORMS); i++) {
       const { name, type } = gl.getActiveUniform(p, i), at = gl.getUniformLocation(p, name);
-      const count = { [gl.FLOAT_MAT4]: 16 }[type];
-      setters[name] = count ? (v) => gl.uniformMatrix4fv(at, false, v)
+      setters[name] = type === gl.FLOAT_MAT4 ? (v) => gl.uniformMatrix4fv(at, false, v)
         : ints.includes(type) ? (v) => intVector(at, [v].flat())
         : (v) => floatVector(at, [v].flat());
     }
@@ -94,34 +93,34 @@
   const SLAB = program(
     `layout(location=0) in vec3 aBox; uniform mat4 uMVP; out vec3 vBox;
      void main() { vBox = aBox; gl_Position = uMVP * vec4(aBox, 1.0); }`,
-    `in vec3 vBox; uniform sampler3D uTex; uniform ivec3 uIDims; uniform int uIGrey, uIInside;
+    `in vec3 vBox; uniform sampler3D uTex; uniform ivec3 uDims; uniform int uGrey, uInside;
      uniform float uShade; out vec4 colour; ${REGION}
      void main() {
        if (away(vBox)) discard;
-       ivec3 v = clamp(ivec3(floor(vBox * vec3(uIDims))), ivec3(0), uIDims - 1);
+       ivec3 v = clamp(ivec3(floor(vBox * vec3(uDims))), ivec3(0), uDims - 1);
        vec4 t = texelFetch(uTex, v, 0);
-       if (uIInside == 1 && t.a < 0.5) discard;
-       colour = vec4((uIGrey == 1 ? t.rrr : t.rgb) * uShade, 1.0);
+       if (uInside == 1 && t.a < 0.5) discard;
+       colour = vec4((uGrey == 1 ? t.rrr : t.rgb) * uShade, 1.0);
      }`);
   const SURFACE = program(
     `layout(location=0) in vec3 aPos; layout(location=1) in vec3 aNormal; layout(location=2) in vec3 aColour;
      uniform mat4 uVP; out vec3 vPos, vNormal, vColour;
      void main() { vPos = aPos; vNormal = aNormal; vColour = aColour; gl_Position = uVP * vec4(aPos, 1.0); }`,
-    `in vec3 vPos, vNormal, vColour; uniform sampler3D uTex; uniform int uITextured;
+    `in vec3 vPos, vNormal, vColour; uniform sampler3D uTex; uniform int uTextured;
      uniform vec3 uLo, uSize, uEye; out vec4 colour; ${REGION}
      void main() {
        vec3 b = (vPos - uLo) / uSize;
-       if (uITextured == 1 && away(b)) discard;
+       if (uTextured == 1 && away(b)) discard;
        vec3 n = normalize(vNormal), e = normalize(uEye - vPos);
        if (dot(n, e) < 0.0) n = -n;
-       vec3 c = uITextured == 1 ? texture(uTex, b).rgb : vColour;
+       vec3 c = uTextured == 1 ? texture(uTex, b).rgb : vColour;
        colour = vec4(c * (0.3 + 0.7 * max(dot(n, e), 0.0)), 1.0);
      }`);
   const RAYS = program(
     `layout(location=0) in vec3 aBox; uniform mat4 uMVP; out vec3 vBox;
      void main() { vBox = aBox; gl_Position = uMVP * vec4(aBox, 1.0); }`,
     `in vec3 vBox; uniform sampler3D uTex; uniform vec3 uEyeBox, uSize, uBack; uniform float uOpacity, uStep;
-     uniform vec2 uLevels; uniform int uIDensity; out vec4 colour; ${REGION}
+     uniform vec2 uLevels; uniform int uDensity; out vec4 colour; ${REGION}
      void main() {
        vec3 dir = vBox - uEyeBox;
        vec3 inv = 1.0 / dir, t0 = -uEyeBox * inv, t1 = (1.0 - uEyeBox) * inv;
@@ -138,7 +137,7 @@
          if (away(b)) continue;
          vec4 s = texture(uTex, b);
          float lum = dot(s.rgb, vec3(0.2126, 0.7152, 0.0722));
-         float d = uIDensity == 1 ? 1.0 - lum : uIDensity == 2 ? lum : 1.0;
+         float d = uDensity == 1 ? 1.0 - lum : uDensity == 2 ? lum : 1.0;
          d = s.a * clamp((d - uLevels.x) / (uLevels.y - uLevels.x), 0.0, 1.0);
          float a = 1.0 - pow(1.0 - uOpacity, d * uStep / tenth);
          sum += kept * a * s.rgb; kept *= 1.0 - a;
@@ -349,7 +348,7 @@
     gl.activeTexture(gl.TEXTURE0);
     gl.bindTexture(gl.TEXTURE_3D, texture);
     for (const s of slabs) {
-      SLAB.use({ uMVP: mvp, uTex: 0, uIDims: grid.dims, uIGrey: grey ? 1 : 0, uIInside: s.inside ? 1 : 0,
+      SLAB.use({ uMVP: mvp, uTex: 0, uDims: grid.dims, uGrey: grey ? 1 : 0, uInside: s.inside ? 1 : 0,
         uShade: shade ? shade[s.axis] : 1, uKeepLo: [-1, -1, -1], uKeepHi: [2, 2, 2],
         uHoleLo: (s.hole || NO_HOLE).lo, uHoleHi: (s.hole || NO_HOLE).hi });
       drawPoints(quad(s.axis, s.t, s.lo, s.hi), gl.TRIANGLES);
@@ -524,7 +523,7 @@
       costly: () => state.translucent,
       handles: caps,
       // A cut face is held only where it shows material.
-      holds: (box) => inside(box),
+      holds: (b) => inside(b),
       draw(vp) {
         const h = hole();
         gl.activeTexture(gl.TEXTURE0);
@@ -534,13 +533,13 @@
           gl.cullFace(gl.FRONT);
           RAYS.use({ uMVP: mul(vp, box.toWorld), uTex: 0, uEyeBox: box.fromWorld(eye()), uSize: size,
             uBack: BACKGROUND, uOpacity: state.opacity, uStep: Math.max(...size) / Math.max(...dims),
-            uLevels: state.levels, uIDensity: state.density, ...region(h) });
+            uLevels: state.levels, uDensity: state.density, ...region(h) });
           drawPoints(faces(NO_HOLE).flatMap((f) => outward(f.axis, f.t)), gl.TRIANGLES);
           gl.disable(gl.CULL_FACE);
           return;
         }
         gl.bindTexture(gl.TEXTURE_3D, smooth);
-        SURFACE.use({ uVP: vp, uTex: 0, uITextured: 1, uLo: grid.lo, uSize: size, uEye: eye(), ...region(h) });
+        SURFACE.use({ uVP: vp, uTex: 0, uTextured: 1, uLo: grid.lo, uSize: size, uEye: eye(), ...region(h) });
         meshes.forEach(drawMesh);
         drawSlabs(mul(vp, box.toWorld), exact, box, false, caps(), state.cut === 'corner' ? SHADE : null);
       },
@@ -587,7 +586,7 @@
       costly: () => false,
       handles: () => [],
       draw(vp) {
-        SURFACE.use({ uVP: vp, uITextured: 0, uEye: eye() });
+        SURFACE.use({ uVP: vp, uTextured: 0, uEye: eye() });
         drawMesh(m);
       },
       snapshot: () => null,
