@@ -120,6 +120,13 @@ fn a_model_page_cuts_as_bake_does_and_its_cut_can_be_dragged() {
     snapshots_match(&report, &baked, d);
     interaction_answers(&report, 2);
     assert_eq!(report["interaction"]["start"]["state"]["cut"], "plane", "the key z shows the plane across z");
+    // o: an oblique cut facing the camera, dragged towards it
+    let Some(report) = opened(&page, json!({ "keys": ["o"], "drag": "o" })) else { return };
+    let steps = &report["interaction"];
+    assert_eq!(steps["start"]["state"]["cut"], "oblique");
+    let shift = |step: &str| steps[step]["state"]["shift"].as_i64().unwrap();
+    assert!((3..=6).contains(&(shift("slice") - shift("start"))), "{steps}");
+    assert_ne!(steps["start"]["picture"]["hash"], steps["slice"]["picture"]["hash"]);
 }
 
 #[test]

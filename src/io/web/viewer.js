@@ -85,10 +85,11 @@
 
   // Regions in box coordinates (0 to 1 across the grid): a fragment outside [uKeepLo,
   // uKeepHi] or strictly inside (uHoleLo, uHoleHi) is not drawn.
-  const REGION = `uniform vec3 uKeepLo, uKeepHi, uHoleLo, uHoleHi;
+  // uCut = (n, w) also takes away the half-space n.b > w (n = 0: nothing).
+  const REGION = `uniform vec3 uKeepLo, uKeepHi, uHoleLo, uHoleHi; uniform vec4 uCut;
     bool away(vec3 b) {
       return any(lessThan(b, uKeepLo)) || any(greaterThan(b, uKeepHi)) ||
-        (all(greaterThan(b, uHoleLo)) && all(lessThan(b, uHoleHi)));
+        (all(greaterThan(b, uHoleLo)) && all(lessThan(b, uHoleHi))) || dot(uCut.xyz, b) > uCut.w;
     }`;
   const SLAB = program(
     `layout(location=0) in vec3 aBox; uniform mat4 uMVP; out vec3 vBox;
@@ -306,6 +307,7 @@
     return (index + 0.5) / grid.dims[axis];
   }
   const NO_HOLE = { lo: [3, 3, 3], hi: [4, 4, 4] };
+  const NO_CUT = [0, 0, 0, 1];
   // Light on the faces across x, y and z, so the planes of a corner read apart.
   const SHADE = [0.84, 0.93, 1];
   // A hole a quarter voxel smaller: the outer faces overlap the cut faces' edges instead of
@@ -349,9 +351,9 @@
     gl.bindTexture(gl.TEXTURE_3D, texture);
     for (const s of slabs) {
       SLAB.use({ uMVP: mvp, uTex: 0, uDims: grid.dims, uGrey: grey ? 1 : 0, uInside: s.inside ? 1 : 0,
-        uShade: shade ? shade[s.axis] : 1, uKeepLo: [-1, -1, -1], uKeepHi: [2, 2, 2],
+        uShade: shade ? shade[s.axis] : 1, uKeepLo: [-1, -1, -1], uKeepHi: [2, 2, 2], uCut: NO_CUT,
         uHoleLo: (s.hole || NO_HOLE).lo, uHoleHi: (s.hole || NO_HOLE).hi });
-      drawPoints(quad(s.axis, s.t, s.lo, s.hi), gl.TRIANGLES);
+      drawPoints(s.points || quad(s.axis, s.t, s.lo, s.hi), gl.TRIANGLES);
     }
   }
   // The box's six faces as slabs around a hole.
@@ -366,17 +368,27 @@
     const d = sub(far, o);
     let best = null;
     for (const h of handles) {
-      if (Math.abs(d[h.axis]) < 1e-9) continue;
-      const s = (h.t - o[h.axis]) / d[h.axis];
+      // an axis plane b[axis] = t, or a plane n.b = w
+      const [n, w] = h.plane || [[0, 1, 2].map((a) => Number(a === h.axis)), h.t];
+      if (Math.abs(dot(n, d)) < 1e-9) continue;
+      const s = (w - dot(n, o)) / dot(n, d);
       if (s <= 0 || (best && s >= best.s)) continue;
       const p = add(o, scale(d, s));
       const lo = h.lo || [0, 0, 0], hi = h.hi || [1, 1, 1];
-      if ([0, 1, 2].every((a) => a === h.axis || (p[a] >= lo[a] - 1e-6 && p[a] <= hi[a] + 1e-6))) best = { s, axis: h.axis, p };
+      const within = (a) => (h.plane === undefined && a === h.axis) || (p[a] >= lo[a] - 1e-6 && p[a] <= hi[a] + 1e-6);
+      if ([0, 1, 2].every(within)) best = { s, axis: h.axis, p };
     }
     if (best && scene.holds && !scene.holds(best.p)) return null;
     return best && { axis: best.axis, box: best.p };
   }
-  // Canvas pixels (CSS) per voxel when moving a handle along its axis from box point `p`.
+  // The mouse travel (CSS pixels) that moves a handle one voxel: along its axis as the
+  // axis shows on screen; the oblique plane, which faces the camera, one voxel towards it
+  // per OBLIQUE_PX pixels up.
+  const OBLIQUE_PX = 2;
+  function handleStep(grid, hit) {
+    return hit.axis === 'o' ? [0, -OBLIQUE_PX] : screenAxis(grid, hit.axis, hit.box);
+  }
+  // Canvas pixels (CSS) per voxel when moving along box `axis` from box point `p`.
   function screenAxis(grid, axis, p) {
     const vp = viewProjection(canvas.clientWidth, canvas.clientHeight);
     const toScreen = (b) => {
@@ -506,22 +518,50 @@
     let lo = [Infinity, Infinity, Infinity], hi = [-Infinity, -Infinity, -Infinity];
     for (const m of meshes) for (let a = 0; a < 3; a++) { lo[a] = Math.min(lo[a], m.lo[a]); hi[a] = Math.max(hi[a], m.hi[a]); }
     const state = { cut: 'none', axis: 2, at: dims.map((d) => Math.floor(d / 2)), translucent: false,
-      opacity: 0.3, density: 0, levels: [0, 1] };
+      opacity: 0.3, density: 0, levels: [0, 1], facing: [0, 0, 1], shift: 0 };
     const hole = () => state.cut === 'corner' ? corner(box, state.at)
       : state.cut === 'plane' ? halfSpace(box, state.axis, state.at[state.axis]) : NO_HOLE;
+    // The oblique cut: the plane through the models' centre facing `facing` (a unit world
+    // vector), moved `shift` voxels along it; the side it faces is taken away. In box
+    // coordinates n.b > w.
+    const voxel = grid.step, reach = Math.ceil(Math.hypot(...size) / 2 / voxel);
+    const oblique = () => {
+      const n = state.facing, w = dot(n, add(centre, scale(n, state.shift * voxel)));
+      return [n.map((v, a) => v * size[a]), w - dot(n, grid.lo)];
+    };
+    const cutPlane = () => (state.cut === 'oblique' ? oblique() : null);
+    const obliqueCap = () => {
+      const [n, w] = oblique(), points = [];
+      for (let i = 0; i < BOX_EDGES.length; i += 6) {
+        const p = BOX_EDGES.slice(i, i + 3), q = BOX_EDGES.slice(i + 3, i + 6);
+        const f = dot(n, p) - w, g = dot(n, q) - w;
+        if ((f < 0) !== (g < 0)) points.push(add(p, scale(sub(q, p), f / (f - g))));
+      }
+      if (points.length < 3) return [];
+      const c = scale(points.reduce(add), 1 / points.length), u = norm(sub(points[0], c)), v = cross(norm(n), u);
+      const angle = (p) => Math.atan2(dot(sub(p, c), v), dot(sub(p, c), u));
+      points.sort((a, b) => angle(a) - angle(b));
+      const fan = points.flatMap((p, i) => [...c, ...p, ...points[(i + 1) % points.length]]);
+      return [{ axis: 2, points: fan, inside: true }];
+    };
     const caps = () => {
       const h = hole();
       const axes = state.cut === 'corner' ? [0, 1, 2] : state.cut === 'plane' ? [state.axis] : [];
       return axes.map((axis) => ({ axis, t: sliceT(box, axis, state.at[axis]), inside: true, ...faceOfHole(axis, h) }));
     };
-    const region = (h) => ({ uKeepLo: [-1, -1, -1], uKeepHi: [2, 2, 2], uHoleLo: h.lo, uHoleHi: h.hi });
+    const region = (h) => {
+      const plane = cutPlane();
+      return { uKeepLo: [-1, -1, -1], uKeepHi: [2, 2, 2], uHoleLo: h.lo, uHoleHi: h.hi,
+        uCut: plane ? [...plane[0], plane[1]] : NO_CUT };
+    };
+    const centre = scale(add(lo, hi), 0.5);
     return {
-      centre: scale(add(lo, hi), 0.5),
+      centre,
       radius: Math.hypot(...sub(hi, lo)) / 2,
       view: [30, 20],
       grid: () => box,
       costly: () => state.translucent,
-      handles: caps,
+      handles: () => (state.cut === 'oblique' ? [{ axis: 'o', plane: oblique() }] : caps()),
       // A cut face is held only where it shows material.
       holds: (b) => inside(b),
       draw(vp) {
@@ -541,7 +581,8 @@
         gl.bindTexture(gl.TEXTURE_3D, smooth);
         SURFACE.use({ uVP: vp, uTex: 0, uTextured: 1, uLo: grid.lo, uSize: size, uEye: eye(), ...region(h) });
         meshes.forEach(drawMesh);
-        drawSlabs(mul(vp, box.toWorld), exact, box, false, caps(), state.cut === 'corner' ? SHADE : null);
+        const cutFaces = state.cut === 'oblique' ? obliqueCap() : caps();
+        drawSlabs(mul(vp, box.toWorld), exact, box, false, cutFaces, state.cut === 'corner' ? SHADE : null);
       },
       snapshot(axis, index, draw) {
         const [a, b] = [[1, 2], [0, 2], [0, 1]][axis];
@@ -549,24 +590,30 @@
           drawSlabs(mvp, exact, box, false, [{ axis, t: sliceT(box, axis, index), inside: true }], null), a, b);
       },
       move(axis, by) {
-        state.at[axis] = Math.min(dims[axis] - 1, Math.max(0, state.at[axis] + by));
+        if (axis === 'o') state.shift = Math.min(reach, Math.max(-reach, state.shift + by));
+        else state.at[axis] = Math.min(dims[axis] - 1, Math.max(0, state.at[axis] + by));
       },
-      state: () => ({ cut: state.cut, axis: 'xyz'[state.axis], slices: state.at.slice(), translucent: state.translucent, dims }),
-      keys: [['c', 'no cut / plane / corner'], ['x y z', 'the plane\u2019s axis'], ['drag the cut', 'move it'],
-        ['t', 'translucent']],
+      state: () => ({ cut: state.cut, axis: 'xyz'[state.axis], slices: state.at.slice(), translucent: state.translucent, dims,
+        facing: state.facing.slice(), shift: state.shift }),
+      keys: [['c', 'no cut / plane / corner / oblique'], ['x y z', 'the plane\u2019s axis'],
+        ['o', 'an oblique cut facing you'], ['drag the cut', 'move it'], ['t', 'translucent']],
       key(k) {
-        if (k === 'c') state.cut = { none: 'plane', plane: 'corner', corner: 'none' }[state.cut];
+        if (k === 'c') state.cut = { none: 'plane', plane: 'corner', corner: 'oblique', oblique: 'none' }[state.cut];
+        else if (k === 'o') { state.facing = norm(sub(eye(), centre)); state.shift = 0; state.cut = 'oblique'; }
         else if ('xyz'.includes(k)) { state.axis = 'xyz'.indexOf(k); if (state.cut === 'none') state.cut = 'plane'; }
         else if (k === 't') state.translucent = !state.translucent;
         else return false;
         return true;
       },
       controls(panel) {
-        panel.buttons([['whole', 'none'], ['plane', 'plane'], ['corner', 'corner']], () => state.cut, (v) => (state.cut = v));
+        panel.buttons([['whole', 'none'], ['plane', 'plane'], ['corner', 'corner'], ['oblique', 'oblique']],
+          () => state.cut, (v) => (state.cut = v));
         panel.buttons([['x', 0], ['y', 1], ['z', 2]], () => state.axis, (v) => (state.axis = v), () => state.cut === 'plane');
         const cutting = (axis) => () => state.cut === 'corner' || (state.cut === 'plane' && state.axis === axis);
         ['x', 'y', 'z'].forEach((name, axis) =>
           panel.range(name, () => dims[axis] - 1, () => state.at[axis], (v) => (state.at[axis] = v), cutting(axis)));
+        panel.range('shift', () => 2 * reach, () => state.shift + reach, (v) => (state.shift = v - reach),
+          () => state.cut === 'oblique');
         panel.buttons([['surface', false], ['translucent', true]], () => state.translucent, (v) => (state.translucent = v));
         const seeThrough = () => state.translucent;
         panel.range('opacity', () => 100, () => Math.round(state.opacity * 100),
@@ -721,7 +768,7 @@
     const free = e.shiftKey || e.altKey || e.ctrlKey || e.button !== 0;
     const hit = grid && !free ? pick(grid, scene.handles(), e.offsetX, e.offsetY) : null;
     drag = { x: e.offsetX, y: e.offsetY, pan: e.shiftKey || e.button !== 0, hit, moved: 0 };
-    if (hit) drag.axisPx = screenAxis(grid, hit.axis, hit.box);
+    if (hit) drag.axisPx = handleStep(grid, hit);
   });
   canvas.addEventListener('pointermove', (e) => {
     if (!drag) return;
@@ -834,7 +881,7 @@
           if (document.elementFromPoint(x, y) !== canvas) continue;
           const hit = pick(grid, scene.handles(), x, y);
           if (hit && hit.axis === axis) {
-            const [dx, dy] = screenAxis(grid, axis, hit.box);
+            const [dx, dy] = handleStep(grid, hit);
             return { x, y, dx, dy };
           }
         }
