@@ -28,13 +28,13 @@ pub fn names() -> Vec<String> {
 }
 
 /// The fruit, its tets and its frame field.
-fn fruit() -> Result<(crate::mesh::Mesh, TetMesh, FrameField)> {
+fn fruit() -> Result<(crate::mesh::Mesh, TetMesh, FrameField, Vec<(Vec3, f32)>)> {
     let fruit = crate::mesh::shapes::named("fruit").expect("a drawn shape").canonical();
     let tets = crate::fill::mesher::tetrahedralize(&fruit, 5000)?;
     let directions = [(Vec3::new(-0.75, 0.0, 0.0), Vec3::X), (Vec3::new(0.0, 0.2, 0.0), Vec3::X)];
     let depth: Vec<(Vec3, f32)> = fruit.vertices.iter().map(|p| (*p, 0.0)).chain([(Vec3::ZERO, 1.0)]).collect();
     let field = solve(&tets, &sketched_frames(&directions, &depth)?)?;
-    Ok((fruit, tets, field))
+    Ok((fruit, tets, field, depth))
 }
 
 /// Run the guided workloads.
@@ -42,7 +42,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     if !names().iter().any(|n| wanted(args, n)) {
         return Ok(());
     }
-    let (fruit, tets, field) = fruit()?;
+    let (fruit, tets, field, depth) = fruit()?;
     let image = crate::sections::draw("bark-skin", 128, 128, 1)?;
     let options = Options::for_exemplar(crate::synth::cube::SIDE);
     let started = Instant::now();
@@ -51,7 +51,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let prepared = started.elapsed().as_secs_f64();
     let view = View::framing(fruit.bounds(), Vec3::ZERO, Vec3::Y, 256)?;
     let domain = Domain::around(fruit.bounds(), 256)?;
-    let frames = solid::frames_over(&tets, &field, &domain);
+    let frames = solid::frames_over(&tets, &field, &domain, &depth)?;
     let setup = Setup {
         exemplars: &exemplars,
         frames: Some(&frames),
@@ -80,7 +80,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         )?;
     }
     let domain = Domain::around(fruit.bounds(), 128)?;
-    let frames = solid::frames_over(&tets, &field, &domain);
+    let frames = solid::frames_over(&tets, &field, &domain, &depth)?;
     let setup = Setup { dims: domain.dims, frames: Some(&frames), ..setup };
     timed(args, SOLID, || {
         let out = synth::run(&setup, &synth::plan(&setup, &Mask::full(domain.dims), 0), None, &NoProgress)?;

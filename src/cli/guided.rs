@@ -101,7 +101,7 @@ pub fn run(args: &FieldArgs) -> Result<()> {
     let turns = field_turns(&g, &view)?;
     tell!(
         "  as `guided --res {TURN_RES}` reads it, the frames turn by at most {:.1}° between neighbouring pixels of the cut; \
-         {} of {} pairs by more than {TURN_LIMIT}° (pairs within two voxels of a depth axis left out)",
+         {} of {} pairs by more than {TURN_LIMIT}° (pairs within two voxels of a depth axis, or of its ridge past its ends, left out)",
         turns.largest,
         turns.over,
         turns.pairs
@@ -117,17 +117,31 @@ const TURN_LIMIT: f32 = 30.0;
 /// pixels inside the model, away from the spec's depth axes.
 fn field_turns(g: &Guide, view: &View) -> Result<crate::guided::field::Turns> {
     let domain = Domain::around(g.surface.bounds(), TURN_RES)?;
-    let frames = solid::frames_over(&g.tets, &g.field, &domain);
+    let frames = solid::frames_over(&g.tets, &g.field, &domain, &g.depth)?;
     let inside = crate::fill::render::field_cut(&g.tets, &vec![0.0; g.tets.vertices.len()], view);
     let to_grid = |p: Vec3| (p - domain.origin) / domain.voxel - 0.5;
     let points: Vec<Option<Vec3>> = (0..view.width * view.height)
         .map(|i| inside[i].map(|_| to_grid(view.point(i % view.width, i / view.width))))
         .collect();
+    let reach = domain.voxel * domain.dims.iter().sum::<usize>() as f32;
+    let ridges: Vec<Vec<Vec3>> = g.axes.iter().map(|line| ridge(line, reach)).collect();
     let near_axis = |p: Vec3| {
         let at = domain.origin + (p + 0.5) * domain.voxel;
-        g.axes.iter().any(|line| line.windows(2).any(|w| segment_distance(at, w[0], w[1]) <= 2.0 * domain.voxel))
+        ridges.iter().any(|line| line.windows(2).any(|w| segment_distance(at, w[0], w[1]) <= 2.0 * domain.voxel))
     };
     Ok(crate::guided::field::turns(&frames, &points, view.width, TURN_LIMIT, near_axis))
+}
+
+/// A depth axis and the ridge of the depth past its ends: its first and last segments
+/// carried on by `reach` (out of the model), where frames turning around the axis go on
+/// turning around the ridge.
+fn ridge(line: &[Vec3], reach: f32) -> Vec<Vec3> {
+    let (Some(&[a, b]), Some(&[c, d])) = (line.first_chunk::<2>(), line.last_chunk::<2>()) else {
+        return line.to_vec();
+    };
+    let before = a + (a - b).normalize_or_zero() * reach;
+    let after = d + (d - c).normalize_or_zero() * reach;
+    std::iter::once(before).chain(line.iter().copied()).chain(std::iter::once(after)).collect()
 }
 
 /// The distance from `p` to the segment from `a` to `b`.
@@ -249,7 +263,7 @@ pub fn run_guided(args: &GuidedArgs) -> Result<()> {
             plane_exemplars(args, path, rows)?
         }
     };
-    let frames = solid::frames_over(&g.tets, &g.field, &domain);
+    let frames = solid::frames_over(&g.tets, &g.field, &domain, &g.depth)?;
     let setup = Setup {
         exemplars: &prepared,
         frames: Some(&frames),

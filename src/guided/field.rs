@@ -173,6 +173,9 @@ pub struct FrameGrid {
     pub dims: [usize; 3],
     /// Per corner, a unit quaternion as (x, y, z, w), x fastest.
     pub corners: Vec<Vec4>,
+    /// Per corner, the gradient of the model's depth, when it has one: frames are then
+    /// read from it and the corners' x axes (see [`FrameGrid::at`]).
+    pub gradients: Option<Vec<Vec3>>,
 }
 
 impl FrameGrid {
@@ -202,7 +205,16 @@ impl FrameGrid {
         }
         fill_outwards(&mut corners, dims);
         let corners = corners.into_iter().map(|c| c.unwrap_or(Vec4::W)).collect();
-        FrameGrid { lo, step, dims, corners }
+        FrameGrid { lo, step, dims, corners, gradients: None }
+    }
+
+    /// The grid with the depth's gradient (`gradient`, in model units) at its corners.
+    pub fn with_depth(self, gradient: impl Fn(Vec3) -> Vec3 + Sync) -> FrameGrid {
+        let [nx, ny, _] = self.dims;
+        let at =
+            |i: usize| self.lo + Vec3::new((i % nx) as f32, ((i / nx) % ny) as f32, (i / (nx * ny)) as f32) * self.step;
+        let gradients = (0..self.corners.len()).into_par_iter().map(|i| gradient(at(i))).collect();
+        FrameGrid { gradients: Some(gradients), ..self }
     }
 
     /// The same grid in the coordinates of a voxel grid whose voxel (0, 0, 0) spans
@@ -212,15 +224,38 @@ impl FrameGrid {
     }
 
     /// The frame at `p` (clamped into the box): its axes as the columns of a rotation.
+    /// With the depth's gradient, z is the corners' gradients blended and x their frames'
+    /// x axes blended, both as plain vectors: neither has a sign to flip, so frames turning
+    /// around a depth axis turn only on its ridge, where the gradients meet head on
+    /// (quaternions half a turn apart blend to nothing across a whole cell). Where that
+    /// gives no frame (no gradient, or one along x), the quaternions are blended.
     pub fn at(&self, p: Vec3) -> Mat3 {
+        let corners = trilinear(self.lo, self.step, self.dims, p);
+        if let Some(gradients) = &self.gradients
+            && let Some(frame) = self.from_depth(&corners, gradients)
+        {
+            return frame;
+        }
         let mut sum = Vec4::ZERO;
         let mut first = None;
-        for (at, w) in trilinear(self.lo, self.step, self.dims, p) {
+        for (at, w) in corners {
             let q = self.corners[at];
             let first = *first.get_or_insert(q);
             sum += if q.dot(first) < 0.0 { -q } else { q } * w;
         }
         Mat3::from_quat(sum.try_normalize().map_or(Quat::IDENTITY, Quat::from_vec4))
+    }
+
+    /// The frame of the blended gradient (z) and x axes, unless they are missing or nearly
+    /// parallel.
+    fn from_depth(&self, corners: &[(usize, f32); 8], gradients: &[Vec3]) -> Option<Mat3> {
+        let (mut z, mut x) = (Vec3::ZERO, Vec3::ZERO);
+        for &(at, w) in corners {
+            z += gradients[at] * w;
+            x += Quat::from_vec4(self.corners[at]) * Vec3::X * w;
+        }
+        let (z, x) = (z.try_normalize()?, x.try_normalize()?);
+        (z.dot(x).abs() < 0.9).then(|| Mat3::from_quat(frame(x, z)))
     }
 }
 
@@ -442,13 +477,34 @@ fn integrate(flow: &[Option<Vec2>], noise: &[f32], (w, h): (usize, usize), start
 mod tests {
     use super::*;
 
+    /// Across a ridge of the depth (gradients +y, 0, -y in three rows of corners), frames
+    /// follow the blended gradient, not the quaternions: z stays +y all the way to the
+    /// ridge and is -y past it, though the ridge's corners hold a frame a quarter turn off;
+    /// with a gradient along x, the quaternions are blended.
+    #[test]
+    fn with_the_depth_frames_follow_its_gradient_up_to_the_ridge() {
+        let (up, down, off) = (frame(Vec3::X, Vec3::Y), frame(Vec3::X, -Vec3::Y), frame(Vec3::X, Vec3::Z));
+        let row = |i: usize| (i / 2) % 3;
+        let corners = (0..12).map(|i| Vec4::from([up, off, down][row(i)])).collect();
+        let grid = FrameGrid { lo: Vec3::ZERO, step: 1.0, dims: [2, 3, 2], corners, gradients: None };
+        let plain = grid.clone();
+        let grid = grid.with_depth(|p| Vec3::Y * (1.0 - p.y));
+        for (y, z) in [(0.25, Vec3::Y), (0.75, Vec3::Y), (1.5, -Vec3::Y)] {
+            let m = grid.at(Vec3::new(0.5, y, 0.5));
+            assert!(m.z_axis.distance(z) < 1e-4 && m.x_axis.distance(Vec3::X) < 1e-4, "at y = {y}: {m:?}");
+        }
+        assert!(plain.at(Vec3::new(0.5, 0.75, 0.5)).z_axis.distance(Vec3::Y) > 0.1, "the quaternions alone tilt");
+        let along = plain.clone().with_depth(|_| Vec3::X);
+        assert_eq!(along.at(Vec3::new(0.5, 0.75, 0.5)), plain.at(Vec3::new(0.5, 0.75, 0.5)));
+    }
+
     /// Frames turning a quarter turn between two columns of corners: the pairs across it
     /// count, unless exempt; a uniform grid turns nowhere.
     #[test]
     fn turns_count_the_neighbours_whose_frames_differ() {
         let quarter = Vec4::from(Quat::from_rotation_z(std::f32::consts::FRAC_PI_2));
         let corners = (0..4 * 4 * 2).map(|i| if i % 4 >= 2 { quarter } else { Vec4::W }).collect();
-        let grid = FrameGrid { lo: Vec3::ZERO, step: 1.0, dims: [4, 4, 2], corners };
+        let grid = FrameGrid { lo: Vec3::ZERO, step: 1.0, dims: [4, 4, 2], corners, gradients: None };
         let points: Vec<Option<Vec3>> = (0..16).map(|i| Some(Vec3::new((i % 4) as f32, (i / 4) as f32, 0.0))).collect();
         let turned = turns(&grid, &points, 4, 30.0, |_| false);
         assert_eq!((turned.over, turned.pairs), (4, 24), "{turned:?}");

@@ -67,10 +67,19 @@ impl Domain {
 /// cells on the shortest side suffice for a smooth field).
 const FIELD_CELLS: usize = 32;
 
-/// The field sampled over `domain`, in its voxel coordinates.
-pub fn frames_over(tets: &TetMesh, field: &FrameField, domain: &Domain) -> FrameGrid {
+/// The field sampled over `domain`, in its voxel coordinates, with the gradient of the
+/// depth through `depth` (the spec's constraints) when they rise above 0.
+pub fn frames_over(tets: &TetMesh, field: &FrameField, domain: &Domain, depth: &[(Vec3, f32)]) -> Result<FrameGrid> {
     let hi = domain.origin + Vec3::from_array(domain.dims.map(|d| d as f32)) * domain.voxel;
-    FrameGrid::sample(tets, field, (domain.origin, hi), FIELD_CELLS).in_voxels(domain.origin, domain.voxel)
+    let grid = FrameGrid::sample(tets, field, (domain.origin, hi), FIELD_CELLS);
+    let grid = match depth.iter().any(|d| d.1 > 0.0) {
+        true => {
+            let rbf = crate::fill::field::Rbf::fit(depth)?;
+            grid.with_depth(|p| rbf.gradient(p))
+        }
+        false => grid,
+    };
+    Ok(grid.in_voxels(domain.origin, domain.voxel))
 }
 
 /// The model's depth (the RBF through the spec's depth constraints, as the fill computes

@@ -89,7 +89,7 @@ pub fn picture(
                     (exemplars, options, None)
                 }
             };
-            let frames = solid::frames_over(mesh, &field, &domain);
+            let frames = solid::frames_over(mesh, &field, &domain, &depths)?;
             let setup = Setup {
                 exemplars: &exemplars,
                 frames: Some(&frames),

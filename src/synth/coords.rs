@@ -1410,7 +1410,8 @@ mod tests {
         let z_along_x = Quat::from_rotation_y(std::f32::consts::FRAC_PI_2);
         assert!((z_along_x * Vec3::Z).distance(Vec3::X) < 1e-6);
         let q = glam::Vec4::from(z_along_x);
-        let frames = FrameGrid { lo: Vec3::splat(-0.5), step: 32.0, dims: [2; 3], corners: vec![q; 8] };
+        let frames =
+            FrameGrid { lo: Vec3::splat(-0.5), step: 32.0, dims: [2; 3], corners: vec![q; 8], gradients: None };
         let depth = crate::guided::field::ScalarGrid {
             lo: Vec3::splat(-0.5),
             step: 32.0,
