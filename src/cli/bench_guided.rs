@@ -28,7 +28,10 @@ pub fn names() -> Vec<String> {
 }
 
 /// The fruit, its tets and its frame field.
-fn fruit() -> Result<(crate::mesh::Mesh, TetMesh, FrameField, Vec<(Vec3, f32)>)> {
+/// The bench's fruit: its surface, tets, frame field and depth constraints.
+type Fruit = (crate::mesh::Mesh, TetMesh, FrameField, Vec<(Vec3, f32)>);
+
+fn fruit() -> Result<Fruit> {
     let fruit = crate::mesh::shapes::named("fruit").expect("a drawn shape").canonical();
     let tets = crate::fill::mesher::tetrahedralize(&fruit, 5000)?;
     let directions = [(Vec3::new(-0.75, 0.0, 0.0), Vec3::X), (Vec3::new(0.0, 0.2, 0.0), Vec3::X)];

@@ -232,7 +232,7 @@ impl FrameGrid {
     pub fn at(&self, p: Vec3) -> Mat3 {
         let corners = trilinear(self.lo, self.step, self.dims, p);
         if let Some(gradients) = &self.gradients
-            && let Some(frame) = self.from_depth(&corners, gradients)
+            && let Some(frame) = self.along_depth(&corners, gradients)
         {
             return frame;
         }
@@ -248,7 +248,7 @@ impl FrameGrid {
 
     /// The frame of the blended gradient (z) and x axes, unless they are missing or nearly
     /// parallel.
-    fn from_depth(&self, corners: &[(usize, f32); 8], gradients: &[Vec3]) -> Option<Mat3> {
+    fn along_depth(&self, corners: &[(usize, f32); 8], gradients: &[Vec3]) -> Option<Mat3> {
         let (mut z, mut x) = (Vec3::ZERO, Vec3::ZERO);
         for &(at, w) in corners {
             z += gradients[at] * w;
