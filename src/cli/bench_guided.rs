@@ -27,10 +27,10 @@ pub fn names() -> Vec<String> {
     [CUT, CACHED, SOLID].map(String::from).to_vec()
 }
 
-/// The fruit, its tets and its frame field.
 /// The bench's fruit: its surface, tets, frame field and depth constraints.
 type Fruit = (crate::mesh::Mesh, TetMesh, FrameField, Vec<(Vec3, f32)>);
 
+/// The fruit, its tets, its frame field and its depth.
 fn fruit() -> Result<Fruit> {
     let fruit = crate::mesh::shapes::named("fruit").expect("a drawn shape").canonical();
     let tets = crate::fill::mesher::tetrahedralize(&fruit, 5000)?;
