@@ -690,6 +690,7 @@ pub fn fingerprint(setup: &Setup) -> u64 {
         f.lo.to_array().iter().chain([f.step].iter()).for_each(|c| add(u64::from(c.to_bits())));
         f.dims.iter().for_each(|d| add(*d as u64));
         f.corners.iter().flat_map(|q| q.to_array()).for_each(|c| add(u64::from(c.to_bits())));
+        f.gradients.iter().flatten().flat_map(|g| g.to_array()).for_each(|c| add(u64::from(c.to_bits())));
     }
     setup.dims.iter().for_each(|d| add(*d as u64));
     setup.wrap.iter().for_each(|w| add(u64::from(*w)));
