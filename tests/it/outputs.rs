@@ -47,6 +47,8 @@ fn an_output_naming_an_input_is_refused_and_nothing_changes() {
         vec!["view", "w.lst", "-o", "w.lst"],
         vec!["render", "w.lst", "-o", "w.lst"],
         vec!["export", "w.lst", "-o", "w.lst"],
+        vec!["web", "w.lst", "-o", "w.lst"],
+        vec!["web", "v.exr", "-o", "v.exr"],
         vec!["field", "fruit.obj", "--spec", "s.toml", "-o", "s.toml"],
         vec!["fill", "fruit.obj", "--spec", "s.toml", "-o", "w.lst", "--json", "s.toml"],
         vec!["fill", "fruit.obj", "--spec", "w.lst", "-o", "w.lst"],
@@ -118,6 +120,16 @@ fn a_build_never_replaces_a_persons_file_in_its_folder() {
         "the other entry and the report are written"
     );
     std::fs::remove_file(out.join("b.exr")).unwrap();
+    std::fs::write(out.join("b.view.html"), "<p>my page</p>").unwrap();
+    let run = solidtex(&["build", &lib, "-o", &at(dir.path(), "out")]);
+    assert!(
+        stderr(&run).contains("b.view.html") && stderr(&run).contains("not written by solidtex"),
+        "{}",
+        stderr(&run)
+    );
+    assert_eq!(std::fs::read(out.join("b.view.html")).unwrap(), b"<p>my page</p>");
+    assert!(!out.join("b.exr").exists(), "an entry with a person's file in the way is not built");
+    std::fs::remove_file(out.join("b.view.html")).unwrap();
     let run = solidtex(&["build", &lib, "-o", &at(dir.path(), "out"), "--force"]);
     assert!(run.status.success(), "solidtex replaces its own files: {}", stderr(&run));
     std::fs::write(out.join("a.sheet.png"), "edited").unwrap();
