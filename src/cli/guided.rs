@@ -10,7 +10,7 @@ use crate::guided::field::{FrameField, sketched_frames, solve, streamlines};
 use crate::guided::solid::{self, Domain};
 use crate::io::guided_cache::{self, Cached};
 use crate::io::{self, fill_spec, mesh_file};
-use crate::mesh::Mesh;
+use crate::mesh::{Mesh, closest_on_segment};
 use crate::synth::coords::{self as synth, Exemplars, Options, Setup};
 use crate::synth::cube;
 use crate::synth::region::{Mask, Sparse};
@@ -127,7 +127,9 @@ fn field_turns(g: &Guide, view: &View) -> Result<crate::guided::field::Turns> {
     let ridges: Vec<Vec<Vec3>> = g.axes.iter().map(|line| ridge(line, reach)).collect();
     let near_axis = |p: Vec3| {
         let at = domain.origin + (p + 0.5) * domain.voxel;
-        ridges.iter().any(|line| line.windows(2).any(|w| segment_distance(at, w[0], w[1]) <= 2.0 * domain.voxel))
+        ridges
+            .iter()
+            .any(|line| line.windows(2).any(|w| at.distance(closest_on_segment(at, w[0], w[1])) <= 2.0 * domain.voxel))
     };
     Ok(crate::guided::field::turns(&frames, &points, view.width, TURN_LIMIT, near_axis))
 }
@@ -142,13 +144,6 @@ fn ridge(line: &[Vec3], reach: f32) -> Vec<Vec3> {
     let before = a + (a - b).normalize_or_zero() * reach;
     let after = d + (d - c).normalize_or_zero() * reach;
     std::iter::once(before).chain(line.iter().copied()).chain(std::iter::once(after)).collect()
-}
-
-/// The distance from `p` to the segment from `a` to `b`.
-fn segment_distance(p: Vec3, a: Vec3, b: Vec3) -> f32 {
-    let ab = b - a;
-    let t = ((p - a).dot(ab) / ab.length_squared().max(f32::MIN_POSITIVE)).clamp(0.0, 1.0);
-    p.distance(a + ab * t)
 }
 
 /// The arguments of `solidtex guided`.

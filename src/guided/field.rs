@@ -232,11 +232,11 @@ impl FrameGrid {
     /// smoothly to the quaternions blended; without a gradient, they alone are read.
     pub fn at(&self, p: Vec3) -> Mat3 {
         let corners = trilinear(self.lo, self.step, self.dims, p);
-        let blended = self.blended(&corners);
-        let Some((along, weight)) = self.gradients.as_ref().and_then(|g| self.along_depth(&corners, g)) else {
-            return Mat3::from_quat(blended);
-        };
-        Mat3::from_quat(along.slerp(blended, weight))
+        match self.gradients.as_ref().and_then(|g| self.along_depth(&corners, g)) {
+            Some((along, 0.0)) => Mat3::from_quat(along),
+            Some((along, weight)) => Mat3::from_quat(along.slerp(self.blended(&corners), weight)),
+            None => Mat3::from_quat(self.blended(&corners)),
+        }
     }
 
     /// The corners' quaternions flipped towards the first, blended and normalized.
