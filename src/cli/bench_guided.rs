@@ -68,17 +68,18 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     timed_then(
         args,
         CUT,
-        || solid::cut(&setup, &domain, &tets, &view, None, &NoProgress),
+        || solid::cut(&setup, &domain, &tets, &view, &[], &NoProgress),
         |(picture, out)| {
             Ok(format!("{} the exemplar's cube synthesized in {prepared:.2} s", report(picture, &image, out, whole)?))
         },
     )?;
     if wanted(args, CACHED) {
-        let (level, coarse) = solid::coarse_levels(&setup, &NoProgress)?;
+        let coarse = solid::coarse_levels(&setup, &NoProgress)?;
+        let kept: Vec<_> = coarse.iter().map(Some).collect();
         timed_then(
             args,
             CACHED,
-            || solid::cut(&setup, &domain, &tets, &view, Some((level, &coarse)), &NoProgress),
+            || solid::cut(&setup, &domain, &tets, &view, &kept, &NoProgress),
             |(picture, out)| report(picture, &image, out, whole),
         )?;
     }
@@ -86,7 +87,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let frames = solid::frames_over(&tets, &field, &domain, &depth)?;
     let setup = Setup { dims: domain.dims, frames: Some(&frames), ..setup };
     timed(args, SOLID, || {
-        let out = synth::run(&setup, &synth::plan(&setup, &Mask::full(domain.dims), 0), None, &NoProgress)?;
+        let out = synth::run(&setup, &synth::plan(&setup, &Mask::full(domain.dims), &[]), &[], &NoProgress)?;
         Ok(format!("{} voxels, {} corrections", out.voxels, out.corrections))
     })
 }

@@ -11,7 +11,7 @@ use crate::guided::solid::{self, Domain};
 use crate::io::guided_cache::{self, Cached};
 use crate::io::{self, fill_spec, mesh_file};
 use crate::mesh::{Mesh, closest_on_segment};
-use crate::synth::coords::{self as synth, Exemplars, Options, Setup};
+use crate::synth::coords::{self as synth, Exemplars, Options, Setup, Synthesized};
 use crate::synth::cube;
 use crate::synth::region::{Mask, Sparse};
 use crate::volume::{Channel, Image2d};
@@ -183,7 +183,7 @@ pub struct GuidedArgs {
     /// exemplar keeps its grooves longer (docs/guided.md; the way --layered and --mask go)
     #[arg(long)]
     pub planes: bool,
-    /// Voxels along the longest side of the grid around the model (16 to 512); one
+    /// Voxels along the longest side of the grid around the model (16 to 1024); one
     /// exemplar pixel spans one voxel.
     #[arg(long, default_value_t = 128)]
     pub res: usize,
@@ -202,9 +202,14 @@ pub struct GuidedArgs {
     /// The cut's picture size in pixels, 8 to 4096.
     #[arg(long, default_value_t = 256, requires = "cut")]
     pub size: usize,
-    /// A folder keeping the coarse levels between cuts of the same inputs.
+    /// A folder keeping what cuts of the same inputs computed (every level's bricks), so
+    /// that a later cut reads what it shares with them instead of computing it.
     #[arg(long, requires = "cut")]
     pub cache: Option<PathBuf>,
+    /// Most megabytes the cache holds in memory (16 to 65536); the bricks of the latest
+    /// cuts are kept first.
+    #[arg(long, default_value_t = 256, requires = "cache")]
+    pub cache_mb: usize,
     /// Override the spec's target tet count (100 to 200000).
     #[arg(long)]
     pub tets: Option<usize>,
@@ -230,6 +235,7 @@ pub fn run_guided(args: &GuidedArgs) -> Result<()> {
     let checks = || -> Result<Option<(Vec3, Vec3)>> {
         io::values::within("--res", args.res, *solid::RESOLUTION.start(), *solid::RESOLUTION.end())?;
         io::values::within("--size", args.size, 8, 4096)?;
+        io::values::within("--cache-mb", args.cache_mb, *CACHE_MB.start(), *CACHE_MB.end())?;
         odd_side("--coarse-n", args.coarse_n)?;
         odd_side("--n", args.n)?;
         check_tets(args.tets)?;
@@ -277,9 +283,6 @@ pub fn run_guided(args: &GuidedArgs) -> Result<()> {
     };
     bar.0.finish_and_clear();
     let (voxels, corrections, full) = outcome?;
-    if voxels == 0 {
-        tell!("warning: the cut misses the model; the picture is transparent");
-    }
     tell!(
         "wrote {}: {}x{}x{} grid, {} tets, field solved in {:.0} ms, set up in {ready:.2} s, synthesized in {:.2} s",
         args.output.display(),
@@ -477,24 +480,79 @@ fn cube_volume(args: &GuidedArgs, images: &[Image2d; 3]) -> Result<crate::volume
     Ok(volume)
 }
 
-/// The coarse level from the cache folder, or computed and cached there (also when the
-/// cached file was damaged).
-fn cached_level(folder: &Path, setup: &Setup, bar: &super::fill::Bar) -> Result<(usize, Sparse<synth::Voxel>)> {
-    let level = solid::below_finest(setup)?;
+/// Megabytes the cache may hold in memory.
+const CACHE_MB: std::ops::RangeInclusive<usize> = 16..=65536;
+
+/// Bytes a cached brick takes in the file at most (its head and every voxel).
+const CACHED_BRICK_BYTES: usize = 80 + 13 * 512;
+
+/// Compute every level below the finest over the whole grid into `levels` (the cache's,
+/// coarsest first) unless the cache holds them already or they would take more than a
+/// quarter of its `most` bricks: later cuts then compute only their finest level. Whether
+/// it computed them.
+fn whole_coarse_levels(
+    setup: &Setup,
+    levels: &mut Vec<Sparse<synth::Voxel>>,
+    most: usize,
+    bar: &super::fill::Bar,
+) -> Result<bool> {
+    let dims = setup.level_dims();
+    let Some(below) = dims.len().checked_sub(2) else { return Ok(false) };
+    let bricks: usize = dims[..=below].iter().map(|d| d.iter().map(|n| n.div_ceil(8)).product::<usize>()).sum();
+    if levels.get(below).is_some_and(|l| l.mask().is_full()) || 4 * bricks > most {
+        return Ok(false);
+    }
+    let finer: Vec<Sparse<synth::Voxel>> = levels.drain(..).skip(below + 1).collect();
+    *levels = solid::coarse_levels(setup, bar)?.into_iter().chain(finer).collect();
+    Ok(true)
+}
+
+/// Where a cache file is and the key it is kept under.
+struct Kept {
+    path: PathBuf,
+    key: u64,
+}
+
+/// The bricks earlier cuts kept in the cache folder, one store per level (none when there
+/// is no cache yet), and where they are; a damaged file is said and dropped.
+fn kept_bricks(folder: &Path, setup: &Setup, most: usize) -> Result<(Kept, Vec<Sparse<synth::Voxel>>)> {
     let key = synth::fingerprint(setup);
     let path = guided_cache::path(folder, key);
-    let slots = setup.exemplars.slot_counts(level);
-    let voxel = |slot, shown| setup.restored(level, slot, shown);
-    let stale = match guided_cache::read(&path, key, setup.level_dims()[level], slots, voxel)? {
-        Cached::Good(found) => return Ok(found),
-        Cached::Stale(why) => Some(why),
-        Cached::Missing => None,
-    };
+    let dims = setup.level_dims();
+    let slots: Vec<[usize; 3]> = (0..dims.len()).map(|l| setup.exemplars.slot_counts(l)).collect();
+    let voxel = |level, slot, shown| setup.restored(level, slot, shown);
+    let limit = (most * CACHED_BRICK_BYTES + 4096) as u64;
+    match guided_cache::read(&path, key, &dims, &slots, limit, voxel)? {
+        Cached::Good(levels) => Ok((Kept { path, key }, levels)),
+        Cached::Stale(why) => {
+            warn_rebuilt(&path, Some(why));
+            Ok((Kept { path, key }, Vec::new()))
+        }
+        Cached::Missing => Ok((Kept { path, key }, Vec::new())),
+    }
+}
+
+/// Keep what the cut computed (`made`, coarsest first) over what the cache held (`kept`),
+/// at most `most` bricks, coarser levels first.
+fn keep_bricks(
+    folder: &Path,
+    file: &Kept,
+    made: &Synthesized,
+    kept: &[Sparse<synth::Voxel>],
+    most: usize,
+) -> Result<()> {
+    let mut left = most;
+    let mut levels = Vec::new();
+    for (level, new) in made.levels().enumerate() {
+        let merged = match kept.get(level) {
+            Some(old) => new.over(old, left),
+            None => new.over(&Sparse::from_bricks(new.dims, []), left),
+        };
+        left -= merged.brick_count();
+        levels.push(merged);
+    }
     std::fs::create_dir_all(folder).map_err(|e| Error::io(folder, e))?;
-    let (level, values) = solid::coarse_levels(setup, bar)?;
-    guided_cache::write(&path, key, level, &values)?;
-    warn_rebuilt(&path, stale);
-    Ok((level, values))
+    guided_cache::write(&file.path, file.key, &levels)
 }
 
 /// Tell that a cache file solidtex wrote, found unusable (`stale`: what was wrong), was
@@ -520,11 +578,28 @@ fn write_cut(
     bar: &super::fill::Bar,
 ) -> Result<(usize, usize, usize)> {
     let view = View::framing(g.surface.bounds(), point, normal, args.size)?;
-    let from = args.cache.as_deref().map(|folder| cached_level(folder, setup, bar)).transpose()?;
-    let (picture, out) = solid::cut(setup, domain, &g.tets, &view, from.as_ref().map(|(l, v)| (*l, v)), bar)?;
+    let most = (args.cache_mb << 20) / (512 * std::mem::size_of::<synth::Voxel>());
+    let mut cached = args.cache.as_deref().map(|folder| kept_bricks(folder, setup, most)).transpose()?;
+    let coarse_made = match cached.as_mut() {
+        Some((_, levels)) => whole_coarse_levels(setup, levels, most, bar)?,
+        None => false,
+    };
+    let kept: Vec<Option<&Sparse<synth::Voxel>>> =
+        cached.as_ref().map_or(Vec::new(), |(_, levels)| levels.iter().map(Some).collect());
+    let (picture, out) = solid::cut(setup, domain, &g.tets, &view, &kept, bar)?;
     io::write_image(&args.output, &picture)?;
+    let alpha = picture.channel_count() - 1;
+    let shown = picture.data().chunks_exact(alpha + 1).any(|p| p[alpha] > 0.5);
+    if !shown {
+        tell!("warning: the cut misses the model; the picture is transparent");
+    }
+    if let (Some(folder), Some((file, levels))) = (&args.cache, &cached)
+        && (out.voxels > 0 || coarse_made)
+    {
+        keep_bricks(folder, file, &out, levels, most)?;
+    }
     let scale = view.right.length() / domain.voxel;
-    if out.voxels > 0 && (0.8..=1.25).contains(&scale) {
+    if shown && (0.8..=1.25).contains(&scale) {
         let s = solid::cut_sharpness(&picture, exemplar)?;
         let (g, l) = (crate::sharpness::GRADIENT_RANGE, crate::sharpness::LENGTH_RANGE);
         tell!(
@@ -536,7 +611,7 @@ fn write_cut(
             l.0,
             l.1
         );
-    } else if out.voxels > 0 {
+    } else if shown {
         tell!(
             "sharpness against the exemplar: not measured, a pixel spans {scale:.2} voxels (--size {} gives about one)",
             (args.size as f32 * scale).round()
@@ -553,7 +628,7 @@ fn write_solid(
     bar: &super::fill::Bar,
 ) -> Result<(usize, usize, usize)> {
     crate::volume::check_size(domain.dims, setup.exemplars.channels() + 1, io::budget_from_env()?)?;
-    let out = synth::run(setup, &synth::plan(setup, &Mask::full(domain.dims), 0), None, bar)?;
+    let out = synth::run(setup, &synth::plan(setup, &Mask::full(domain.dims), &[]), &[], bar)?;
     let alpha = coverage(&g.surface, domain);
     io::write_volume(&args.output, &solid::solid_volume(setup, &out, &alpha)?)?;
     Ok((out.voxels, out.corrections, whole(setup)))

@@ -7,13 +7,13 @@ use crate::fill::render::View;
 use crate::fill::render::field_cut;
 use crate::fill::tets::TetMesh;
 use crate::progress::Progress;
-use crate::synth::coords::{self as synth, Setup, Synthesized, Voxel};
+use crate::synth::coords::{self as synth, Kept, Setup, Synthesized, Voxel};
 use crate::synth::region::{Mask, Sparse};
 use crate::volume::{Channel, Image2d, Volume};
 use glam::Vec3;
 
 /// Finest-level resolutions `guided` accepts (voxels along the grid's longest side).
-pub const RESOLUTION: std::ops::RangeInclusive<usize> = 16..=512;
+pub const RESOLUTION: std::ops::RangeInclusive<usize> = 16..=1024;
 
 /// Share of the model's longest side added around it on every side: neighbourhoods at the
 /// surface read texture, not the grid's clamped edge.
@@ -115,45 +115,51 @@ pub fn layer_rows(depth: &ScalarGrid, res: usize) -> Result<usize> {
     Ok(rows.min(*LAYER_ROWS.end()))
 }
 
-/// A cut through the model synthesized on demand: its picture and the run (voxels and
-/// corrections). `from`: a coarse level computed over the whole grid (e.g. cached).
+/// A cut through the model synthesized on demand: its picture and the run (voxels,
+/// corrections and the values it computed). `kept`: per level, values an earlier run kept
+/// (a cache), read instead of computed where they reach.
 pub fn cut(
     setup: &Setup,
     domain: &Domain,
     tets: &TetMesh,
     view: &View,
-    from: Option<(usize, &Sparse<Voxel>)>,
+    kept: &Kept,
     progress: &dyn Progress,
 ) -> Result<(Image2d, Synthesized)> {
     let ones = vec![1.0; tets.vertices.len()];
     let inside: Vec<bool> = field_cut(tets, &ones, view).iter().map(Option::is_some).collect();
     let request = cut_request(domain, view, &inside);
-    let first = from.map_or(0, |(level, _)| level + 1);
-    let out = synth::run(setup, &synth::plan(setup, &request, first), from, progress)?;
-    Ok((cut_image(setup, &out, domain, view, &inside)?, out))
+    let out = synth::run(setup, &synth::plan(setup, &request, kept), kept, progress)?;
+    let picture = match kept.get(out.finest).copied().flatten() {
+        Some(earlier) => {
+            let shown = Sparse::compute(&request, |v| match out.values.holds(v) {
+                true => out.values.at(v.map(|c| c as i64)),
+                false => earlier.at(v.map(|c| c as i64)),
+            });
+            cut_image(setup, &shown, domain, view, &inside)?
+        }
+        None => cut_image(setup, &out.values, domain, view, &inside)?,
+    };
+    Ok((picture, out))
 }
 
-/// The level below the finest computed over the whole grid, and its index: what a cache
-/// keeps so that a cut recomputes only the finest level.
-pub fn coarse_levels(setup: &Setup, progress: &dyn Progress) -> Result<(usize, Sparse<Voxel>)> {
-    let level = below_finest(setup)?;
-    let mut masks = synth::plan(setup, &Mask::full(setup.dims), 0);
-    masks.truncate(level + 1);
-    Ok((level, synth::run(setup, &masks, None, progress)?.values))
+/// Every level below the finest computed over the whole grid, coarsest first (none when
+/// there is one level): kept, a cut computes only its finest level.
+pub fn coarse_levels(setup: &Setup, progress: &dyn Progress) -> Result<Vec<Sparse<Voxel>>> {
+    let levels = setup.options.levels;
+    if levels < 2 {
+        return Ok(Vec::new());
+    }
+    let mut masks = synth::plan(setup, &Mask::full(setup.dims), &[]);
+    masks.truncate(levels - 1);
+    let out = synth::run(setup, &masks, &[], progress)?;
+    Ok(out.coarser.into_iter().chain([out.values]).collect())
 }
 
-/// The index of the level below the finest; an error when there is one level only.
-pub fn below_finest(setup: &Setup) -> Result<usize> {
-    setup.options.levels.checked_sub(2).ok_or_else(|| {
-        Error::invalid(
-            "there is no coarse level to keep: the exemplar allows one level only (its shorter side is under 32 \
-             pixels); cut without --cache or give a larger exemplar",
-        )
-    })
-}
-
-/// About how many bytes synthesizing needs (before it starts): a flag per voxel of every
-/// level and version for the plan, and for the whole solid two versions of every voxel.
+/// About how many bytes synthesizing needs (before it starts): every level and version's
+/// mask holds a brick table (4 bytes per 8³ voxels), and for the whole solid a flag per
+/// voxel and two versions of every voxel. A cut's own voxels are not counted: they are a
+/// slab, a small share of the grid.
 pub fn memory_needed(setup: &Setup, whole: bool) -> u128 {
     let per_voxel = std::mem::size_of::<Voxel>() as u128;
     setup
@@ -162,7 +168,8 @@ pub fn memory_needed(setup: &Setup, whole: bool) -> u128 {
         .enumerate()
         .map(|(level, d)| {
             let voxels = d.iter().map(|&n| n as u128).product::<u128>();
-            let masks = voxels * (setup.options.passes_at(level) as u128 + 1);
+            let per_mask = voxels / 128 + if whole { voxels / 8 } else { 0 };
+            let masks = per_mask * (setup.options.passes_at(level) as u128 + 1);
             masks + if whole { 2 * voxels * per_voxel } else { 0 }
         })
         .sum()
@@ -188,22 +195,26 @@ pub fn check_memory(setup: &Setup, whole: bool, res: usize, budget: u64) -> Resu
 pub fn cut_request(domain: &Domain, view: &View, inside: &[bool]) -> Mask {
     let mut mask = Mask::empty(domain.dims);
     for (i, _) in inside.iter().enumerate().filter(|(_, b)| **b) {
-        let v = domain.voxel_of(view.point(i % view.width, i / view.width));
-        let at = mask.index(v);
-        mask.on[at] = true;
+        mask.insert(domain.voxel_of(view.point(i % view.width, i / view.width)));
     }
     mask
 }
 
 /// The cut's picture: each pixel inside the model takes the colour of the voxel under it
 /// (the exemplar's channels, then alpha 1); outside, transparent.
-pub fn cut_image(setup: &Setup, out: &Synthesized, domain: &Domain, view: &View, inside: &[bool]) -> Result<Image2d> {
+pub fn cut_image(
+    setup: &Setup,
+    values: &Sparse<Voxel>,
+    domain: &Domain,
+    view: &View,
+    inside: &[bool],
+) -> Result<Image2d> {
     let channels = setup.exemplars.channels();
     let mut data = Vec::with_capacity(view.width * view.height * (channels + 1));
     for (i, inside) in inside.iter().enumerate() {
         if *inside {
             let v = domain.voxel_of(view.point(i % view.width, i / view.width));
-            data.extend(out.colour(setup, v));
+            data.extend_from_slice(&values.at(v.map(|c| c as i64)).colour[..channels]);
             data.push(1.0);
         } else {
             data.extend(std::iter::repeat_n(0.0, channels + 1));

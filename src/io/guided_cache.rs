@@ -1,12 +1,14 @@
-//! The cache of guided synthesis: a coarse level computed over the whole grid, kept
-//! between cuts of the same model, field, exemplars and seed.
+//! The cache of guided synthesis: the 8³ bricks of every level that earlier cuts computed,
+//! kept between cuts of the same model, field, exemplars and seed. A cut reads the voxels
+//! it finds there instead of computing them (and so the coarser voxels they came from).
 //!
 //! ```text
 //!  file  DIR/guided-<key as 16 hex digits>.cache
-//!  "solidtex guided cache 3\n"  key u64  level u32  dims 3 x u32   (little-endian)
+//!  "solidtex guided cache 4\n"  key u64  levels u32  finest dims 3 x u32   (little-endian)
 //!  checksum: blake3 of the header above and the body below, 32 bytes
-//!  per voxel, x fastest: its centre slot per plane, 3 x u32, and the plane it shows,
-//!  u8 (3: the mean of the three)
+//!  per brick: level u32, brick coordinates 3 x u32, 64 bytes of flags (row y + 8 z,
+//!  bit x: the voxels held), then per voxel held, x fastest: its centre slot per plane,
+//!  3 x u32, and the plane it shows, u8 (3: the mean of the three)
 //! ```
 //!
 //! The solid cube synthesized from plain exemplars is kept beside it, under a key of the
@@ -27,12 +29,13 @@
 use super::atomic;
 use crate::error::{Error, Result};
 use crate::synth::coords::{MEAN, Voxel};
-use crate::synth::region::{Mask, Sparse};
+use crate::synth::region::{BRICK, Bits, Sparse};
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 
-const MAGIC: &[u8] = b"solidtex guided cache 3\n";
-const OLD_MAGICS: &[&[u8]] = &[b"solidtex guided cache 1\n", b"solidtex guided cache 2\n"];
+const MAGIC: &[u8] = b"solidtex guided cache 4\n";
+const OLD_MAGICS: &[&[u8]] =
+    &[b"solidtex guided cache 1\n", b"solidtex guided cache 2\n", b"solidtex guided cache 3\n"];
 const HEADER: usize = 24 + 8 + 4 + 12;
 const PER_VOXEL: usize = 13;
 
@@ -196,64 +199,135 @@ pub fn path(folder: &Path, key: u64) -> PathBuf {
     folder.join(format!("guided-{key:016x}.cache"))
 }
 
-/// The level cached under `key`: `(level, values)`, or an error naming the file when it is
-/// not solidtex's cache of `key`. Every slot is checked against `slots[plane]` (the level's
-/// exemplar centre counts); `voxel` makes a voxel of its slots and shown plane.
+/// Bytes of a brick's entry before its voxels: level, coordinates and flags.
+const BRICK_HEAD: usize = 16 + BRICK * BRICK;
+
+/// The bricks cached under `key` for a grid whose levels have `dims` (coarsest first), one
+/// store per level, or an error naming the file when it is not solidtex's cache of `key`.
+/// A file over `most` bytes is stale (made under a larger cap). Every slot is checked
+/// against `slots[level][plane]` (the exemplar centre counts); `voxel` makes a voxel of its
+/// level, slots and shown plane.
 pub fn read(
     path: &Path,
     key: u64,
-    dims: [usize; 3],
-    slots: [usize; 3],
-    voxel: impl Fn([u32; 3], u8) -> Voxel + Sync,
-) -> Result<Cached<(usize, Sparse<Voxel>)>> {
-    let count: usize = dims.iter().product();
+    dims: &[[usize; 3]],
+    slots: &[[usize; 3]],
+    most: u64,
+    voxel: impl Fn(usize, [u32; 3], u8) -> Voxel,
+) -> Result<Cached<Vec<Sparse<Voxel>>>> {
+    let size = match std::fs::metadata(path) {
+        Ok(meta) => meta.len(),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(Cached::Missing),
+        Err(e) => return Err(Error::io(path, e)),
+    };
+    let finest = dims.last().copied().unwrap_or_default();
     let ours = |h: &[u8]| {
-        let fits = le_u64(h, 24) == key && [36, 40, 44].map(|at| le_u32(h, at)) == dims;
+        let fits =
+            le_u64(h, 24) == key && le_u32(h, 32) == dims.len() && [36, 40, 44].map(|at| le_u32(h, at)) == finest;
         owner(h, MAGIC, OLD_MAGICS).filter(|_| fits)
     };
-    let found = read_checked(path, HEADER, count * PER_VOXEL, ours)?.ok_or_else(|| {
+    let file = atomic::open_regular(path, u64::MAX)?;
+    let mut head = Vec::with_capacity(HEADER + CHECKSUM);
+    file.take((HEADER + CHECKSUM) as u64).read_to_end(&mut head).map_err(|e| Error::io(path, e))?;
+    let owner = head.get(..HEADER).and_then(ours).ok_or_else(|| {
         Error::file(
             path,
             "is not the guided-synthesis cache of these inputs; solidtex does not overwrite it (move it away or \
              give another --cache folder)",
         )
     })?;
-    Ok(found.and_then(|bytes| {
-        let level = le_u32(&bytes, 32);
-        let body = &bytes[HEADER + CHECKSUM..];
-        let value = |i: usize| [0, 4, 8].map(|o| le_u32(body, i * PER_VOXEL + o) as u32);
-        let shown = |i: usize| body[i * PER_VOXEL + 12];
-        let bad = (0..count).map(value).position(|v| (0..3).any(|a| v[a] as usize >= slots[a]));
-        if let Some(i) = bad {
-            return damaged(format!("voxel {i} holds a pixel outside the exemplar"));
-        }
-        if let Some(i) = (0..count).position(|i| shown(i) > MEAN) {
-            return damaged(format!("voxel {i} shows plane {}, not 0-{MEAN}", shown(i)));
-        }
-        let mask = Mask::full(dims);
-        Cached::Good((level, Sparse::compute(&mask, |v| voxel(value(mask.index(v)), shown(mask.index(v))))))
-    }))
+    if owner == Owner::Older {
+        return Ok(Cached::Stale("from an older solidtex (an earlier format)".to_string()));
+    }
+    if size > most {
+        return Ok(Cached::Stale(format!("larger ({size} bytes) than the cache's cap of {most} bytes")));
+    }
+    let bytes = atomic::read_bytes_within(path, most)?;
+    if bytes.len() < HEADER + CHECKSUM {
+        return Ok(damaged(format!("it holds {} bytes, fewer than its header", bytes.len())));
+    }
+    let (fields, rest) = bytes.split_at(HEADER);
+    let (sum, body) = rest.split_at(CHECKSUM);
+    if checksum(fields, body) != sum {
+        return Ok(damaged("its checksum does not match its contents".to_string()));
+    }
+    Ok(match bricks(body, dims, slots, &voxel) {
+        Ok(levels) => Cached::Good(levels),
+        Err(why) => damaged(why),
+    })
 }
 
-/// Write `values` (the whole grid of `level`) under `key`.
-pub fn write(path: &Path, key: u64, level: usize, values: &Sparse<Voxel>) -> Result<()> {
-    let dims = values.dims;
-    let count: usize = dims.iter().product();
+/// A brick read back: its coordinates, flags and values.
+type Brick = ([usize; 3], Bits, Vec<Voxel>);
+
+/// A cache body's bricks, one store per level; what is wrong otherwise.
+fn bricks(
+    mut body: &[u8],
+    dims: &[[usize; 3]],
+    slots: &[[usize; 3]],
+    voxel: &impl Fn(usize, [u32; 3], u8) -> Voxel,
+) -> std::result::Result<Vec<Sparse<Voxel>>, String> {
+    let mut found: Vec<Vec<Brick>> = vec![Vec::new(); dims.len()];
+    let mut seen = std::collections::HashSet::new();
+    while !body.is_empty() {
+        if body.len() < BRICK_HEAD {
+            return Err("a brick is cut short".to_string());
+        }
+        let level = le_u32(body, 0);
+        let brick = [4, 8, 12].map(|at| le_u32(body, at));
+        let bits: Bits = body[16..BRICK_HEAD].try_into().expect("a brick's flags");
+        let Some(level_dims) = dims.get(level) else { return Err(format!("a brick of level {level}")) };
+        let inside = (0..3).all(|a| brick[a] * BRICK < level_dims[a]);
+        if !inside || !seen.insert((level, brick)) {
+            return Err(format!("brick {brick:?} of level {level} lies outside the grid or comes twice"));
+        }
+        let held: usize = bits.iter().map(|r| r.count_ones() as usize).sum();
+        let end = BRICK_HEAD + held * PER_VOXEL;
+        if body.len() < end {
+            return Err("a brick is cut short".to_string());
+        }
+        let mut values = vec![Voxel::default(); BRICK * BRICK * BRICK];
+        let mut at = BRICK_HEAD;
+        for (k, value) in values.iter_mut().enumerate().filter(|(k, _)| bits[k / BRICK] >> (k % BRICK) & 1 == 1) {
+            let slot = [0, 4, 8].map(|o| le_u32(body, at + o) as u32);
+            let shown = body[at + 12];
+            if (0..3).any(|a| slot[a] as usize >= slots[level][a]) {
+                return Err(format!("voxel {k} of brick {brick:?} holds a pixel outside the exemplar"));
+            }
+            if shown > MEAN {
+                return Err(format!("voxel {k} of brick {brick:?} shows plane {shown}, not 0-{MEAN}"));
+            }
+            *value = voxel(level, slot, shown);
+            at += PER_VOXEL;
+        }
+        found[level].push((brick, bits, values));
+        body = &body[end..];
+    }
+    Ok(found.into_iter().zip(dims).map(|(bricks, d)| Sparse::from_bricks(*d, bricks)).collect())
+}
+
+/// Write every level's bricks (`levels`, coarsest first, the finest of `levels.len()`
+/// levels last) under `key`.
+pub fn write(path: &Path, key: u64, levels: &[Sparse<Voxel>]) -> Result<()> {
     let mut fields = Vec::with_capacity(HEADER);
     fields.extend_from_slice(MAGIC);
     fields.extend_from_slice(&key.to_le_bytes());
-    fields.extend_from_slice(&(level as u32).to_le_bytes());
-    for d in dims {
+    fields.extend_from_slice(&(levels.len() as u32).to_le_bytes());
+    for d in levels.last().map_or([0; 3], |l| l.dims) {
         fields.extend_from_slice(&(d as u32).to_le_bytes());
     }
-    let mask = Mask::full(dims);
-    let mut body = Vec::with_capacity(count * PER_VOXEL);
-    for i in 0..count {
-        let v = values.at(mask.voxel(i).map(|c| c as i64));
-        for s in v.slot {
-            body.extend_from_slice(&s.to_le_bytes());
+    let mut body = Vec::new();
+    for (level, values) in levels.iter().enumerate() {
+        for (brick, bits, voxels) in values.bricks() {
+            for c in [level, brick[0], brick[1], brick[2]] {
+                body.extend_from_slice(&(c as u32).to_le_bytes());
+            }
+            body.extend_from_slice(bits);
+            for (_, v) in voxels.iter().enumerate().filter(|(k, _)| bits[k / BRICK] >> (k % BRICK) & 1 == 1) {
+                v.slot.iter().for_each(|s| body.extend_from_slice(&s.to_le_bytes()));
+                body.push(v.shown);
+            }
         }
-        body.push(v.shown);
     }
     write_checked(path, &fields, &body)
 }
@@ -329,46 +403,60 @@ mod tests {
         assert_eq!(read_cube(&path, 7, 2, 3, RANGE).unwrap(), Cached::Good(colours));
     }
 
-    /// A coarse level reads back as written, the plane each voxel shows with it; another
-    /// key or grid is refused by name; a flipped byte, a slot outside the exemplar, a shown
-    /// plane past the mean or the format before it makes it stale.
+    /// Bricks of two levels read back as written, the plane each voxel shows with them;
+    /// another key or grid is refused by name; a flipped byte, a slot outside the exemplar,
+    /// a shown plane past the mean, a brick cut short, a file over the cap or the format
+    /// before it makes it stale.
     #[test]
-    fn a_level_reads_back_and_a_damaged_one_is_stale() {
+    fn bricks_read_back_and_damaged_ones_are_stale() {
+        use crate::synth::region::Mask;
         let dir = tempfile::tempdir().unwrap();
         let path = path(dir.path(), 9);
-        let dims = [3, 2, 2];
-        let voxel = |slot: [u32; 3], shown: u8| Voxel { slot, shown, ..Voxel::default() };
-        let read = |key, dims, slots| read(&path, key, dims, slots, voxel);
-        assert!(matches!(read(9, dims, [20; 3]).unwrap(), Cached::Missing));
-        let mask = Mask::full(dims);
-        let values =
-            Sparse::compute(&mask, |v| voxel([v[0] as u32, v[1] as u32 + 4, v[2] as u32 + 8], (v[0] % 4) as u8));
-        write(&path, 9, 2, &values).unwrap();
-        let Cached::Good((level, back)) = read(9, dims, [20; 3]).unwrap() else { panic!("not good") };
-        assert_eq!(level, 2);
-        assert!(
-            (0..12).all(|i| back.at(mask.voxel(i).map(|c| c as i64)) == values.at(mask.voxel(i).map(|c| c as i64)))
-        );
-        for (key, dims) in [(8, dims), (9, [2, 3, 2])] {
-            let err = read(key, dims, [20; 3]).unwrap_err().to_string();
+        let dims = [[5, 4, 4], [10, 8, 7]];
+        let voxel = |_: usize, slot: [u32; 3], shown: u8| Voxel { slot, shown, ..Voxel::default() };
+        let read = |key, dims: &[[usize; 3]], slots: &[[usize; 3]], most| read(&path, key, dims, slots, most, voxel);
+        let slots = [[40; 3], [40; 3]];
+        assert!(matches!(read(9, &dims, &slots, 1 << 20).unwrap(), Cached::Missing));
+        let value = |v: [usize; 3]| voxel(0, [v[0] as u32, v[1] as u32 + 4, v[2] as u32 + 8], (v[0] % 4) as u8);
+        let mut fine = Mask::empty(dims[1]);
+        [[9, 7, 6], [0, 0, 0], [3, 5, 1]].into_iter().for_each(|v| fine.insert(v));
+        let levels = [Sparse::compute(&Mask::full(dims[0]), value), Sparse::compute(&fine, value)];
+        write(&path, 9, &levels).unwrap();
+        let Cached::Good(back) = read(9, &dims, &slots, 1 << 20).unwrap() else { panic!("not good") };
+        for (level, (b, l)) in back.iter().zip(&levels).enumerate() {
+            let every = (0..dims[level].iter().product()).map(|i| crate::synth::region::grid_voxel(dims[level], i));
+            for v in every {
+                assert_eq!(b.holds(v), l.holds(v), "level {level} voxel {v:?}");
+                assert_eq!(b.at(v.map(|c| c as i64)), l.at(v.map(|c| c as i64)), "level {level} voxel {v:?}");
+            }
+        }
+        for (key, dims) in [(8, &dims[..]), (9, &[[5, 4, 4], [10, 8, 8]][..]), (9, &dims[1..])] {
+            let err = read(key, dims, &slots, 1 << 20).unwrap_err().to_string();
             assert!(err.contains("guided-") && err.contains("does not overwrite"), "{err}");
         }
-        assert!(stale_why(read(9, dims, [20, 20, 9]).unwrap()).contains("outside the exemplar"));
+        assert!(stale_why(read(9, &dims, &[[40; 3], [40, 40, 9]], 1 << 20).unwrap()).contains("outside the exemplar"));
         let good = std::fs::read(&path).unwrap();
+        assert!(stale_why(read(9, &dims, &slots, 1000).unwrap()).contains("cap of 1000 bytes"));
+        let resealed = |bytes: &mut Vec<u8>| {
+            let sum = checksum(&bytes[..HEADER], &bytes[HEADER + CHECKSUM..]);
+            bytes[HEADER..HEADER + CHECKSUM].copy_from_slice(&sum);
+        };
         let mut past = good.clone();
-        past[HEADER + CHECKSUM + 12] = MEAN + 1;
-        let sum = checksum(&past[..HEADER], &past[HEADER + CHECKSUM..]);
-        past[HEADER..HEADER + CHECKSUM].copy_from_slice(&sum);
-        std::fs::write(&path, past).unwrap();
-        assert!(stale_why(read(9, dims, [20; 3]).unwrap()).contains("shows plane 4"));
+        past[HEADER + CHECKSUM + BRICK_HEAD + 12] = MEAN + 1;
+        resealed(&mut past);
+        std::fs::write(&path, &past).unwrap();
+        assert!(stale_why(read(9, &dims, &slots, 1 << 20).unwrap()).contains("shows plane 4"));
+        let mut short = good[..good.len() - 3].to_vec();
+        resealed(&mut short);
+        std::fs::write(&path, &short).unwrap();
+        assert!(stale_why(read(9, &dims, &slots, 1 << 20).unwrap()).contains("cut short"));
         let mut older = good.clone();
-        older[..MAGIC.len()].copy_from_slice(OLD_MAGICS[1]);
+        older[..MAGIC.len()].copy_from_slice(OLD_MAGICS[2]);
         std::fs::write(&path, older).unwrap();
-        assert!(stale_why(read(9, dims, [20; 3]).unwrap()).contains("older solidtex"));
-        std::fs::write(&path, good).unwrap();
-        let mut flipped = std::fs::read(&path).unwrap();
+        assert!(stale_why(read(9, &dims, &slots, 1 << 20).unwrap()).contains("older solidtex"));
+        let mut flipped = good.clone();
         flipped[HEADER + CHECKSUM + 5] ^= 0x80;
         std::fs::write(&path, flipped).unwrap();
-        assert!(stale_why(read(9, dims, [20; 3]).unwrap()).contains("checksum"));
+        assert!(stale_why(read(9, &dims, &slots, 1 << 20).unwrap()).contains("checksum"));
     }
 }

@@ -99,7 +99,7 @@ pub fn picture(
                 seed: spec.seed,
                 options,
             };
-            let (cut, _) = solid::cut(&setup, &domain, mesh, view, None, progress)?;
+            let (cut, _) = solid::cut(&setup, &domain, mesh, view, &[], progress)?;
             let grey = cut.channel_count() < 4;
             cut.data()
                 .chunks_exact(cut.channel_count())

@@ -40,7 +40,7 @@
 
 use super::cube::Cube;
 use super::occupancy::Balance;
-use super::region::{Mask, Sparse};
+use super::region::{Mask, Sparse, grid_voxel};
 use super::triples::Triples;
 use crate::error::{Error, Result};
 use crate::guided::field::{FrameGrid, ScalarGrid};
@@ -472,27 +472,31 @@ impl Setup<'_> {
     }
 }
 
+/// Per level, the values an earlier run kept (a cache): a voxel held there is read, not
+/// computed again. A level past the slice's end keeps nothing.
+pub type Kept<'a> = [Option<&'a Sparse<Voxel>>];
+
 /// The voxels each level and version needs for `request` (voxels of the finest level):
-/// `masks[level][version]`, version 0 the upsampled (or initialized) one. Levels below
-/// `first` (taken from an earlier run) get no masks.
-pub fn plan(setup: &Setup, request: &Mask, first: usize) -> Vec<Vec<Mask>> {
+/// `masks[level][version]`, version 0 the upsampled (or initialized) one. A level's last
+/// version leaves out what `kept` holds there, and its coarser levels serve only the rest.
+pub fn plan(setup: &Setup, request: &Mask, kept: &Kept) -> Vec<Vec<Mask>> {
     let dims = setup.level_dims();
     let levels = dims.len();
     let mut out: Vec<Vec<Mask>> = vec![Vec::new(); levels];
     let mut last = request.clone();
-    for level in (first..levels).rev() {
+    for level in (0..levels).rev() {
         let (passes, reach) = (setup.options.passes_at(level), setup.options.reach_at(level));
-        let mut versions = vec![last];
+        let needed = match kept.get(level).copied().flatten() {
+            Some(k) => last.without(k.mask()),
+            None => last,
+        };
+        let mut versions = vec![needed];
         for _ in 0..passes {
             let grown = versions[versions.len() - 1].grown(reach);
             versions.push(grown);
         }
         versions.reverse();
-        if level > 0 {
-            last = versions[0].parents(dims[level - 1]);
-        } else {
-            last = Mask::empty([0; 3]);
-        }
+        last = if level > 0 { versions[0].parents(dims[level - 1]) } else { Mask::empty([0; 3]) };
         out[level] = versions;
     }
     out
@@ -500,8 +504,10 @@ pub fn plan(setup: &Setup, request: &Mask, first: usize) -> Vec<Vec<Mask>> {
 
 /// What a run gives: the final version of its last level, and how much it computed.
 pub struct Synthesized {
-    /// The last level's final values.
+    /// The last level's final values (the voxels computed in this run).
     pub values: Sparse<Voxel>,
+    /// The coarser levels' final values computed in this run, coarsest first.
+    pub coarser: Vec<Sparse<Voxel>>,
     /// The last level's index.
     pub finest: usize,
     /// Voxels materialized (every computed level's version 0).
@@ -515,31 +521,48 @@ impl Synthesized {
     pub fn colour(&self, setup: &Setup, v: [usize; 3]) -> Vec<f32> {
         self.values.at(v.map(|c| c as i64)).colour[..setup.exemplars.channels()].to_vec()
     }
+
+    /// Every level's final values computed in this run, coarsest first.
+    pub fn levels(&self) -> impl Iterator<Item = &Sparse<Voxel>> {
+        self.coarser.iter().chain([&self.values])
+    }
 }
 
-/// Synthesize the voxels `masks` lists ([`plan`]). `from`: a level computed earlier over
-/// the whole grid (its index and final values, e.g. from a cache): the levels up to it are
-/// read from it, not recomputed.
-pub fn run(
-    setup: &Setup,
-    masks: &[Vec<Mask>],
-    from: Option<(usize, &Sparse<Voxel>)>,
-    progress: &dyn Progress,
-) -> Result<Synthesized> {
+/// A level's values as a finer level reads them: computed in this run, else kept.
+struct Level<'a> {
+    made: &'a Sparse<Voxel>,
+    kept: Option<&'a Sparse<Voxel>>,
+}
+
+impl Level<'_> {
+    fn at(&self, v: [usize; 3]) -> Voxel {
+        let v = [0, 1, 2].map(|a| v[a].min(self.made.dims[a] - 1));
+        match self.kept {
+            Some(kept) if !self.made.holds(v) => kept.at(v.map(|c| c as i64)),
+            _ => self.made.at(v.map(|c| c as i64)),
+        }
+    }
+}
+
+/// Synthesize the voxels `masks` lists ([`plan`]), reading what `kept` holds (the same
+/// `kept` the plan was made with).
+pub fn run(setup: &Setup, masks: &[Vec<Mask>], kept: &Kept, progress: &dyn Progress) -> Result<Synthesized> {
     let levels = masks.len();
-    let start = from.map_or(0, |(level, _)| level + 1);
-    let mut made: Option<Sparse<Voxel>> = None;
+    let mut made: Vec<Sparse<Voxel>> = Vec::with_capacity(levels);
     let (mut voxels, mut corrections) = (0, 0);
-    let total: f64 = masks[start..].iter().flatten().map(|m| m.count() as f64).sum::<f64>().max(1.0);
+    let total: f64 = masks.iter().flatten().map(|m| m.count() as f64).sum::<f64>().max(1.0);
     let mut done = 0.0;
-    for (level, versions) in masks.iter().enumerate().skip(start) {
+    for (level, versions) in masks.iter().enumerate() {
         if progress.cancelled() {
             return Err(Error::Cancelled);
         }
         let stop = || progress.cancelled();
-        let mut current = match made.as_ref().or(from.map(|(_, values)| values)) {
+        let mut current = match made.last() {
             None => Sparse::compute(&versions[0], |v| initial(setup, v)),
-            Some(p) => Sparse::compute(&versions[0], |v| upsampled(setup, level, p, v)),
+            Some(p) => {
+                let parents = Level { made: p, kept: kept.get(level - 1).copied().flatten() };
+                Sparse::compute(&versions[0], |v| upsampled(setup, level, &parents, v))
+            }
         };
         voxels += versions[0].count();
         done += versions[0].count() as f64;
@@ -559,23 +582,19 @@ pub fn run(
             done += mask.count() as f64;
             progress.update(&format!("level {}/{levels}, pass {pass}", level + 1), (done / total) as f32);
         }
-        if versions.last().is_some_and(|m| m.on.iter().all(|on| *on)) {
+        if versions.last().is_some_and(Mask::is_full) {
             show_level(setup, level, &current, progress);
         }
-        made = Some(current);
+        made.push(current);
     }
-    let values = match (made, from) {
-        (Some(values), _) => values,
-        (None, Some((_, given))) => given.clone(),
-        (None, None) => return Err(Error::invalid("guided synthesis was asked for no level")),
-    };
-    Ok(Synthesized { values, finest: levels - 1, voxels, corrections })
+    let values = made.pop().ok_or_else(|| Error::invalid("guided synthesis was asked for no level"))?;
+    Ok(Synthesized { values, coarser: made, finest: levels - 1, voxels, corrections })
 }
 
 /// The colour balance of `level` when its options ask for one and every version covers
 /// the whole grid.
 fn balance_at(setup: &Setup, level: usize, versions: &[Mask]) -> Option<Balance> {
-    let whole = versions.iter().all(|m| m.on.iter().all(|on| *on));
+    let whole = versions.iter().all(Mask::is_full);
     let weighed = setup.options.balance_every_level || level + 1 == setup.options.levels;
     if setup.options.histogram <= 0.0 || setup.exemplars.cube.is_some() || !whole || !weighed {
         return None;
@@ -612,15 +631,14 @@ fn balanced_pass(
 /// How many voxels of `values` (a whole grid) show a colour of each bin.
 fn bin_counts(setup: &Setup, balance: &Balance, values: &Sparse<Voxel>) -> Vec<u64> {
     use rayon::prelude::*;
-    let mask = Mask::full(values.dims);
     let shown = setup.exemplars.channels();
     let bins = balance.bins();
-    (0..mask.on.len())
+    (0..values.dims.iter().product())
         .into_par_iter()
         .fold(
             || vec![0u64; bins.count],
             |mut counts, i| {
-                let colour = values.at(mask.voxel(i).map(|c| c as i64)).colour;
+                let colour = values.at(grid_voxel(values.dims, i).map(|c| c as i64)).colour;
                 counts[bins.of_colour(&colour[..shown])] += 1;
                 counts
             },
@@ -640,12 +658,12 @@ fn show_level(setup: &Setup, level: usize, values: &Sparse<Voxel>, progress: &dy
 pub fn samples(setup: &Setup, values: &Sparse<Voxel>, with_depth: bool) -> Result<Vec<f32>> {
     let shown = setup.exemplars.channels();
     let depth = setup.exemplars.depth.filter(|_| with_depth);
-    let mask = Mask::full(values.dims);
+    let count: usize = values.dims.iter().product();
     let mut data = Vec::new();
-    data.try_reserve_exact(mask.on.len() * (shown + usize::from(depth.is_some())))
+    data.try_reserve_exact(count * (shown + usize::from(depth.is_some())))
         .map_err(|_| Error::invalid("not enough memory for the solid's samples"))?;
-    for i in 0..mask.on.len() {
-        let colour = values.at(mask.voxel(i).map(|c| c as i64)).colour;
+    for i in 0..count {
+        let colour = values.at(grid_voxel(values.dims, i).map(|c| c as i64)).colour;
         data.extend_from_slice(&colour[..shown]);
         data.extend(depth.map(|d| colour[d]));
     }
@@ -732,9 +750,9 @@ fn initial(setup: &Setup, v: [usize; 3]) -> Voxel {
 
 /// A voxel of `level` from its parent: the parent's pixels doubled, plus the child's
 /// offset from the parent's place turned into the parent's frame (Zhang et al., Eq. 3).
-fn upsampled(setup: &Setup, level: usize, parents: &Sparse<Voxel>, v: [usize; 3]) -> Voxel {
+fn upsampled(setup: &Setup, level: usize, parents: &Level, v: [usize; 3]) -> Voxel {
     let p = v.map(|c| c / 2);
-    let parent = parents.at(p.map(|c| c as i64));
+    let parent = parents.at(p);
     let offset = Vec3::from_array([0, 1, 2].map(|a| (v[a] - 2 * p[a]) as f32));
     let local = setup.frame(level - 1, p).transpose() * offset;
     if let Some(cube) = &setup.exemplars.cube {
@@ -1176,15 +1194,15 @@ mod tests {
     fn a_run_shows_its_levels_and_stops_within_a_pass() {
         let (exemplars, frames) = world(32);
         let setup = setup(&exemplars, &frames, 32);
-        let masks = plan(&setup, &Mask::full([32; 3]), 0);
+        let masks = plan(&setup, &Mask::full([32; 3]), &[]);
         let watch = Watch { stop_after: usize::MAX, ..Watch::default() };
-        run(&setup, &masks, None, &watch).unwrap();
+        run(&setup, &masks, &[], &watch).unwrap();
         assert_eq!(*watch.levels.lock().unwrap(), [(1, [16; 3], 3), (2, [32; 3], 3)]);
         let polls = watch.polls.into_inner();
         // 2 passes over 2³ bricks and 2 over 4³ bricks, each brick asking once
         assert!(polls >= 2 * 8 + 2 * 64, "{polls} polls");
         let watch = Watch { stop_after: 20, ..Watch::default() };
-        assert!(matches!(run(&setup, &masks, None, &watch), Err(Error::Cancelled)));
+        assert!(matches!(run(&setup, &masks, &[], &watch), Err(Error::Cancelled)));
         assert!(watch.levels.lock().unwrap().len() <= 1);
     }
 
@@ -1280,16 +1298,16 @@ mod tests {
     fn a_child_shows_the_plane_its_parent_shows() {
         let (exemplars, frames) = world(32);
         let setup = setup(&exemplars, &frames, 32);
-        let mut masks = plan(&setup, &Mask::full([32; 3]), 0);
+        let mut masks = plan(&setup, &Mask::full([32; 3]), &[]);
         masks.truncate(1);
-        let coarse = run(&setup, &masks, None, &crate::progress::NoProgress).unwrap().values;
+        let coarse = run(&setup, &masks, &[], &crate::progress::NoProgress).unwrap().values;
         let shown = |v: [usize; 3]| coarse.at(v.map(|c| c as i64)).shown;
         let parents: Vec<[usize; 3]> = (0..16 * 16 * 16).map(|i| [i % 16, i / 16 % 16, i / 256]).collect();
         assert!(parents.iter().all(|&p| shown(p) < MEAN), "every corrected voxel shows one plane");
         let planes: std::collections::BTreeSet<u8> = parents.iter().map(|&p| shown(p)).collect();
         assert!(planes.len() > 1, "the planes shown vary: {planes:?}");
         for p in parents.iter().step_by(37) {
-            let child = upsampled(&setup, 1, &coarse, p.map(|c| 2 * c + 1));
+            let child = upsampled(&setup, 1, &Level { made: &coarse, kept: None }, p.map(|c| 2 * c + 1));
             assert_eq!(child.shown, shown(*p));
             assert_eq!(child, setup.showing(1, child.slot, usize::from(child.shown)));
         }
@@ -1313,28 +1331,55 @@ mod tests {
         for y in 0..side {
             for x in 0..side {
                 let v = [x, y, (20 + x / 3).min(side - 1)];
-                let at = request.index(v);
-                request.on[at] = true;
+                request.insert(v);
                 cut.push(v);
             }
         }
-        let alone = run(setup, &plan(setup, &request, 0), None, &crate::progress::NoProgress).unwrap();
+        let alone = run(setup, &plan(setup, &request, &[]), &[], &crate::progress::NoProgress).unwrap();
         let full_mask = Mask::full(setup.dims);
         let pool = |threads: usize| rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
         let whole =
-            pool(1).install(|| run(setup, &plan(setup, &full_mask, 0), None, &crate::progress::NoProgress).unwrap());
+            pool(1).install(|| run(setup, &plan(setup, &full_mask, &[]), &[], &crate::progress::NoProgress).unwrap());
         assert_eq!(colours(setup, &alone, &cut), colours(setup, &whole, &cut));
         assert!(alone.voxels < whole.voxels, "{} voxels for the cut, {} for the whole", alone.voxels, whole.voxels);
-        let every: Vec<[usize; 3]> = (0..side * side * side).map(|i| full_mask.voxel(i)).collect();
+        let every: Vec<[usize; 3]> = (0..side * side * side).map(|i| grid_voxel(setup.dims, i)).collect();
         let three =
-            pool(3).install(|| run(setup, &plan(setup, &full_mask, 0), None, &crate::progress::NoProgress).unwrap());
+            pool(3).install(|| run(setup, &plan(setup, &full_mask, &[]), &[], &crate::progress::NoProgress).unwrap());
         assert_eq!(colours(setup, &whole, &every), colours(setup, &three, &every));
         // a level taken over from an earlier whole run (a cache) gives the same cut
-        let mut coarse_masks = plan(setup, &full_mask, 0);
+        let mut coarse_masks = plan(setup, &full_mask, &[]);
         coarse_masks.truncate(1);
-        let coarse = run(setup, &coarse_masks, None, &crate::progress::NoProgress).unwrap().values;
-        let resumed = run(setup, &plan(setup, &request, 1), Some((0, &coarse)), &crate::progress::NoProgress).unwrap();
+        let coarse = run(setup, &coarse_masks, &[], &crate::progress::NoProgress).unwrap().values;
+        let kept = [Some(&coarse)];
+        let resumed = run(setup, &plan(setup, &request, &kept), &kept, &crate::progress::NoProgress).unwrap();
         assert_eq!(colours(setup, &resumed, &cut), colours(setup, &whole, &cut));
+        // what a cut computed, kept (a brick cache): another cut shows the whole solid's
+        // colours, a cut beside it reads the coarser voxels they share and computes fewer,
+        // the same cut again computes nothing
+        let levels: Vec<&Sparse<Voxel>> = alone.levels().collect();
+        let kept: Vec<Option<&Sparse<Voxel>>> = levels.iter().map(|l| Some(*l)).collect();
+        let merged = |out: &Synthesized, v: [usize; 3]| match out.values.holds(v) {
+            true => out.colour(setup, v),
+            false => levels[levels.len() - 1].at(v.map(|c| c as i64)).colour[..setup.exemplars.channels()].to_vec(),
+        };
+        let plane = |f: &dyn Fn(usize, usize) -> [usize; 3]| -> Vec<[usize; 3]> {
+            (0..side * side).map(|i| f(i % side, i / side)).collect()
+        };
+        let crossing = plane(&|a, b| [a, 24, b]);
+        let beside = plane(&|x, y| [x, y, (22 + x / 3).min(side - 1)]);
+        for (voxels, shares_much) in [(crossing, false), (beside, true)] {
+            let mut other = Mask::empty(setup.dims);
+            voxels.iter().for_each(|v| other.insert(*v));
+            let fresh = run(setup, &plan(setup, &other, &[]), &[], &crate::progress::NoProgress).unwrap();
+            let reused = run(setup, &plan(setup, &other, &kept), &kept, &crate::progress::NoProgress).unwrap();
+            let shown: Vec<f32> = voxels.iter().flat_map(|v| merged(&reused, *v)).collect();
+            assert_eq!(shown, colours(setup, &whole, &voxels));
+            if shares_much {
+                assert!(reused.voxels < fresh.voxels, "{} voxels kept, {} fresh", reused.voxels, fresh.voxels);
+            }
+        }
+        let again = run(setup, &plan(setup, &request, &kept), &kept, &crate::progress::NoProgress).unwrap();
+        assert_eq!((again.voxels, again.corrections), (0, 0));
     }
 
     /// A tiling 32³ cube of sharp-edged blobs (gradient noise cut at 0) with a little noise, a solid exemplar of two
@@ -1355,7 +1400,7 @@ mod tests {
         const SIDE: usize = 48;
         let frames = world(SIDE).1;
         let setup = Setup { exemplars, ..setup(exemplars, &frames, SIDE) };
-        let out = run(&setup, &plan(&setup, &Mask::full([SIDE; 3]), 0), None, &crate::progress::NoProgress).unwrap();
+        let out = run(&setup, &plan(&setup, &Mask::full([SIDE; 3]), &[]), &[], &crate::progress::NoProgress).unwrap();
         let cut: Vec<f32> = (0..SIDE * SIDE).map(|i| out.colour(&setup, [SIDE / 2, i % SIDE, i / SIDE])[0]).collect();
         let cut = Image2d::from_data(SIDE, SIDE, Channel::grey(), cut).unwrap();
         crate::sharpness::compare(&[cut], &cube_slice(), &[0]).unwrap()
@@ -1386,12 +1431,12 @@ mod tests {
     fn the_solid_is_made_of_exemplar_pixels() {
         let (exemplars, frames) = world(32);
         let setup = setup(&exemplars, &frames, 32);
-        let out = run(&setup, &plan(&setup, &Mask::full([32; 3]), 0), None, &crate::progress::NoProgress).unwrap();
+        let out = run(&setup, &plan(&setup, &Mask::full([32; 3]), &[]), &[], &crate::progress::NoProgress).unwrap();
         let image = &exemplars.planes[0][1].colours;
         let range = |c: usize, xs: &[f32]| {
             xs.iter().skip(c).step_by(3).fold((f32::MAX, f32::MIN), |(lo, hi), v| (lo.min(*v), hi.max(*v)))
         };
-        let all: Vec<[usize; 3]> = (0..32 * 32 * 32).map(|i| Mask::full([32; 3]).voxel(i)).collect();
+        let all: Vec<[usize; 3]> = (0..32 * 32 * 32).map(|i| grid_voxel([32; 3], i)).collect();
         let solid = colours(&setup, &out, &all);
         let pixels: Vec<&[f32]> = image.chunks_exact(3).collect();
         for colour in solid.chunks_exact(3) {
@@ -1449,11 +1494,11 @@ mod tests {
                 seed: 2,
                 options,
             };
-            let out = run(&setup, &plan(&setup, &Mask::full([32; 3]), 0), None, &crate::progress::NoProgress).unwrap();
+            let out = run(&setup, &plan(&setup, &Mask::full([32; 3]), &[]), &[], &crate::progress::NoProgress).unwrap();
             // how far each voxel's red is from what its depth asks for (1 - depth)
             let mut error = 0.0;
             for i in 0..32 * 32 * 32 {
-                let v = Mask::full([32; 3]).voxel(i);
+                let v = grid_voxel([32; 3], i);
                 let want = 1.0 - (v[0] as f32 + 0.5) / 32.0;
                 error += (out.colour(&setup, v)[0] - want).abs();
             }
@@ -1495,7 +1540,7 @@ mod tests {
             seed: 4,
             options,
         };
-        let out = run(&setup, &plan(&setup, &Mask::full([32; 3]), 0), None, &crate::progress::NoProgress).unwrap();
+        let out = run(&setup, &plan(&setup, &Mask::full([32; 3]), &[]), &[], &crate::progress::NoProgress).unwrap();
         // the share of the voxels of layer x (depth (x + 0.5) / 32) showing `colour`
         let share = |x: usize, colour: [f32; 3]| {
             let near = |v: [usize; 3]| {
@@ -1535,10 +1580,10 @@ mod tests {
             let exemplars = Exemplars::prepare([&image, &image, &image], &options).unwrap();
             assert_eq!(exemplars.channels(), 3, "the mask is not shown");
             let setup = setup(&exemplars, &frames, 32);
-            let out = run(&setup, &plan(&setup, &Mask::full([32; 3]), 0), None, &crate::progress::NoProgress).unwrap();
+            let out = run(&setup, &plan(&setup, &Mask::full([32; 3]), &[]), &[], &crate::progress::NoProgress).unwrap();
             let mut agree = 0;
             for i in 0..32 * 32 * 32 {
-                let slot = out.values.at(Mask::full([32; 3]).voxel(i).map(|c| c as i64)).slot;
+                let slot = out.values.at(grid_voxel([32; 3], i).map(|c| c as i64)).slot;
                 let mask = [0, 1, 2].map(|a| {
                     let p = exemplars.planes[a][1].centres[slot[a] as usize] as usize;
                     blob(p % 32, p / 32)

@@ -91,7 +91,7 @@ pub fn synthesize(
     let depth = layered.then(|| depth_along_z(dims[2]));
     let wrap = [params.tileable, params.tileable, params.tileable && !layered];
     let setup = Setup { exemplars: &exemplars, frames: None, wrap, depth: depth.as_ref(), dims, seed, options };
-    let mut out = coords::run(&setup, &coords::plan(&setup, &Mask::full(dims), 0), None, progress)?;
+    let mut out = coords::run(&setup, &coords::plan(&setup, &Mask::full(dims), &[]), &[], progress)?;
     if labels {
         for _ in 0..SETTLE_ROUNDS {
             out.values = coords::settled(&setup, &out.values);

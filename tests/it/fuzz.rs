@@ -85,7 +85,7 @@ const fn file(name: &'static str, case: &'static str, seeds: fn(&Path) -> Vec<Fi
 
 type Reader = fn(&Path) -> solidtex::Result<()>;
 
-const TARGETS: [Target; 19] = [
+const TARGETS: [Target; 20] = [
     file("obj", "case.obj", obj_seeds, read_mesh),
     file("stl_binary", "case.stl", stl_binary_seeds, read_mesh),
     file("stl_ascii", "case.stl", stl_ascii_seeds, read_mesh),
@@ -103,6 +103,7 @@ const TARGETS: [Target; 19] = [
     file("fill_spec", "case.toml", fill_spec_seeds, read_fill_spec),
     file("lst", "case.lst", lst_seeds, read_lst),
     file("guided_cube", "case.cache", guided_cube_seeds, read_guided_cube),
+    file("guided_bricks", "case.cache", guided_brick_seeds, read_guided_bricks),
     file("snapshot", "case.snap", snapshot_seeds, read_snapshot),
     file("snapshot_check", "case.snap", snapshot_check_seeds, check_snapshot),
 ];
@@ -123,6 +124,29 @@ fn guided_cube_seeds(dir: &Path) -> Vec<Files> {
     let (key, side, channels) = CUBE;
     let colours: Vec<f32> = (0..side * side * side * channels).map(|i| (i % 10) as f32 / 10.0).collect();
     vec![written(dir, "cube.cache", |p| io::guided_cache::write_cube(p, key, side, channels, &colours))]
+}
+
+/// The key and level sizes of the guided brick seeds.
+const BRICKS: (u64, [[usize; 3]; 2]) = (9, [[5, 4, 4], [10, 8, 7]]);
+
+fn read_guided_bricks(path: &Path) -> solidtex::Result<()> {
+    let voxel = |_, slot, shown| solidtex::synth::coords::Voxel { slot, shown, ..Default::default() };
+    io::guided_cache::read(path, BRICKS.0, &BRICKS.1, &[[40; 3]; 2], 1 << 20, voxel).map(drop)
+}
+
+/// A guided-synthesis cache of two levels' bricks as `guided --cache` keeps it.
+fn guided_brick_seeds(dir: &Path) -> Vec<Files> {
+    use solidtex::synth::region::{Mask, Sparse};
+    let (key, dims) = BRICKS;
+    let value = |v: [usize; 3]| solidtex::synth::coords::Voxel {
+        slot: [v[0] as u32, v[1] as u32, v[2] as u32 + 3],
+        shown: (v[0] % 4) as u8,
+        ..Default::default()
+    };
+    let mut fine = Mask::empty(dims[1]);
+    [[9, 7, 6], [0, 0, 0], [3, 5, 1]].into_iter().for_each(|v| fine.insert(v));
+    let levels = [Sparse::compute(&Mask::full(dims[0]), value), Sparse::compute(&fine, value)];
+    vec![written(dir, "bricks.cache", |p| io::guided_cache::write(p, key, &levels))]
 }
 
 fn read_skin(path: &Path) -> solidtex::Result<()> {

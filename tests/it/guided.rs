@@ -132,17 +132,23 @@ fn a_guided_cut_is_synthesized_on_demand_and_cached() {
         std::fs::remove_file(&third).unwrap();
     }
 
-    // matched as planes, an exemplar too small for a second level has nothing to cache:
-    // refused, not a crash; its solid cube has levels enough
+    // matched as planes, an exemplar too small for a second level keeps its one level's
+    // bricks: a second cut reads them all and shows the same picture
     let small = at(d, "small.png");
     assert!(solidtex(&["draw", "kiwi", "--size", "24x24", "-o", &small]).status.success());
     let args = ["guided", &fruit, "--spec", &spec, "--exemplar", &small, "--res", "32", "--cut", "0,0,0,0,0,1"];
     let cache2 = at(d, "cache2");
-    let run = solidtex(&[&args[..], &["--planes", "--cache", &cache2, "-o", &at(d, "small_cut.png")]].concat());
-    crate::support::assert_fails(&run, &["one level only", "--cache"]);
-    assert!(!d.join("small_cut.png").exists());
-    let run = solidtex(&[&args[..], &["--cache", &cache2, "-o", &at(d, "small_cut.png")]].concat());
+    let (one, two) = (at(d, "small_cut.png"), at(d, "small_again.png"));
+    let run = solidtex(&[&args[..], &["--planes", "--cache", &cache2, "-o", &one]].concat());
     assert!(run.status.success(), "{}", stderr(&run));
+    let run = solidtex(&[&args[..], &["--planes", "--cache", &cache2, "-o", &two]].concat());
+    assert!(stderr(&run).contains("voxels synthesized: 0 of"), "{}", stderr(&run));
+    assert!(!stderr(&run).contains("misses the model"), "{}", stderr(&run));
+    assert_eq!(std::fs::read(&one).unwrap(), std::fs::read(&two).unwrap());
+    let run = solidtex(&[&args[..], &["--cache", &cache2, "-o", &at(d, "small_cube.png")]].concat());
+    assert!(run.status.success(), "{}", stderr(&run));
+    let run = solidtex(&[&args[..], &["--cache", &cache2, "--cache-mb", "8", "-o", &at(d, "x.png")]].concat());
+    crate::support::assert_usage(&run, &["--cache-mb 8", "16 to 65536"]);
 }
 
 /// A photo's guided cut is as sharp as the photo: the sharpness line `guided` prints for
