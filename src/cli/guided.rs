@@ -483,9 +483,6 @@ fn cube_volume(args: &GuidedArgs, images: &[Image2d; 3]) -> Result<crate::volume
 /// Megabytes the cache may hold in memory.
 const CACHE_MB: std::ops::RangeInclusive<usize> = 16..=65536;
 
-/// Bytes a cached brick takes in the file at most (its head and every voxel).
-const CACHED_BRICK_BYTES: usize = 80 + 13 * 512;
-
 /// Compute every level below the finest over the whole grid into `levels` (the cache's,
 /// coarsest first) unless the cache holds them already or they would take more than a
 /// quarter of its `most` bricks: later cuts then compute only their finest level. Whether
@@ -521,8 +518,7 @@ fn kept_bricks(folder: &Path, setup: &Setup, most: usize) -> Result<(Kept, Vec<S
     let dims = setup.level_dims();
     let slots: Vec<[usize; 3]> = (0..dims.len()).map(|l| setup.exemplars.slot_counts(l)).collect();
     let voxel = |level, slot, shown| setup.restored(level, slot, shown);
-    let limit = (most * CACHED_BRICK_BYTES + 4096) as u64;
-    match guided_cache::read(&path, key, &dims, &slots, limit, voxel)? {
+    match guided_cache::read(&path, key, &dims, &slots, guided_cache::file_bytes(most), voxel)? {
         Cached::Good(levels) => Ok((Kept { path, key }, levels)),
         Cached::Stale(why) => {
             warn_rebuilt(&path, Some(why));

@@ -202,6 +202,11 @@ pub fn path(folder: &Path, key: u64) -> PathBuf {
 /// Bytes of a brick's entry before its voxels: level, coordinates and flags.
 const BRICK_HEAD: usize = 16 + BRICK * BRICK;
 
+/// The most bytes a cache file of `bricks` bricks (every voxel of each held) takes.
+pub fn file_bytes(bricks: usize) -> u64 {
+    (HEADER + CHECKSUM + bricks * (BRICK_HEAD + BRICK * BRICK * BRICK * PER_VOXEL)) as u64
+}
+
 /// The bricks cached under `key` for a grid whose levels have `dims` (coarsest first), one
 /// store per level, or an error naming the file when it is not solidtex's cache of `key`.
 /// A file over `most` bytes is stale (made under a larger cap). Every slot is checked
