@@ -45,6 +45,7 @@ pub mod error;
 pub mod fill;
 pub mod ground_truth;
 pub mod guided;
+pub mod hashing;
 pub mod io;
 pub mod labels;
 pub mod library;

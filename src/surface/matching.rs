@@ -27,6 +27,7 @@
 //! class run in parallel, the points inside one cube in index order.
 
 use crate::error::{Error, Result};
+use crate::hashing::IntMap;
 use crate::noise::mix64;
 use crate::progress::Progress;
 use crate::quality::{BINS, histogram};
@@ -34,7 +35,6 @@ use crate::synth::exemplar::{PrepareOptions, Prepared};
 use crate::volume::{Edge, Image2d, Volume, downsample};
 use glam::Vec3;
 use rayon::prelude::*;
-use std::collections::HashMap;
 
 /// Neighbourhood radius in exemplar pixels of the level.
 const RADIUS: f32 = 4.5;
@@ -171,7 +171,7 @@ fn subsets(points: &Points, levels: usize) -> Vec<Vec<u32>> {
     let mut sets = vec![(0..points.positions.len() as u32).collect::<Vec<u32>>()];
     for level in 1..levels {
         let radius = poisson_radius(points, level);
-        let mut grid: HashMap<[i32; 3], Vec<u32>> = HashMap::new();
+        let mut grid: IntMap<[i32; 3], Vec<u32>> = IntMap::default();
         let mut kept = Vec::new();
         for &p in &sets[level - 1] {
             let at = points.positions[p as usize];
@@ -207,13 +207,13 @@ fn neighbour_cells([x, y, z]: [i32; 3]) -> impl Iterator<Item = [i32; 3]> {
 /// Points bucketed by cubes of one side.
 struct Buckets {
     size: f32,
-    cells: HashMap<[i32; 3], Vec<u32>>,
+    cells: IntMap<[i32; 3], Vec<u32>>,
 }
 
 impl Buckets {
     /// `items[i]` is the point at slot `i`; buckets hold slots.
     fn new(positions: &[Vec3], items: &[u32], size: f32) -> Buckets {
-        let mut cells: HashMap<[i32; 3], Vec<u32>> = HashMap::new();
+        let mut cells: IntMap<[i32; 3], Vec<u32>> = IntMap::default();
         for (slot, &p) in items.iter().enumerate() {
             cells.entry(cell_of(positions[p as usize], size)).or_default().push(slot as u32);
         }

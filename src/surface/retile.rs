@@ -20,11 +20,11 @@
 
 use crate::error::{Error, Result};
 use crate::fill::mesher::closest::Surface;
+use crate::hashing::IntMap;
 use crate::mesh::Mesh;
 use crate::progress::Progress;
 use glam::Vec3;
 use rayon::prelude::*;
-use std::collections::{HashMap, HashSet};
 
 /// Rounds of split, collapse, flip and relax at each edge length.
 const ROUNDS: usize = 5;
@@ -114,37 +114,43 @@ struct Tiling {
     triangles: Vec<[u32; 3]>,
 }
 
-/// Each vertex's neighbours (sorted) and whether it lies on an open border.
+/// Each vertex's neighbours (sorted), whether it lies on an open border, and its
+/// triangles.
 struct Adjacency {
     offsets: Vec<usize>,
     neighbours: Vec<u32>,
     border: Vec<bool>,
+    around: Around,
 }
 
 impl Adjacency {
+    /// Each vertex's neighbours are the other corners of its triangles; an edge that only
+    /// one triangle (or more than two) holds is an open border.
     fn build(vertices: usize, triangles: &[[u32; 3]]) -> Adjacency {
-        let mut edges: Vec<u64> = triangles.iter().flat_map(|&[a, b, c]| [key(a, b), key(b, c), key(c, a)]).collect();
-        edges.sort_unstable();
-        let mut border = vec![false; vertices];
-        let mut pairs: Vec<(u32, u32)> = Vec::with_capacity(edges.len());
-        for run in edges.chunk_by(|x, y| x == y) {
-            let (a, b) = ((run[0] >> 32) as u32, run[0] as u32);
-            if run.len() != 2 {
-                border[a as usize] = true;
-                border[b as usize] = true;
-            }
-            pairs.push((a, b));
-            pairs.push((b, a));
+        let around = triangles_around(vertices, triangles);
+        let lists: Vec<(Vec<u32>, bool)> = (0..vertices)
+            .into_par_iter()
+            .map(|v| {
+                let mut others: Vec<u32> =
+                    around.of(v).iter().flat_map(|&t| triangles[t as usize]).filter(|&w| w != v as u32).collect();
+                others.sort_unstable();
+                let mut border = false;
+                let mut unique = Vec::with_capacity(others.len() / 2 + 1);
+                for run in others.chunk_by(|x, y| x == y) {
+                    border |= run.len() != 2;
+                    unique.push(run[0]);
+                }
+                (unique, border)
+            })
+            .collect();
+        let mut offsets = Vec::with_capacity(vertices + 1);
+        offsets.push(0);
+        for (list, _) in &lists {
+            offsets.push(offsets[offsets.len() - 1] + list.len());
         }
-        pairs.sort_unstable();
-        let mut offsets = vec![0; vertices + 1];
-        for &(a, _) in &pairs {
-            offsets[a as usize + 1] += 1;
-        }
-        for v in 0..vertices {
-            offsets[v + 1] += offsets[v];
-        }
-        Adjacency { offsets, neighbours: pairs.into_iter().map(|(_, b)| b).collect(), border }
+        let border = lists.iter().map(|(_, b)| *b).collect();
+        let neighbours = lists.into_iter().flat_map(|(list, _)| list).collect();
+        Adjacency { offsets, neighbours, border, around }
     }
 
     fn of(&self, v: usize) -> &[u32] {
@@ -160,7 +166,7 @@ impl Tiling {
     /// Splits every edge longer than `limit` at its middle (each triangle into 2, 3 or 4);
     /// the number split.
     fn split_long(&mut self, limit: f32) -> usize {
-        let mut middles: HashMap<u64, u32> = HashMap::new();
+        let mut middles: IntMap<u64, u32> = IntMap::default();
         let limit2 = limit * limit;
         for t in &self.triangles {
             for k in 0..3 {
@@ -222,7 +228,7 @@ impl Tiling {
     fn collapse_short(&mut self, low: f32, high: f32) -> usize {
         let n = self.vertices.len();
         let adjacency = Adjacency::build(n, &self.triangles);
-        let around = triangles_around(n, &self.triangles);
+        let around = &adjacency.around;
         let mut short: Vec<(f32, u32, u32)> = Vec::new();
         for a in 0..n {
             for &b in adjacency.of(a) {
@@ -232,7 +238,7 @@ impl Tiling {
                 }
             }
         }
-        short.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)).then(x.2.cmp(&y.2)));
+        short.par_sort_unstable_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)).then(x.2.cmp(&y.2)));
         let mut locked = vec![false; n];
         let mut into: Vec<u32> = (0..n as u32).collect();
         let mut collapsed = 0;
@@ -241,7 +247,7 @@ impl Tiling {
             if locked[ua] || locked[ub] || adjacency.border[ua] || adjacency.border[ub] {
                 continue;
             }
-            let Some(p) = self.collapse_point(&adjacency, &around, (a, b), high) else { continue };
+            let Some(p) = self.collapse_point(&adjacency, around, (a, b), high) else { continue };
             self.vertices[ua] = p;
             into[ub] = a;
             collapsed += 1;
@@ -320,14 +326,20 @@ impl Tiling {
         let adjacency = Adjacency::build(n, &self.triangles);
         let mut valence: Vec<i32> = (0..n).map(|v| adjacency.of(v).len() as i32).collect();
         let target: Vec<i32> = adjacency.border.iter().map(|&b| if b { 4 } else { 6 }).collect();
-        let mut edges: HashSet<u64> =
-            (0..n).flat_map(|a| adjacency.of(a).iter().map(move |&b| key(a as u32, b))).collect();
-        let mut directed: HashMap<(u32, u32), u32> = HashMap::with_capacity(self.triangles.len() * 3);
-        for (i, t) in self.triangles.iter().enumerate() {
-            for k in 0..3 {
-                directed.insert((t[k], t[(k + 1) % 3]), i as u32);
-            }
-        }
+        // the triangles as they were: a flip locks both its triangles, so a lookup that
+        // finds one it changed skips it either way
+        let before = self.triangles.clone();
+        let around = &adjacency.around;
+        let owner = |from: u32, to: u32| {
+            let has = |t: &[u32; 3]| (0..3).any(|k| t[k] == from && t[(k + 1) % 3] == to);
+            around.of(from as usize).iter().rev().copied().find(|&t| has(&before[t as usize]))
+        };
+        // edges flipped away (false) or into being (true) since `adjacency` was built
+        let mut changed: IntMap<u64, bool> = IntMap::default();
+        let is_edge = |changed: &IntMap<u64, bool>, a: u32, b: u32| match changed.get(&key(a, b)) {
+            Some(now) => *now,
+            None => adjacency.of(a as usize).binary_search(&b).is_ok(),
+        };
         let mut locked = vec![false; self.triangles.len()];
         let mut flipped = 0;
         for i in 0..self.triangles.len() {
@@ -337,14 +349,14 @@ impl Tiling {
                 }
                 let t = self.triangles[i];
                 let (a, b, c) = (t[k], t[(k + 1) % 3], t[(k + 2) % 3]);
-                let Some(&j) = directed.get(&(b, a)) else { continue };
+                let Some(j) = owner(b, a) else { continue };
                 let j = j as usize;
                 if a > b || locked[j] {
                     continue;
                 }
                 let other = self.triangles[j];
                 let d = other.into_iter().find(|&v| v != a && v != b).unwrap_or(a);
-                if d == a || c == d || edges.contains(&key(c, d)) {
+                if d == a || c == d || is_edge(&changed, c, d) {
                     continue;
                 }
                 let [ua, ub, uc, ud] = [a, b, c, d].map(|v| v as usize);
@@ -362,8 +374,8 @@ impl Tiling {
                 valence[ub] -= 1;
                 valence[uc] += 1;
                 valence[ud] += 1;
-                edges.remove(&key(a, b));
-                edges.insert(key(c, d));
+                changed.insert(key(a, b), false);
+                changed.insert(key(c, d), true);
                 flipped += 1;
             }
         }
