@@ -125,31 +125,65 @@ struct Adjacency {
 
 impl Adjacency {
     /// Each vertex's neighbours are the other corners of its triangles; an edge that only
-    /// one triangle (or more than two) holds is an open border.
+    /// one triangle (or more than two) holds is an open border. Blocks of vertices are
+    /// listed in parallel, each into its own stretch of one buffer (two corners per
+    /// triangle around a vertex at most), then packed.
     fn build(vertices: usize, triangles: &[[u32; 3]]) -> Adjacency {
+        const BLOCK: usize = 4096;
         let around = triangles_around(vertices, triangles);
-        let lists: Vec<(Vec<u32>, bool)> = (0..vertices)
+        let mut scratch = vec![0u32; 2 * around.offsets[vertices]];
+        let mut stretches = Vec::with_capacity(vertices.div_ceil(BLOCK));
+        let mut rest = scratch.as_mut_slice();
+        for start in (0..vertices).step_by(BLOCK) {
+            let end = (start + BLOCK).min(vertices);
+            let (this, next) = rest.split_at_mut(2 * (around.offsets[end] - around.offsets[start]));
+            stretches.push((start..end, this));
+            rest = next;
+        }
+        let listed: Vec<(Vec<u32>, Vec<bool>)> = stretches
             .into_par_iter()
-            .map(|v| {
-                let mut others: Vec<u32> =
-                    around.of(v).iter().flat_map(|&t| triangles[t as usize]).filter(|&w| w != v as u32).collect();
-                others.sort_unstable();
-                let mut border = false;
-                let mut unique = Vec::with_capacity(others.len() / 2 + 1);
-                for run in others.chunk_by(|x, y| x == y) {
-                    border |= run.len() != 2;
-                    unique.push(run[0]);
+            .map(|(range, buffer)| {
+                let (mut counts, mut borders) = (Vec::with_capacity(range.len()), Vec::with_capacity(range.len()));
+                let first = 2 * around.offsets[range.start];
+                for v in range {
+                    let start = 2 * around.offsets[v] - first;
+                    let mut at = start;
+                    for &t in around.of(v) {
+                        for w in triangles[t as usize].into_iter().filter(|&w| w != v as u32) {
+                            buffer[at] = w;
+                            at += 1;
+                        }
+                    }
+                    let others = &mut buffer[start..at];
+                    others.sort_unstable();
+                    let (mut unique, mut border, mut k) = (0, false, 0);
+                    while k < others.len() {
+                        let run = others[k..].iter().take_while(|&&w| w == others[k]).count();
+                        border |= run != 2;
+                        others[unique] = others[k];
+                        unique += 1;
+                        k += run;
+                    }
+                    counts.push(unique as u32);
+                    borders.push(border);
                 }
-                (unique, border)
+                (counts, borders)
             })
             .collect();
         let mut offsets = Vec::with_capacity(vertices + 1);
         offsets.push(0);
-        for (list, _) in &lists {
-            offsets.push(offsets[offsets.len() - 1] + list.len());
+        let mut neighbours = Vec::new();
+        let mut border = Vec::with_capacity(vertices);
+        let mut v = 0;
+        for (counts, borders) in listed {
+            for (count, b) in counts.into_iter().zip(borders) {
+                let start = 2 * around.offsets[v];
+                neighbours.extend_from_slice(&scratch[start..start + count as usize]);
+                offsets.push(neighbours.len());
+                border.push(b);
+                v += 1;
+            }
         }
-        let border = lists.iter().map(|(_, b)| *b).collect();
-        let neighbours = lists.into_iter().flat_map(|(list, _)| list).collect();
         Adjacency { offsets, neighbours, border, around }
     }
 
@@ -229,15 +263,16 @@ impl Tiling {
         let n = self.vertices.len();
         let adjacency = Adjacency::build(n, &self.triangles);
         let around = &adjacency.around;
-        let mut short: Vec<(f32, u32, u32)> = Vec::new();
-        for a in 0..n {
-            for &b in adjacency.of(a) {
-                let d = self.vertices[a].distance_squared(self.vertices[b as usize]);
-                if (a as u32) < b && d < low * low {
-                    short.push((d, a as u32, b));
-                }
-            }
-        }
+        let vertices = &self.vertices;
+        let mut short: Vec<(f32, u32, u32)> = (0..n)
+            .into_par_iter()
+            .flat_map_iter(|a| {
+                adjacency.of(a).iter().filter_map(move |&b| {
+                    let d = vertices[a].distance_squared(vertices[b as usize]);
+                    ((a as u32) < b && d < low * low).then_some((d, a as u32, b))
+                })
+            })
+            .collect();
         short.par_sort_unstable_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)).then(x.2.cmp(&y.2)));
         let mut locked = vec![false; n];
         let mut into: Vec<u32> = (0..n as u32).collect();
