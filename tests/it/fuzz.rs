@@ -73,6 +73,9 @@ struct Target {
     folder: bool,
     /// Re-checksum PNG chunks after most mutations, so cases get past the CRC check.
     png: bool,
+    /// A guided cache's header length: the blake3 checksum after it is recomputed after
+    /// most mutations, so cases reach the body's checks.
+    sealed: Option<usize>,
     /// Valid seeds, made in the given scratch folder.
     seeds: fn(&Path) -> Vec<Files>,
     /// The reader; `Ok` and `Err` are both fine.
@@ -80,7 +83,7 @@ struct Target {
 }
 
 const fn file(name: &'static str, case: &'static str, seeds: fn(&Path) -> Vec<Files>, read: Reader) -> Target {
-    Target { name, case, folder: false, png: false, seeds, read }
+    Target { name, case, folder: false, png: false, sealed: None, seeds, read }
 }
 
 type Reader = fn(&Path) -> solidtex::Result<()>;
@@ -102,8 +105,8 @@ const TARGETS: [Target; 20] = [
     file("manifest", "case.toml", manifest_seeds, read_manifest),
     file("fill_spec", "case.toml", fill_spec_seeds, read_fill_spec),
     file("lst", "case.lst", lst_seeds, read_lst),
-    file("guided_cube", "case.cache", guided_cube_seeds, read_guided_cube),
-    file("guided_bricks", "case.cache", guided_brick_seeds, read_guided_bricks),
+    Target { sealed: Some(39), ..file("guided_cube", "case.cache", guided_cube_seeds, read_guided_cube) },
+    Target { sealed: Some(48), ..file("guided_bricks", "case.cache", guided_brick_seeds, read_guided_bricks) },
     file("snapshot", "case.snap", snapshot_seeds, read_snapshot),
     file("snapshot_check", "case.snap", snapshot_check_seeds, check_snapshot),
 ];
@@ -773,6 +776,13 @@ fn make_case(target: &Target, seeds: &[Files], rng: &mut Pcg64) -> Files {
     if target.png && rng.random_bool(0.8) {
         fix_png_crcs(bytes);
     }
+    if let Some(header) = target.sealed
+        && bytes.len() >= header + 32
+        && rng.random_bool(0.8)
+    {
+        let sum = blake3::Hasher::new().update(&bytes[..header]).update(&bytes[header + 32..]).finalize();
+        bytes[header..header + 32].copy_from_slice(sum.as_bytes());
+    }
     files
 }
 
@@ -1250,6 +1260,11 @@ fn binary_ply_reader_survives_mutated_files() {
 #[test]
 fn guided_cube_reader_survives_mutated_files() {
     fuzz("guided_cube");
+}
+
+#[test]
+fn guided_brick_cache_reader_survives_mutated_files() {
+    fuzz("guided_bricks");
 }
 
 #[test]
