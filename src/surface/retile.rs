@@ -140,36 +140,8 @@ impl Adjacency {
             stretches.push((start..end, this));
             rest = next;
         }
-        let listed: Vec<(Vec<u32>, Vec<bool>)> = stretches
-            .into_par_iter()
-            .map(|(range, buffer)| {
-                let (mut counts, mut borders) = (Vec::with_capacity(range.len()), Vec::with_capacity(range.len()));
-                let first = 2 * around.offsets[range.start];
-                for v in range {
-                    let start = 2 * around.offsets[v] - first;
-                    let mut at = start;
-                    for &t in around.of(v) {
-                        for w in triangles[t as usize].into_iter().filter(|&w| w != v as u32) {
-                            buffer[at] = w;
-                            at += 1;
-                        }
-                    }
-                    let others = &mut buffer[start..at];
-                    others.sort_unstable();
-                    let (mut unique, mut border, mut k) = (0, false, 0);
-                    while k < others.len() {
-                        let run = others[k..].iter().take_while(|&&w| w == others[k]).count();
-                        border |= run != 2;
-                        others[unique] = others[k];
-                        unique += 1;
-                        k += run;
-                    }
-                    counts.push(unique as u32);
-                    borders.push(border);
-                }
-                (counts, borders)
-            })
-            .collect();
+        let listed: Vec<(Vec<u32>, Vec<bool>)> =
+            stretches.into_par_iter().map(|(range, buffer)| list_block(&around, triangles, range, buffer)).collect();
         let mut offsets = Vec::with_capacity(vertices + 1);
         offsets.push(0);
         let mut neighbours = Vec::new();
@@ -449,6 +421,42 @@ impl Tiling {
             .collect();
         self.vertices = moved;
     }
+}
+
+/// The neighbours of the vertices `range` (sorted, each at the start of its stretch of
+/// `buffer`, which begins at the first vertex's place: two corners per triangle around a
+/// vertex), and per vertex their count and whether it lies on an open border.
+fn list_block(
+    around: &Around,
+    triangles: &[[u32; 3]],
+    range: std::ops::Range<usize>,
+    buffer: &mut [u32],
+) -> (Vec<u32>, Vec<bool>) {
+    let (mut counts, mut borders) = (Vec::with_capacity(range.len()), Vec::with_capacity(range.len()));
+    let first = 2 * around.offsets[range.start];
+    for v in range {
+        let start = 2 * around.offsets[v] - first;
+        let mut at = start;
+        for &t in around.of(v) {
+            for w in triangles[t as usize].into_iter().filter(|&w| w != v as u32) {
+                buffer[at] = w;
+                at += 1;
+            }
+        }
+        let others = &mut buffer[start..at];
+        others.sort_unstable();
+        let (mut unique, mut border, mut k) = (0, false, 0);
+        while k < others.len() {
+            let run = others[k..].iter().take_while(|&&w| w == others[k]).count();
+            border |= run != 2;
+            others[unique] = others[k];
+            unique += 1;
+            k += run;
+        }
+        counts.push(unique as u32);
+        borders.push(border);
+    }
+    (counts, borders)
 }
 
 /// Each vertex's triangles.
