@@ -167,33 +167,44 @@ impl Prepared {
     }
 
     /// For every centre: itself, then its k - 1 most alike centres that are not its
-    /// close spatial neighbours (those would add nothing new).
+    /// close spatial neighbours (those would add nothing new). The centres are searched in
+    /// the tree's leaf order (the answers of an exact search do not depend on it).
     fn coherence_sets(&self) -> Vec<u32> {
         let dims = self.pca.dims;
         let low = dims.min(TREE_DIMS);
         let tree = KdTree::build(self.projected.packed(low), low);
         let k = self.k;
         let away = (self.n / 2).max(2) as i64;
-        (0..self.centres.len())
-            .into_par_iter()
-            .flat_map_iter(|slot| {
-                let here = self.projection(slot);
-                let (mx, my) = self.slot_xy(slot);
-                let mut hits: Vec<(f32, u32)> = tree
-                    .nearest(&here[..low], 2 * k + 6)
-                    .into_iter()
-                    .map(|(_, i)| (super::knn::squared(here, self.projection(i as usize)), i))
-                    .collect();
-                hits.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-                let others = hits.into_iter().map(|(_, i)| i).filter(move |&i| {
-                    let (px, py) = self.slot_xy(i as usize);
-                    (px - mx).abs().max((py - my).abs()) >= away
-                });
-                let mut set: Vec<u32> = std::iter::once(slot as u32).chain(others).take(k).collect();
-                set.resize(k, slot as u32);
-                set
-            })
-            .collect()
+        let set_of = |slot: usize| {
+            let here = self.projection(slot);
+            let (mx, my) = self.slot_xy(slot);
+            let mut hits: Vec<(f32, u32)> = tree
+                .nearest(&here[..low], 2 * k + 6)
+                .into_iter()
+                .map(|(_, i)| (super::knn::squared(here, self.projection(i as usize)), i))
+                .collect();
+            hits.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+            let others = hits.into_iter().map(|(_, i)| i).filter(move |&i| {
+                let (px, py) = self.slot_xy(i as usize);
+                (px - mx).abs().max((py - my).abs()) >= away
+            });
+            let mut set: Vec<u32> = std::iter::once(slot as u32).chain(others).take(k).collect();
+            set.resize(k, slot as u32);
+            set
+        };
+        const CHUNK: usize = 256;
+        let order = tree.leaf_order();
+        let found: Vec<Vec<u32>> = order
+            .par_chunks(CHUNK)
+            .map(|chunk| chunk.iter().flat_map(|&slot| set_of(slot as usize)).collect())
+            .collect();
+        let mut sets = vec![0u32; self.centres.len() * k];
+        for (chunk, found) in order.chunks(CHUNK).zip(found) {
+            for (&slot, set) in chunk.iter().zip(found.chunks_exact(k)) {
+                sets[slot as usize * k..(slot as usize + 1) * k].copy_from_slice(set);
+            }
+        }
+        sets
     }
 }
 
