@@ -13,7 +13,7 @@ use crate::io::{self, fill_spec, mesh_file};
 use crate::mesh::{Mesh, closest_on_segment};
 use crate::synth::coords::{self as synth, Exemplars, Options, Setup, Synthesized};
 use crate::synth::cube;
-use crate::synth::region::{Mask, Sparse};
+use crate::synth::region::{BRICK, Mask, Sparse};
 use crate::volume::{Channel, Image2d};
 use glam::Vec3;
 use std::path::{Path, PathBuf};
@@ -495,7 +495,7 @@ fn whole_coarse_levels(
 ) -> Result<bool> {
     let dims = setup.level_dims();
     let Some(below) = dims.len().checked_sub(2) else { return Ok(false) };
-    let bricks: usize = dims[..=below].iter().map(|d| d.iter().map(|n| n.div_ceil(8)).product::<usize>()).sum();
+    let bricks: usize = dims[..=below].iter().map(|d| d.iter().map(|n| n.div_ceil(BRICK)).product::<usize>()).sum();
     if levels.get(below).is_some_and(|l| l.mask().is_full()) || 4 * bricks > most {
         return Ok(false);
     }
@@ -574,7 +574,7 @@ fn write_cut(
     bar: &super::fill::Bar,
 ) -> Result<(usize, usize, usize)> {
     let view = View::framing(g.surface.bounds(), point, normal, args.size)?;
-    let most = (args.cache_mb << 20) / (512 * std::mem::size_of::<synth::Voxel>());
+    let most = (args.cache_mb << 20) / (BRICK.pow(3) * std::mem::size_of::<synth::Voxel>());
     let mut cached = args.cache.as_deref().map(|folder| kept_bricks(folder, setup, most)).transpose()?;
     let coarse_made = match cached.as_mut() {
         Some((_, levels)) => whole_coarse_levels(setup, levels, most, bar)?,

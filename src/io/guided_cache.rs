@@ -69,16 +69,24 @@ impl<T> Cached<T> {
     }
 }
 
-/// The bytes of a cache file whose `header` bytes `ours` accepts and whose checksum
-/// holds (`body` bytes follow the checksum); `None` when the file is not ours (another
-/// magic, key or size in its header).
+/// How long a cache file must be.
+enum Size {
+    /// Its header, checksum and a body of exactly this many bytes.
+    Body(usize),
+    /// At most this many bytes in all (a cap; longer is stale, not damaged).
+    AtMost(u64),
+}
+
+/// The bytes of a cache file whose `header` bytes `ours` accepts, whose size fits `size`
+/// and whose checksum holds; `None` when the file is not ours (another magic, key or size
+/// in its header).
 fn read_checked(
     path: &Path,
     header: usize,
-    body: usize,
+    size: Size,
     ours: impl Fn(&[u8]) -> Option<Owner>,
 ) -> Result<Option<Cached<Vec<u8>>>> {
-    let size = match std::fs::metadata(path) {
+    let found = match std::fs::metadata(path) {
         Ok(meta) => meta.len(),
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(Some(Cached::Missing)),
         Err(e) => return Err(Error::io(path, e)),
@@ -90,11 +98,21 @@ fn read_checked(
     if owner == Owner::Older {
         return Ok(Some(Cached::Stale("from an older solidtex (an earlier format)".to_string())));
     }
-    let expected = (header + CHECKSUM + body) as u64;
-    if size != expected {
-        return Ok(Some(damaged(format!("it holds {size} bytes, not {expected}"))));
+    let least = (header + CHECKSUM) as u64;
+    let most = match size {
+        Size::Body(body) if found != least + body as u64 => {
+            return Ok(Some(damaged(format!("it holds {found} bytes, not {}", least + body as u64))));
+        }
+        Size::Body(body) => least + body as u64,
+        Size::AtMost(cap) if found > cap => {
+            return Ok(Some(Cached::Stale(format!("larger ({found} bytes) than the cache's cap of {cap} bytes"))));
+        }
+        Size::AtMost(cap) => cap,
+    };
+    let bytes = atomic::read_bytes_within(path, most)?;
+    if (bytes.len() as u64) < least {
+        return Ok(Some(damaged(format!("it holds {} bytes, fewer than its header", bytes.len()))));
     }
-    let bytes = atomic::read_bytes_within(path, expected)?;
     let (fields, rest) = bytes.split_at(header);
     let (sum, content) = rest.split_at(CHECKSUM);
     if checksum(fields, content) != sum {
@@ -163,7 +181,7 @@ pub fn read_cube(path: &Path, key: u64, side: usize, channels: usize, range: (f3
         let fits = le_u64(h, 23) == key && le_u32(h, 31) == side && le_u32(h, 35) == channels;
         owner(h, CUBE_MAGIC, OLD_CUBE_MAGICS).filter(|_| fits)
     };
-    let found = read_checked(path, CUBE_HEADER, 4 * side * side * side * channels, ours)?.ok_or_else(|| {
+    let found = read_checked(path, CUBE_HEADER, Size::Body(4 * side * side * side * channels), ours)?.ok_or_else(|| {
         Error::file(
             path,
             "is not the solid cube of these exemplars; solidtex does not overwrite it (move it away or give another \
@@ -220,46 +238,23 @@ pub fn read(
     most: u64,
     voxel: impl Fn(usize, [u32; 3], u8) -> Voxel,
 ) -> Result<Cached<Vec<Sparse<Voxel>>>> {
-    let size = match std::fs::metadata(path) {
-        Ok(meta) => meta.len(),
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(Cached::Missing),
-        Err(e) => return Err(Error::io(path, e)),
-    };
     let finest = dims.last().copied().unwrap_or_default();
     let ours = |h: &[u8]| {
         let fits =
             le_u64(h, 24) == key && le_u32(h, 32) == dims.len() && [36, 40, 44].map(|at| le_u32(h, at)) == finest;
         owner(h, MAGIC, OLD_MAGICS).filter(|_| fits)
     };
-    let file = atomic::open_regular(path, u64::MAX)?;
-    let mut head = Vec::with_capacity(HEADER + CHECKSUM);
-    file.take((HEADER + CHECKSUM) as u64).read_to_end(&mut head).map_err(|e| Error::io(path, e))?;
-    let owner = head.get(..HEADER).and_then(ours).ok_or_else(|| {
+    let found = read_checked(path, HEADER, Size::AtMost(most), ours)?.ok_or_else(|| {
         Error::file(
             path,
             "is not the guided-synthesis cache of these inputs; solidtex does not overwrite it (move it away or \
              give another --cache folder)",
         )
     })?;
-    if owner == Owner::Older {
-        return Ok(Cached::Stale("from an older solidtex (an earlier format)".to_string()));
-    }
-    if size > most {
-        return Ok(Cached::Stale(format!("larger ({size} bytes) than the cache's cap of {most} bytes")));
-    }
-    let bytes = atomic::read_bytes_within(path, most)?;
-    if bytes.len() < HEADER + CHECKSUM {
-        return Ok(damaged(format!("it holds {} bytes, fewer than its header", bytes.len())));
-    }
-    let (fields, rest) = bytes.split_at(HEADER);
-    let (sum, body) = rest.split_at(CHECKSUM);
-    if checksum(fields, body) != sum {
-        return Ok(damaged("its checksum does not match its contents".to_string()));
-    }
-    Ok(match bricks(body, dims, slots, &voxel) {
+    Ok(found.and_then(|bytes| match bricks(&bytes[HEADER + CHECKSUM..], dims, slots, &voxel) {
         Ok(levels) => Cached::Good(levels),
         Err(why) => damaged(why),
-    })
+    }))
 }
 
 /// A brick read back: its coordinates, flags and values.
