@@ -115,7 +115,10 @@ fn fill_here(job: &Job, mesh: TetMesh, progress: &dyn Progress) -> Result<(LstMo
         outer_share: field.depth.as_deref().map(|d| model::outer_share(&mesh, d)),
         depth: field.depth.clone(),
     };
-    let model = LstModel::new(mesh, job.surface.clone(), job.sources.clone(), pasted.patches, pasted.tet_patches);
+    let mut model = LstModel::new(mesh, job.surface.clone(), job.sources.clone(), pasted.patches, pasted.tet_patches);
+    if let Some(edges) = field.bumps {
+        model = model.with_depth(model::DepthBumps { axis: job.axes[0], sources: auto, edges });
+    }
     Ok((model, report))
 }
 

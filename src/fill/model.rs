@@ -114,7 +114,37 @@ pub struct LstModel {
     pub patches: Vec<Patch>,
     /// Per tet, its patches bottom first.
     pub tet_patches: Vec<Vec<u32>>,
+    /// The smooth depth's quadratic term, for fills whose texture depth follows the depth
+    /// field (1-b, 2-b).
+    pub depth: Option<DepthBumps>,
     located: Located,
+}
+
+/// Where a depth-varying fill's texture depth departs from the linear interpolation of its
+/// tets' corner depths (see [`super::field::bump`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct DepthBumps {
+    /// The texture axis that holds depth.
+    pub axis: usize,
+    /// The sources whose patches take their depth from the field: the first `sources`
+    /// (manual pastes are rigid).
+    pub sources: usize,
+    /// Per tet, the bump at the middle of each of its edges ([`super::field::EDGES`]).
+    pub edges: Vec<[f32; 6]>,
+}
+
+impl DepthBumps {
+    /// The texture point's shift along [`DepthBumps::axis`] at barycentric point `b` of tet
+    /// `t`. A point outside its tet (negative weights) takes the bump of the tet's nearest
+    /// point of the same weights clamped and renormalized, which meets the bump on the face.
+    pub fn at(&self, t: usize, b: [f32; 4]) -> f32 {
+        let clamped = b.map(|w| w.max(0.0));
+        let sum: f32 = clamped.iter().sum();
+        if sum <= 0.0 {
+            return 0.0;
+        }
+        super::field::bump(&self.edges[t], clamped.map(|w| w / sum))
+    }
 }
 
 /// The model's [`Locator`], made on first use.
@@ -137,7 +167,12 @@ impl LstModel {
         patches: Vec<Patch>,
         tet_patches: Vec<Vec<u32>>,
     ) -> LstModel {
-        LstModel { mesh, surface, sources, patches, tet_patches, located: Located::default() }
+        LstModel { mesh, surface, sources, patches, tet_patches, depth: None, located: Located::default() }
+    }
+
+    /// The model with its texture depth made smooth by `bumps`.
+    pub fn with_depth(self, bumps: DepthBumps) -> LstModel {
+        LstModel { depth: Some(bumps), ..self }
     }
 
     /// The boundary of `mesh` as a surface: for models written before the input surface
@@ -195,6 +230,22 @@ impl LstModel {
                 if self.mesh.tets[t].iter().any(|v| patch.vertices.binary_search(v).is_err()) {
                     return Err(Error::invalid(format!("tet {t} lists patch {p}, which lacks its corners")));
                 }
+            }
+        }
+        if let Some(d) = &self.depth {
+            if d.axis > 2 || d.sources > self.sources.len() || d.edges.len() != self.mesh.tets.len() {
+                return Err(Error::invalid(format!(
+                    "depth bumps on axis {} for {} sources and {} tets; allowed: axis 0 to 2, at most {} sources, \
+                     one entry per tet ({})",
+                    d.axis,
+                    d.sources,
+                    d.edges.len(),
+                    self.sources.len(),
+                    self.mesh.tets.len()
+                )));
+            }
+            if let Some(t) = d.edges.iter().position(|e| e.iter().any(|x| !(-1.0..=1.0).contains(x))) {
+                return Err(Error::invalid(format!("tet {t}'s depth bumps lie outside -1 to 1")));
             }
         }
         Ok(())

@@ -355,7 +355,8 @@ fn render_band(
                 let l = inverse * (view.point(x, y) - c[0]);
                 let b = [1.0 - l.x - l.y - l.z, l.x, l.y, l.z];
                 if b.iter().all(|w| *w >= -1e-5) {
-                    put(i, shade(textures, (layers.iter().rev().copied(), layers.first().copied()), b, false));
+                    let layers = (layers.iter().rev().copied(), layers.first().copied());
+                    put(i, shade(textures, layers, b, false, lift(model, t, b)));
                     done[i] = true;
                 }
             }
@@ -365,7 +366,7 @@ fn render_band(
     for (i, _) in done.iter().enumerate().filter(|(_, d)| !**d) {
         let (x, y) = (i % view.width, y0 + i / view.width);
         if let Some(at) = model.locate(view.point(x, y)) {
-            put(i, shade(textures, lazy_layers(model, at.tet as usize), at.weights, !at.inside));
+            put(i, shade_at_with_patch(model, textures, &at));
         }
     }
 }
@@ -457,7 +458,28 @@ pub fn shade_point(model: &LstModel, textures: &Textures, point: Vec3) -> Option
 
 /// The composited colour of the model at a located point.
 pub fn shade_at(model: &LstModel, textures: &Textures, at: &Location) -> [f32; 4] {
-    shade(textures, lazy_layers(model, at.tet as usize), at.weights, !at.inside).0
+    shade_at_with_patch(model, textures, at).0
+}
+
+/// [`shade_at`], and the patch that contributes most.
+fn shade_at_with_patch(model: &LstModel, textures: &Textures, at: &Location) -> ([f32; 4], u32) {
+    let t = at.tet as usize;
+    shade(textures, lazy_layers(model, t), at.weights, !at.inside, lift(model, t, at.weights))
+}
+
+/// How a depth-varying model's texture depth rises at barycentric point `b` of tet `t`
+/// above the linear interpolation of the corners' ([`LstModel::depth`]).
+fn lift(model: &LstModel, t: usize, b: [f32; 4]) -> Option<Lift> {
+    model.depth.as_ref().map(|d| Lift { axis: d.axis, sources: d.sources, by: d.at(t, b) })
+}
+
+/// A shift of the texture point along the depth axis, for the layers of the first
+/// `sources` sources.
+#[derive(Debug, Clone, Copy)]
+struct Lift {
+    axis: usize,
+    sources: usize,
+    by: f32,
 }
 
 /// The layers of the tet a run of neighbouring points falls in, made once for the run
@@ -476,7 +498,8 @@ impl TetLayers {
             self.layers = layers_of(model, at.tet as usize);
         }
         let layers = (self.layers.iter().rev().copied(), self.layers.first().copied());
-        shade(textures, layers, at.weights, !at.inside).0
+        let t = at.tet as usize;
+        shade(textures, layers, at.weights, !at.inside, lift(model, t, at.weights)).0
     }
 }
 
@@ -488,16 +511,20 @@ fn shade(
     (top_first, bottom): (impl Iterator<Item = Layer>, Option<Layer>),
     b: [f32; 4],
     extended: bool,
+    lift: Option<Lift>,
 ) -> ([f32; 4], u32) {
-    let at = |w: &[Vec3; 4]| {
-        let p = w[0] * b[0] + w[1] * b[1] + w[2] * b[2] + w[3] * b[3];
+    let at = |source: usize, w: &[Vec3; 4]| {
+        let mut p = w[0] * b[0] + w[1] * b[1] + w[2] * b[2] + w[3] * b[3];
+        if let Some(l) = lift.filter(|l| source < l.sources) {
+            p[l.axis] = (p[l.axis] + l.by).clamp(0.0, 1.0);
+        }
         if extended { p.clamp(Vec3::ZERO, Vec3::ONE) } else { p }
     };
     let mut colour = Vec3::ZERO;
     let mut cover = 0.0f32;
     let (mut most, mut share) = (NO_PATCH, 0.0f32);
     for (source, w, patch) in top_first {
-        let p = at(&w);
+        let p = at(source, &w);
         let a = textures.masks[source].alpha(p);
         if a <= 0.0 {
             continue;
@@ -515,7 +542,7 @@ fn shade(
     if cover > 0.0 {
         colour /= cover;
     } else if let Some((source, w, patch)) = bottom {
-        colour = textures.colour[source].rgb(at(&w));
+        colour = textures.colour[source].rgb(at(source, &w));
         most = patch;
     }
     ([colour.x, colour.y, colour.z, 1.0], most)

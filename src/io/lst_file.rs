@@ -4,7 +4,7 @@
 
 use super::atomic::{read_bytes, write_bytes};
 use crate::error::{Error, Result};
-use crate::fill::model::{LstModel, MaskRef, Source};
+use crate::fill::model::{DepthBumps, LstModel, MaskRef, Source};
 use crate::fill::paste::Patch;
 use crate::fill::tets::TetMesh;
 use crate::mesh::Mesh;
@@ -13,8 +13,11 @@ use std::path::Path;
 
 /// The first 8 bytes.
 pub const MAGIC: &[u8; 8] = b"SOLIDLST";
-/// The version this code writes; it also reads [`FIRST_VERSION`].
-pub const VERSION: u32 = 2;
+/// The version this code writes; it also reads the versions from [`FIRST_VERSION`] on.
+pub const VERSION: u32 = 3;
+/// Models with their input surface but without the smooth depth's bumps (read with the
+/// depth linear over each tet, as they were drawn).
+pub const SURFACE_VERSION: u32 = 2;
 /// Models without their input surface, read with the tet mesh's boundary as the surface.
 pub const FIRST_VERSION: u32 = 1;
 
@@ -49,6 +52,15 @@ pub fn to_bytes(model: &LstModel) -> Vec<u8> {
     }
     surface.vertices.iter().flat_map(|v| v.to_array()).for_each(|x| out.extend_from_slice(&x.to_le_bytes()));
     surface.triangles.iter().flatten().for_each(|i| out.extend_from_slice(&i.to_le_bytes()));
+    match &model.depth {
+        None => out.extend_from_slice(&0u32.to_le_bytes()),
+        Some(d) => {
+            for n in [1, d.axis as u32, d.sources as u32] {
+                out.extend_from_slice(&n.to_le_bytes());
+            }
+            d.edges.iter().flatten().for_each(|x| out.extend_from_slice(&x.to_le_bytes()));
+        }
+    }
     out
 }
 
@@ -82,6 +94,7 @@ pub fn from_bytes(bytes: &[u8]) -> Result<LstModel> {
     let tet_patches = (0..nt).map(|_| r.list()).collect::<Result<Vec<_>>>()?;
     let mesh = TetMesh { vertices, tets };
     let surface = if version == FIRST_VERSION { None } else { Some(r.surface()?) };
+    let depth = if version > SURFACE_VERSION { r.depth(nt)? } else { None };
     if r.at != bytes.len() {
         return Err(Error::invalid(format!("{} unexpected byte(s) after the model", bytes.len() - r.at)));
     }
@@ -93,7 +106,10 @@ pub fn from_bytes(bytes: &[u8]) -> Result<LstModel> {
             LstModel::boundary_of(&mesh)?
         }
     };
-    let model = LstModel::new(mesh, surface, sources, patches, tet_patches);
+    let mut model = LstModel::new(mesh, surface, sources, patches, tet_patches);
+    if let Some(d) = depth {
+        model = model.with_depth(d);
+    }
     model.check()?;
     Ok(model)
 }
@@ -167,6 +183,28 @@ impl Reader<'_> {
         Mesh::new(vertices, triangles).map_err(|e| Error::invalid(format!("the model's input surface: {e}")))
     }
 
+    /// The smooth depth's bumps: a flag, then the depth axis, the sources that follow
+    /// depth and six numbers per tet.
+    fn depth(&mut self, tets: usize) -> Result<Option<DepthBumps>> {
+        match self.u32()? {
+            0 => Ok(None),
+            1 => {
+                let (axis, sources) = (self.u32()? as usize, self.u32()? as usize);
+                if tets.saturating_mul(24) > self.bytes.len() - self.at {
+                    return Err(Error::invalid(format!(
+                        "truncated: the depth bumps of {tets} tets at byte {}",
+                        self.at
+                    )));
+                }
+                let edges = (0..tets)
+                    .map(|_| Ok([self.f32()?, self.f32()?, self.f32()?, self.f32()?, self.f32()?, self.f32()?]))
+                    .collect::<Result<Vec<_>>>()?;
+                Ok(Some(DepthBumps { axis, sources, edges }))
+            }
+            flag => Err(Error::invalid(format!("depth flag {flag} at byte {}; allowed: 0 or 1", self.at - 4))),
+        }
+    }
+
     fn list(&mut self) -> Result<Vec<u32>> {
         let n = self.count(4)?;
         (0..n).map(|_| self.u32()).collect()
@@ -204,12 +242,40 @@ mod tests {
         let mut bytes = to_bytes(&m);
         // two counts, then three numbers per vertex and per triangle
         let surface = 4 * (2 + 3 * m.surface.vertices.len() + 3 * m.surface.triangles.len());
-        bytes.truncate(bytes.len() - surface);
+        bytes.truncate(bytes.len() - surface - 4);
         bytes[8..12].copy_from_slice(&FIRST_VERSION.to_le_bytes());
         let old = from_bytes(&bytes).unwrap();
         assert_eq!(old.surface, LstModel::boundary_of(&m.mesh).unwrap());
         assert_eq!(old.mesh, m.mesh);
-        bytes[8..12].copy_from_slice(&3u32.to_le_bytes());
-        assert!(from_bytes(&bytes).unwrap_err().to_string().contains("versions 1 to 2"));
+        bytes[8..12].copy_from_slice(&4u32.to_le_bytes());
+        assert!(from_bytes(&bytes).unwrap_err().to_string().contains("versions 1 to 3"));
+    }
+
+    /// A depth-varying model keeps its depth bumps; a version 2 model (without them) reads
+    /// with none; bumps out of range or of the wrong count are refused, naming what.
+    #[test]
+    fn depth_bumps_read_back_and_are_checked() {
+        let tets = model().mesh.tets.len();
+        let edges: Vec<[f32; 6]> = (0..tets).map(|t| [0.01 * t as f32, -0.02, 0.0, 0.03, 0.0, 0.1]).collect();
+        let m = model().with_depth(DepthBumps { axis: 2, sources: 1, edges });
+        let bytes = to_bytes(&m);
+        assert_eq!(from_bytes(&bytes).unwrap(), m);
+        let mut old = to_bytes(&model());
+        old[8..12].copy_from_slice(&SURFACE_VERSION.to_le_bytes());
+        old.truncate(old.len() - 4);
+        assert_eq!(from_bytes(&old).unwrap().depth, None);
+        let flag = bytes.len() - 4 * (3 + 6 * tets);
+        let mut bad = bytes.clone();
+        bad[flag..flag + 4].copy_from_slice(&2u32.to_le_bytes());
+        assert!(from_bytes(&bad).unwrap_err().to_string().contains("depth flag 2"));
+        let mut bad = bytes.clone();
+        bad[flag + 4..flag + 8].copy_from_slice(&3u32.to_le_bytes());
+        assert!(from_bytes(&bad).unwrap_err().to_string().contains("axis 3"));
+        let mut bad = bytes.clone();
+        bad[flag + 12..flag + 16].copy_from_slice(&1.5f32.to_le_bytes());
+        assert!(from_bytes(&bad).unwrap_err().to_string().contains("outside -1 to 1"));
+        let mut bad = bytes.clone();
+        bad.truncate(bytes.len() - 4);
+        assert!(from_bytes(&bad).unwrap_err().to_string().contains("truncated"));
     }
 }

@@ -199,6 +199,51 @@ fn a_cut_across_the_kiwi_shows_a_ring_of_seeds_around_a_round_core() {
     }
 }
 
+/// Over the middle 60 % of a cut along the log (its axis running across the picture), the
+/// spread in pixels of the row where the depth picture's upper half falls below `level`:
+/// the heartwood's edge, straight along a round log.
+fn edge_spread(png: &str, level: f32) -> f32 {
+    let img = image::open(png).unwrap().to_rgb8();
+    let (w, h) = img.dimensions();
+    let value = |x: u32, y: u32| img.get_pixel(x, y).0[0] as f32;
+    let rows: Vec<f32> = (w / 5..w * 4 / 5)
+        .map(|x| {
+            let mut y = h / 2;
+            while y > 0 && value(x, y) > level {
+                y -= 1;
+            }
+            let (above, below) = (value(x, y), value(x, y + 1));
+            y as f32 + if below != above { (level - above) / (below - above) } else { 0.0 }
+        })
+        .collect();
+    rows.iter().copied().fold(f32::MIN, f32::max) - rows.iter().copied().fold(f32::MAX, f32::min)
+}
+
+/// The trunk on the drawn log (2-b, an axis): the texture's depth is smooth inside each
+/// tet, so a cut across the axis shows round depth contours (pith and rings) and a cut
+/// along it a straight heartwood edge. With depth linear over each tet the pith was a
+/// square (roundness 0.84 at level 230) and the edge zigzagged with the lattice's period
+/// (2 px at 256²).
+#[test]
+fn the_logs_pith_is_round_and_its_heartwood_straight() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let model = filled(d, "log", "trunk", TRUNK);
+    let (across, along) = (at(d, "across.png"), at(d, "along.png"));
+    for (png, plane) in [(&across, "0,0,1,0,0,1"), (&along, "0,0,1,1,0,0")] {
+        let run = solidtex(&["cut", &model, "--channel", "Depth", "--plane", plane, "--size", "256", "-o", png]);
+        assert!(run.status.success(), "{}", stderr(&run));
+    }
+    for level in [128, 180, 230, 250] {
+        let round = roundness(&across, level);
+        assert!(round >= 0.95, "depth contour {level}: roundness {round:.3}");
+    }
+    for level in [180.0, 230.0] {
+        let spread = edge_spread(&along, level);
+        assert!(spread <= 1.0, "depth contour {level} along the log: {spread:.2} px");
+    }
+}
+
 /// The repository's strata spec on the drawn block: patches end where their masks fade,
 /// not at tet faces (a patch cut off where its mask is still high draws a straight seam
 /// along the lattice; such fills measure 1.4-1.6).

@@ -28,7 +28,7 @@ use crate::support::{assert_fails, at, listing, random_volume, solidtex};
 use glam::Vec3;
 use rand::{RngExt, SeedableRng};
 use rand_pcg::Pcg64;
-use solidtex::fill::{LstModel, MaskRef, Source, mesher, paste::Patch};
+use solidtex::fill::{LstModel, MaskRef, Source, mesher, model::DepthBumps, paste::Patch};
 use solidtex::io::{self, fill_spec, lst_file, manifest, mesh_file, snapshot_file};
 use solidtex::mask::Layer;
 use solidtex::mesh::{Mesh, shapes};
@@ -460,8 +460,14 @@ fn lst_seeds(dir: &Path) -> Vec<Files> {
     ];
     let mut tet_patches = vec![vec![0]; mesh.tets.len()];
     tet_patches[0].push(1);
+    let edges = (0..mesh.tets.len()).map(|t| [0.01 * (t % 7) as f32, -0.02, 0.0, 0.03, 0.0, 0.1]).collect();
     let model = LstModel::new(mesh, cuboid, sources, patches, tet_patches);
-    vec![written(dir, "model.lst", |p| lst_file::write_lst(p, &model))]
+    let plain = model.clone();
+    let smooth = model.with_depth(DepthBumps { axis: 2, sources: 2, edges });
+    vec![
+        written(dir, "model.lst", |p| lst_file::write_lst(p, &plain)),
+        written(dir, "depth.lst", |p| lst_file::write_lst(p, &smooth)),
+    ]
 }
 
 fn snapshot_seeds(dir: &Path) -> Vec<Files> {
