@@ -54,7 +54,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let prepared = started.elapsed().as_secs_f64();
     let view = View::framing(fruit.bounds(), Vec3::ZERO, Vec3::Y, 256)?;
     let domain = Domain::around(fruit.bounds(), 256)?;
-    let frames = solid::frames_over(&tets, &field, &domain, &depth)?;
+    let frames = solid::frames_over(&tets, &field, &domain, &depth, &[])?;
     let setup = Setup {
         exemplars: &exemplars,
         frames: Some(&frames),
@@ -84,7 +84,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         )?;
     }
     let domain = Domain::around(fruit.bounds(), 128)?;
-    let frames = solid::frames_over(&tets, &field, &domain, &depth)?;
+    let frames = solid::frames_over(&tets, &field, &domain, &depth, &[])?;
     let setup = Setup { dims: domain.dims, frames: Some(&frames), ..setup };
     timed(args, SOLID, || {
         let out = synth::run(&setup, &synth::plan(&setup, &Mask::full(domain.dims), &[]), &[], &NoProgress)?;

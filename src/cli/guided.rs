@@ -117,7 +117,7 @@ const TURN_LIMIT: f32 = 30.0;
 /// pixels inside the model, away from the spec's depth axes.
 fn field_turns(g: &Guide, view: &View) -> Result<crate::guided::field::Turns> {
     let domain = Domain::around(g.surface.bounds(), TURN_RES)?;
-    let frames = solid::frames_over(&g.tets, &g.field, &domain, &g.depth)?;
+    let frames = solid::frames_over(&g.tets, &g.field, &domain, &g.depth, &g.axes)?;
     let inside = crate::fill::render::field_cut(&g.tets, &vec![0.0; g.tets.vertices.len()], view);
     let to_grid = |p: Vec3| (p - domain.origin) / domain.voxel - 0.5;
     let points: Vec<Option<Vec3>> = (0..view.width * view.height)
@@ -264,7 +264,7 @@ pub fn run_guided(args: &GuidedArgs) -> Result<()> {
             plane_exemplars(args, path, rows)?
         }
     };
-    let frames = solid::frames_over(&g.tets, &g.field, &domain, &g.depth)?;
+    let frames = solid::frames_over(&g.tets, &g.field, &domain, &g.depth, &g.axes)?;
     let setup = Setup {
         exemplars: &prepared,
         frames: Some(&frames),

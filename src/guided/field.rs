@@ -176,6 +176,10 @@ pub struct FrameGrid {
     /// Per corner, the gradient of the model's depth, when it has one: frames are then
     /// read from it and the corners' x axes (see [`FrameGrid::at`]).
     pub gradients: Option<Vec<Vec3>>,
+    /// Whether a frame read from the gradient gives way to the blended quaternions as the
+    /// gradient comes within [`ALONG`] of x (true unless [`FrameGrid::with_x_along`] set the
+    /// corners' x along the depth axes).
+    pub give_way: bool,
 }
 
 impl FrameGrid {
@@ -205,16 +209,38 @@ impl FrameGrid {
         }
         fill_outwards(&mut corners, dims);
         let corners = corners.into_iter().map(|c| c.unwrap_or(Vec4::W)).collect();
-        FrameGrid { lo, step, dims, corners, gradients: None }
+        FrameGrid { lo, step, dims, corners, gradients: None, give_way: true }
     }
 
     /// The grid with the depth's gradient (`gradient`, in model units) at its corners.
     pub fn with_depth(self, gradient: impl Fn(Vec3) -> Vec3 + Sync) -> FrameGrid {
-        let [nx, ny, _] = self.dims;
-        let at =
-            |i: usize| self.lo + Vec3::new((i % nx) as f32, ((i / nx) % ny) as f32, (i / (nx * ny)) as f32) * self.step;
-        let gradients = (0..self.corners.len()).into_par_iter().map(|i| gradient(at(i))).collect();
+        let gradients = (0..self.corners.len()).into_par_iter().map(|i| gradient(self.corner(i))).collect();
         FrameGrid { gradients: Some(gradients), ..self }
+    }
+
+    /// The grid with each corner's frame turned (by the shortest arc) so that its x axis
+    /// runs along `along(corner)` where that gives a direction (either way along it,
+    /// whichever is nearer), and frames that no longer give way near x: where the
+    /// gradient past a depth axis' ends aims at the end and x runs along the axis, the two
+    /// meet only on the line the axis carries on along, where frames must turn.
+    pub fn with_x_along(self, along: impl Fn(Vec3) -> Option<Vec3> + Sync) -> FrameGrid {
+        let corners = (0..self.corners.len())
+            .into_par_iter()
+            .map(|i| {
+                let q = Quat::from_vec4(self.corners[i]);
+                let Some(d) = along(self.corner(i)).and_then(Vec3::try_normalize) else { return self.corners[i] };
+                let x = q * Vec3::X;
+                let target = if x.dot(d) < 0.0 { -d } else { d };
+                Vec4::from(Quat::from_rotation_arc(x, target) * q)
+            })
+            .collect();
+        FrameGrid { corners, give_way: false, ..self }
+    }
+
+    /// Where corner `i` lies.
+    fn corner(&self, i: usize) -> Vec3 {
+        let [nx, ny, _] = self.dims;
+        self.lo + Vec3::new((i % nx) as f32, ((i / nx) % ny) as f32, (i / (nx * ny)) as f32) * self.step
     }
 
     /// The same grid in the coordinates of a voxel grid whose voxel (0, 0, 0) spans
@@ -228,8 +254,9 @@ impl FrameGrid {
     /// x axes blended, both as plain vectors: neither has a sign to flip, so frames turning
     /// around a depth axis turn only on its ridge, where the gradients meet head on
     /// (quaternions half a turn apart blend to nothing across a whole cell). As the
-    /// gradient comes within [`ALONG`] of x (past an axis' ends), that frame gives way
-    /// smoothly to the quaternions blended; without a gradient, they alone are read.
+    /// gradient comes within [`ALONG`] of x (past the end of a depth given by points, not
+    /// axes: see [`FrameGrid::give_way`]), that frame gives way smoothly to the quaternions
+    /// blended; without a gradient, they alone are read.
     pub fn at(&self, p: Vec3) -> Mat3 {
         let corners = trilinear(self.lo, self.step, self.dims, p);
         match self.gradients.as_ref().and_then(|g| self.along_depth(&corners, g)) {
@@ -261,6 +288,9 @@ impl FrameGrid {
             x += Quat::from_vec4(self.corners[at]) * Vec3::X * w;
         }
         let (z, x) = (z.try_normalize()?, x.try_normalize()?);
+        if !self.give_way {
+            return Some((frame(x, z), 0.0));
+        }
         let t = ((z.dot(x).abs() - ALONG.0) / (ALONG.1 - ALONG.0)).clamp(0.0, 1.0);
         Some((frame(x, z), t * t * (3.0 - 2.0 * t)))
     }
@@ -498,7 +528,7 @@ mod tests {
         let (up, down, off) = (frame(Vec3::X, Vec3::Y), frame(Vec3::X, -Vec3::Y), frame(Vec3::X, Vec3::Z));
         let row = |i: usize| (i / 2) % 3;
         let corners = (0..12).map(|i| Vec4::from([up, off, down][row(i)])).collect();
-        let grid = FrameGrid { lo: Vec3::ZERO, step: 1.0, dims: [2, 3, 2], corners, gradients: None };
+        let grid = FrameGrid { lo: Vec3::ZERO, step: 1.0, dims: [2, 3, 2], corners, gradients: None, give_way: true };
         let plain = grid.clone();
         let grid = grid.with_depth(|p| Vec3::Y * (1.0 - p.y));
         for (y, z) in [(0.25, Vec3::Y), (0.75, Vec3::Y), (1.5, -Vec3::Y)] {
@@ -513,11 +543,31 @@ mod tests {
 
     /// Frames turning a quarter turn between two columns of corners: the pairs across it
     /// count, unless exempt; a uniform grid turns nowhere.
+    /// Turning the corners' x along a direction keeps their z as close as a shortest arc
+    /// allows, picks the nearer way along the direction, leaves corners without one, and
+    /// stops the frames giving way near x.
+    #[test]
+    fn corners_turn_their_x_along_a_given_direction() {
+        let corners = vec![Vec4::from(Quat::from_rotation_z(0.3)); 8];
+        let grid = FrameGrid { lo: Vec3::ZERO, step: 1.0, dims: [2; 3], corners, gradients: None, give_way: true };
+        let turned = grid.clone().with_x_along(|p| (p.x > 0.5).then_some(-Vec3::Y));
+        assert!(!turned.give_way);
+        for (i, (q, before)) in turned.corners.iter().zip(&grid.corners).enumerate() {
+            let x = Quat::from_vec4(*q) * Vec3::X;
+            if i % 2 == 1 {
+                assert!(x.dot(Vec3::Y) > 0.9999, "corner {i}: x {x}, the nearer way along -y");
+                assert!((Quat::from_vec4(*q) * Vec3::Z).dot(Vec3::Z) > 0.9999, "z kept");
+            } else {
+                assert_eq!(q, before);
+            }
+        }
+    }
+
     #[test]
     fn turns_count_the_neighbours_whose_frames_differ() {
         let quarter = Vec4::from(Quat::from_rotation_z(std::f32::consts::FRAC_PI_2));
         let corners = (0..4 * 4 * 2).map(|i| if i % 4 >= 2 { quarter } else { Vec4::W }).collect();
-        let grid = FrameGrid { lo: Vec3::ZERO, step: 1.0, dims: [4, 4, 2], corners, gradients: None };
+        let grid = FrameGrid { lo: Vec3::ZERO, step: 1.0, dims: [4, 4, 2], corners, gradients: None, give_way: true };
         let points: Vec<Option<Vec3>> = (0..16).map(|i| Some(Vec3::new((i % 4) as f32, (i / 4) as f32, 0.0))).collect();
         let turned = turns(&grid, &points, 4, 30.0, |_| false);
         assert_eq!((turned.over, turned.pairs), (4, 24), "{turned:?}");

@@ -68,18 +68,63 @@ impl Domain {
 const FIELD_CELLS: usize = 32;
 
 /// The field sampled over `domain`, in its voxel coordinates, with the gradient of the
-/// depth through `depth` (the spec's constraints) when they rise above 0.
-pub fn frames_over(tets: &TetMesh, field: &FrameField, domain: &Domain, depth: &[(Vec3, f32)]) -> Result<FrameGrid> {
+/// depth through `depth` (the spec's constraints) when they rise above 0, aimed at the
+/// end of its `axes` (the spec's depth axes) past their ends ([`aimed_past_ends`]).
+pub fn frames_over(
+    tets: &TetMesh,
+    field: &FrameField,
+    domain: &Domain,
+    depth: &[(Vec3, f32)],
+    axes: &[Vec<Vec3>],
+) -> Result<FrameGrid> {
     let hi = domain.origin + Vec3::from_array(domain.dims.map(|d| d as f32)) * domain.voxel;
     let grid = FrameGrid::sample(tets, field, (domain.origin, hi), FIELD_CELLS);
     let grid = match depth.iter().any(|d| d.1 > 0.0) {
         true => {
             let rbf = crate::fill::field::Rbf::fit(depth)?;
-            grid.with_depth(|p| rbf.gradient(p))
+            grid.with_depth(|p| aimed_past_ends(axes, p, rbf.gradient(p)))
+                .with_x_along(|p| past_end(axes, p).map(|(_, out)| out))
         }
         false => grid,
     };
     Ok(grid.in_voxels(domain.origin, domain.voxel))
+}
+
+/// The depth's gradient `g` at `p`, or, where `p` lies past an end of the nearest of the
+/// depth `axes` ([`past_end`]), a vector as long aimed at that end. Frames turning around
+/// an axis turn around the line it carries on along past its ends too, where the cut's
+/// figures leave them out; there the frames' x runs along the axis (`frames_over`), so
+/// the frames turn on that line. With the RBF's own gradient and the field's x, they
+/// turned where the two met, about two voxels beside the line at `--res 256` on the drawn
+/// fruit (the RBF's ridge wanders with the surface's samples, the field's x tilts).
+pub fn aimed_past_ends(axes: &[Vec<Vec3>], p: Vec3, g: Vec3) -> Vec3 {
+    match past_end(axes, p) {
+        Some((end, _)) => (end - p).normalize_or(g.normalize_or_zero()) * g.length(),
+        None => g,
+    }
+}
+
+/// The end of the depth axis (polyline) nearest to `p` and its outward direction, when `p`
+/// lies past that end (beyond the plane through it across its last segment).
+pub fn past_end(axes: &[Vec<Vec3>], p: Vec3) -> Option<(Vec3, Vec3)> {
+    let mut nearest: (f32, Option<(Vec3, Vec3)>) = (f32::INFINITY, None);
+    for line in axes.iter().filter(|l| l.len() >= 2) {
+        let last = line.len() - 2;
+        for (k, w) in line.windows(2).enumerate() {
+            let d = w[1] - w[0];
+            let t = (p - w[0]).dot(d) / d.length_squared().max(f32::MIN_POSITIVE);
+            let distance = p.distance(w[0] + d * t.clamp(0.0, 1.0));
+            if distance < nearest.0 {
+                let end = match () {
+                    _ if k == 0 && t < 0.0 => Some((w[0], -d)),
+                    _ if k == last && t > 1.0 => Some((w[1], d)),
+                    _ => None,
+                };
+                nearest = (distance, end);
+            }
+        }
+    }
+    nearest.1.filter(|(_, out)| *out != Vec3::ZERO)
 }
 
 /// The model's depth (the RBF through the spec's depth constraints, as the fill computes
@@ -271,4 +316,27 @@ fn inside_square(picture: &Image2d) -> Result<Image2d> {
 /// The exemplars' channels (alpha-free: [`crate::synth::coords::Exemplars::prepare`]) and alpha.
 fn with_alpha(setup: &Setup) -> Vec<Channel> {
     setup.exemplars.names.iter().cloned().chain([Channel::A]).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Past either end of a depth axis (beyond the plane across its end segment) the
+    /// gradient is aimed at that end and keeps its length; beside the axis, or nearer
+    /// another axis' middle, it is left as it is.
+    #[test]
+    fn the_gradient_past_an_axis_end_aims_at_the_end() {
+        let axes = vec![vec![Vec3::new(-1.0, 0.0, 0.0), Vec3::ZERO, Vec3::new(1.0, 0.0, 0.0)]];
+        let g = Vec3::new(-2.0, 0.3, 0.0);
+        assert_eq!(past_end(&axes, Vec3::new(2.0, 0.1, 0.0)), Some((Vec3::X, Vec3::X)));
+        assert_eq!(past_end(&axes, Vec3::new(-1.5, 0.0, 0.2)), Some((-Vec3::X, -Vec3::X)));
+        assert_eq!(past_end(&axes, Vec3::new(0.9, 1.0, 0.0)), None);
+        let aimed = aimed_past_ends(&axes, Vec3::new(2.0, 1.0, 0.0), g);
+        assert!((aimed.length() - g.length()).abs() < 1e-5);
+        assert!(aimed.normalize().dot(Vec3::new(-1.0, -1.0, 0.0).normalize()) > 0.9999, "{aimed}");
+        assert_eq!(aimed_past_ends(&axes, Vec3::new(0.5, 1.0, 0.0), g), g);
+        let two = vec![axes[0].clone(), vec![Vec3::new(1.5, -1.0, 0.0), Vec3::new(1.5, 1.0, 0.0)]];
+        assert_eq!(past_end(&two, Vec3::new(1.6, 0.0, 0.0)), None, "nearer the second axis' middle");
+    }
 }

@@ -89,7 +89,7 @@ pub fn picture(
                     (exemplars, options, None)
                 }
             };
-            let frames = solid::frames_over(mesh, &field, &domain, &depths)?;
+            let frames = solid::frames_over(mesh, &field, &domain, &depths, &spec.depth.axes)?;
             let setup = Setup {
                 exemplars: &exemplars,
                 frames: Some(&frames),

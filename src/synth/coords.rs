@@ -709,6 +709,7 @@ pub fn fingerprint(setup: &Setup) -> u64 {
         f.dims.iter().for_each(|d| add(*d as u64));
         f.corners.iter().flat_map(|q| q.to_array()).for_each(|c| add(u64::from(c.to_bits())));
         f.gradients.iter().flatten().flat_map(|g| g.to_array()).for_each(|c| add(u64::from(c.to_bits())));
+        add(u64::from(f.give_way));
     }
     setup.dims.iter().for_each(|d| add(*d as u64));
     setup.wrap.iter().for_each(|w| add(u64::from(*w)));
@@ -1456,8 +1457,14 @@ mod tests {
         let z_along_x = Quat::from_rotation_y(std::f32::consts::FRAC_PI_2);
         assert!((z_along_x * Vec3::Z).distance(Vec3::X) < 1e-6);
         let q = glam::Vec4::from(z_along_x);
-        let frames =
-            FrameGrid { lo: Vec3::splat(-0.5), step: 32.0, dims: [2; 3], corners: vec![q; 8], gradients: None };
+        let frames = FrameGrid {
+            lo: Vec3::splat(-0.5),
+            step: 32.0,
+            dims: [2; 3],
+            corners: vec![q; 8],
+            gradients: None,
+            give_way: true,
+        };
         let depth = crate::guided::field::ScalarGrid {
             lo: Vec3::splat(-0.5),
             step: 32.0,
