@@ -82,8 +82,11 @@ pub fn frames_over(
     let grid = match depth.iter().any(|d| d.1 > 0.0) {
         true => {
             let rbf = crate::fill::field::Rbf::fit(depth)?;
-            grid.with_depth(|p| aimed_past_ends(axes, p, rbf.gradient(p)))
-                .with_x_along(|p| past_end(axes, p).map(|(_, out)| out))
+            let grid = grid.with_depth(|p| aimed_past_ends(axes, p, rbf.gradient(p)));
+            match axes.is_empty() {
+                true => grid,
+                false => grid.with_x_along(|p| past_end(axes, p).map(|(_, out)| out)),
+            }
         }
         false => grid,
     };
