@@ -107,10 +107,15 @@ pub struct BakeArgs {
     /// Voxels along the longest side, 2 to 512.
     #[arg(long, default_value_t = 128)]
     pub res: usize,
-    /// The volume to write: R, G, B, every other channel all the exemplars have (Depth,
-    /// Displacement, named ones), then A (1 inside the model).
+    /// The volume to write: R, G, B, the carried channels (`--carry`), then A (1 inside
+    /// the model).
     #[arg(short, long)]
     pub output: PathBuf,
+    /// The channels besides R, G, B and A to carry into the volume, comma-separated (e.g.
+    /// Depth,Displacement), or `none`; each must be in every exemplar the models use
+    /// (default: every such channel).
+    #[arg(long)]
+    pub carry: Option<String>,
 }
 
 /// The arguments of `solidtex view`.
@@ -469,6 +474,28 @@ fn shared_channels(loaded: &[Loaded]) -> (Vec<Channel>, Vec<Channel>) {
     all.into_iter().partition(|c| loaded.iter().flat_map(|l| &l.volumes).all(|v| v.channel_index(c).is_some()))
 }
 
+/// The channels `--carry` names (`none`: no channel), each one of `shared` (the channels
+/// every exemplar has besides R, G, B, A), in the order given.
+fn carried_channels(list: &str, shared: &[Channel]) -> Result<Vec<Channel>> {
+    if list.trim() == "none" {
+        return Ok(Vec::new());
+    }
+    let mut out: Vec<Channel> = Vec::new();
+    for name in list.split(',').map(str::trim) {
+        let c = shared.iter().find(|c| c.name() == name).ok_or_else(|| {
+            let allowed: Vec<&str> = shared.iter().map(Channel::name).collect();
+            let allowed = if allowed.is_empty() { "none".to_string() } else { allowed.join(", ") + " or none" };
+            usage(Error::invalid(format!(
+                "--carry {name}: not a channel every exemplar the models use has; allowed: {allowed}"
+            )))
+        })?;
+        if !out.contains(c) {
+            out.push(c.clone());
+        }
+    }
+    Ok(out)
+}
+
 pub(super) fn load_models(paths: &[PathBuf]) -> Result<Vec<Loaded>> {
     if paths.len() > render::MAX_MODELS {
         return Err(usage(Error::invalid(format!(
@@ -730,9 +757,15 @@ pub fn run_bake(args: &BakeArgs) -> Result<()> {
     io::check_output(&args.output, &models)?;
     let loaded = load_models(&args.models)?;
     let (shared, left_out) = shared_channels(&loaded);
-    for c in &left_out {
-        tell!("warning: channel {c} is not in every exemplar the models use; it is left out of the bake");
-    }
+    let shared = match args.carry.as_deref() {
+        None => {
+            for c in &left_out {
+                tell!("warning: channel {c} is not in every exemplar the models use; it is left out of the bake");
+            }
+            shared
+        }
+        Some(list) => carried_channels(list, &shared)?,
+    };
     let textures = shared.iter().map(|c| channel_textures(&loaded, c)).collect::<Result<Vec<_>>>()?;
     let carried: Vec<render::Carried> = shared
         .iter()
@@ -741,6 +774,10 @@ pub fn run_bake(args: &BakeArgs) -> Result<()> {
         .collect();
     let started = Instant::now();
     let volume = render::bake(&pairs(&loaded), &carried, args.res, io::budget_from_env()?)?;
+    // the models and their textures are done with: free them before the writer copies the
+    // volume into its own layout
+    drop(carried);
+    drop((textures, loaded));
     io::write_volume(&args.output, &volume)?;
     let [x, y, z] = volume.dims();
     let names: Vec<&str> = volume.channels().iter().map(Channel::name).collect();

@@ -628,13 +628,18 @@ pub fn bake(models: &[(&LstModel, &Textures)], carried: &[Carried], res: usize, 
         .chain([Channel::A])
         .collect();
     crate::volume::check_size(dims, channels.len(), budget)?;
-    let mut data = Vec::with_capacity(dims[0] * dims[1] * dims[2] * channels.len());
+    let count = dims[0] * dims[1] * dims[2] * channels.len();
+    let mut data: Vec<f32> = Vec::new();
+    data.try_reserve_exact(count).map_err(|_| Error::invalid(format!("no memory for a {count}-value bake")))?;
+    data.resize(count, 0.0);
     let slice = |z: usize| {
         let origin = Vec3::new(lo.x, lo.y, lo.z + (z as f32 + 0.5) * step);
         View { origin, right: Vec3::X * step, down: Vec3::Y * step, width: dims[0], height: dims[1] }
     };
     let outlines = stack_outlines(models, &slice(0), Vec3::Z * step, dims[2]);
-    for z in 0..dims[2] {
+    // slices are independent: several at once keep both cores busy (a slice alone has
+    // few bands of rows to share out)
+    data.par_chunks_mut(dims[0] * dims[1] * channels.len()).enumerate().for_each(|(z, out)| {
         let view = slice(z);
         let insides: Vec<Vec<bool>> = outlines.iter().map(|o| o.inside(z)).collect();
         let colour = cut_many_within(models, &view, &insides).pixels;
@@ -646,12 +651,12 @@ pub fn bake(models: &[(&LstModel, &Textures)], carried: &[Carried], res: usize, 
                 cut_many_within(&pairs, &view, &insides).pixels
             })
             .collect();
-        for (i, p) in colour.iter().enumerate() {
-            data.extend_from_slice(&p[..3]);
-            data.extend(extra.iter().map(|e| e[i][0]));
-            data.push(p[3]);
+        for ((i, p), voxel) in colour.iter().enumerate().zip(out.chunks_exact_mut(channels.len())) {
+            voxel[..3].copy_from_slice(&p[..3]);
+            voxel[3..3 + extra.len()].iter_mut().zip(&extra).for_each(|(v, e)| *v = e[i][0]);
+            voxel[3 + extra.len()] = p[3];
         }
-    }
+    });
     Volume::from_data(dims, channels, data)
 }
 

@@ -25,16 +25,17 @@ impl Sampler {
         Sampler::pick(volume, &[0])
     }
 
-    /// A sampler of R, G, B (or the first channel three times for a grey volume).
+    /// A sampler of R, G, B (or the first channel, read as grey, for a grey volume).
     pub fn colour(volume: &Volume) -> Sampler {
         let rgb: Vec<usize> =
             [Channel::R, Channel::G, Channel::B].iter().filter_map(|c| volume.channel_index(c)).collect();
-        Sampler::pick(volume, if rgb.len() == 3 { &rgb } else { &[0, 0, 0] })
+        Sampler::pick(volume, if rgb.len() == 3 { &rgb } else { &[0] })
     }
 
-    /// A sampler of channel `c` of `volume`, read as grey (its value three times).
+    /// A sampler of channel `c` of `volume`, read as grey ([`Sampler::rgb`] gives its value
+    /// three times; it is stored once).
     pub fn channel(volume: &Volume, c: usize) -> Sampler {
-        Sampler::pick(volume, &[c, c, c])
+        Sampler::pick(volume, &[c])
     }
 
     /// The chosen channels, with one more voxel on the high side of each axis repeating
@@ -134,9 +135,14 @@ impl Sampler {
         lerp(near, far, t.z)
     }
 
-    /// R, G, B at `w`, clamped at the border.
+    /// R, G, B at `w`, clamped at the border (a one-channel sampler's value three times).
     #[inline]
     pub fn rgb(&self, w: Vec3) -> Vec3 {
+        if self.channels == 1 {
+            let mut grey = [0.0; 1];
+            self.lookup(w, &mut grey);
+            return Vec3::splat(grey[0]);
+        }
         let mut out = [0.0; 3];
         self.lookup(w, &mut out);
         Vec3::from(out)

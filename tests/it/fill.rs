@@ -465,6 +465,19 @@ fn the_exemplars_other_channels_survive_the_fill_into_cuts_and_bakes() {
     // voxel y grows with model y: the low rows are the block's bottom (depth 1)
     let (bottom, top) = (v.get(x / 2, 1, z / 2, 3), v.get(x / 2, y - 2, z / 2, 3));
     assert!(top < 0.2 && bottom > 0.8, "depth at the bottom {bottom}, at the top {top}");
+    // `--carry none` bakes the colour and the inside alone, the same values; a channel the
+    // exemplars lack is refused by name, with what may be carried, and nothing written
+    let plain = at(d, "plain.exr");
+    let run = solidtex(&["bake", &model, "--res", "16", "--carry", "none", "-o", &plain]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let p = solidtex::io::read_volume(Path::new(&plain), u64::MAX).unwrap();
+    assert_eq!(p.channels().iter().map(|c| c.name()).collect::<Vec<_>>(), ["R", "G", "B", "A"]);
+    let (mid, k) = ([x / 2, y / 2, z / 2], [0, 1, 2, 4]);
+    assert_eq!(k.map(|c| v.get(mid[0], mid[1], mid[2], c)), [0, 1, 2, 3].map(|c| p.get(mid[0], mid[1], mid[2], c)));
+    let unused = at(d, "unused.exr");
+    let run = solidtex(&["bake", &model, "--carry", "Displacement", "-o", &unused]);
+    assert_usage(&run, &["--carry Displacement", "allowed: Depth or none"]);
+    assert!(!Path::new(&unused).exists());
     // a channel no exemplar has is refused, naming the exemplar file and what it has
     let bad = at(d, "bad.png");
     assert_fails(
