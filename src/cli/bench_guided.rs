@@ -68,7 +68,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     timed_then(
         args,
         CUT,
-        || solid::cut(&setup, &domain, &tets, &view, &[], &NoProgress),
+        || solid::cut(&setup, &domain, &fruit, &view, &[], &NoProgress),
         |(picture, out)| {
             Ok(format!("{} the exemplar's cube synthesized in {prepared:.2} s", report(picture, &image, out, whole)?))
         },
@@ -79,7 +79,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         timed_then(
             args,
             CACHED,
-            || solid::cut(&setup, &domain, &tets, &view, &kept, &NoProgress),
+            || solid::cut(&setup, &domain, &fruit, &view, &kept, &NoProgress),
             |(picture, out)| report(picture, &image, out, whole),
         )?;
     }

@@ -52,6 +52,8 @@ struct Guide {
     depth: Vec<(Vec3, f32)>,
     /// The spec's depth axes (polylines at depth 1).
     axes: Vec<Vec<Vec3>>,
+    /// The spec's texture axes, when it gives them (`axes`).
+    texture_axes: Option<[crate::volume::Axis; 2]>,
     frames: usize,
     solve_ms: f64,
 }
@@ -66,8 +68,9 @@ fn guide(mesh: &Path, spec: &Path, tets: Option<usize>) -> Result<Guide> {
     let frames = sketched_frames(&constraints.directions, &constraints.depth).map_err(|e| e.in_file(spec))?;
     let field = solve(&tet_mesh, &frames)?;
     let solve_ms = started.elapsed().as_secs_f64() * 1000.0;
-    let axes = fill.depth.axes.clone();
-    Ok(Guide { surface, tets: tet_mesh, field, depth: constraints.depth, axes, frames: frames.len(), solve_ms })
+    let (axes, texture_axes) = (fill.depth.axes.clone(), fill.axes);
+    let depth = constraints.depth;
+    Ok(Guide { surface, tets: tet_mesh, field, depth, axes, texture_axes, frames: frames.len(), solve_ms })
 }
 
 fn check_tets(tets: Option<usize>) -> Result<()> {
@@ -158,8 +161,10 @@ pub struct GuidedArgs {
     #[arg(long, required_unless_present = "solid")]
     pub exemplar: Option<PathBuf>,
     /// A solid exemplar instead: a volume (e.g. a built library exemplar) that is a cube
-    /// whose side halves evenly to at least 16 voxels, read along the field as it is
-    #[arg(long, conflicts_with_all = ["exemplar", "layered", "mask", "planes", "ey", "ez", "max_exemplar"])]
+    /// whose side halves evenly to at least 16 voxels, read along the field as it is; with
+    /// --layered, a volume with a Depth channel (a built cross-section: its skin, rings,
+    /// seeds), whose central slices along its depth are followed as layered exemplars
+    #[arg(long, conflicts_with_all = ["exemplar", "mask", "planes", "ey", "ez", "max_exemplar"])]
     pub solid: Option<PathBuf>,
     /// Ey, Ez and shrinking (default: exemplars shrunk to 128 pixels).
     #[command(flatten)]
@@ -258,7 +263,7 @@ pub fn run_guided(args: &GuidedArgs) -> Result<()> {
         args.layered.then(|| solid::depth_over(&g.depth, &domain)).transpose().map_err(|e| e.in_file(&args.spec))?;
     let rows = depth.as_ref().map(|d| solid::layer_rows(d, args.res)).transpose()?;
     let (prepared, options, exemplar) = match &args.solid {
-        Some(path) => solid_exemplar(args, path).map_err(|e| e.in_file(path))?,
+        Some(path) => solid_exemplar(args, path, rows, g.texture_axes).map_err(|e| e.in_file(path))?,
         None => {
             let path = args.exemplar.as_ref().ok_or_else(|| usage(Error::invalid("give --exemplar or --solid")))?;
             plane_exemplars(args, path, rows)?
@@ -448,9 +453,31 @@ fn plane_exemplars(args: &GuidedArgs, path: &Path, rows: Option<usize>) -> Resul
 }
 
 /// The prepared solid exemplar of `--solid`, its settings, and its central slice across x
-/// (alpha left out) for a cut's sharpness.
-fn solid_exemplar(args: &GuidedArgs, path: &Path) -> Result<(Exemplars, Options, Image2d)> {
+/// (alpha left out) for a cut's sharpness. Layered (`rows`: how many voxels the model's
+/// depth spans), a volume with a Depth channel gives its two central slices along its
+/// depth axis as layered planes, as the library's fill preview takes them.
+fn solid_exemplar(
+    args: &GuidedArgs,
+    path: &Path,
+    rows: Option<usize>,
+    given: Option<[crate::volume::Axis; 2]>,
+) -> Result<(Exemplars, Options, Image2d)> {
     let volume = io::read_volume(path, io::budget_from_env()?)?;
+    if let Some(rows) = rows {
+        let planes = crate::library::guided::layered_planes(&volume, given, rows)?.ok_or_else(|| {
+            usage(Error::invalid(format!(
+                "{}: --layered with --solid needs a volume with layers, a Depth channel (a library \
+                 cross-section's build); it has {}",
+                path.display(),
+                volume.channels().iter().map(|c| c.name()).collect::<Vec<_>>().join(", ")
+            )))
+        })?;
+        let side = planes.iter().map(|e| e.width().min(e.height())).min().unwrap_or(0);
+        let options = Options { layered: true, coarse_n: args.coarse_n, n: args.n, ..Options::for_exemplar(side) };
+        let prepared = Exemplars::prepare([&planes[0], &planes[1], &planes[2]], &options)?;
+        let [first, ..] = planes;
+        return Ok((prepared, options, first));
+    }
     let options = Options { coarse_n: args.coarse_n, n: args.n, ..Options::for_exemplar(volume.dims()[0]) };
     let prepared = Exemplars::of_volume(&volume, &options)?;
     let slice = without_alpha(volume.slice(crate::volume::Axis::X, volume.dims()[0] / 2)?)?;
@@ -582,7 +609,7 @@ fn write_cut(
     };
     let kept: Vec<Option<&Sparse<synth::Voxel>>> =
         cached.as_ref().map_or(Vec::new(), |(_, levels)| levels.iter().map(Some).collect());
-    let (picture, out) = solid::cut(setup, domain, &g.tets, &view, &kept, bar)?;
+    let (picture, out) = solid::cut(setup, domain, &g.surface, &view, &kept, bar)?;
     io::write_image(&args.output, &picture)?;
     let alpha = picture.channel_count() - 1;
     let shown = picture.data().chunks_exact(alpha + 1).any(|p| p[alpha] > 0.5);

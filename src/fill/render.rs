@@ -222,12 +222,12 @@ impl Cut {
 /// Renders the cut of `model` seen through `view`: its outline is the input surface's
 /// cross-section, its texture that of the tets.
 pub fn cut(model: &LstModel, textures: &Textures, view: &View) -> Cut {
-    cut_within(
-        model,
-        textures,
-        view,
-        &Outlines::new(&model.surface, view, view.normal() * view.right.length(), 1).inside(0),
-    )
+    cut_within(model, textures, view, &inside_surface(&model.surface, view))
+}
+
+/// Per pixel of `view`, whether it lies inside `surface` (its cross-section filled).
+pub fn inside_surface(surface: &Mesh, view: &View) -> Vec<bool> {
+    Outlines::new(surface, view, view.normal() * view.right.length(), 1).inside(0)
 }
 
 /// The cut of `model` at the pixels of `view` that `inside` marks (its outline).

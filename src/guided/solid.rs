@@ -4,8 +4,9 @@
 use super::field::{FrameField, FrameGrid, ScalarGrid};
 use crate::error::{Error, Result};
 use crate::fill::render::View;
-use crate::fill::render::field_cut;
+use crate::fill::render::inside_surface;
 use crate::fill::tets::TetMesh;
+use crate::mesh::Mesh;
 use crate::progress::Progress;
 use crate::synth::coords::{self as synth, Kept, Setup, Synthesized, Voxel};
 use crate::synth::region::{Mask, Sparse};
@@ -169,13 +170,14 @@ pub fn layer_rows(depth: &ScalarGrid, res: usize) -> Result<usize> {
 pub fn cut(
     setup: &Setup,
     domain: &Domain,
-    tets: &TetMesh,
+    surface: &Mesh,
     view: &View,
     kept: &Kept,
     progress: &dyn Progress,
 ) -> Result<(Image2d, Synthesized)> {
-    let ones = vec![1.0; tets.vertices.len()];
-    let inside: Vec<bool> = field_cut(tets, &ones, view).iter().map(Option::is_some).collect();
+    // the outline is the model's surface cut by the plane (as the lapped fill's), not the
+    // tets' faces
+    let inside = inside_surface(surface, view);
     let request = cut_request(domain, view, &inside);
     let out = synth::run(setup, &synth::plan(setup, &request, kept), kept, progress)?;
     let picture = match kept.get(out.finest).copied().flatten() {

@@ -99,7 +99,7 @@ pub fn picture(
                 seed: spec.seed,
                 options,
             };
-            let (cut, _) = solid::cut(&setup, &domain, mesh, view, &[], progress)?;
+            let (cut, _) = solid::cut(&setup, &domain, &filled.model.surface, view, &[], progress)?;
             let grey = cut.channel_count() < 4;
             cut.data()
                 .chunks_exact(cut.channel_count())
@@ -142,28 +142,35 @@ fn central_slices(volume: &Volume) -> Result<[Image2d; 3]> {
 }
 
 /// For a volume with a Depth channel and a spec whose depth rises inside the model: the
-/// two central slices holding the depth axis, rows along it from the outside in (as
-/// `solidtex guided --layered` takes a section), fitted to the voxels the model's depth
-/// spans on the grid (the third plane is not matched), with the model's depth. `None`
-/// otherwise, and where the depth spans too few voxels at [`GUIDED_RES`] to be layered.
-///
-/// The strokes run along frame x, so the first slice is the one across the volume axis
-/// the lapped fill lays along them (the spec's `axes`, else the axis the volume changes
-/// slowest along: a kiwi's length), the second across the remaining one.
+/// layered planes ([`layered_planes`]) fitted to the voxels the model's depth spans on the
+/// grid, with the model's depth. `None` otherwise, and where the depth spans too few voxels
+/// at [`GUIDED_RES`] to be layered.
 fn layered_slices(
     volume: &Volume,
     given: Option<[Axis; 2]>,
     depths: &[(Vec3, f32)],
     domain: &Domain,
 ) -> Result<Option<([Image2d; 3], ScalarGrid)>> {
-    let (Some(axis), Some(c)) = (volume.depth_axis(), volume.channel_index(&Channel::Depth)) else {
-        return Ok(None);
-    };
-    if !depths.iter().any(|d| d.1 > 0.0) {
+    if volume.channel_index(&Channel::Depth).is_none() || !depths.iter().any(|d| d.1 > 0.0) {
         return Ok(None);
     }
     let depth = solid::depth_over(depths, domain)?;
     let Ok(rows) = solid::layer_rows(&depth, GUIDED_RES) else {
+        return Ok(None);
+    };
+    Ok(layered_planes(volume, given, rows)?.map(|planes| (planes, depth)))
+}
+
+/// For a volume with a Depth channel (a library cross-section's build): the two central
+/// slices holding its depth axis, rows along it from the outside in (as `solidtex guided
+/// --layered` takes a section), `rows` tall, with their Depth channel; the third plane
+/// (not matched) repeats the second. `None` for a volume without layers.
+///
+/// The strokes run along frame x, so the first slice is the one across the volume axis
+/// the lapped fill lays along them (the spec's `given` texture axes, else the axis the
+/// volume changes slowest along: a kiwi's length), the second across the remaining one.
+pub fn layered_planes(volume: &Volume, given: Option<[Axis; 2]>, rows: usize) -> Result<Option<[Image2d; 3]>> {
+    let (Some(axis), Some(c)) = (volume.depth_axis(), volume.channel_index(&Channel::Depth)) else {
         return Ok(None);
     };
     let keep: Vec<usize> = colour_channels(volume).into_iter().chain([c]).collect();
@@ -182,7 +189,7 @@ fn layered_slices(
         _ => (0..3).find(|&a| a != axis).expect("two axes besides depth"),
     };
     let (first, second) = (slice(along)?, slice(3 - axis - along)?);
-    Ok(Some(([first, second.clone(), second], depth)))
+    Ok(Some([first, second.clone(), second]))
 }
 
 /// The volume's colour channels (red, green, blue, or the first as grey).

@@ -212,7 +212,8 @@ fn a_guided_cut_of_a_photo_is_as_sharp_as_the_photo() {
 
 /// `--solid` reads a volume along the field as it is: every pixel of the cut inside the
 /// fruit has a colour of the volume; a volume that is not a cube halving evenly is refused
-/// by name, and `--solid` with `--layered` as a usage error.
+/// by name, and `--solid --layered` with a volume without a Depth channel as a usage error
+/// naming the volume and what it has.
 #[test]
 fn a_solid_exemplar_is_read_along_the_field() {
     let dir = tempfile::tempdir().unwrap();
@@ -239,9 +240,33 @@ fn a_solid_exemplar_is_read_along_the_field() {
     let refused = at(d, "refused.png");
     let run = solidtex(&[&base[..], &["--solid", &flat, "-o", &refused]].concat());
     crate::support::assert_fails(&run, &["flat.exr", "cube", "32x32x24"]);
-    let run = solidtex(&[&base[..], &["--solid", &marble, "--layered", "-o", &refused]].concat());
-    crate::support::assert_usage(&run, &["--solid", "--layered"]);
+    let deep = ["--solid", &marble, "--layered", "-o", &refused];
+    let run = solidtex(&[&base[..2], &base[2..4], &["--res", "96"], &base[6..], &deep].concat());
+    crate::support::assert_usage(&run, &["marble.exr", "--layered with --solid", "Depth channel", "R, G, B"]);
     assert!(!d.join("refused.png").exists());
+}
+
+/// A built cross-section (the library's trunk: rings, heartwood and bark, with its Depth)
+/// is followed as layered exemplars with `--solid --layered`; the cut's outline is the
+/// log's round cross-section (the surface's, as the lapped fill's), not the tets' polygon.
+#[test]
+fn a_built_cross_section_is_followed_in_layers_inside_the_surfaces_outline() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    crate::fill::filled(d, "log", "trunk", crate::fill::TRUNK);
+    let (log, trunk, built) = (at(d, "log.obj"), at(d, "trunk.toml"), at(d, "built/trunk.exr"));
+    let out = at(d, "across.png");
+    let args = ["guided", &log, "--spec", &trunk, "--solid", &built, "--layered", "--res", "128"];
+    let run = solidtex(&[&args[..], &["--cut", "0,0,1,0,0,1", "--size", "128", "-o", &out]].concat());
+    assert!(run.status.success(), "{}", stderr(&run));
+    let img = image::open(&out).unwrap().to_rgba8();
+    // the log's radius is 0.5 of the cut's 1.04 units: a disc of 61.5 px radius
+    let (inside, radius) = (img.pixels().filter(|p| p.0[3] == 255).count() as f64, 0.5 * 128.0 / 1.04);
+    let disc = std::f64::consts::PI * radius * radius;
+    assert!((inside / disc - 1.0).abs() < 0.02, "{inside} pixels inside, a disc holds {disc:.0}");
+    let reds: Vec<u8> = img.pixels().filter(|p| p.0[3] == 255).map(|p| p.0[0]).collect();
+    let (lo, hi) = (reds.iter().min().unwrap(), reds.iter().max().unwrap());
+    assert!(hi - lo > 40, "rings and heartwood: red {lo} to {hi}");
 }
 
 /// Without `--cut`, the whole solid is written: the exemplar's channels (one: the photo is
