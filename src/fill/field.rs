@@ -17,7 +17,7 @@
 use super::mesher::closest::Surface;
 use super::patch::orthogonal;
 use super::solve::{Sparse, dense_solve, least_squares, least_squares_each};
-use super::tets::{TetGrid, TetMesh};
+use super::tets::{EDGES, TetGrid, TetMesh};
 use crate::TextureType;
 use crate::error::{Error, Result};
 use crate::mesh::Mesh;
@@ -159,9 +159,6 @@ fn pin_surface(mesh: &TetMesh, surface: &Mesh, values: &[Option<f32>], depth: &m
         depth[v] = d;
     }
 }
-
-/// A tet's edges, as pairs of its corners, in the order of [`Field::bumps`].
-pub const EDGES: [(usize, usize); 6] = [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)];
 
 /// The depth at barycentric point `b` of a tet beyond the linear interpolation of its
 /// corners' depths: the quadratic (10-node) tet's term, 4 Σ bᵢbⱼ eᵢⱼ over its `edges`.

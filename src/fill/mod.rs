@@ -214,7 +214,7 @@ pub fn mean_edge(mesh: &TetMesh) -> f32 {
     let total: f32 = (0..mesh.tets.len())
         .map(|t| {
             let c = mesh.corners(t);
-            [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)].iter().map(|&(a, b)| c[a].distance(c[b])).sum::<f32>()
+            tets::EDGES.iter().map(|&(a, b)| c[a].distance(c[b])).sum::<f32>()
         })
         .sum();
     total / (6 * mesh.tets.len().max(1)) as f32

@@ -129,7 +129,7 @@ pub struct DepthBumps {
     /// The sources whose patches take their depth from the field: the first `sources`
     /// (manual pastes are rigid).
     pub sources: usize,
-    /// Per tet, the bump at the middle of each of its edges ([`super::field::EDGES`]).
+    /// Per tet, the bump at the middle of each of its edges ([`super::tets::EDGES`]).
     pub edges: Vec<[f32; 6]>,
 }
 

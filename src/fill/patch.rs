@@ -128,7 +128,7 @@ pub fn to_byte(a: f32) -> u8 {
 /// corners, edge midpoints and centre).
 pub fn touches(mask: &Sampler, w: [Vec3; 4]) -> bool {
     let centre = (w[0] + w[1] + w[2] + w[3]) / 4.0;
-    let mids = [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)].map(|(a, b)| (w[a] + w[b]) / 2.0);
+    let mids = super::tets::EDGES.map(|(a, b)| (w[a] + w[b]) / 2.0);
     w.iter().chain(&mids).chain(std::iter::once(&centre)).any(|p| mask.alpha(*p) > 0.0)
 }
 

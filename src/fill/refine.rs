@@ -117,7 +117,7 @@ pub(crate) fn vertex_tets(mesh: &TetMesh) -> Vec<Vec<u32>> {
 fn longest_edge(mesh: &TetMesh, t: usize) -> (u32, u32, f32) {
     let tet = mesh.tets[t];
     let mut best = (0, 0, -1.0f32);
-    for (i, j) in [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)] {
+    for (i, j) in super::tets::EDGES {
         let (a, b) = (tet[i].min(tet[j]), tet[i].max(tet[j]));
         let length = mesh.vertices[a as usize].distance(mesh.vertices[b as usize]);
         if length > best.2 || (length == best.2 && (a, b) < (best.0, best.1)) {

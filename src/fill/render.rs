@@ -414,7 +414,7 @@ pub fn field_cut(mesh: &TetMesh, values: &[f32], view: &View) -> Vec<Option<f32>
 fn section(c: &[Vec3; 4], normal: Vec3, offset: f32) -> Vec<Vec3> {
     let side = c.map(|p| normal.dot(p) - offset);
     let mut points = Vec::with_capacity(4);
-    for (a, b) in [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)] {
+    for (a, b) in super::tets::EDGES {
         if (side[a] <= 0.0) != (side[b] <= 0.0) {
             let t = side[a] / (side[a] - side[b]);
             points.push(c[a].lerp(c[b], t));

@@ -31,6 +31,9 @@ pub struct TetMesh {
 /// counter-clockwise for a positively oriented tet.
 pub const FACES: [[usize; 3]; 4] = [[1, 2, 3], [0, 3, 2], [0, 1, 3], [0, 2, 1]];
 
+/// A tet's six edges, as pairs of its corners.
+pub const EDGES: [(usize, usize); 6] = [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)];
+
 impl TetMesh {
     /// The four corners of tet `t`.
     pub fn corners(&self, t: usize) -> [Vec3; 4] {
