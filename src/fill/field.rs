@@ -69,33 +69,46 @@ pub fn build(mesh: &TetMesh, kind: TextureType, constraints: &Constraints, surfa
     let uses_depth = matches!(kind, TextureType::T1b | TextureType::T2a | TextureType::T2b);
     let rbf = if uses_depth { Some(Rbf::fit(&constraints.depth)?) } else { None };
     let raw: Option<Vec<f32>> = rbf.as_ref().map(|f| mesh.vertices.par_iter().map(|v| f.value(*v)).collect());
-    let mut depth = raw.clone();
-    if let (Some(d), Some(surface)) = (depth.as_mut(), surface) {
-        pin_surface(mesh, surface, &constraints.surface_values, d);
-    }
-    let gradients: Option<Vec<Vec3>> =
-        rbf.as_ref().map(|f| (0..tets).into_par_iter().map(|t| f.gradient(mesh.centroid(t))).collect());
+    // the pinning's solve runs on one core at a time: the gradients use the other
+    let (depth, gradients) = rayon::join(
+        || {
+            let mut depth = raw.clone();
+            if let (Some(d), Some(surface)) = (depth.as_mut(), surface) {
+                pin_surface(mesh, surface, &constraints.surface_values, d);
+            }
+            depth
+        },
+        || rbf.as_ref().map(|f| (0..tets).into_par_iter().map(|t| f.gradient(mesh.centroid(t))).collect::<Vec<Vec3>>()),
+    );
     let primary: Vec<Vec3> = match (kind, &gradients) {
         (TextureType::T1a, _) => per_tet(mesh, &smooth_vectors(mesh, &constraints.directions, None)?),
         (_, Some(g)) => g.iter().map(|g| g.normalize_or(Vec3::Y)).collect(),
         _ => vec![Vec3::ZERO; tets],
     };
-    let secondary = match kind {
-        TextureType::T2a | TextureType::T2b => {
-            let smoothed = smooth_vectors(mesh, &constraints.directions, depth.as_deref())?;
-            per_tet(mesh, &smoothed).iter().zip(&primary).map(|(s, r)| orthogonal(*s, *r)).collect()
-        }
-        _ => vec![Vec3::ZERO; tets],
-    };
-    let scale = match (kind, &gradients) {
-        (TextureType::T1b | TextureType::T2b, Some(g)) => g.iter().map(|g| 1.0 / g.length().max(1e-6)).collect(),
-        _ => smooth_scales(mesh, constraints)?,
-    };
-    let depth = if matches!(kind, TextureType::T1b | TextureType::T2b) { depth } else { None };
-    let bumps = match (&rbf, &raw, &depth) {
-        (Some(f), Some(raw), Some(d)) => Some(depth_bumps(mesh, f, raw, d)),
-        _ => None,
-    };
+    let layered = matches!(kind, TextureType::T1b | TextureType::T2b);
+    // the same for the secondary directions' solve and the depth bumps
+    let (directions, bumps) = rayon::join(
+        || -> Result<(Vec<Vec3>, Vec<f32>)> {
+            let secondary = match kind {
+                TextureType::T2a | TextureType::T2b => {
+                    let smoothed = smooth_vectors(mesh, &constraints.directions, depth.as_deref())?;
+                    per_tet(mesh, &smoothed).iter().zip(&primary).map(|(s, r)| orthogonal(*s, *r)).collect()
+                }
+                _ => vec![Vec3::ZERO; tets],
+            };
+            let scale = match (layered, &gradients) {
+                (true, Some(g)) => g.iter().map(|g| 1.0 / g.length().max(1e-6)).collect(),
+                _ => smooth_scales(mesh, constraints)?,
+            };
+            Ok((secondary, scale))
+        },
+        || match (&rbf, &raw, &depth) {
+            (Some(f), Some(raw), Some(d)) if layered => Some(depth_bumps(mesh, f, raw, d)),
+            _ => None,
+        },
+    );
+    let (secondary, scale) = directions?;
+    let depth = if layered { depth } else { None };
     Ok(Field { depth, bumps, primary, secondary, scale })
 }
 

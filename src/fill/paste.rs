@@ -107,6 +107,8 @@ pub struct Paster<'a> {
     /// The same samples in batches.
     batches: Vec<[[f32; BATCH]; 4]>,
     coverage: Vec<u8>,
+    /// The tets whose coverage the last patch recorded added to.
+    recorded: Vec<u32>,
     out: Pasted,
     angles: Vec<f32>,
 }
@@ -134,6 +136,7 @@ impl<'a> Paster<'a> {
             samples,
             batches: sample_batches(),
             coverage,
+            recorded: Vec::new(),
             out,
             angles: Vec::new(),
         })
@@ -145,6 +148,9 @@ impl<'a> Paster<'a> {
         let mut rng = Pcg64Mcg::seed_from_u64(self.params.seed);
         let mut uncovered: Vec<u32> = (0..tets as u32).collect();
         let mut strikes = vec![0u8; tets];
+        // a tet leaves the list once covered or struck out; only a patch's own tets and
+        // its seed can change that
+        let mut done = vec![false; tets];
         while !uncovered.is_empty() {
             if progress.cancelled() {
                 return Err(Error::Cancelled);
@@ -157,7 +163,10 @@ impl<'a> Paster<'a> {
             if strikes[seed] >= STRIKES && !self.covered(seed) {
                 self.out.stats.forced += 1;
             }
-            uncovered.retain(|&t| !self.covered(t as usize) && strikes[t as usize] < STRIKES);
+            for &t in self.recorded.iter().chain([&(seed as u32)]) {
+                done[t as usize] = self.covered(t as usize) || strikes[t as usize] >= STRIKES;
+            }
+            uncovered.retain(|&t| !done[t as usize]);
             progress.update("pasting", 1.0 - uncovered.len() as f32 / tets as f32);
         }
         Ok(())
@@ -350,39 +359,68 @@ impl<'a> Paster<'a> {
         // where each tet stands: in the clump, joined, neither
         let mut state = vec![Standing::Outside; self.mesh.tets.len()];
         tets.iter().for_each(|&t| state[t as usize] = Standing::Clump);
+        let mut ring: Vec<(u32, [Vec3; 4])> = tets
+            .par_iter()
+            .map(|&t| (t, self.mesh.tets[t as usize].map(|v| coords[local[v as usize] as usize])))
+            .collect();
         let mut added: Vec<(u32, [Vec3; 4])> = Vec::new();
-        let mut i = 0;
-        while i < tets.len() + added.len() {
-            let t = tets.get(i).copied().unwrap_or_else(|| added[i - tets.len()].0);
-            let open = |state: &[Standing], n: u32| n != NONE && state[n as usize] == Standing::Outside;
-            if !self.neighbours[t as usize].iter().any(|&n| open(&state, n)) {
-                // inside the clump and what joined so far: nothing to reach
-                i += 1;
-                continue;
-            }
-            let w_t = match tets.get(i) {
-                Some(_) => self.mesh.tets[t as usize].map(|v| coords[local[v as usize] as usize]),
-                None => added[i - tets.len()].1,
-            };
-            i += 1;
-            let jac = jacobian(self.mesh, t as usize, w_t);
-            let origin = self.mesh.vertices[self.mesh.tets[t as usize][0] as usize];
-            for n in self.neighbours[t as usize] {
-                if !open(&state, n) || !self.alike(seed, n as usize, Some(frame), NOT_OPPOSED) {
-                    continue;
-                }
-                let w = self.mesh.tets[n as usize].map(|v| match local[v as usize] {
-                    NONE => self.with_depth(v, w_t[0] + jac * (self.mesh.vertices[v as usize] - origin)),
-                    i => coords[i as usize],
-                });
-                if touches(mask, w) {
-                    added.push((n, w));
+        // a ring at a time, its tets in order: each offers the open neighbours its map
+        // reaches (tested side by side), and the first offer for a tet wins, as a flood
+        // one tet at a time in the same order would decide
+        while !ring.is_empty() {
+            let before = &state;
+            let offers: Vec<Vec<(u32, [Vec3; 4])>> = ring
+                .par_iter()
+                .map(|&(t, w_t)| self.offers(seed, frame, mask, before, local, coords, t, w_t))
+                .collect();
+            let first = added.len();
+            for (n, w) in offers.into_iter().flatten() {
+                if state[n as usize] == Standing::Outside {
                     state[n as usize] = Standing::Joined;
+                    added.push((n, w));
                 }
             }
+            ring = added[first..].to_vec();
         }
         added.sort_unstable_by_key(|a| a.0);
         added
+    }
+
+    /// The neighbours of tet `t` (texture coordinates `w_t` at its corners) that are
+    /// outside in `state`, not opposed to the seed's tensor, and that the map of `t`
+    /// extended over them makes touch `mask`, with their corners' coordinates (corners
+    /// in `local` keep theirs).
+    #[allow(clippy::too_many_arguments)]
+    fn offers(
+        &self,
+        seed: usize,
+        frame: &Frame,
+        mask: &Sampler,
+        state: &[Standing],
+        local: &[u32],
+        coords: &[Vec3],
+        t: u32,
+        w_t: [Vec3; 4],
+    ) -> Vec<(u32, [Vec3; 4])> {
+        let open = |n: u32| n != NONE && state[n as usize] == Standing::Outside;
+        let neighbours = self.neighbours[t as usize];
+        if !neighbours.iter().any(|&n| open(n)) {
+            return Vec::new();
+        }
+        let jac = jacobian(self.mesh, t as usize, w_t);
+        let origin = self.mesh.vertices[self.mesh.tets[t as usize][0] as usize];
+        let reach = |n: u32| {
+            self.mesh.tets[n as usize].map(|v| match local[v as usize] {
+                NONE => self.with_depth(v, w_t[0] + jac * (self.mesh.vertices[v as usize] - origin)),
+                i => coords[i as usize],
+            })
+        };
+        neighbours
+            .into_iter()
+            .filter(|&n| open(n) && self.alike(seed, n as usize, Some(frame), NOT_OPPOSED))
+            .map(|n| (n, reach(n)))
+            .filter(|(_, w)| touches(mask, *w))
+            .collect()
     }
 
     /// The clump with the `added` tets: its tets, vertices and their coordinates (each new
@@ -439,12 +477,14 @@ impl<'a> Paster<'a> {
             }
         });
         let index = self.out.patches.len() as u32;
+        self.recorded.clear();
         for ((&t, a), angle) in tets.iter().zip(alphas.chunks_exact(SAMPLES)).zip(angles) {
             if a.iter().all(|x| *x == 0) {
                 continue;
             }
             let cov = &mut self.coverage[t as usize * SAMPLES..(t as usize + 1) * SAMPLES];
             cov.iter_mut().zip(a).for_each(|(c, x)| *c = c.saturating_add(*x));
+            self.recorded.push(t);
             self.out.tet_patches[t as usize].push(index);
             self.angles.extend(angle);
         }

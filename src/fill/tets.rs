@@ -206,37 +206,39 @@ impl TetGrid {
             let pad = Vec3::splat(1e-4 * (b - a).max_element() + 1e-6);
             (grid.cell_of(a - pad), grid.cell_of(b + pad))
         };
-        let entries = (0..mesh.tets.len())
-            .map(|t| {
-                let (a, b) = span(t);
-                (0..3).map(|k| b[k] - a[k] + 1).product::<usize>()
-            })
+        let spans: Vec<([usize; 3], [usize; 3])> = (0..mesh.tets.len()).into_par_iter().map(span).collect();
+        let entries = spans
+            .iter()
+            .map(|(a, b)| (0..3).map(|k| b[k] - a[k] + 1).product::<usize>())
             .fold(0usize, usize::saturating_add);
         if entries > MAX_GRID_ENTRIES {
             return Err(Error::invalid(format!(
                 "the model's tets are too long to locate points in ({entries} grid entries; at most {MAX_GRID_ENTRIES})"
             )));
         }
-        let mut pairs: Vec<(u32, u32)> = Vec::with_capacity(entries);
-        for t in 0..mesh.tets.len() {
-            let (a, b) = span(t);
-            for z in a[2]..=b[2] {
-                for y in a[1]..=b[1] {
-                    for x in a[0]..=b[0] {
-                        pairs.push(((x + dims[0] * (y + dims[1] * z)) as u32, t as u32));
-                    }
-                }
-            }
-        }
-        pairs.sort_unstable();
+        let cells_of = |(a, b): &([usize; 3], [usize; 3])| {
+            let (a, b) = (*a, *b);
+            (a[2]..=b[2]).flat_map(move |z| {
+                (a[1]..=b[1]).flat_map(move |y| (a[0]..=b[0]).map(move |x| x + dims[0] * (y + dims[1] * z)))
+            })
+        };
+        // a counting sort by cell: each cell's tets in index order
         let mut offsets = vec![0u32; dims.iter().product::<usize>() + 1];
-        for (c, _) in &pairs {
-            offsets[*c as usize + 1] += 1;
+        for c in spans.iter().flat_map(cells_of) {
+            offsets[c + 1] += 1;
         }
         for i in 1..offsets.len() {
             offsets[i] += offsets[i - 1];
         }
-        Ok(TetGrid { offsets, tets: pairs.into_iter().map(|(_, t)| t).collect(), ..grid })
+        let mut next = offsets.clone();
+        let mut tets = vec![0u32; entries];
+        for (t, span) in spans.iter().enumerate() {
+            for c in cells_of(span) {
+                tets[next[c] as usize] = t as u32;
+                next[c] += 1;
+            }
+        }
+        Ok(TetGrid { offsets, tets, ..grid })
     }
 
     /// The cell holding `p`, clamped into the grid (monotone in each coordinate, so a box's
