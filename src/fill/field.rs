@@ -220,10 +220,9 @@ fn per_tet(mesh: &TetMesh, at_vertices: &[Vec3]) -> Vec<Vec3> {
 
 /// Laplacian smoothing of the three components of `directions`, then normalized.
 fn smooth_vectors(mesh: &TetMesh, directions: &[(Vec3, Vec3)], depth: Option<&[f32]>) -> Result<Vec<Vec3>> {
-    let system = Smoothing::new(mesh, depth);
     let points: Vec<(Vec3, [f32; 3])> =
         directions.iter().map(|(p, d)| (*p, d.normalize_or_zero().to_array())).collect();
-    let solved = system.solve(mesh, &points)?;
+    let solved = smooth(mesh, depth, &points)?;
     Ok((0..mesh.vertices.len())
         .map(|v| glam::DVec3::from_slice(&solved[v * 3..v * 3 + 3]).as_vec3().normalize_or(Vec3::Y))
         .collect())
@@ -232,7 +231,18 @@ fn smooth_vectors(mesh: &TetMesh, directions: &[(Vec3, Vec3)], depth: Option<&[f
 /// `K` values per vertex of `mesh`, as smooth as the uniform Laplacian allows while meeting
 /// the values at `points` (soft constraints, interpolated in the tet holding each point).
 pub fn smooth_at_vertices<const K: usize>(mesh: &TetMesh, points: &[(Vec3, [f32; K])]) -> Result<Vec<f64>> {
-    Smoothing::new(mesh, None).solve(mesh, points)
+    smooth(mesh, None, points)
+}
+
+/// [`Smoothing::solve`] over `mesh` (weighted by `depth` if given). Points that all hold
+/// one value give it at every vertex without a solve: a constant meets every constraint
+/// and is as smooth as can be (the solve starts there and stops at once).
+fn smooth<const K: usize>(mesh: &TetMesh, depth: Option<&[f32]>, points: &[(Vec3, [f32; K])]) -> Result<Vec<f64>> {
+    if let Some((_, first)) = points.first().filter(|_| points.iter().all(|p| p.1 == points[0].1)) {
+        let value = first.map(f64::from);
+        return Ok((0..mesh.vertices.len()).flat_map(|_| value).collect());
+    }
+    Smoothing::new(mesh, depth).solve(mesh, points)
 }
 
 /// Laplacian smoothing of the scale constraints; the default scale where there are none.
@@ -244,7 +254,7 @@ fn smooth_scales(mesh: &TetMesh, c: &Constraints) -> Result<Vec<f32>> {
         return Err(Error::invalid(format!("scale {s} at {p} must be a positive number of model units")));
     }
     let points: Vec<(Vec3, [f32; 1])> = c.scales.iter().map(|(p, s)| (*p, [*s])).collect();
-    let at_vertices = Smoothing::new(mesh, None).solve(mesh, &points)?;
+    let at_vertices = smooth(mesh, None, &points)?;
     Ok(mesh.tets.iter().map(|t| t.iter().map(|&v| at_vertices[v as usize] as f32).sum::<f32>() / 4.0).collect())
 }
 
