@@ -267,6 +267,22 @@ fn a_built_cross_section_is_followed_in_layers_inside_the_surfaces_outline() {
     let reds: Vec<u8> = img.pixels().filter(|p| p.0[3] == 255).map(|p| p.0[0]).collect();
     let (lo, hi) = (reds.iter().min().unwrap(), reds.iter().max().unwrap());
     assert!(hi - lo > 40, "rings and heartwood: red {lo} to {hi}");
+    // the bark, the section's outermost 3 % of depth, rims the cut: dark on most of the
+    // outer band (past 0.95 of the radius) against the wood between 0.5 and 0.9
+    let luminance = |p: &image::Rgba<u8>| 0.3 * p.0[0] as f64 + 0.59 * p.0[1] as f64 + 0.11 * p.0[2] as f64;
+    let band = |lo: f64, hi: f64| -> Vec<f64> {
+        img.enumerate_pixels()
+            .filter(|(x, y, p)| {
+                let r = (*x as f64 - 63.5).hypot(*y as f64 - 63.5) / radius;
+                p.0[3] == 255 && r > lo && r <= hi
+            })
+            .map(|(_, _, p)| luminance(p))
+            .collect()
+    };
+    let wood = band(0.5, 0.9).iter().sum::<f64>() / band(0.5, 0.9).len() as f64;
+    let rim = band(0.95, 1.1);
+    let dark = rim.iter().filter(|l| **l < 0.6 * wood).count() as f64 / rim.len() as f64;
+    assert!(dark >= 0.4, "the bark rims {:.0} % of the outer band", dark * 100.0);
 }
 
 /// Without `--cut`, the whole solid is written: the exemplar's channels (one: the photo is
