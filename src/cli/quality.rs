@@ -47,8 +47,9 @@ pub fn run(args: &QualityArgs) -> Result<()> {
     }
     let volume = io::read_volume(&args.volume, io::budget_from_env()?)?;
     let Some(exemplar) = &args.exemplar else { return labels(args, &volume) };
-    let ex = args.others.load(exemplar, "exemplar")?;
-    let (ey, ez) = args.others.load_yz()?;
+    let others = shrunk_as_made(&args.others, &volume);
+    let ex = others.load(exemplar, "exemplar")?;
+    let (ey, ez) = others.load_yz()?;
     let layered = args.layered || volume.meta.texture_type == Some(crate::TextureType::T1b);
     let ey_ref = ey.as_ref().unwrap_or(&ex);
     let exemplars = if layered {
@@ -63,6 +64,23 @@ pub fn run(args: &QualityArgs) -> Result<()> {
         say!("{}", table(&report).trim_end());
     }
     verdict(args.check, report.outside_bands())
+}
+
+/// The exemplars' shrinking: `--max-exemplar` as given, else as the volume was synthesized
+/// with (its provenance; said on stderr), so a volume is measured against the exemplars
+/// it was made from.
+fn shrunk_as_made(others: &super::synth::OtherExemplars, volume: &crate::Volume) -> super::synth::OtherExemplars {
+    let recorded = volume.meta.get(super::synth::MAX_EXEMPLAR_KEY).and_then(|v| v.parse::<usize>().ok());
+    let max_exemplar = match (others.max_exemplar, recorded) {
+        (None, Some(side)) => {
+            tell!(
+                "measuring against the exemplars shrunk to {side} px, as the volume was made (--max-exemplar {side})"
+            );
+            Some(side)
+        }
+        (given, _) => given,
+    };
+    super::synth::OtherExemplars { ey: others.ey.clone(), ez: others.ez.clone(), max_exemplar }
 }
 
 /// With `--check`: an error (exit status 1) naming the figures outside their bands.
@@ -294,7 +312,11 @@ pub fn noise(args: &NoiseArgs) -> Result<()> {
     let (ey, ez) = args.others.load_yz()?;
     let ey_ref = ey.as_ref().unwrap_or(&ex);
     let exemplars = [Some(&ex), Some(ey_ref), Some(ez.as_ref().unwrap_or(ey_ref))];
-    let volume = crate::controls::spectral_noise(exemplars, dims, args.seed).map_err(|e| e.in_file(&args.exemplar))?;
+    let mut volume =
+        crate::controls::spectral_noise(exemplars, dims, args.seed).map_err(|e| e.in_file(&args.exemplar))?;
+    if let Some(side) = args.others.max_exemplar {
+        volume.meta.set(super::synth::MAX_EXEMPLAR_KEY, side.to_string());
+    }
     io::write_volume(&args.output, &volume)?;
     tell!("wrote {} (random-phase noise with the exemplars' spectra and colours)", args.output.display());
     Ok(())

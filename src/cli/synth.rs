@@ -24,6 +24,9 @@ pub struct OtherExemplars {
     pub max_exemplar: Option<usize>,
 }
 
+/// The provenance key of the `--max-exemplar` a volume was synthesized with.
+pub const MAX_EXEMPLAR_KEY: &str = "max_exemplar";
+
 impl OtherExemplars {
     /// Check `--max-exemplar` against its range (a usage error).
     pub fn check(&self) -> Result<()> {
@@ -231,6 +234,11 @@ pub fn run(args: &SynthArgs) -> Result<()> {
         synth::synthesize(exemplars, &params, args.seed, &bar).map_err(|e| e.in_file(&args.exemplar))?
     };
     bar.bar.finish_and_clear();
+    let mut volume = volume;
+    if let Some(side) = args.others.max_exemplar {
+        // `quality` shrinks the exemplars alike when it is not told otherwise
+        volume.meta.set(MAX_EXEMPLAR_KEY, side.to_string());
+    }
     io::write_volume(&args.output, &volume)?;
     let [x, y, z] = volume.dims();
     tell!("wrote {} ({x}x{y}x{z}) in {:.2} s", args.output.display(), started.elapsed().as_secs_f64());

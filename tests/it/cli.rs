@@ -140,6 +140,23 @@ fn build_makes_the_default_library() {
     }
 }
 
+/// A volume synthesized from shrunk exemplars is measured against the same shrunk
+/// exemplars when `quality` is not told `--max-exemplar` (the volume records it), and
+/// says so.
+#[test]
+fn quality_measures_against_the_exemplars_the_volume_was_made_from() {
+    let dir = tempfile::tempdir().unwrap();
+    let photo = concat!(env!("CARGO_MANIFEST_DIR"), "/exemplars/gravel_photo.png");
+    let volume = at(dir.path(), "gravel.exr");
+    let run = solidtex(&["synth", photo, "--max-exemplar", "48", "--size", "24", "-o", &volume]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let told = solidtex(&["quality", &volume, "--exemplar", photo, "--max-exemplar", "48", "--json"]);
+    let recorded = solidtex(&["quality", &volume, "--exemplar", photo, "--json"]);
+    assert!(told.status.success() && recorded.status.success(), "{}", stderr(&recorded));
+    assert_eq!(String::from_utf8_lossy(&told.stdout), String::from_utf8_lossy(&recorded.stdout));
+    assert!(stderr(&recorded).contains("--max-exemplar 48"), "{}", stderr(&recorded));
+}
+
 #[test]
 fn build_rejects_a_bad_manifest_by_name() {
     let dir = tempfile::tempdir().unwrap();
