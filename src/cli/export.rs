@@ -45,7 +45,11 @@ pub fn run(args: &ExportArgs) -> Result<()> {
     let checks = || -> Result<()> {
         io::values::within("--crease", args.crease, 0.0, 180.0)?;
         if let Some(edge) = args.edge {
-            io::values::within("--edge", edge, 0.0, f32::MAX)?;
+            if !(edge.is_finite() && edge >= 0.0) {
+                return Err(Error::invalid(format!(
+                    "--edge {edge} is out of range; allowed: 0 (the input surface's triangles) or a positive length in model units"
+                )));
+            }
         }
         if let Some(side) = args.atlas {
             io::values::within("--atlas", side, 64, 8192)?;

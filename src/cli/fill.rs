@@ -234,12 +234,12 @@ pub fn run_fill(args: &FillArgs) -> Result<()> {
         .map_err(|e| e.in_file(&args.mesh))?;
     warn_if_lost(&args.mesh, &held);
     let distance = mesher::surface_distance(&surface, &tets).map_err(|e| e.in_file(&args.mesh))?;
-    let missing = library::fill::missing(&spec)?;
+    let missing = library::fill::missing(&spec).map_err(|e| e.in_file(&args.spec))?;
     if !missing.is_empty() {
         tell!("building {} into {} first", missing.join(", "), spec.built.display());
         library::fill::build_first(&spec, missing, &super::build::Lines::new(0))?;
     }
-    let resolved = library::fill::resolve(&spec, &args.output)?;
+    let resolved = library::fill::resolve(&spec, &args.output).map_err(|e| e.in_file(&args.spec))?;
     let job = Job {
         surface: &surface,
         spec: &spec,

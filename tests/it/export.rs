@@ -230,7 +230,7 @@ fn several_models_a_relief_and_a_skin_export_and_bad_input_is_refused() {
     // bad input: a clear error, nothing written
     let bad = at(d, "bad.glb");
     assert_fails(&solidtex(&["export", &kiwi, "--displacement", "0.1", "-o", &bad]), &["kiwi.exr", "Displacement"]);
-    assert_usage(&solidtex(&["export", &kiwi, "--edge", "-1", "-o", &bad]), &["--edge"]);
+    assert_usage(&solidtex(&["export", &kiwi, "--edge", "-1", "-o", &bad]), &["--edge", "-1", "positive length"]);
     assert_usage(&solidtex(&["export", &kiwi, "--edge", "0.00001", "-o", &bad]), &["--edge", "triangles"]);
     assert_usage(&solidtex(&["export", &kiwi, "--atlas", "10", "-o", &bad]), &["--atlas"]);
     assert_usage(&solidtex(&["export", &kiwi, "--atlas", "64", "--edge", "0.02", "-o", &bad]), &["atlas"]);

@@ -685,7 +685,11 @@ fn bad_fills_are_refused_with_the_reason_and_nothing_written() {
     let fruit = draw(d, "fruit");
     let out = at(d, "out.lst");
     let cases: Vec<(String, String, Vec<&str>)> = vec![
-        (fruit.clone(), spec(d, "unknown.toml", "exemplar = \"plum\"\n"), vec!["plum", "not in the library", "kiwi"]),
+        (
+            fruit.clone(),
+            spec(d, "unknown.toml", "exemplar = \"plum\"\n"),
+            vec!["unknown.toml", "plum", "not in the library", "kiwi"],
+        ),
         (fruit.clone(), spec(d, "nostroke.toml", "exemplar = \"wood\"\ntype = \"1-a\"\n"), vec!["1-a", "direction"]),
         (
             fruit.clone(),

@@ -255,6 +255,11 @@ fn a_built_cross_section_is_followed_in_layers_inside_the_surfaces_outline() {
     let d = dir.path();
     crate::fill::filled(d, "log", "trunk", crate::fill::TRUNK);
     let (log, trunk, built) = (at(d, "log.obj"), at(d, "trunk.toml"), at(d, "built/trunk.exr"));
+    // without --layered, a section is no solid cube: the message says what to add
+    let refused = at(d, "refused.png");
+    let flat = ["guided", &log, "--spec", &trunk, "--solid", &built, "--res", "64", "-o", &refused];
+    crate::support::assert_fails(&solidtex(&flat), &["trunk.exr", "Depth", "add --layered"]);
+    assert!(!d.join("refused.png").exists());
     let out = at(d, "across.png");
     let args = ["guided", &log, "--spec", &trunk, "--solid", &built, "--layered", "--res", "128"];
     let run = solidtex(&[&args[..], &["--cut", "0,0,1,0,0,1", "--size", "128", "-o", &out]].concat());
