@@ -44,12 +44,10 @@ const DEFAULT_VIEW: (usize, f32) = (512, 2.0);
 pub fn run(args: &ExportArgs) -> Result<()> {
     let checks = || -> Result<()> {
         io::values::within("--crease", args.crease, 0.0, 180.0)?;
-        if let Some(edge) = args.edge {
-            if !(edge.is_finite() && edge >= 0.0) {
-                return Err(Error::invalid(format!(
-                    "--edge {edge} is out of range; allowed: 0 (the input surface's triangles) or a positive length in model units"
-                )));
-            }
+        if let Some(edge) = args.edge.filter(|e| !(e.is_finite() && *e >= 0.0)) {
+            return Err(Error::invalid(format!(
+                "--edge {edge} is out of range; allowed: 0 (the input surface's triangles) or a positive length in model units"
+            )));
         }
         if let Some(side) = args.atlas {
             io::values::within("--atlas", side, 64, 8192)?;
