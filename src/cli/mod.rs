@@ -49,7 +49,7 @@ pub struct Cli {
 pub enum Command {
     /// Print dims, channels, texture type, provenance and per-channel statistics.
     Info {
-        /// A volume file (.exr, .nrrd, .vol, .png atlas, or a folder of PNG slices).
+        /// A volume file (.exr, .nrrd, .vol, .png atlas, .vdb, .dds, or a folder of PNG slices).
         file: PathBuf,
         /// Print JSON instead of text.
         #[arg(long)]
@@ -117,7 +117,7 @@ pub enum Command {
         #[arg(long)]
         title: Option<String>,
     },
-    /// Make a procedural volume: marble (type 0), strata (1-b) or wood (2-a).
+    /// Make a procedural volume: marble, strata, wood, the cake's sponge, cream and chocolate, or a 3D truth (foam, channels).
     Make {
         /// marble, strata, wood, sponge, cream, chocolate, or the label volumes foam and
         /// channels (3D truths with long features for `quality --labels --truth`).

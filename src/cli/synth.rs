@@ -124,7 +124,7 @@ pub struct SynthArgs {
     /// Print every stage with the time it was reached.
     #[arg(long, short)]
     pub verbose: bool,
-    /// The volume file to write (.exr, .nrrd, .vol, .png or a folder).
+    /// The volume file to write (.exr, .nrrd, .vol, .png, .vdb, .dds, or a folder).
     #[arg(short, long)]
     pub output: PathBuf,
 }

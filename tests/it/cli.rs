@@ -157,6 +157,17 @@ fn quality_measures_against_the_exemplars_the_volume_was_made_from() {
     assert!(stderr(&recorded).contains("--max-exemplar 48"), "{}", stderr(&recorded));
 }
 
+/// An output named in no format solidtex writes is a usage error (exit 2), said before any
+/// work, with the formats allowed, and nothing is written.
+#[test]
+fn an_output_in_no_known_format_is_a_usage_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = at(dir.path(), "marble.txt");
+    let run = solidtex(&["make", "marble", "--size", "8", "-o", &out]);
+    crate::support::assert_usage(&run, &["marble.txt", ".txt", ".exr", ".vdb"]);
+    assert!(!dir.path().join("marble.txt").exists());
+}
+
 #[test]
 fn build_rejects_a_bad_manifest_by_name() {
     let dir = tempfile::tempdir().unwrap();
