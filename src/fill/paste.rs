@@ -363,16 +363,34 @@ impl<'a> Paster<'a> {
             .par_iter()
             .map(|&t| (t, self.mesh.tets[t as usize].map(|v| coords[local[v as usize] as usize])))
             .collect();
+        // the open neighbours of tet `t` (coordinates `w_t`) not opposed to the seed's
+        // tensor that the map of `t`, extended over them, makes touch the mask, with their
+        // corners' coordinates (corners in the clump keep theirs)
+        let offers = |state: &[Standing], t: u32, w_t: [Vec3; 4]| -> Vec<(u32, [Vec3; 4])> {
+            let open = |n: u32| n != NONE && state[n as usize] == Standing::Outside;
+            let neighbours = self.neighbours[t as usize];
+            if !neighbours.iter().any(|&n| open(n)) {
+                return Vec::new();
+            }
+            let jac = jacobian(self.mesh, t as usize, w_t);
+            let origin = self.mesh.vertices[self.mesh.tets[t as usize][0] as usize];
+            let reach = |n: u32| {
+                self.mesh.tets[n as usize].map(|v| match local[v as usize] {
+                    NONE => self.with_depth(v, w_t[0] + jac * (self.mesh.vertices[v as usize] - origin)),
+                    i => coords[i as usize],
+                })
+            };
+            let alike = |n: u32| self.alike(seed, n as usize, Some(frame), NOT_OPPOSED);
+            let joining = neighbours.into_iter().filter(|&n| open(n) && alike(n)).map(|n| (n, reach(n)));
+            joining.filter(|(_, w)| touches(mask, *w)).collect()
+        };
         let mut added: Vec<(u32, [Vec3; 4])> = Vec::new();
-        // a ring at a time, its tets in order: each offers the open neighbours its map
-        // reaches (tested side by side), and the first offer for a tet wins, as a flood
-        // one tet at a time in the same order would decide
+        // a ring at a time, its tets in order: each offers its neighbours (tested side by
+        // side), and the first offer for a tet wins, as a flood one tet at a time in the
+        // same order would decide
         while !ring.is_empty() {
             let before = &state;
-            let offers: Vec<Vec<(u32, [Vec3; 4])>> = ring
-                .par_iter()
-                .map(|&(t, w_t)| self.offers(seed, frame, mask, before, local, coords, t, w_t))
-                .collect();
+            let offers: Vec<Vec<(u32, [Vec3; 4])>> = ring.par_iter().map(|&(t, w_t)| offers(before, t, w_t)).collect();
             let first = added.len();
             for (n, w) in offers.into_iter().flatten() {
                 if state[n as usize] == Standing::Outside {
@@ -384,43 +402,6 @@ impl<'a> Paster<'a> {
         }
         added.sort_unstable_by_key(|a| a.0);
         added
-    }
-
-    /// The neighbours of tet `t` (texture coordinates `w_t` at its corners) that are
-    /// outside in `state`, not opposed to the seed's tensor, and that the map of `t`
-    /// extended over them makes touch `mask`, with their corners' coordinates (corners
-    /// in `local` keep theirs).
-    #[allow(clippy::too_many_arguments)]
-    fn offers(
-        &self,
-        seed: usize,
-        frame: &Frame,
-        mask: &Sampler,
-        state: &[Standing],
-        local: &[u32],
-        coords: &[Vec3],
-        t: u32,
-        w_t: [Vec3; 4],
-    ) -> Vec<(u32, [Vec3; 4])> {
-        let open = |n: u32| n != NONE && state[n as usize] == Standing::Outside;
-        let neighbours = self.neighbours[t as usize];
-        if !neighbours.iter().any(|&n| open(n)) {
-            return Vec::new();
-        }
-        let jac = jacobian(self.mesh, t as usize, w_t);
-        let origin = self.mesh.vertices[self.mesh.tets[t as usize][0] as usize];
-        let reach = |n: u32| {
-            self.mesh.tets[n as usize].map(|v| match local[v as usize] {
-                NONE => self.with_depth(v, w_t[0] + jac * (self.mesh.vertices[v as usize] - origin)),
-                i => coords[i as usize],
-            })
-        };
-        neighbours
-            .into_iter()
-            .filter(|&n| open(n) && self.alike(seed, n as usize, Some(frame), NOT_OPPOSED))
-            .map(|n| (n, reach(n)))
-            .filter(|(_, w)| touches(mask, *w))
-            .collect()
     }
 
     /// The clump with the `added` tets: its tets, vertices and their coordinates (each new
