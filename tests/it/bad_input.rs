@@ -191,7 +191,8 @@ fn output_in_a_folder_that_does_not_exist() {
 fn unknown_extension_and_missing_input() {
     let dir = tempfile::tempdir().unwrap();
     let input = good(dir.path(), "v.exr");
-    assert_fails(
+    // an output in no format solidtex writes is the command line's to correct: exit 2
+    assert_usage(
         &solidtex(&["convert", &input, &at(dir.path(), "v.obj")]),
         &["v.obj", "allowed: .exr, .nrrd, .vol, .png"],
     );
