@@ -473,9 +473,14 @@ fn solid_exemplar(
             )))
         })?;
         let side = planes.iter().map(|e| e.width().min(e.height())).min().unwrap_or(0);
-        let depth_share = crate::synth::coords::SECTION_DEPTH_SHARE;
-        let options =
-            Options { layered: true, depth_share, coarse_n: args.coarse_n, n: args.n, ..Options::for_exemplar(side) };
+        let coarse_depth_share = crate::synth::coords::SECTION_DEPTH_SHARE;
+        let options = Options {
+            layered: true,
+            coarse_depth_share,
+            coarse_n: args.coarse_n,
+            n: args.n,
+            ..Options::for_exemplar(side)
+        };
         let prepared = Exemplars::prepare([&planes[0], &planes[1], &planes[2]], &options)?;
         let [first, ..] = planes;
         return Ok((prepared, options, first));

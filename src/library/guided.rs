@@ -81,8 +81,8 @@ pub fn picture(
             let (exemplars, options, depth) = match layered_slices(&volume, spec.axes, &depths, &domain)? {
                 Some((planes, depth)) => {
                     let side = planes.iter().map(|e| e.width().min(e.height())).min().unwrap_or(0);
-                    let depth_share = crate::synth::coords::SECTION_DEPTH_SHARE;
-                    let options = Options { layered: true, depth_share, ..Options::for_exemplar(side) };
+                    let coarse_depth_share = crate::synth::coords::SECTION_DEPTH_SHARE;
+                    let options = Options { layered: true, coarse_depth_share, ..Options::for_exemplar(side) };
                     (Exemplars::prepare([&planes[0], &planes[1], &planes[2]], &options)?, options, Some(depth))
                 }
                 None => {

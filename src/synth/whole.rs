@@ -59,7 +59,7 @@ pub fn options(params: &SynthParams, layered: bool) -> Options {
         histogram: if layered { 0.0 } else { BALANCE * params.histogram_strength },
         balance_every_level: false,
         keep_shown_plane: true,
-        depth_share: super::coords::DEPTH_SHARE,
+        coarse_depth_share: super::coords::DEPTH_SHARE,
     }
 }
 
