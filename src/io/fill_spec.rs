@@ -101,7 +101,16 @@ pub fn parse_fill_spec(text: &str, folder: &Path) -> Result<FillSpec> {
 /// [`parse_fill_spec`]; `quote` allows a syntax error to show the line it is on. Errors
 /// of a field start with the line it is on.
 fn spec_of(text: &str, folder: &Path, quote: bool) -> Result<FillSpec> {
-    let raw: RawSpec = toml::from_str(text).map_err(|e| manifest::syntax_error(text, &e, "fill spec", quote))?;
+    let raw: RawSpec = toml::from_str(text).map_err(|e| {
+        let error = manifest::syntax_error(text, &e, "fill spec", quote);
+        // a tet count of the wrong kind: say its range, as for one out of it
+        let start = e.span().map_or(0, |s| s.start.min(text.len()));
+        let line_start = text[..start].rfind('\n').map_or(0, |i| i + 1);
+        if e.span().is_some() && text[line_start..].trim_start().starts_with("tets") {
+            return Error::invalid(format!("{error}; tets is a whole number, {} to {}", TETS.start(), TETS.end()));
+        }
+        error
+    })?;
     validate(raw, folder).map_err(|e| {
         let message = e.to_string();
         match manifest::line_of(text, manifest::leading_path(&message)) {
@@ -374,6 +383,7 @@ mod tests {
     fn mistakes_name_the_field_and_the_allowed_values() {
         let cases = [
             ("exemplar = \"a\"\ntets = 5", "tets = 5"),
+            ("exemplar = \"a\"\ntets = \"many\"", "100 to 200000"),
             ("exemplar = \"a\"\nscale = -1", "scale = -1"),
             ("exemplar = \"a\"\naxes = \"z,z\"", "axes"),
             ("exemplar = \"a\"\ntype = \"3-a\"", "type"),
