@@ -107,7 +107,8 @@ fn spec_of(text: &str, folder: &Path, quote: bool) -> Result<FillSpec> {
         let start = e.span().map_or(0, |s| s.start.min(text.len()));
         let line_start = text[..start].rfind('\n').map_or(0, |i| i + 1);
         if e.span().is_some() && text[line_start..].trim_start().starts_with("tets") {
-            return Error::invalid(format!("{error}; tets is a whole number, {} to {}", TETS.start(), TETS.end()));
+            let range = format!("a whole number, {} to {}", TETS.start(), TETS.end());
+            return Error::invalid(error.to_string().replace("a whole number, 0 or more", &range));
         }
         error
     })?;
