@@ -98,6 +98,7 @@ pub fn run(args: &ExportArgs) -> Result<()> {
         meshes.len(),
         match options.atlas {
             Some(side) => format!(", a {side}x{side} atlas"),
+            None if options.edge == 0.0 => ", vertex colours, the input surface's own triangles".to_string(),
             None => format!(", vertex colours, edges about {:.4} model units", options.edge),
         }
     );

@@ -207,6 +207,10 @@ fn several_models_a_relief_and_a_skin_export_and_bad_input_is_refused() {
     let names: Vec<&str> = (0..2).map(|i| glb.doc["nodes"][i]["name"].as_str().unwrap()).collect();
     assert_eq!(names, ["trunk", "kiwi"]);
     assert_eq!(glb.doc["meshes"].as_array().unwrap().len(), 2);
+    // --edge 0 keeps the input triangles, and says so rather than an edge of length 0
+    let kept = at(d, "kept.glb");
+    let run = solidtex(&["export", &kiwi, "--edge", "0", "-o", &kept]);
+    assert!(run.status.success() && stderr(&run).contains("the input surface's own triangles"), "{}", stderr(&run));
     // the relief moves the log's vertices along their normals by at most half the scale
     let (flat, raised) = (at(d, "flat.glb"), at(d, "raised.glb"));
     assert!(solidtex(&["export", &log, "--edge", "0.05", "-o", &flat]).status.success());
