@@ -472,18 +472,17 @@ fn solid_exemplar(
                 volume.channels().iter().map(|c| c.name()).collect::<Vec<_>>().join(", ")
             )))
         })?;
-        let side = planes.iter().map(|e| e.width().min(e.height())).min().unwrap_or(0);
-        let coarse_depth_share = crate::synth::coords::SECTION_DEPTH_SHARE;
-        let options = Options {
-            layered: true,
-            coarse_depth_share,
-            coarse_n: args.coarse_n,
-            n: args.n,
-            ..Options::for_exemplar(side)
-        };
+        let options =
+            Options { coarse_n: args.coarse_n, n: args.n, ..crate::library::guided::section_options(&planes) };
         let prepared = Exemplars::prepare([&planes[0], &planes[1], &planes[2]], &options)?;
         let [first, ..] = planes;
         return Ok((prepared, options, first));
+    }
+    if volume.channel_index(&crate::volume::Channel::Depth).is_some() {
+        return Err(Error::invalid(
+            "a solid exemplar shows colours only, and this volume has a Depth channel (a built \
+             cross-section): follow it in layers, add --layered",
+        ));
     }
     let options = Options { coarse_n: args.coarse_n, n: args.n, ..Options::for_exemplar(volume.dims()[0]) };
     let prepared = Exemplars::of_volume(&volume, &options)?;

@@ -13,7 +13,7 @@ use crate::guided::field::{FrameField, ScalarGrid, sketched_frames, solve, strea
 use crate::guided::solid::{self, Domain};
 use crate::mesh::Mesh;
 use crate::progress::Progress;
-use crate::synth::coords::{Exemplars, Options, Setup};
+use crate::synth::coords::{Exemplars, Options, SECTION_DEPTH_SHARE, Setup};
 use crate::synth::cube::{self, Cube};
 use crate::volume::{Axis, Channel, Image2d, Volume};
 use glam::Vec3;
@@ -80,9 +80,7 @@ pub fn picture(
             let domain = Domain::around(surface.bounds(), GUIDED_RES)?;
             let (exemplars, options, depth) = match layered_slices(&volume, spec.axes, &depths, &domain)? {
                 Some((planes, depth)) => {
-                    let side = planes.iter().map(|e| e.width().min(e.height())).min().unwrap_or(0);
-                    let coarse_depth_share = crate::synth::coords::SECTION_DEPTH_SHARE;
-                    let options = Options { layered: true, coarse_depth_share, ..Options::for_exemplar(side) };
+                    let options = section_options(&planes);
                     (Exemplars::prepare([&planes[0], &planes[1], &planes[2]], &options)?, options, Some(depth))
                 }
                 None => {
@@ -160,6 +158,13 @@ fn layered_slices(
         return Ok(None);
     };
     Ok(layered_planes(volume, given, rows)?.map(|planes| (planes, depth)))
+}
+
+/// The settings for a built cross-section's layered planes ([`layered_planes`]): layered,
+/// their depth held at [`SECTION_DEPTH_SHARE`] while the layers are laid out.
+pub fn section_options(planes: &[Image2d; 3]) -> Options {
+    let side = planes.iter().map(|e| e.width().min(e.height())).min().unwrap_or(0);
+    Options { layered: true, coarse_depth_share: SECTION_DEPTH_SHARE, ..Options::for_exemplar(side) }
 }
 
 /// For a volume with a Depth channel (a library cross-section's build): the two central

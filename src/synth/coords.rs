@@ -295,13 +295,8 @@ impl Exemplars {
     /// A solid exemplar, its channels named `names` (colours only).
     pub fn of_cube(cube: Cube, names: Vec<Channel>) -> Result<Exemplars> {
         if names.len() != cube.channels || names.iter().any(|c| matched_only(c) || *c == Channel::A) {
-            let hint = if names.contains(&Channel::Depth) {
-                " (a built cross-section with a Depth channel is followed in layers: add --layered)"
-            } else {
-                ""
-            };
             return Err(Error::invalid(format!(
-                "a solid exemplar shows colours only; channels {} do not fit its {}{hint}",
+                "a solid exemplar shows colours only; channels {} do not fit its {}",
                 crate::volume::channel_names(&names),
                 cube.channels
             )));
