@@ -234,7 +234,14 @@ pub fn run_fill(args: &FillArgs) -> Result<()> {
         .map_err(|e| e.in_file(&args.mesh))?;
     warn_if_lost(&args.mesh, &held);
     let distance = mesher::surface_distance(&surface, &tets).map_err(|e| e.in_file(&args.mesh))?;
-    let missing = library::fill::missing(&spec).map_err(|e| e.in_file(&args.spec))?;
+    if !spec.regions.is_empty() {
+        tell!(
+            "note: the spec's [[region]] entries choose exemplars for `solidtex guided`; the lapped fill uses \
+             exemplar = {:?} throughout",
+            spec.exemplar
+        );
+    }
+    let missing = library::fill::missing(&spec, &library::fill::names(&spec)).map_err(|e| e.in_file(&args.spec))?;
     if !missing.is_empty() {
         tell!("building {} into {} first", missing.join(", "), spec.built.display());
         library::fill::build_first(&spec, missing, &super::build::Lines::new(0))?;

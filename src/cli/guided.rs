@@ -7,6 +7,7 @@ use crate::error::{Error, Result};
 use crate::fill::render::View;
 use crate::fill::tets::TetMesh;
 use crate::guided::field::{FrameField, sketched_frames, solve, streamlines};
+use crate::guided::regions::Regions;
 use crate::guided::solid::{self, Domain};
 use crate::io::guided_cache::{self, Cached};
 use crate::io::{self, fill_spec, mesh_file};
@@ -56,6 +57,8 @@ struct Guide {
     texture_axes: Option<[crate::volume::Axis; 2]>,
     frames: usize,
     solve_ms: f64,
+    /// The spec itself (its regions and library).
+    spec: crate::fill::spec::FillSpec,
 }
 
 fn guide(mesh: &Path, spec: &Path, tets: Option<usize>) -> Result<Guide> {
@@ -70,7 +73,8 @@ fn guide(mesh: &Path, spec: &Path, tets: Option<usize>) -> Result<Guide> {
     let solve_ms = started.elapsed().as_secs_f64() * 1000.0;
     let (axes, texture_axes) = (fill.depth.axes.clone(), fill.axes);
     let depth = constraints.depth;
-    Ok(Guide { surface, tets: tet_mesh, field, depth, axes, texture_axes, frames: frames.len(), solve_ms })
+    let frames = frames.len();
+    Ok(Guide { surface, tets: tet_mesh, field, depth, axes, texture_axes, frames, solve_ms, spec: fill })
 }
 
 fn check_tets(tets: Option<usize>) -> Result<()> {
@@ -158,7 +162,8 @@ pub struct GuidedArgs {
     #[arg(long)]
     pub spec: PathBuf,
     /// The exemplar: the cross-section orthogonal to the frame's x axis (alone, all three).
-    #[arg(long, required_unless_present = "solid")]
+    /// Not with a spec whose [[region]] entries choose the exemplars by depth.
+    #[arg(long)]
     pub exemplar: Option<PathBuf>,
     /// A solid exemplar instead: a volume (e.g. a built library exemplar) that is a cube
     /// whose side halves evenly to at least 16 voxels, read along the field as it is; with
@@ -259,6 +264,9 @@ pub fn run_guided(args: &GuidedArgs) -> Result<()> {
     let started = Instant::now();
     let g = guide(&args.mesh, &args.spec, args.tets)?;
     let domain = Domain::around(g.surface.bounds(), args.res)?;
+    if !g.spec.regions.is_empty() {
+        return by_regions(args, &g, &domain, cut, started);
+    }
     let depth =
         args.layered.then(|| solid::depth_over(&g.depth, &domain)).transpose().map_err(|e| e.in_file(&args.spec))?;
     let rows = depth.as_ref().map(|d| solid::layer_rows(d, args.res)).transpose()?;
@@ -288,6 +296,13 @@ pub fn run_guided(args: &GuidedArgs) -> Result<()> {
     };
     bar.0.finish_and_clear();
     let (voxels, corrections, full) = outcome?;
+    report(args, &g, &domain, started, ready, [voxels, corrections, full]);
+    Ok(())
+}
+
+/// Say what was written, how long it took and how much of the whole solid it synthesized.
+fn report(args: &GuidedArgs, g: &Guide, domain: &Domain, started: Instant, ready: f64, counts: [usize; 3]) {
+    let [voxels, corrections, full] = counts;
     tell!(
         "wrote {}: {}x{}x{} grid, {} tets, field solved in {:.0} ms, set up in {ready:.2} s, synthesized in {:.2} s",
         args.output.display(),
@@ -302,6 +317,82 @@ pub fn run_guided(args: &GuidedArgs) -> Result<()> {
         "voxels synthesized: {voxels} of the {full} a whole solid needs ({:.1} %), {corrections} corrections",
         100.0 * voxels as f64 / full.max(1) as f64
     );
+}
+
+/// `guided` with the spec's `[[region]]` entries: each depth range synthesized from its
+/// own library exemplar (built first when it is not) and blended across the band.
+fn by_regions(
+    args: &GuidedArgs,
+    g: &Guide,
+    domain: &Domain,
+    cut: Option<(Vec3, Vec3)>,
+    started: Instant,
+) -> Result<()> {
+    let given = [
+        ("--exemplar", args.exemplar.is_some()),
+        ("--solid", args.solid.is_some()),
+        ("--ey", args.others.ey.is_some()),
+        ("--ez", args.others.ez.is_some()),
+        ("--mask", args.mask.is_some()),
+        ("--layered", args.layered),
+        ("--planes", args.planes),
+        ("--cache", args.cache.is_some()),
+    ];
+    if let Some((flag, _)) = given.iter().find(|(_, on)| *on) {
+        return Err(usage(Error::invalid(format!(
+            "{flag}: the spec {} chooses its exemplars by depth ([[region]] entries; a built exemplar with layers \
+             follows them), so leave out {flag}",
+            args.spec.display()
+        ))));
+    }
+    let spec = &g.spec;
+    let names = crate::library::fill::region_names(spec);
+    let missing = crate::library::fill::missing(spec, &names).map_err(|e| e.in_file(&args.spec))?;
+    if !missing.is_empty() {
+        tell!("building {} into {} first", missing.join(", "), spec.built.display());
+        crate::library::fill::build_first(spec, missing, &super::build::Lines::new(0))?;
+    }
+    let depth = solid::depth_over(&g.depth, domain).map_err(|e| e.in_file(&args.spec))?;
+    let made = crate::library::guided::region_exemplars(spec, &g.depth, domain).map_err(|e| e.in_file(&args.spec))?;
+    let frames = solid::frames_over(&g.tets, &g.field, domain, &g.depth, &g.axes)?;
+    let parts: Vec<Setup> = made
+        .iter()
+        .map(|(exemplars, options, layered)| Setup {
+            exemplars,
+            frames: Some(&frames),
+            wrap: [false; 3],
+            depth: layered.as_ref(),
+            dims: domain.dims,
+            seed: args.seed,
+            options: Options { coarse_n: args.coarse_n, n: args.n, ..*options },
+        })
+        .collect();
+    for setup in &parts {
+        solid::check_memory(setup, cut.is_none(), args.res, io::budget_from_env()?)?;
+    }
+    let ranges: Vec<[f32; 2]> = spec.regions.iter().map(|r| r.depth).collect();
+    let regions = Regions::new(&ranges, spec.region_band);
+    let ready = started.elapsed().as_secs_f64();
+    let bar = super::fill::Bar::new();
+    let outcome = match cut {
+        Some((point, normal)) => {
+            let view = View::framing(g.surface.bounds(), point, normal, args.size)?;
+            solid::cut_regions(&parts, &regions, &depth, domain, &g.surface, &view, &bar)
+                .and_then(|(picture, counts)| io::write_image(&args.output, &picture).map(|_| counts))
+        }
+        None => crate::volume::check_size(domain.dims, 4, io::budget_from_env()?).and_then(|_| {
+            let alpha = coverage(&g.surface, domain);
+            let (volume, counts) = solid::solid_regions(&parts, &regions, &depth, &alpha, &bar)?;
+            io::write_volume(&args.output, &volume).map(|_| counts)
+        }),
+    };
+    bar.0.finish_and_clear();
+    let [voxels, corrections] = outcome?;
+    let full = parts.first().map_or(0, whole);
+    report(args, g, domain, started, ready, [voxels, corrections, full]);
+    for (region, name) in spec.regions.iter().zip(&names) {
+        tell!("  depth {} to {}: {name}", region.depth[0], region.depth[1]);
+    }
     Ok(())
 }
 

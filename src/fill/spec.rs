@@ -43,6 +43,10 @@ pub struct FillSpec {
     pub scales: Vec<(Vec3, f32)>,
     /// Manual pastes after the automatic fill.
     pub pastes: Vec<PasteSpec>,
+    /// Guided synthesis: exemplars by depth range, outside in (empty: `exemplar` everywhere).
+    pub regions: Vec<RegionSpec>,
+    /// Width in depth of the band where neighbouring regions blend.
+    pub region_band: f32,
 }
 
 impl FillSpec {
@@ -63,8 +67,23 @@ impl FillSpec {
             depth: DepthSpec { surface: true, ..Default::default() },
             scales: Vec::new(),
             pastes: Vec::new(),
+            regions: Vec::new(),
+            region_band: DEFAULT_REGION_BAND,
         }
     }
+}
+
+/// The band neighbouring regions blend across when a spec gives none.
+pub const DEFAULT_REGION_BAND: f32 = 0.05;
+
+/// A depth range of the model textured by its own exemplar (guided synthesis, Zhang et
+/// al.'s bark outside and wood inside).
+#[derive(Debug, Clone, PartialEq)]
+pub struct RegionSpec {
+    /// The exemplar's name in the library.
+    pub exemplar: String,
+    /// The depths it covers, from the outer (smaller) to the inner.
+    pub depth: [f32; 2],
 }
 
 /// Depth constraints: the surface, axis polylines, points and face groups.

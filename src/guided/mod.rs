@@ -5,4 +5,5 @@
 //! needs, [`crate::synth::region`]).
 
 pub mod field;
+pub mod regions;
 pub mod solid;

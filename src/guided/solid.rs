@@ -2,6 +2,7 @@
 //! voxels a cut needs, the cut's picture and the whole solid as a volume.
 
 use super::field::{FrameField, FrameGrid, ScalarGrid};
+use super::regions::Regions;
 use crate::error::{Error, Result};
 use crate::fill::render::View;
 use crate::fill::render::inside_surface;
@@ -191,6 +192,103 @@ pub fn cut(
         None => cut_image(setup, &out.values, domain, view, &inside)?,
     };
     Ok((picture, out))
+}
+
+/// A cut through a model whose depth ranges take their own exemplars: `parts` holds one
+/// setup per region of `regions` (the same grid and field), each synthesized over the
+/// cut's voxels it weighs in at the model's `depth`, and the pixel blends them by weight.
+/// The picture is red, green, blue (a grey exemplar's grey on all three) and alpha; also
+/// the voxels and corrections of all the runs.
+pub fn cut_regions(
+    parts: &[Setup],
+    regions: &Regions,
+    depth: &ScalarGrid,
+    domain: &Domain,
+    surface: &Mesh,
+    view: &View,
+    progress: &dyn Progress,
+) -> Result<(Image2d, [usize; 2])> {
+    let inside = inside_surface(surface, view);
+    let request = cut_request(domain, view, &inside);
+    let (runs, counts) = region_runs(parts, regions, depth, &request, progress)?;
+    let mut data = Vec::with_capacity(view.width * view.height * 4);
+    for (i, inside) in inside.iter().enumerate() {
+        match inside {
+            true => {
+                let v = domain.voxel_of(view.point(i % view.width, i / view.width));
+                data.extend(blended(parts, &runs, regions, depth, v).into_iter().chain([1.0]));
+            }
+            false => data.extend([0.0; 4]),
+        }
+    }
+    Ok((Image2d::from_data(view.width, view.height, RGBA.to_vec(), data)?, counts))
+}
+
+/// The whole solid of a model textured by regions ([`cut_regions`]): every voxel's blended
+/// colour, then `alpha` (the model's coverage per voxel); also the runs' voxels and
+/// corrections.
+pub fn solid_regions(
+    parts: &[Setup],
+    regions: &Regions,
+    depth: &ScalarGrid,
+    alpha: &[f32],
+    progress: &dyn Progress,
+) -> Result<(Volume, [usize; 2])> {
+    let dims = parts.first().map_or([0; 3], |p| p.dims);
+    let (runs, counts) = region_runs(parts, regions, depth, &Mask::full(dims), progress)?;
+    let mut data = Vec::with_capacity(alpha.len() * 4);
+    for (i, a) in alpha.iter().enumerate() {
+        let v = [i % dims[0], (i / dims[0]) % dims[1], i / (dims[0] * dims[1])];
+        data.extend(blended(parts, &runs, regions, depth, v).into_iter().chain([*a]));
+    }
+    Ok((Volume::from_data(dims, RGBA.to_vec(), data)?, counts))
+}
+
+const RGBA: [Channel; 4] = [Channel::R, Channel::G, Channel::B, Channel::A];
+
+/// Each region's synthesis over the voxels of `request` it weighs in, and the runs'
+/// voxels and corrections summed.
+fn region_runs(
+    parts: &[Setup],
+    regions: &Regions,
+    depth: &ScalarGrid,
+    request: &Mask,
+    progress: &dyn Progress,
+) -> Result<(Vec<Sparse<Voxel>>, [usize; 2])> {
+    let mut runs = Vec::with_capacity(parts.len());
+    let mut counts = [0, 0];
+    for (k, setup) in parts.iter().enumerate() {
+        let mut mine = Mask::empty(request.dims);
+        for v in request.voxels().filter(|&v| regions.weight(k, depth_at(depth, v)) > 0.0) {
+            mine.insert(v);
+        }
+        let out = synth::run(setup, &synth::plan(setup, &mine, &[]), &[], progress)?;
+        counts = [counts[0] + out.voxels, counts[1] + out.corrections];
+        runs.push(out.values);
+    }
+    Ok((runs, counts))
+}
+
+/// The model's depth at voxel `v`.
+pub fn depth_at(depth: &ScalarGrid, v: [usize; 3]) -> f32 {
+    depth.at(Vec3::from_array(v.map(|c| c as f32)))
+}
+
+/// The regions' colours at voxel `v` blended by their weights at its depth.
+fn blended(parts: &[Setup], runs: &[Sparse<Voxel>], regions: &Regions, depth: &ScalarGrid, v: [usize; 3]) -> [f32; 3] {
+    let d = depth_at(depth, v);
+    let mut rgb = [0.0; 3];
+    for (k, (setup, run)) in parts.iter().zip(runs).enumerate() {
+        let w = regions.weight(k, d);
+        if w > 0.0 {
+            let colour = &run.at(v.map(|c| c as i64)).colour;
+            let grey = setup.exemplars.channels() < 3;
+            for (c, out) in rgb.iter_mut().enumerate() {
+                *out += w * colour[if grey { 0 } else { c }];
+            }
+        }
+    }
+    rgb
 }
 
 /// Every level below the finest computed over the whole grid, coarsest first (none when

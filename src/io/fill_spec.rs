@@ -4,7 +4,7 @@
 
 use super::{manifest, values};
 use crate::error::{Error, Result};
-use crate::fill::spec::{DepthSpec, FaceGroup, FillSpec, PasteSpec};
+use crate::fill::spec::{DEFAULT_REGION_BAND, DepthSpec, FaceGroup, FillSpec, PasteSpec, RegionSpec};
 use crate::texture_type::TextureType;
 use crate::volume::Axis;
 use glam::{Quat, Vec3};
@@ -39,6 +39,16 @@ struct RawSpec {
     scale_at: Vec<RawScale>,
     #[serde(default)]
     paste: Vec<RawPaste>,
+    #[serde(default)]
+    region: Vec<RawRegion>,
+    region_band: Option<f32>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawRegion {
+    exemplar: String,
+    depth: [f32; 2],
 }
 
 #[derive(Debug, Deserialize)]
@@ -145,7 +155,64 @@ fn validate(raw: RawSpec, folder: &Path) -> Result<FillSpec> {
         depth: depth(raw.depth)?,
         scales: scales(&raw.scale_at)?,
         pastes: raw.paste.into_iter().enumerate().map(|(i, p)| paste(i, p)).collect::<Result<_>>()?,
+        region_band: region_band(raw.region_band.unwrap_or(DEFAULT_REGION_BAND), &raw.region)?,
+        regions: regions(raw.region)?,
     })
+}
+
+/// The regions, in order from depth 0 to 1, each range inside 0..1 and meeting the next.
+fn regions(raw: Vec<RawRegion>) -> Result<Vec<RegionSpec>> {
+    let mut reached = 0.0;
+    for (i, r) in raw.iter().enumerate() {
+        let [from, to] = r.depth;
+        if !(0.0..=1.0).contains(&from) || !(0.0..=1.0).contains(&to) || from >= to {
+            return Err(Error::invalid(format!(
+                "region[{i}].depth = [{from}, {to}] must be two depths from 0 (surface) to 1 (innermost), the first \
+                 smaller"
+            )));
+        }
+        if from != reached {
+            return Err(Error::invalid(format!(
+                "region[{i}].depth starts at {from}, not at {reached} where {}; the regions run from depth 0 to 1 \
+                 in order, each starting where the one before ends",
+                if i == 0 { "depth starts".to_string() } else { format!("region[{}] ends", i - 1) }
+            )));
+        }
+        if r.exemplar.trim().is_empty() {
+            return Err(Error::invalid(format!("region[{i}].exemplar is empty; name a library exemplar")));
+        }
+        reached = to;
+    }
+    if !raw.is_empty() && reached != 1.0 {
+        return Err(Error::invalid(format!(
+            "region[{}].depth ends at {reached}; the last region reaches depth 1 (the innermost)",
+            raw.len() - 1
+        )));
+    }
+    Ok(raw.into_iter().map(|r| RegionSpec { exemplar: r.exemplar, depth: r.depth }).collect())
+}
+
+/// The band regions blend across: 0 (a sharp border) to 0.5, and no wider than the
+/// narrowest region.
+fn region_band(band: f32, raw: &[RawRegion]) -> Result<f32> {
+    if !(0.0..=0.5).contains(&band) {
+        return Err(Error::invalid(format!(
+            "region_band = {band} must be a depth width from 0 (a sharp border) to 0.5"
+        )));
+    }
+    if let Some((i, r)) = raw
+        .iter()
+        .enumerate()
+        .filter(|(_, r)| r.depth[1] - r.depth[0] < band)
+        .min_by(|a, b| (a.1.depth[1] - a.1.depth[0]).total_cmp(&(b.1.depth[1] - b.1.depth[0])))
+    {
+        return Err(Error::invalid(format!(
+            "region_band = {band} is wider than region[{i}] (depth {} to {}); give a band no wider than the \
+             narrowest region",
+            r.depth[0], r.depth[1]
+        )));
+    }
+    Ok(band)
 }
 
 fn positive(field: &str, value: Option<f32>) -> Result<()> {
@@ -273,6 +340,9 @@ pub fn spec_text(spec: &FillSpec, library: &str, built: &str, header: &str) -> S
     if let Some(falloff) = spec.mask_falloff {
         t += &format!("mask_falloff = {falloff}\n");
     }
+    if spec.region_band != DEFAULT_REGION_BAND {
+        t += &format!("region_band = {}\n", spec.region_band);
+    }
     for stroke in &spec.directions {
         t += &format!("\n[[direction]]\npoints = {}\n", line(stroke));
     }
@@ -297,6 +367,9 @@ pub fn spec_text(spec: &FillSpec, library: &str, built: &str, header: &str) -> S
     }
     for (p, scale) in &spec.scales {
         t += &format!("\n[[scale_at]]\npoint = {}\nscale = {scale}\n", v(*p));
+    }
+    for r in &spec.regions {
+        t += &format!("\n[[region]]\nexemplar = {:?}\ndepth = [{}, {}]\n", r.exemplar, r.depth[0], r.depth[1]);
     }
     for p in &spec.pastes {
         let (axis, angle) = p.rotation.to_axis_angle();
@@ -337,6 +410,11 @@ mod tests {
         spec.scales = vec![(Vec3::new(0.5, 0.0, 0.0), 0.2)];
         let rotation = Quat::from_axis_angle(Vec3::Y, 30f32.to_radians());
         spec.pastes = vec![PasteSpec { exemplar: "marble".into(), at: Vec3::new(0.1, 0.0, 0.0), rotation, scale: 0.3 }];
+        spec.regions = vec![
+            RegionSpec { exemplar: "bark".into(), depth: [0.0, 0.2] },
+            RegionSpec { exemplar: "wood".into(), depth: [0.2, 1.0] },
+        ];
+        spec.region_band = 0.1;
         let folder = Path::new("/specs");
         (spec.library, spec.built) = (folder.join("lib.toml"), folder.join("../out"));
         let text = spec_text(&spec, "lib.toml", "../out", "written by a test\nsecond line");
@@ -391,6 +469,18 @@ mod tests {
             ("exemplar = \"a\"\n[[direction]]\npoints = [[0, 0, 0]]", "direction[0]"),
             ("exemplar = \"a\"\n[depth]\npoints = [[0, 0, 0, 2]]", "depth.points[0]"),
             ("exemplar = \"a\"\ncolour = 1", "unknown field"),
+            ("exemplar = \"a\"\n[[region]]\nexemplar = \"b\"\ndepth = [0, 1.5]", "region[0].depth = [0, 1.5]"),
+            ("exemplar = \"a\"\n[[region]]\nexemplar = \"b\"\ndepth = [0.1, 1]", "not at 0 where depth starts"),
+            (
+                "exemplar = \"a\"\n[[region]]\nexemplar = \"b\"\ndepth = [0, 0.3]\n[[region]]\nexemplar = \"c\"\ndepth = [0.4, 1]",
+                "region[1].depth starts at 0.4, not at 0.3 where region[0] ends",
+            ),
+            ("exemplar = \"a\"\n[[region]]\nexemplar = \"b\"\ndepth = [0, 0.5]", "reaches depth 1"),
+            (
+                "exemplar = \"a\"\nregion_band = 0.2\n[[region]]\nexemplar = \"b\"\ndepth = [0, 0.1]\n[[region]]\nexemplar = \"c\"\ndepth = [0.1, 1]",
+                "wider than region[0]",
+            ),
+            ("exemplar = \"a\"\nregion_band = 0.7", "region_band = 0.7"),
         ];
         for (text, want) in cases {
             let e = parse_fill_spec(text, Path::new(".")).unwrap_err().to_string();

@@ -34,15 +34,20 @@ pub fn names(spec: &FillSpec) -> Vec<String> {
     names
 }
 
-/// The exemplars of `spec` whose volumes are not built yet; an error if the library has
-/// no entry of one of its names.
-pub fn missing(spec: &FillSpec) -> Result<Vec<String>> {
-    check_names(spec, &manifest::read_plan(&spec.library)?)?;
-    Ok(names(spec).into_iter().filter(|n| !files::volume(&spec.built, n).exists()).collect())
+/// The exemplars of guided synthesis by regions: each `[[region]]`'s, in order.
+pub fn region_names(spec: &FillSpec) -> Vec<String> {
+    spec.regions.iter().map(|r| r.exemplar.clone()).collect()
 }
 
-fn check_names(spec: &FillSpec, plan: &manifest::Plan) -> Result<()> {
-    for name in &names(spec) {
+/// Of the exemplars `names` of `spec`'s library, those whose volumes are not built yet; an
+/// error if the library has no entry of one of them.
+pub fn missing(spec: &FillSpec, names: &[String]) -> Result<Vec<String>> {
+    check_names(spec, &manifest::read_plan(&spec.library)?, names)?;
+    Ok(names.iter().filter(|n| !files::volume(&spec.built, n).exists()).cloned().collect())
+}
+
+fn check_names(spec: &FillSpec, plan: &manifest::Plan, names: &[String]) -> Result<()> {
+    for name in names {
         if !plan.entries.iter().any(|e| &e.name == name) {
             let known: Vec<&str> = plan.entries.iter().map(|e| e.name.as_str()).collect();
             return Err(Error::invalid(format!(
@@ -72,7 +77,7 @@ pub fn build_first(spec: &FillSpec, names: Vec<String>, observer: &dyn Observer)
 /// written (its sources name files relative to it).
 pub fn resolve(spec: &FillSpec, model_path: &Path) -> Result<Resolved> {
     let plan = manifest::read_plan(&spec.library)?;
-    check_names(spec, &plan)?;
+    check_names(spec, &plan, &names(spec))?;
     let entry = plan.entries.iter().find(|e| e.name == spec.exemplar).expect("checked above");
     let volume = load_built(spec, &spec.exemplar)?;
     let declared = entry.texture_type.or(volume.meta.texture_type);

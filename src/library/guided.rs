@@ -10,6 +10,7 @@ use crate::fill::FillPreview;
 use crate::fill::render::View;
 use crate::fill::spec::FillSpec;
 use crate::guided::field::{FrameField, ScalarGrid, sketched_frames, solve, streamlines};
+use crate::guided::regions::Regions;
 use crate::guided::solid::{self, Domain};
 use crate::mesh::Mesh;
 use crate::progress::Progress;
@@ -75,19 +76,33 @@ pub fn picture(
             let lines = streamlines(mesh, &field, view);
             lines.data.chunks_exact(3).zip(&inside).map(|(p, i)| i.then(|| [p[0], p[1], p[2]])).collect()
         }
+        Overlay::Guided if !spec.regions.is_empty() => {
+            let domain = Domain::around(surface.bounds(), GUIDED_RES)?;
+            let depth = solid::depth_over(&depths, &domain)?;
+            let made = region_exemplars(spec, &depths, &domain)?;
+            let frames = solid::frames_over(mesh, &field, &domain, &depths, &spec.depth.axes)?;
+            let parts: Vec<Setup> = made
+                .iter()
+                .map(|(exemplars, options, layered)| Setup {
+                    exemplars,
+                    frames: Some(&frames),
+                    wrap: [false; 3],
+                    depth: layered.as_ref(),
+                    dims: domain.dims,
+                    seed: spec.seed,
+                    options: *options,
+                })
+                .collect();
+            let ranges: Vec<[f32; 2]> = spec.regions.iter().map(|r| r.depth).collect();
+            let regions = Regions::new(&ranges, spec.region_band);
+            let (cut, _) =
+                solid::cut_regions(&parts, &regions, &depth, &domain, &filled.model.surface, view, progress)?;
+            shown_pixels(&cut)
+        }
         Overlay::Guided => {
             let volume = load_built(spec, &spec.exemplar)?;
             let domain = Domain::around(surface.bounds(), GUIDED_RES)?;
-            let (exemplars, options, depth) = match layered_slices(&volume, spec.axes, &depths, &domain)? {
-                Some((planes, depth)) => {
-                    let options = section_options(&planes);
-                    (Exemplars::prepare([&planes[0], &planes[1], &planes[2]], &options)?, options, Some(depth))
-                }
-                None => {
-                    let (exemplars, options) = plain_exemplars(&volume)?;
-                    (exemplars, options, None)
-                }
-            };
+            let (exemplars, options, depth) = volume_exemplars(&volume, spec.axes, &depths, &domain)?;
             let frames = solid::frames_over(mesh, &field, &domain, &depths, &spec.depth.axes)?;
             let setup = Setup {
                 exemplars: &exemplars,
@@ -99,18 +114,61 @@ pub fn picture(
                 options,
             };
             let (cut, _) = solid::cut(&setup, &domain, &filled.model.surface, view, &[], progress)?;
-            let grey = cut.channel_count() < 4;
-            cut.data()
-                .chunks_exact(cut.channel_count())
-                .map(|p| {
-                    let byte = |v: f32| (v.clamp(0.0, 1.0) * 255.0).round() as u8;
-                    let alpha = p[p.len() - 1];
-                    (alpha > 0.0).then(|| if grey { [byte(p[0]); 3] } else { [byte(p[0]), byte(p[1]), byte(p[2])] })
-                })
-                .collect()
+            shown_pixels(&cut)
         }
     };
     Ok(Picture { size: view.width, pixels })
+}
+
+/// A cut's pixels as bytes (grey on all three), `None` where it is transparent.
+fn shown_pixels(cut: &Image2d) -> Vec<Option<[u8; 3]>> {
+    let grey = cut.channel_count() < 4;
+    cut.data()
+        .chunks_exact(cut.channel_count())
+        .map(|p| {
+            let byte = |v: f32| (v.clamp(0.0, 1.0) * 255.0).round() as u8;
+            let alpha = p[p.len() - 1];
+            (alpha > 0.0).then(|| if grey { [byte(p[0]); 3] } else { [byte(p[0]), byte(p[1]), byte(p[2])] })
+        })
+        .collect()
+}
+
+/// The exemplars of the spec's `[[region]]` entries, in order ([`volume_exemplars`] of
+/// their built volumes, which must exist).
+pub fn region_exemplars(
+    spec: &FillSpec,
+    depths: &[(Vec3, f32)],
+    domain: &Domain,
+) -> Result<Vec<(Exemplars, Options, Option<ScalarGrid>)>> {
+    let each = |(i, region): (usize, &crate::fill::spec::RegionSpec)| {
+        let volume = load_built(spec, &region.exemplar)?;
+        volume_exemplars(&volume, spec.axes, depths, domain)
+            .map_err(|e| Error::invalid(format!("region[{i}] (exemplar '{}'): {e}", region.exemplar)))
+    };
+    spec.regions.iter().enumerate().map(each).collect()
+}
+
+/// A built exemplar volume ready to follow along a field over `domain`: with a Depth
+/// channel and a spec whose depth (`depths`) rises inside the model, its layers fitted to
+/// the voxels the depth spans ([`layered_slices`]); else the volume itself as a solid
+/// exemplar, or its central slices ([`plain_exemplars`]). Also the settings, and the
+/// model's depth when layered.
+pub fn volume_exemplars(
+    volume: &Volume,
+    given: Option<[Axis; 2]>,
+    depths: &[(Vec3, f32)],
+    domain: &Domain,
+) -> Result<(Exemplars, Options, Option<ScalarGrid>)> {
+    match layered_slices(volume, given, depths, domain)? {
+        Some((planes, depth)) => {
+            let options = section_options(&planes);
+            Ok((Exemplars::prepare([&planes[0], &planes[1], &planes[2]], &options)?, options, Some(depth)))
+        }
+        None => {
+            let (exemplars, options) = plain_exemplars(volume)?;
+            Ok((exemplars, options, None))
+        }
+    }
 }
 
 /// The exemplars of a volume without layers: the volume itself as the solid exemplar when
@@ -143,7 +201,7 @@ fn central_slices(volume: &Volume) -> Result<[Image2d; 3]> {
 /// For a volume with a Depth channel and a spec whose depth rises inside the model: the
 /// layered planes ([`layered_planes`]) fitted to the voxels the model's depth spans on the
 /// grid, with the model's depth. `None` otherwise, and where the depth spans too few voxels
-/// at [`GUIDED_RES`] to be layered.
+/// of the grid to be layered.
 fn layered_slices(
     volume: &Volume,
     given: Option<[Axis; 2]>,
@@ -154,7 +212,8 @@ fn layered_slices(
         return Ok(None);
     }
     let depth = solid::depth_over(depths, domain)?;
-    let Ok(rows) = solid::layer_rows(&depth, GUIDED_RES) else {
+    let res = domain.dims.iter().copied().max().unwrap_or(0);
+    let Ok(rows) = solid::layer_rows(&depth, res) else {
         return Ok(None);
     };
     Ok(layered_planes(volume, given, rows)?.map(|planes| (planes, depth)))

@@ -396,3 +396,64 @@ fn a_layered_cut_shows_the_innermost_rows_at_the_axis() {
     );
     assert!(!d.join("low.png").exists());
 }
+
+/// A spec's `[[region]]` entries texture the log by depth: a red exemplar outside (depth
+/// 0 to 0.3), a blue one inside, blended across a band of 0.1. On a cut across the log,
+/// red holds at least 90 % of the outer band's pixels (past 0.85 of the radius) and at
+/// most 5 % of the inner region's (within half the radius). Given with `--exemplar`, the
+/// spec's regions are a usage error naming the flag.
+#[test]
+fn regions_give_the_log_one_exemplar_outside_and_another_inside() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::create_dir(d.join("built")).unwrap();
+    let mut manifest = String::new();
+    for (seed, name) in [(1, "red"), (2, "blue")] {
+        let noise = crate::support::random_volume([32, 32, 32], solidtex::Channel::rgb(), seed);
+        let hue = |k: usize, v: f32| if (k == 0) == (name == "red") && k != 1 { 0.6 + 0.4 * v } else { 0.2 * v };
+        let data = noise.data().chunks_exact(3).flat_map(|p| (0..3).map(move |k| hue(k, p[k]))).collect();
+        let volume = solidtex::Volume::from_data([32; 3], solidtex::Channel::rgb(), data).unwrap();
+        solidtex::io::write_volume(&d.join(format!("built/{name}.exr")), &volume).unwrap();
+        manifest += &format!("[[exemplar]]\nname = \"{name}\"\nrecipe = \"procedural:marble\"\nsize = 32\n\n");
+    }
+    std::fs::write(d.join("library.toml"), manifest).unwrap();
+    let log = crate::fill::draw(d, "log");
+    let regions =
+        "[[region]]\nexemplar = \"red\"\ndepth = [0, 0.3]\n[[region]]\nexemplar = \"blue\"\ndepth = [0.3, 1]\n";
+    let body =
+        crate::fill::TRUNK.replacen("exemplar = \"trunk\"", "exemplar = \"red\"\nregion_band = 0.1", 1) + regions;
+    let spec = at(d, "regions.toml");
+    std::fs::write(&spec, format!("library = \"library.toml\"\nbuilt = \"built\"\n{body}")).unwrap();
+    let out = at(d, "across.png");
+    let args = ["guided", &log, "--spec", &spec, "--res", "128", "--cut", "0,0,1,0,0,1", "--size", "128", "-o", &out];
+    let run = solidtex(&args);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let img = image::open(&out).unwrap().to_rgba8();
+    let radius = 0.5 * 128.0 / 1.04;
+    let red_share = |lo: f64, hi: f64| {
+        let ring: Vec<bool> = img
+            .enumerate_pixels()
+            .filter(|(x, y, p)| {
+                let r = (*x as f64 - 63.5).hypot(*y as f64 - 63.5) / radius;
+                p.0[3] == 255 && r > lo && r <= hi
+            })
+            .map(|(_, _, p)| p.0[0] > p.0[2])
+            .collect();
+        assert!(ring.len() > 300, "{} pixels between {lo} and {hi} of the radius", ring.len());
+        ring.iter().filter(|red| **red).count() as f64 / ring.len() as f64
+    };
+    let (outer, inner) = (red_share(0.85, 1.1), red_share(0.0, 0.5));
+    assert!(
+        outer >= 0.9 && inner <= 0.05,
+        "red: {:.1} % of the outer band, {:.1} % inside",
+        outer * 100.0,
+        inner * 100.0
+    );
+
+    let photo = at(d, "photo.png");
+    image::RgbImage::from_pixel(32, 32, image::Rgb([90, 90, 90])).save(&photo).unwrap();
+    let refused = at(d, "refused.png");
+    let run = solidtex(&[&args[..10], &["--exemplar", &photo, "-o", &refused]].concat());
+    crate::support::assert_usage(&run, &["--exemplar", "regions.toml", "[[region]]"]);
+    assert!(!d.join("refused.png").exists());
+}
