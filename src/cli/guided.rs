@@ -267,6 +267,9 @@ pub fn run_guided(args: &GuidedArgs) -> Result<()> {
     if !g.spec.regions.is_empty() {
         return by_regions(args, &g, &domain, cut, started);
     }
+    if !g.spec.scales.is_empty() {
+        return by_scales(args, &g, &domain, cut, started);
+    }
     let depth =
         args.layered.then(|| solid::depth_over(&g.depth, &domain)).transpose().map_err(|e| e.in_file(&args.spec))?;
     let rows = depth.as_ref().map(|d| solid::layer_rows(d, args.res)).transpose()?;
@@ -274,7 +277,7 @@ pub fn run_guided(args: &GuidedArgs) -> Result<()> {
         Some(path) => solid_exemplar(args, path, rows, g.texture_axes).map_err(|e| e.in_file(path))?,
         None => {
             let path = args.exemplar.as_ref().ok_or_else(|| usage(Error::invalid("give --exemplar or --solid")))?;
-            plane_exemplars(args, path, rows)?
+            plane_exemplars(args, path, rows, 1.0)?
         }
     };
     let frames = solid::frames_over(&g.tets, &g.field, &domain, &g.depth, &g.axes)?;
@@ -346,6 +349,11 @@ fn by_regions(
         ))));
     }
     let spec = &g.spec;
+    if !spec.scales.is_empty() {
+        tell!(
+            "note: the spec's [[scale_at]] points are not used with its [[region]] entries; each region's exemplar keeps its size"
+        );
+    }
     let names = crate::library::fill::region_names(spec);
     let missing = crate::library::fill::missing(spec, &names).map_err(|e| e.in_file(&args.spec))?;
     if !missing.is_empty() {
@@ -367,22 +375,41 @@ fn by_regions(
             options: Options { coarse_n: args.coarse_n, n: args.n, ..*options },
         })
         .collect();
-    for setup in &parts {
-        solid::check_memory(setup, cut.is_none(), args.res, io::budget_from_env()?)?;
-    }
     let ranges: Vec<[f32; 2]> = spec.regions.iter().map(|r| r.depth).collect();
     let regions = Regions::new(&ranges, spec.region_band);
+    let weight = |k: usize, v: [usize; 3]| regions.weight(k, solid::grid_at(&depth, v));
+    write_blend(args, g, domain, cut, &parts, &weight, started)?;
+    for (region, name) in spec.regions.iter().zip(&names) {
+        tell!("  depth {} to {}: {name}", region.depth[0], region.depth[1]);
+    }
+    Ok(())
+}
+
+/// Synthesize blended parts ([`solid::cut_blend`]): the cut as a PNG, or the whole solid
+/// with the model's coverage as alpha; then say what was done.
+fn write_blend(
+    args: &GuidedArgs,
+    g: &Guide,
+    domain: &Domain,
+    cut: Option<(Vec3, Vec3)>,
+    parts: &[Setup],
+    weight: &solid::Weight,
+    started: Instant,
+) -> Result<()> {
+    for setup in parts {
+        solid::check_memory(setup, cut.is_none(), args.res, io::budget_from_env()?)?;
+    }
     let ready = started.elapsed().as_secs_f64();
     let bar = super::fill::Bar::new();
     let outcome = match cut {
         Some((point, normal)) => {
             let view = View::framing(g.surface.bounds(), point, normal, args.size)?;
-            solid::cut_regions(&parts, &regions, &depth, domain, &g.surface, &view, &bar)
+            solid::cut_blend(parts, weight, domain, &g.surface, &view, &bar)
                 .and_then(|(picture, counts)| io::write_image(&args.output, &picture).map(|_| counts))
         }
         None => crate::volume::check_size(domain.dims, 4, io::budget_from_env()?).and_then(|_| {
             let alpha = coverage(&g.surface, domain);
-            let (volume, counts) = solid::solid_regions(&parts, &regions, &depth, &alpha, &bar)?;
+            let (volume, counts) = solid::solid_blend(parts, weight, &alpha, &bar)?;
             io::write_volume(&args.output, &volume).map(|_| counts)
         }),
     };
@@ -390,16 +417,59 @@ fn by_regions(
     let [voxels, corrections] = outcome?;
     let full = parts.first().map_or(0, whole);
     report(args, g, domain, started, ready, [voxels, corrections, full]);
-    for (region, name) in spec.regions.iter().zip(&names) {
-        tell!("  depth {} to {}: {name}", region.depth[0], region.depth[1]);
-    }
+    Ok(())
+}
+
+/// Width in octaves of the band two neighbouring scale steps blend across.
+const SCALE_BAND: f32 = 0.25;
+
+/// `guided --exemplar` with the spec's `[[scale_at]]` points: the exemplars synthesized at
+/// half-octave steps of their size (shrunk or enlarged, each plain photo's solid cube made
+/// at that size) and each voxel blending the two steps nearest its scale.
+fn by_scales(args: &GuidedArgs, g: &Guide, domain: &Domain, cut: Option<(Vec3, Vec3)>, started: Instant) -> Result<()> {
+    let path = match (&args.exemplar, &args.solid, args.layered) {
+        (Some(path), None, false) => path,
+        _ => {
+            return Err(usage(Error::invalid(format!(
+                "the spec {} gives [[scale_at]] points: a scale field takes plain exemplars (--exemplar without \
+                 --layered); a layered exemplar's scale follows the depth, and a --solid volume keeps its own",
+                args.spec.display()
+            ))));
+        }
+    };
+    let side = load_exemplars(args, path, None, 1.0)?[0].width();
+    let scale = solid::scale_over(&g.tets, &g.spec.scales, side, domain).map_err(|e| e.in_file(&args.spec))?;
+    let steps = solid::scale_steps(&scale).map_err(|e| e.in_file(&args.spec))?;
+    let made: Vec<(Exemplars, Options)> = steps
+        .iter()
+        .map(|step| plane_exemplars(args, path, None, step.exp2()).map(|(e, o, _)| (e, o)))
+        .collect::<Result<_>>()?;
+    let frames = solid::frames_over(&g.tets, &g.field, domain, &g.depth, &g.axes)?;
+    let parts: Vec<Setup> = made
+        .iter()
+        .map(|(exemplars, options)| Setup {
+            exemplars,
+            frames: Some(&frames),
+            wrap: [false; 3],
+            depth: None,
+            dims: domain.dims,
+            seed: args.seed,
+            options: *options,
+        })
+        .collect();
+    let borders = steps.windows(2).map(|w| (w[0] + w[1]) / 2.0).collect();
+    let blend = Regions::with_borders(borders, SCALE_BAND);
+    let weight = |k: usize, v: [usize; 3]| blend.weight(k, solid::grid_at(&scale, v));
+    write_blend(args, g, domain, cut, &parts, &weight, started)?;
+    let sizes: Vec<String> = steps.iter().map(|s| format!("{:.2}", s.exp2())).collect();
+    tell!("  the exemplar synthesized with pixels {} voxels wide, blended by the spec's scale", sizes.join(", "));
     Ok(())
 }
 
 /// The exemplars per plane, alpha dropped (the solid's alpha is the model's coverage),
 /// with their feature masks and (layered, `rows`) scaled so that their rows span the
 /// model's depth in voxels, with a Depth channel.
-fn load_exemplars(args: &GuidedArgs, exemplar: &Path, rows: Option<usize>) -> Result<[Image2d; 3]> {
+fn load_exemplars(args: &GuidedArgs, exemplar: &Path, rows: Option<usize>, factor: f32) -> Result<[Image2d; 3]> {
     let shrink = super::synth::OtherExemplars {
         ey: None,
         ez: None,
@@ -414,9 +484,9 @@ fn load_exemplars(args: &GuidedArgs, exemplar: &Path, rows: Option<usize>) -> Re
         }
     }
     let load = |path: &Path, mask: Option<&PathBuf>, what: &str| -> Result<Image2d> {
-        let image = without_alpha(shrink.load(path, what)?)?;
+        let image = resized_by(without_alpha(shrink.load(path, what)?)?, factor).map_err(|e| e.in_file(path))?;
         let image = match mask {
-            Some(m) => with_mask(image, &shrink.load(m, "feature mask")?, path, m)?,
+            Some(m) => with_mask(image, &resized_by(shrink.load(m, "feature mask")?, factor)?, path, m)?,
             None => image,
         };
         match rows {
@@ -430,6 +500,24 @@ fn load_exemplars(args: &GuidedArgs, exemplar: &Path, rows: Option<usize>) -> Re
     let ey = ey.unwrap_or_else(|| ex.clone());
     let ez = ez.unwrap_or_else(|| ey.clone());
     Ok([ex, ey, ez])
+}
+
+/// `image` resized by `factor` (1: as it is); an error naming the size when it would fall
+/// below 8 pixels on a side.
+fn resized_by(image: Image2d, factor: f32) -> Result<Image2d> {
+    if factor == 1.0 {
+        return Ok(image);
+    }
+    let size = |s: usize| (s as f32 * factor).round() as usize;
+    let (w, h) = (size(image.width()), size(image.height()));
+    if w.min(h) < 8 {
+        return Err(Error::invalid(format!(
+            "the scale field shrinks the {}x{} exemplar to {w}x{h} pixels, under 8; ask for larger scales",
+            image.width(),
+            image.height()
+        )));
+    }
+    image.resized(w, h)
 }
 
 /// The image with a feature channel: the mask's grey (the mean of its colour channels).
@@ -526,8 +614,13 @@ fn without_alpha(image: Image2d) -> Result<Image2d> {
 /// The prepared exemplars of `--exemplar` (and `--ey`, `--ez`, masks), their settings and
 /// the exemplar a cut's sharpness is measured against: plain exemplars through their solid
 /// cube, or (layered, masked, `--planes`) as planes.
-fn plane_exemplars(args: &GuidedArgs, path: &Path, rows: Option<usize>) -> Result<(Exemplars, Options, Image2d)> {
-    let exemplars = load_exemplars(args, path, rows)?;
+fn plane_exemplars(
+    args: &GuidedArgs,
+    path: &Path,
+    rows: Option<usize>,
+    factor: f32,
+) -> Result<(Exemplars, Options, Image2d)> {
+    let exemplars = load_exemplars(args, path, rows, factor)?;
     let through_cube = !args.layered && args.mask.is_none() && !args.planes;
     let side =
         if through_cube { cube::SIDE } else { exemplars.iter().map(|e| e.width().min(e.height())).min().unwrap_or(0) };

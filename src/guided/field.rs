@@ -370,6 +370,50 @@ impl ScalarGrid {
         ScalarGrid { lo, step, dims, values }
     }
 
+    /// Per-vertex `values` of a tet mesh read at the corners of a grid over the box
+    /// `(lo, hi)` with `cells` cells along its longest side: inside a tet by its
+    /// barycentric blend, outside every tet the mean of the nearest filled corners.
+    pub fn from_tets(mesh: &TetMesh, values: &[f32], (lo, hi): (Vec3, Vec3), cells: usize) -> ScalarGrid {
+        let step = (hi - lo).max_element().max(1e-6) / cells.max(1) as f32;
+        let dims = ((hi - lo) / step).ceil().to_array().map(|d| d as usize + 2);
+        let index = |i: [usize; 3]| i[0] + dims[0] * (i[1] + dims[1] * i[2]);
+        let mut corners: Vec<Option<f32>> = vec![None; dims.iter().product()];
+        for (t, tet) in mesh.tets.iter().enumerate() {
+            let ps = tet.map(|v| mesh.vertices[v as usize]);
+            let (a, b) = ps.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(a, b), p| (a.min(*p), b.max(*p)));
+            let first = ((a - lo) / step).ceil().max(Vec3::ZERO).to_array().map(|c| c as usize);
+            let last = ((b - lo) / step).floor().to_array().map(|c| c.max(-1.0) as i64);
+            for z in first[2] as i64..=last[2].min(dims[2] as i64 - 1) {
+                for y in first[1] as i64..=last[1].min(dims[1] as i64 - 1) {
+                    for x in first[0] as i64..=last[0].min(dims[0] as i64 - 1) {
+                        let i = index([x as usize, y as usize, z as usize]);
+                        let w = mesh.barycentric(t, lo + Vec3::new(x as f32, y as f32, z as f32) * step);
+                        if corners[i].is_none() && w.iter().all(|c| *c >= -1e-5) {
+                            corners[i] = Some((0..4).map(|k| w[k] * values[tet[k] as usize]).sum());
+                        }
+                    }
+                }
+            }
+        }
+        let stride = [1, dims[0], dims[0] * dims[1]];
+        while corners.iter().any(Option::is_none) && corners.iter().any(Option::is_some) {
+            let next: Vec<Option<f32>> = (0..corners.len())
+                .map(|i| {
+                    let v = [i % dims[0], (i / dims[0]) % dims[1], i / (dims[0] * dims[1])];
+                    let near = (0..3).flat_map(|a| {
+                        let below = (v[a] > 0).then(|| corners[i - stride[a]]).flatten();
+                        let above = (v[a] + 1 < dims[a]).then(|| corners[i + stride[a]]).flatten();
+                        [below, above]
+                    });
+                    let (sum, count) = near.flatten().fold((0.0, 0), |(s, n), x| (s + x, n + 1));
+                    corners[i].or((count > 0).then(|| sum / count as f32))
+                })
+                .collect();
+            corners = next;
+        }
+        ScalarGrid { lo, step, dims, values: corners.into_iter().map(|c| c.unwrap_or(0.0)).collect() }
+    }
+
     /// The same grid in the coordinates of a voxel grid (see [`FrameGrid::in_voxels`]).
     pub fn in_voxels(&self, origin: Vec3, voxel: f32) -> ScalarGrid {
         ScalarGrid { lo: (self.lo - origin) / voxel - 0.5, step: self.step / voxel, ..self.clone() }

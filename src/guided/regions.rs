@@ -1,6 +1,8 @@
 //! Exemplars by depth (Zhang et al. 2011, Fig. 15: bark outside, wood inside): each depth
 //! range of the model takes its own exemplar, synthesized along the same field over the
-//! voxels it weighs in, and neighbouring ranges blend across a band at their border.
+//! voxels it weighs in, and neighbouring ranges blend across a band at their border. The
+//! same ranges over the log of the texture's scale blend one exemplar synthesized at
+//! several scales (a scale field).
 //!
 //! ```text
 //!   weight   region 0           region 1
@@ -27,6 +29,11 @@ impl Regions {
     /// before ends), blending across `band`.
     pub fn new(ranges: &[[f32; 2]], band: f32) -> Regions {
         let borders = ranges.iter().skip(1).map(|r| r[0]).collect();
+        Regions { borders, band }
+    }
+
+    /// Regions meeting at `borders` (increasing), blending across `band`.
+    pub fn with_borders(borders: Vec<f32>, band: f32) -> Regions {
         Regions { borders, band }
     }
 

@@ -2,7 +2,6 @@
 //! voxels a cut needs, the cut's picture and the whole solid as a volume.
 
 use super::field::{FrameField, FrameGrid, ScalarGrid};
-use super::regions::Regions;
 use crate::error::{Error, Result};
 use crate::fill::render::View;
 use crate::fill::render::inside_surface;
@@ -194,15 +193,18 @@ pub fn cut(
     Ok((picture, out))
 }
 
-/// A cut through a model whose depth ranges take their own exemplars: `parts` holds one
-/// setup per region of `regions` (the same grid and field), each synthesized over the
-/// cut's voxels it weighs in at the model's `depth`, and the pixel blends them by weight.
-/// The picture is red, green, blue (a grey exemplar's grey on all three) and alpha; also
-/// the voxels and corrections of all the runs.
-pub fn cut_regions(
+/// How much of part `k` a voxel shows (the weights of a voxel summing to 1).
+pub type Weight<'a> = dyn Fn(usize, [usize; 3]) -> f32 + Sync + 'a;
+
+/// A cut through a model textured by several parts blended per voxel: regions of depth
+/// with their own exemplars, or one exemplar at several scales. `parts` holds one setup
+/// per part (the same grid and field), each synthesized over the cut's voxels where its
+/// `weight` is above 0, and the pixel blends them by weight. The picture is red, green,
+/// blue (a grey exemplar's grey on all three) and alpha; also the voxels and corrections of
+/// all the runs.
+pub fn cut_blend(
     parts: &[Setup],
-    regions: &Regions,
-    depth: &ScalarGrid,
+    weight: &Weight,
     domain: &Domain,
     surface: &Mesh,
     view: &View,
@@ -210,13 +212,13 @@ pub fn cut_regions(
 ) -> Result<(Image2d, [usize; 2])> {
     let inside = inside_surface(surface, view);
     let request = cut_request(domain, view, &inside);
-    let (runs, counts) = region_runs(parts, regions, depth, &request, progress)?;
+    let (runs, counts) = part_runs(parts, weight, &request, progress)?;
     let mut data = Vec::with_capacity(view.width * view.height * 4);
     for (i, inside) in inside.iter().enumerate() {
         match inside {
             true => {
                 let v = domain.voxel_of(view.point(i % view.width, i / view.width));
-                data.extend(blended(parts, &runs, regions, depth, v).into_iter().chain([1.0]));
+                data.extend(blended(parts, &runs, weight, v).into_iter().chain([1.0]));
             }
             false => data.extend([0.0; 4]),
         }
@@ -224,34 +226,32 @@ pub fn cut_regions(
     Ok((Image2d::from_data(view.width, view.height, RGBA.to_vec(), data)?, counts))
 }
 
-/// The whole solid of a model textured by regions ([`cut_regions`]): every voxel's blended
+/// The whole solid of a model textured by blended parts ([`cut_blend`]): every voxel's
 /// colour, then `alpha` (the model's coverage per voxel); also the runs' voxels and
 /// corrections.
-pub fn solid_regions(
+pub fn solid_blend(
     parts: &[Setup],
-    regions: &Regions,
-    depth: &ScalarGrid,
+    weight: &Weight,
     alpha: &[f32],
     progress: &dyn Progress,
 ) -> Result<(Volume, [usize; 2])> {
     let dims = parts.first().map_or([0; 3], |p| p.dims);
-    let (runs, counts) = region_runs(parts, regions, depth, &Mask::full(dims), progress)?;
+    let (runs, counts) = part_runs(parts, weight, &Mask::full(dims), progress)?;
     let mut data = Vec::with_capacity(alpha.len() * 4);
     for (i, a) in alpha.iter().enumerate() {
         let v = [i % dims[0], (i / dims[0]) % dims[1], i / (dims[0] * dims[1])];
-        data.extend(blended(parts, &runs, regions, depth, v).into_iter().chain([*a]));
+        data.extend(blended(parts, &runs, weight, v).into_iter().chain([*a]));
     }
     Ok((Volume::from_data(dims, RGBA.to_vec(), data)?, counts))
 }
 
 const RGBA: [Channel; 4] = [Channel::R, Channel::G, Channel::B, Channel::A];
 
-/// Each region's synthesis over the voxels of `request` it weighs in, and the runs'
-/// voxels and corrections summed.
-fn region_runs(
+/// Each part's synthesis over the voxels of `request` it weighs in, and the runs' voxels
+/// and corrections summed.
+fn part_runs(
     parts: &[Setup],
-    regions: &Regions,
-    depth: &ScalarGrid,
+    weight: &Weight,
     request: &Mask,
     progress: &dyn Progress,
 ) -> Result<(Vec<Sparse<Voxel>>, [usize; 2])> {
@@ -259,7 +259,7 @@ fn region_runs(
     let mut counts = [0, 0];
     for (k, setup) in parts.iter().enumerate() {
         let mut mine = Mask::empty(request.dims);
-        for v in request.voxels().filter(|&v| regions.weight(k, depth_at(depth, v)) > 0.0) {
+        for v in request.voxels().filter(|&v| weight(k, v) > 0.0) {
             mine.insert(v);
         }
         let out = synth::run(setup, &synth::plan(setup, &mine, &[]), &[], progress)?;
@@ -269,17 +269,17 @@ fn region_runs(
     Ok((runs, counts))
 }
 
-/// The model's depth at voxel `v`.
-pub fn depth_at(depth: &ScalarGrid, v: [usize; 3]) -> f32 {
-    depth.at(Vec3::from_array(v.map(|c| c as f32)))
+/// The value of a grid in voxel coordinates (the model's depth, the texture's scale) at
+/// voxel `v`.
+pub fn grid_at(grid: &ScalarGrid, v: [usize; 3]) -> f32 {
+    grid.at(Vec3::from_array(v.map(|c| c as f32)))
 }
 
-/// The regions' colours at voxel `v` blended by their weights at its depth.
-fn blended(parts: &[Setup], runs: &[Sparse<Voxel>], regions: &Regions, depth: &ScalarGrid, v: [usize; 3]) -> [f32; 3] {
-    let d = depth_at(depth, v);
+/// The parts' colours at voxel `v` blended by their weights.
+fn blended(parts: &[Setup], runs: &[Sparse<Voxel>], weight: &Weight, v: [usize; 3]) -> [f32; 3] {
     let mut rgb = [0.0; 3];
     for (k, (setup, run)) in parts.iter().zip(runs).enumerate() {
-        let w = regions.weight(k, d);
+        let w = weight(k, v);
         if w > 0.0 {
             let colour = &run.at(v.map(|c| c as i64)).colour;
             let grey = setup.exemplars.channels() < 3;
@@ -289,6 +289,46 @@ fn blended(parts: &[Setup], runs: &[Sparse<Voxel>], regions: &Regions, depth: &S
         }
     }
     rgb
+}
+
+/// Steps of the texture's scale a scale field is synthesized at: half an octave apart, so
+/// a voxel between two shows a blend of the two nearest.
+pub const SCALE_STEPS_PER_OCTAVE: f32 = 2.0;
+
+/// Most scale steps one synthesis takes (four octaves).
+pub const MOST_SCALE_STEPS: usize = 9;
+
+/// The texture's scale over `domain` as log2 of an exemplar pixel's size in voxels, for an
+/// exemplar `side` pixels wide: the spec's `scales` (point, the exemplar's side in model
+/// units) interpolated on the tets as the fill's field interpolates them, through their
+/// logarithms (halfway between two scales lies their geometric mean).
+pub fn scale_over(tets: &TetMesh, scales: &[(Vec3, f32)], side: usize, domain: &Domain) -> Result<ScalarGrid> {
+    let points: Vec<(Vec3, [f32; 1])> =
+        scales.iter().map(|(p, s)| (*p, [(s / (side as f32 * domain.voxel)).log2()])).collect();
+    let values: Vec<f32> =
+        crate::fill::field::smooth_at_vertices(tets, &points)?.into_iter().map(|v| v as f32).collect();
+    let hi = domain.origin + Vec3::from_array(domain.dims.map(|d| d as f32)) * domain.voxel;
+    let grid = ScalarGrid::from_tets(tets, &values, (domain.origin, hi), FIELD_CELLS);
+    Ok(grid.in_voxels(domain.origin, domain.voxel))
+}
+
+/// The steps a scale grid ([`scale_over`]) spans, as log2 of the pixel size: half an
+/// octave apart, from the smallest to the largest scale of its corners. An error beyond
+/// [`MOST_SCALE_STEPS`].
+pub fn scale_steps(scale: &ScalarGrid) -> Result<Vec<f32>> {
+    let (lo, hi) = scale.values.iter().fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
+    let (first, last) = ((lo * SCALE_STEPS_PER_OCTAVE).round() as i64, (hi * SCALE_STEPS_PER_OCTAVE).round() as i64);
+    let count = (last - first + 1).max(1) as usize;
+    if !(lo.is_finite() && hi.is_finite()) || count > MOST_SCALE_STEPS {
+        return Err(Error::invalid(format!(
+            "the scale_at points ask for exemplar pixels from {:.3} to {:.3} voxels wide, more than {} octaves apart; \
+             bring the scales closer together",
+            lo.exp2(),
+            hi.exp2(),
+            (MOST_SCALE_STEPS - 1) as f32 / SCALE_STEPS_PER_OCTAVE
+        )));
+    }
+    Ok((first..=last).map(|j| j as f32 / SCALE_STEPS_PER_OCTAVE).collect())
 }
 
 /// Every level below the finest computed over the whole grid, coarsest first (none when

@@ -95,8 +95,8 @@ pub fn picture(
                 .collect();
             let ranges: Vec<[f32; 2]> = spec.regions.iter().map(|r| r.depth).collect();
             let regions = Regions::new(&ranges, spec.region_band);
-            let (cut, _) =
-                solid::cut_regions(&parts, &regions, &depth, &domain, &filled.model.surface, view, progress)?;
+            let weight = |k: usize, v: [usize; 3]| regions.weight(k, solid::grid_at(&depth, v));
+            let (cut, _) = solid::cut_blend(&parts, &weight, &domain, &filled.model.surface, view, progress)?;
             shown_pixels(&cut)
         }
         Overlay::Guided => {

@@ -457,3 +457,55 @@ fn regions_give_the_log_one_exemplar_outside_and_another_inside() {
     crate::support::assert_usage(&run, &["--exemplar", "regions.toml", "[[region]]"]);
     assert!(!d.join("refused.png").exists());
 }
+
+/// A spec's `[[scale_at]]` points scale the texture: on a block whose left end asks for
+/// the photo at one pixel per voxel (three points) and whose right end for half that, the right end's
+/// features are half as long (autocorrelation length) within 20 %. With `--solid` the
+/// scale field is a usage error naming the spec.
+#[test]
+fn a_scale_field_halves_the_texture_where_it_asks_for_half() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let block = crate::fill::draw(d, "block");
+    // the grid is 128 voxels over the block's 2 units and a 5 % margin each side: an
+    // exemplar of 128 pixels spans 2.2 units at one pixel per voxel
+    let spec = crate::fill::spec(
+        d,
+        "scaled.toml",
+        &["exemplar = \"gravel\"\ntets = 3000\n[[direction]]\npoints = [[-0.9, 0, 0], [0.9, 0, 0]]\n".to_string()]
+            .into_iter()
+            .chain([-0.9f32, -0.7, -0.5, 0.5, 0.7, 0.9].map(|x| {
+                let scale = if x < 0.0 { 2.2 } else { 1.1 };
+                format!("[[scale_at]]\npoint = [{x}, 0, 0]\nscale = {scale}\n")
+            }))
+            .collect::<String>(),
+    );
+    let photo = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("exemplars/gravel_photo.png");
+    let photo = photo.to_string_lossy();
+    let out = at(d, "scaled.png");
+    let args = ["guided", &block, "--spec", &spec, "--exemplar", &photo, "--res", "128", "--cut", "0,0,0,0,0,1"];
+    let run = solidtex(&[&args[..], &["--size", "128", "-o", &out]].concat());
+    assert!(run.status.success(), "{}", stderr(&run));
+    let img = image::open(&out).unwrap().to_rgba8();
+    let rows: Vec<u32> = (0..img.height()).filter(|&y| img.get_pixel(64, y).0[3] == 255).collect();
+    let crop = |from: f32, to: f32| {
+        let (x0, x1) = ((from * 128.0) as u32, (to * 128.0) as u32);
+        let data: Vec<f32> = rows
+            .iter()
+            .flat_map(|&y| (x0..x1).map(move |x| (x, y)))
+            .map(|(x, y)| img.get_pixel(x, y).0[0] as f32 / 255.0)
+            .collect();
+        solidtex::volume::Image2d::from_data((x1 - x0) as usize, rows.len(), solidtex::Channel::grey(), data).unwrap()
+    };
+    let exemplar = solidtex::io::read_image_fit(std::path::Path::new(&*photo), Some(128)).unwrap();
+    let length = |image| solidtex::sharpness::compare(&[image], &exemplar, &[0]).unwrap().length_ratio;
+    let (left, right) = (length(crop(0.05, 0.3)), length(crop(0.7, 0.95)));
+    assert!((0.4..=0.6).contains(&(right / left)), "feature length {left:.2} at the left end, {right:.2} at the right");
+
+    let refused = at(d, "refused.png");
+    let marble = at(d, "marble.exr");
+    assert!(solidtex(&["make", "marble", "--size", "32", "-o", &marble]).status.success());
+    let run = solidtex(&["guided", &block, "--spec", &spec, "--solid", &marble, "--res", "64", "-o", &refused]);
+    crate::support::assert_usage(&run, &["scaled.toml", "[[scale_at]]", "--solid"]);
+    assert!(!d.join("refused.png").exists());
+}
