@@ -60,7 +60,8 @@ impl CameraArgs {
 /// The arguments of `solidtex cut`.
 #[derive(Debug, clap::Args)]
 pub struct CutArgs {
-    /// One or more models (.lst); several are combined, the first listed wins where they overlap.
+    /// One or more models (.lst); several are combined, the first listed wins where they
+    /// overlap. Or one guided model (.guided, from `solidtex guided`), synthesized on demand.
     #[arg(required = true)]
     pub models: Vec<PathBuf>,
     /// The plane as PX,PY,PZ,NX,NY,NZ (a point and a normal, each -1000000 to 1000000, the
@@ -101,10 +102,11 @@ pub struct CutArgs {
 /// The arguments of `solidtex bake`.
 #[derive(Debug, clap::Args)]
 pub struct BakeArgs {
-    /// One or more models (.lst), combined as in `cut`.
+    /// One or more models (.lst), combined as in `cut`. Or one guided model (.guided): its
+    /// whole solid at its own resolution, with its exemplar's channels and alpha.
     #[arg(required = true)]
     pub models: Vec<PathBuf>,
-    /// Voxels along the longest side, 2 to 512.
+    /// Voxels along the longest side, 2 to 512 (not for a guided model).
     #[arg(long, default_value_t = 128)]
     pub res: usize,
     /// The volume to write: R, G, B, the carried channels (`--carry`), then A (1 inside
@@ -122,7 +124,8 @@ pub struct BakeArgs {
 #[derive(Debug, clap::Args)]
 pub struct ViewArgs {
     /// One or more models (.lst); each pixel shows the nearest surface. Or one skin (.ply
-    /// with vertex colours, as `solidtex surface` writes it).
+    /// with vertex colours, as `solidtex surface` writes it), or one guided model
+    /// (.guided): its mesh, textured by synthesizing only the voxels under what is seen.
     #[arg(required = true)]
     pub models: Vec<PathBuf>,
     /// Where the picture looks from.
@@ -449,6 +452,19 @@ impl Loaded {
     }
 }
 
+/// The guided model (`.guided`) among `models`, when one is given alone; a usage error
+/// when one comes with other models (a guided model combines with none).
+fn guided_model(models: &[PathBuf]) -> Result<Option<&Path>> {
+    match models.iter().find(|m| io::guided_model::is_guided(m)) {
+        None => Ok(None),
+        Some(model) if models.len() == 1 => Ok(Some(model)),
+        Some(model) => Err(usage(Error::invalid(format!(
+            "{} is a guided model; it is drawn alone, not combined with other models",
+            model.display()
+        )))),
+    }
+}
+
 fn load_model(path: &Path) -> Result<Loaded> {
     let model = lst_file::read_lst(path)?;
     let base = path.parent().unwrap_or(Path::new("."));
@@ -616,6 +632,17 @@ fn run_stroke_cut(args: &CutArgs) -> Result<()> {
 
 /// Run `solidtex cut`.
 pub fn run_cut(args: &CutArgs) -> Result<()> {
+    if let Some(model) = guided_model(&args.models)? {
+        let flag = [("--stroke", !args.stroke.is_empty()), ("--channel", args.channel.is_some())];
+        if let Some((flag, _)) = flag.iter().find(|(_, on)| *on) {
+            return Err(usage(Error::invalid(format!(
+                "{flag} cuts a filled model (.lst); {} is a guided model",
+                model.display()
+            ))));
+        }
+        let plane = cut_values(args).map_err(usage)?;
+        return super::guided::cut_model(model, plane, args.size, &args.output);
+    }
     if !args.stroke.is_empty() {
         return run_stroke_cut(args);
     }
@@ -693,6 +720,14 @@ fn render_settings(args: &RenderArgs) -> Result<translucent::Settings> {
 
 /// Run `solidtex render`.
 pub fn run_render(args: &RenderArgs) -> Result<()> {
+    if let Some(model) = guided_model(&args.models)? {
+        return Err(usage(Error::invalid(format!(
+            "{} is a guided model; render draws filled models (.lst). Bake it (`solidtex bake {}`) for a volume, or \
+             view and cut it",
+            model.display(),
+            model.display()
+        ))));
+    }
     let settings = render_settings(args).map_err(usage)?;
     picture_output(&args.output, &args.models, args.skin.as_deref())?;
     let (needed, budget) = (translucent::memory_needed(settings.size), io::budget_from_env()?);
@@ -760,6 +795,16 @@ pub fn run_render(args: &RenderArgs) -> Result<()> {
 /// Run `solidtex bake`.
 pub fn run_bake(args: &BakeArgs) -> Result<()> {
     io::values::within("--res", args.res, 2, 512).map_err(usage)?;
+    if let Some(model) = guided_model(&args.models)? {
+        if args.carry.is_some() {
+            return Err(usage(Error::invalid(format!(
+                "--carry chooses the channels of filled models (.lst); {} is a guided model (its solid carries its \
+                 exemplar's colours and alpha)",
+                model.display()
+            ))));
+        }
+        return super::guided::from_model(model, super::guided::Action::Solid, 256, &args.output);
+    }
     let models: Vec<&Path> = args.models.iter().map(PathBuf::as_path).collect();
     io::check_output(&args.output, &models)?;
     let loaded = load_models(&args.models)?;
@@ -877,6 +922,18 @@ pub fn run_view(args: &ViewArgs) -> Result<()> {
         Ok(())
     };
     checks().map_err(usage)?;
+    if let Some(model) = guided_model(&args.models)? {
+        let flag = [("--displacement", args.displacement.is_some()), ("--skin", args.skin.is_some())];
+        if let Some((flag, _)) = flag.iter().find(|(_, on)| *on) {
+            return Err(usage(Error::invalid(format!(
+                "{flag} draws on a filled model (.lst); {} is a guided model",
+                model.display()
+            ))));
+        }
+        let shading = if args.flat { Shading::Flat } else { Shading::Smooth { crease: args.crease } };
+        let view = crate::fill::view::View { camera: (args.camera.yaw, args.camera.pitch), size: args.size, shading };
+        return super::guided::from_model(model, super::guided::Action::View(view), args.size, &args.output);
+    }
     picture_output(&args.output, &args.models, args.skin.as_deref())?;
     if let [one] = args.models.as_slice()
         && one.extension().is_some_and(|e| e.eq_ignore_ascii_case("ply"))

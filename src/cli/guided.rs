@@ -226,7 +226,8 @@ pub struct GuidedArgs {
     /// Random seed.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// The cut's PNG, or the solid's volume (.exr, .vol, .nrrd, .dds, .vdb, ...).
+    /// The cut's PNG, or the solid's volume (.exr, .vol, .nrrd, .dds, .vdb, ...), or a
+    /// guided model (.guided): the recipe, which `view`, `cut` and `bake` synthesize from.
     #[arg(short, long)]
     pub output: PathBuf,
 }
@@ -240,8 +241,21 @@ fn odd_side(flag: &str, value: usize) -> Result<()> {
     }
 }
 
-/// Run `solidtex guided`.
-pub fn run_guided(args: &GuidedArgs) -> Result<()> {
+/// What `guided` makes of its inputs.
+#[derive(Debug, Clone, Copy)]
+pub enum Action {
+    /// A cut through a point with a normal, as a PNG.
+    Cut(Vec3, Vec3),
+    /// The whole solid, as a volume with the model's coverage as alpha.
+    Solid,
+    /// The model's surface seen from a camera, as a PNG.
+    View(crate::fill::view::View),
+    /// The recipe, as a guided model file (`.guided`) that `view`, `cut` and `bake` read.
+    Model,
+}
+
+/// The values of `args` checked against their ranges (usage errors), and its cut.
+fn checked(args: &GuidedArgs) -> Result<Option<(Vec3, Vec3)>> {
     let checks = || -> Result<Option<(Vec3, Vec3)>> {
         io::values::within("--res", args.res, *solid::RESOLUTION.start(), *solid::RESOLUTION.end())?;
         io::values::within("--size", args.size, 8, 4096)?;
@@ -252,23 +266,55 @@ pub fn run_guided(args: &GuidedArgs) -> Result<()> {
         args.others.check()?;
         args.cut.as_deref().map(|text| super::fill::plane("--cut", text)).transpose()
     };
-    let cut = checks().map_err(usage)?;
-    let masks = [&args.mask, &args.ey_mask, &args.ez_mask].into_iter().flatten();
-    let given = [&args.exemplar, &args.solid].into_iter().flatten();
-    let inputs: Vec<&Path> =
-        [&args.mesh, &args.spec].into_iter().chain(given).chain(masks).map(|p| p.as_path()).collect();
-    match cut {
-        Some(_) => io::guard::png_output(&args.output, &inputs)?,
-        None => io::check_output(&args.output, &inputs)?,
+    checks().map_err(usage)
+}
+
+/// The input files `args` names.
+fn inputs(args: &GuidedArgs) -> Vec<&Path> {
+    let others = [&args.exemplar, &args.solid, &args.others.ey, &args.others.ez];
+    let masks = [&args.mask, &args.ey_mask, &args.ez_mask];
+    let given = others.into_iter().chain(masks).flatten();
+    [&args.mesh, &args.spec].into_iter().chain(given).map(|p| p.as_path()).collect()
+}
+
+/// Run `solidtex guided`.
+pub fn run_guided(args: &GuidedArgs) -> Result<()> {
+    let cut = checked(args)?;
+    let action = match (cut, io::guided_model::is_guided(&args.output)) {
+        (Some(_), true) => {
+            return Err(usage(Error::invalid(format!(
+                "{}: --cut writes a PNG picture; a .guided output is the model's recipe, which `solidtex cut` cuts \
+                 later",
+                args.output.display()
+            ))));
+        }
+        (Some((point, normal)), false) => Action::Cut(point, normal),
+        (None, true) => Action::Model,
+        (None, false) => Action::Solid,
+    };
+    let inputs = inputs(args);
+    match action {
+        Action::Cut(..) | Action::View(_) => io::guard::png_output(&args.output, &inputs)?,
+        Action::Solid => io::check_output(&args.output, &inputs)?,
+        Action::Model => {
+            io::guard::file_output(&args.output, &inputs, &[io::guided_model::EXTENSION], "a guided model")?
+        }
     }
+    synthesize(args, action)
+}
+
+/// Do `action` with the inputs of `args` (checked): the field, the exemplars (by regions,
+/// at the steps of a scale field, or one set), then the cut, the solid, the view or the
+/// model file.
+fn synthesize(args: &GuidedArgs, action: Action) -> Result<()> {
     let started = Instant::now();
     let g = guide(&args.mesh, &args.spec, args.tets)?;
     let domain = Domain::around(g.surface.bounds(), args.res)?;
     if !g.spec.regions.is_empty() {
-        return by_regions(args, &g, &domain, cut, started);
+        return by_regions(args, &g, &domain, action, started);
     }
     if !g.spec.scales.is_empty() {
-        return by_scales(args, &g, &domain, cut, started);
+        return by_scales(args, &g, &domain, action, started);
     }
     let depth =
         args.layered.then(|| solid::depth_over(&g.depth, &domain)).transpose().map_err(|e| e.in_file(&args.spec))?;
@@ -290,17 +336,97 @@ pub fn run_guided(args: &GuidedArgs) -> Result<()> {
         seed: args.seed,
         options,
     };
-    solid::check_memory(&setup, cut.is_none(), args.res, io::budget_from_env()?)?;
+    if let Action::View(_) | Action::Model = action {
+        return write_blend(args, &g, &domain, action, &[setup], &|_, _| 1.0, started);
+    }
+    solid::check_memory(&setup, matches!(action, Action::Solid), args.res, io::budget_from_env()?)?;
     let ready = started.elapsed().as_secs_f64();
     let bar = super::fill::Bar::new();
-    let outcome = match cut {
-        Some((point, normal)) => write_cut(args, &g, &setup, &domain, (point, normal), &exemplar, &bar),
-        None => write_solid(args, &g, &setup, &domain, &bar),
+    let outcome = match action {
+        Action::Cut(point, normal) => write_cut(args, &g, &setup, &domain, (point, normal), &exemplar, &bar),
+        _ => write_solid(args, &g, &setup, &domain, &bar),
     };
     bar.0.finish_and_clear();
     let (voxels, corrections, full) = outcome?;
     report(args, &g, &domain, started, ready, [voxels, corrections, full]);
     Ok(())
+}
+
+/// The recipe of `args` as a guided model (its paths as given).
+fn model_of(args: &GuidedArgs) -> io::guided_model::GuidedModel {
+    io::guided_model::GuidedModel {
+        mesh: args.mesh.clone(),
+        spec: args.spec.clone(),
+        exemplar: args.exemplar.clone(),
+        solid: args.solid.clone(),
+        ey: args.others.ey.clone(),
+        ez: args.others.ez.clone(),
+        mask: args.mask.clone(),
+        ey_mask: args.ey_mask.clone(),
+        ez_mask: args.ez_mask.clone(),
+        max_exemplar: args.others.max_exemplar,
+        layered: args.layered,
+        planes: args.planes,
+        res: args.res,
+        n: args.n,
+        coarse_n: args.coarse_n,
+        seed: args.seed,
+        tets: args.tets,
+    }
+}
+
+/// The arguments `guided` would take to make `model`, writing `output` (a cut's or view's
+/// picture `size` pixels wide, or the solid).
+fn args_of(model: io::guided_model::GuidedModel, size: usize, output: &Path) -> GuidedArgs {
+    GuidedArgs {
+        mesh: model.mesh,
+        spec: model.spec,
+        exemplar: model.exemplar,
+        solid: model.solid,
+        others: super::synth::OtherExemplars { ey: model.ey, ez: model.ez, max_exemplar: model.max_exemplar },
+        mask: model.mask,
+        ey_mask: model.ey_mask,
+        ez_mask: model.ez_mask,
+        layered: model.layered,
+        planes: model.planes,
+        res: model.res,
+        coarse_n: model.coarse_n,
+        n: model.n,
+        cut: None,
+        size,
+        cache: None,
+        cache_mb: 256,
+        tets: model.tets,
+        seed: model.seed,
+        output: output.to_path_buf(),
+    }
+}
+
+/// `cut` of a guided model (`model`, a `.guided` file) through `plane` (default: through
+/// the centre of its mesh's box, normal z), a PNG `size` pixels wide.
+pub fn cut_model(model: &Path, plane: Option<(Vec3, Vec3)>, size: usize, output: &Path) -> Result<()> {
+    let (point, normal) = match plane {
+        Some(plane) => plane,
+        None => {
+            let (lo, hi) = mesh_file::read_mesh(&io::guided_model::read(model)?.mesh)?.bounds();
+            ((lo + hi) / 2.0, Vec3::Z)
+        }
+    };
+    from_model(model, Action::Cut(point, normal), size, output)
+}
+
+/// `view`, `cut` or `bake` of a guided model (`model`, a `.guided` file): `action` with
+/// the model's recipe, writing `output` (`size`: a picture's side).
+pub fn from_model(model: &Path, action: Action, size: usize, output: &Path) -> Result<()> {
+    let args = args_of(io::guided_model::read(model)?, size, output);
+    checked(&args).map_err(|e| e.in_file(model))?;
+    let inputs: Vec<&Path> = inputs(&args).into_iter().chain([model]).collect();
+    match action {
+        Action::Solid => io::check_output(output, &inputs)?,
+        Action::Model => io::guard::file_output(output, &inputs, &[io::guided_model::EXTENSION], "a guided model")?,
+        Action::Cut(..) | Action::View(_) => io::guard::png_output(output, &inputs)?,
+    }
+    synthesize(&args, action)
 }
 
 /// Say what was written, how long it took and how much of the whole solid it synthesized.
@@ -324,13 +450,7 @@ fn report(args: &GuidedArgs, g: &Guide, domain: &Domain, started: Instant, ready
 
 /// `guided` with the spec's `[[region]]` entries: each depth range synthesized from its
 /// own library exemplar (built first when it is not) and blended across the band.
-fn by_regions(
-    args: &GuidedArgs,
-    g: &Guide,
-    domain: &Domain,
-    cut: Option<(Vec3, Vec3)>,
-    started: Instant,
-) -> Result<()> {
+fn by_regions(args: &GuidedArgs, g: &Guide, domain: &Domain, action: Action, started: Instant) -> Result<()> {
     let given = [
         ("--exemplar", args.exemplar.is_some()),
         ("--solid", args.solid.is_some()),
@@ -378,40 +498,56 @@ fn by_regions(
     let ranges: Vec<[f32; 2]> = spec.regions.iter().map(|r| r.depth).collect();
     let regions = Regions::new(&ranges, spec.region_band);
     let weight = |k: usize, v: [usize; 3]| regions.weight(k, solid::grid_at(&depth, v));
-    write_blend(args, g, domain, cut, &parts, &weight, started)?;
+    write_blend(args, g, domain, action, &parts, &weight, started)?;
     for (region, name) in spec.regions.iter().zip(&names) {
         tell!("  depth {} to {}: {name}", region.depth[0], region.depth[1]);
     }
     Ok(())
 }
 
-/// Synthesize blended parts ([`solid::cut_blend`]): the cut as a PNG, or the whole solid
-/// with the model's coverage as alpha; then say what was done.
+/// Do `action` with blended parts ([`solid::cut_blend`]): the cut or the view as a PNG,
+/// the whole solid with the model's coverage as alpha, or the model file; then say what
+/// was done.
 fn write_blend(
     args: &GuidedArgs,
     g: &Guide,
     domain: &Domain,
-    cut: Option<(Vec3, Vec3)>,
+    action: Action,
     parts: &[Setup],
     weight: &solid::Weight,
     started: Instant,
 ) -> Result<()> {
+    if let Action::Model = action {
+        io::guided_model::write(&args.output, &model_of(args))?;
+        tell!(
+            "wrote {}: a guided model ({}x{}x{} grid); `solidtex view`, `cut` and `bake` synthesize what they show from it",
+            args.output.display(),
+            domain.dims[0],
+            domain.dims[1],
+            domain.dims[2]
+        );
+        return Ok(());
+    }
     for setup in parts {
-        solid::check_memory(setup, cut.is_none(), args.res, io::budget_from_env()?)?;
+        solid::check_memory(setup, matches!(action, Action::Solid), args.res, io::budget_from_env()?)?;
     }
     let ready = started.elapsed().as_secs_f64();
     let bar = super::fill::Bar::new();
-    let outcome = match cut {
-        Some((point, normal)) => {
+    let outcome = match action {
+        Action::Cut(point, normal) => {
             let view = View::framing(g.surface.bounds(), point, normal, args.size)?;
             solid::cut_blend(parts, weight, domain, &g.surface, &view, &bar)
                 .and_then(|(picture, counts)| io::write_image(&args.output, &picture).map(|_| counts))
         }
-        None => crate::volume::check_size(domain.dims, 4, io::budget_from_env()?).and_then(|_| {
-            let alpha = coverage(&g.surface, domain);
-            let (volume, counts) = solid::solid_blend(parts, weight, &alpha, &bar)?;
-            io::write_volume(&args.output, &volume).map(|_| counts)
-        }),
+        Action::View(view) => solid::view_blend(parts, weight, domain, &g.surface, view, &bar)
+            .and_then(|(picture, counts)| io::write_rgb8(&args.output, &picture).map(|_| counts)),
+        Action::Solid | Action::Model => {
+            crate::volume::check_size(domain.dims, 4, io::budget_from_env()?).and_then(|_| {
+                let alpha = coverage(&g.surface, domain);
+                let (volume, counts) = solid::solid_blend(parts, weight, &alpha, &bar)?;
+                io::write_volume(&args.output, &volume).map(|_| counts)
+            })
+        }
     };
     bar.0.finish_and_clear();
     let [voxels, corrections] = outcome?;
@@ -426,7 +562,7 @@ const SCALE_BAND: f32 = 0.25;
 /// `guided --exemplar` with the spec's `[[scale_at]]` points: the exemplars synthesized at
 /// half-octave steps of their size (shrunk or enlarged, each plain photo's solid cube made
 /// at that size) and each voxel blending the two steps nearest its scale.
-fn by_scales(args: &GuidedArgs, g: &Guide, domain: &Domain, cut: Option<(Vec3, Vec3)>, started: Instant) -> Result<()> {
+fn by_scales(args: &GuidedArgs, g: &Guide, domain: &Domain, action: Action, started: Instant) -> Result<()> {
     let path = match (&args.exemplar, &args.solid, args.layered) {
         (Some(path), None, false) => path,
         _ => {
@@ -460,7 +596,7 @@ fn by_scales(args: &GuidedArgs, g: &Guide, domain: &Domain, cut: Option<(Vec3, V
     let borders = steps.windows(2).map(|w| (w[0] + w[1]) / 2.0).collect();
     let blend = Regions::with_borders(borders, SCALE_BAND);
     let weight = |k: usize, v: [usize; 3]| blend.weight(k, solid::grid_at(&scale, v));
-    write_blend(args, g, domain, cut, &parts, &weight, started)?;
+    write_blend(args, g, domain, action, &parts, &weight, started)?;
     let sizes: Vec<String> = steps.iter().map(|s| format!("{:.2}", s.exp2())).collect();
     tell!("  the exemplar synthesized with pixels {} voxels wide, blended by the spec's scale", sizes.join(", "));
     Ok(())

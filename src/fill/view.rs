@@ -346,6 +346,39 @@ pub fn surfaces_with(
     Ok((frame.shade_with_skin(models, &hits, skin), all.len()))
 }
 
+/// A closed mesh seen as [`surfaces`] sees a model's input surface, each visible point
+/// coloured by `colours`, which is given every visible point at once (in pixel order) so
+/// that what the colours need can be made together: the picture, lit as [`surfaces`]
+/// lights a model.
+pub fn mesh_picture(
+    mesh: &Mesh,
+    View { camera, size, shading }: View,
+    colours: impl FnOnce(&[Vec3]) -> Result<Vec<[f32; 3]>>,
+) -> Result<Rgb8> {
+    let frame = Frame::around(mesh.vertices.iter().copied(), camera, size);
+    let faces = faces_of(mesh);
+    let normals = corner_normals(&faces, &corner_fans(&faces, shading));
+    let facets: Vec<Facet> = faces
+        .iter()
+        .zip(normals)
+        .map(|(f, normals)| {
+            let p = f.corners;
+            Facet { model: 0, triangle: f.triangle, ids: f.ids, shown: p, sampled: p, normals }
+        })
+        .collect();
+    let mut hits = vec![None; size * size];
+    draw_facets(&mut hits, &facets, &frame, |_| true);
+    let points: Vec<Vec3> = hits.iter().flatten().map(|h| h.point).collect();
+    let coloured = colours(&points)?;
+    let light = frame.light();
+    let mut out = Rgb8::new(size, size, BACKGROUND);
+    for ((i, h), c) in hits.iter().enumerate().filter_map(|(i, h)| h.as_ref().map(|h| (i, h))).zip(coloured) {
+        let lit = 0.35 + 0.65 * h.normal.dot(light).max(0.0);
+        out.put(i % size, i / size, c.map(|v| to_u8(v * lit)));
+    }
+    Ok(out)
+}
+
 /// A skin (a mesh with an RGB colour per vertex, see [`crate::surface`]) seen from
 /// `camera` (yaw, pitch degrees), its colours blended across each triangle, smooth-shaded
 /// by its vertex normals and lit as [`surfaces`] lights a model.
@@ -494,7 +527,11 @@ pub(super) struct Face {
 
 /// The triangles of the model's input surface as faces.
 pub(super) fn surface_faces(model: &LstModel) -> Vec<Face> {
-    let surface = &model.surface;
+    faces_of(&model.surface)
+}
+
+/// The triangles of a mesh as faces.
+fn faces_of(surface: &Mesh) -> Vec<Face> {
     (surface.triangles.iter().enumerate())
         .map(|(i, &ids)| {
             let corners = ids.map(|v| surface.vertices[v as usize]);

@@ -245,6 +245,30 @@ pub fn solid_blend(
     Ok((Volume::from_data(dims, RGBA.to_vec(), data)?, counts))
 }
 
+/// The model's input surface seen from `view`, textured by blended parts ([`cut_blend`]):
+/// each part synthesized over only the voxels under visible points (and what their
+/// neighbourhoods need). Also the runs' voxels and corrections.
+pub fn view_blend(
+    parts: &[Setup],
+    weight: &Weight,
+    domain: &Domain,
+    surface: &Mesh,
+    view: crate::fill::view::View,
+    progress: &dyn Progress,
+) -> Result<(crate::render::Rgb8, [usize; 2])> {
+    let mut counts = [0, 0];
+    let picture = crate::fill::view::mesh_picture(surface, view, |points| {
+        let mut request = Mask::empty(domain.dims);
+        for p in points {
+            request.insert(domain.voxel_of(*p));
+        }
+        let (runs, made) = part_runs(parts, weight, &request, progress)?;
+        counts = made;
+        Ok(points.iter().map(|p| blended(parts, &runs, weight, domain.voxel_of(*p))).collect())
+    })?;
+    Ok((picture, counts))
+}
+
 const RGBA: [Channel; 4] = [Channel::R, Channel::G, Channel::B, Channel::A];
 
 /// Each part's synthesis over the voxels of `request` it weighs in, and the runs' voxels

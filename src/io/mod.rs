@@ -23,6 +23,7 @@ pub mod flipbook;
 pub mod gltf;
 pub mod guard;
 pub mod guided_cache;
+pub mod guided_model;
 mod kopf_vol;
 pub mod ledger;
 pub mod lst_file;

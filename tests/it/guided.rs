@@ -509,3 +509,71 @@ fn a_scale_field_halves_the_texture_where_it_asks_for_half() {
     crate::support::assert_usage(&run, &["scaled.toml", "[[scale_at]]", "--solid"]);
     assert!(!d.join("refused.png").exists());
 }
+
+/// `guided -o X.guided` writes the recipe, not voxels: `cut X.guided` equals `guided --cut`
+/// of the same plane byte for byte, `bake X.guided` equals the whole solid `guided` writes,
+/// and `view X.guided` shows the fruit's surface in the photo's greys (shaded), the same on
+/// one thread and two, synthesizing a small share of the solid. `render` and view options
+/// for filled models are refused by name, as is a guided model combined with another.
+#[test]
+fn a_guided_model_is_viewed_cut_and_baked_on_demand() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (fruit, spec) = crate::fill::kiwi_fruit(d);
+    let ex = gravel();
+    let model = at(d, "fruit.guided");
+    let base =
+        ["guided", &fruit, "--spec", &spec, "--exemplar", &ex, "--max-exemplar", "64", "--planes", "--res", "96"];
+    let run = solidtex(&[&base[..], &["-o", &model]].concat());
+    assert!(run.status.success(), "{}", stderr(&run));
+    let text = std::fs::read_to_string(&model).unwrap();
+    assert!(text.contains("res = 96") && text.contains("mesh = \"fruit.obj\""), "{text}");
+
+    let (direct, from_model) = (at(d, "direct.png"), at(d, "model.png"));
+    let run = solidtex(&[&base[..], &["--cut", "0,0,0,0,1,0", "--size", "64", "-o", &direct]].concat());
+    assert!(run.status.success(), "{}", stderr(&run));
+    let run = solidtex(&["cut", &model, "--plane", "0,0,0,0,1,0", "--size", "64", "-o", &from_model]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    assert_eq!(std::fs::read(&direct).unwrap(), std::fs::read(&from_model).unwrap(), "the same cut");
+    let (solid, baked) = (at(d, "solid.exr"), at(d, "baked.exr"));
+    assert!(solidtex(&[&base[..], &["-o", &solid]].concat()).status.success());
+    let run = solidtex(&["bake", &model, "-o", &baked]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let read = |p: &str| solidtex::io::read_volume(std::path::Path::new(p), 1 << 30).unwrap();
+    assert_eq!(read(&solid).data(), read(&baked).data(), "the same solid");
+
+    let views: Vec<Vec<u8>> = ["1", "2"]
+        .iter()
+        .map(|threads| {
+            let png = at(d, &format!("view{threads}.png"));
+            let run = crate::support::solidtex_env(
+                &["view", &model, "--size", "128", "-o", &png],
+                &[("RAYON_NUM_THREADS", threads)],
+            );
+            assert!(run.status.success(), "{}", stderr(&run));
+            let said = stderr(&run);
+            let share: f64 =
+                said.split(" a whole solid needs (").nth(1).and_then(|t| t.split(' ').next()).unwrap().parse().unwrap();
+            assert!(share < 50.0, "{said}");
+            std::fs::read(&png).unwrap()
+        })
+        .collect();
+    assert_eq!(views[0], views[1], "the same view on one thread and two");
+    let img = image::load_from_memory(&views[0]).unwrap().to_rgb8();
+    let background = *img.get_pixel(0, 0);
+    let surface: Vec<&image::Rgb<u8>> = img.pixels().filter(|p| **p != background).collect();
+    assert!(surface.len() > 128 * 128 / 4, "{} pixels show the fruit", surface.len());
+    let grey = surface.iter().filter(|p| p.0[0] == p.0[1] && p.0[1] == p.0[2]).count();
+    assert_eq!(grey, surface.len(), "the grey photo's colours, lit");
+    let distinct: std::collections::HashSet<u8> = surface.iter().map(|p| p.0[0]).collect();
+    assert!(distinct.len() > 40, "textured, not flat: {} greys", distinct.len());
+
+    let refused = at(d, "refused.png");
+    crate::support::assert_usage(&solidtex(&["render", &model, "-o", &refused]), &["fruit.guided", "bake"]);
+    let run = solidtex(&["view", &model, "--displacement", "0.1", "-o", &refused]);
+    crate::support::assert_usage(&run, &["--displacement", "fruit.guided"]);
+    crate::support::assert_usage(&solidtex(&["view", &model, &model, "-o", &refused]), &["fruit.guided", "alone"]);
+    let run = solidtex(&[&base[..], &["--cut", "0,0,0,0,1,0", "-o", &at(d, "cut.guided")]].concat());
+    crate::support::assert_usage(&run, &["cut.guided", "--cut writes a PNG"]);
+    assert!(!d.join("refused.png").exists() && !d.join("cut.guided").exists());
+}
