@@ -1,13 +1,12 @@
 //! The `solidtex` binary: parse arguments, run, map errors to exit codes.
 
-use clap::Parser;
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
     use solidtex::cli::Command;
     use std::io::Write;
     use std::path::Path;
-    let cli = solidtex::cli::Cli::parse_from(arguments());
+    let cli = solidtex::cli::Cli::parse_numbers_from(arguments());
     #[cfg(unix)]
     stop_cleanly_on_signals();
     // Two front ends: the terminal UI (no command, or `tui`) and every other command.

@@ -33,7 +33,7 @@ pub fn convert(input: &Path, output: &Path, dds_format: Option<&str>) -> Result<
     let volume = load(input)?;
     match format {
         Some(format) => io::dds::write(output, &volume, format)?,
-        None => io::write_volume(output, &volume)?,
+        None => super::write_volume(output, &volume)?,
     }
     tell!("wrote {}", output.display());
     Ok(())
@@ -149,7 +149,7 @@ pub fn make(recipe: &str, size: &str, seed: u64, output: &Path) -> Result<()> {
     let volume = procedural::generate_with(recipe, dims, seed, &bar);
     bar.0.finish_and_clear();
     let volume = volume?;
-    io::write_volume(output, &volume)?;
+    super::write_volume(output, &volume)?;
     tell!("wrote {}", output.display());
     Ok(())
 }

@@ -830,7 +830,7 @@ pub fn run_bake(args: &BakeArgs) -> Result<()> {
     // volume into its own layout
     drop(carried);
     drop((textures, loaded));
-    io::write_volume(&args.output, &volume)?;
+    super::write_volume(&args.output, &volume)?;
     let [x, y, z] = volume.dims();
     let names: Vec<&str> = volume.channels().iter().map(Channel::name).collect();
     tell!(

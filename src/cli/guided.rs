@@ -97,7 +97,8 @@ pub fn run(args: &FieldArgs) -> Result<()> {
     let bounds = g.surface.bounds();
     let (point, normal) = plane.unwrap_or(((bounds.0 + bounds.1) / 2.0, Vec3::Z));
     let view = View::framing(bounds, point, normal, args.size)?;
-    io::write_rgb8(&args.output, &streamlines(&g.tets, &g.field, &view))?;
+    let inside = crate::fill::render::inside_surface(&g.surface, &view);
+    io::write_rgb8(&args.output, &streamlines(&g.tets, &g.field, &view, &inside))?;
     tell!(
         "wrote {} ({} tets, {} sketched frames; the field solved in {:.0} ms)",
         args.output.display(),
@@ -545,7 +546,7 @@ fn write_blend(
             crate::volume::check_size(domain.dims, 4, io::budget_from_env()?).and_then(|_| {
                 let alpha = coverage(&g.surface, domain);
                 let (volume, counts) = solid::solid_blend(parts, weight, &alpha, &bar)?;
-                io::write_volume(&args.output, &volume).map(|_| counts)
+                super::write_volume(&args.output, &volume).map(|_| counts)
             })
         }
     };
@@ -979,7 +980,7 @@ fn write_solid(
     crate::volume::check_size(domain.dims, setup.exemplars.channels() + 1, io::budget_from_env()?)?;
     let out = synth::run(setup, &synth::plan(setup, &Mask::full(domain.dims), &[]), &[], bar)?;
     let alpha = coverage(&g.surface, domain);
-    io::write_volume(&args.output, &solid::solid_volume(setup, &out, &alpha)?)?;
+    super::write_volume(&args.output, &solid::solid_volume(setup, &out, &alpha)?)?;
     Ok((out.voxels, out.corrections, whole(setup)))
 }
 

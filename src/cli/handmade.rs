@@ -104,7 +104,7 @@ pub fn run_sweep(args: &SweepArgs) -> Result<()> {
 }
 
 fn write(path: &Path, volume: &Volume) -> Result<()> {
-    io::write_volume(path, volume)?;
+    super::write_volume(path, volume)?;
     let [x, y, z] = volume.dims();
     tell!("wrote {} ({x}x{y}x{z})", path.display());
     Ok(())

@@ -110,7 +110,7 @@ fn report(path: &Path, m: &MaskMeasures) {
 
 fn write_one(output: &Path, volume: Volume) -> Result<()> {
     io::Format::of(output)?;
-    io::write_volume(output, &volume)?;
+    super::write_volume(output, &volume)?;
     report(output, &mask::measure(&volume));
     Ok(())
 }
@@ -120,7 +120,7 @@ fn write_layers(output: &Path, size: usize, falloff: f32, seed: u64, depth: Axis
         Layer::ALL.iter().map(|l| Ok((*l, mask::layered(size, falloff, seed, *l, depth)?))).collect::<Result<_>>()?;
     io::write_folder(output, |dir| {
         for (layer, volume) in &layers {
-            io::write_volume(&dir.join(format!("{}.exr", layer.name())), volume)?;
+            super::write_volume(&dir.join(format!("{}.exr", layer.name())), volume)?;
         }
         Ok(())
     })?;

@@ -13,6 +13,16 @@ macro_rules! tell {
     ($($arg:tt)*) => { $crate::cli::write_err(&format!($($arg)*)) };
 }
 
+/// Write a volume in the format its path names, warning when the format drops its
+/// channel names ([`crate::io::channels_lost`]).
+fn write_volume(path: &std::path::Path, volume: &crate::volume::Volume) -> crate::error::Result<()> {
+    crate::io::write_volume(path, volume)?;
+    if let Some(note) = crate::io::channels_lost(path, volume) {
+        tell!("warning: {note}");
+    }
+    Ok(())
+}
+
 mod bench;
 mod bench_fill;
 mod bench_guided;
@@ -42,6 +52,53 @@ pub struct Cli {
     /// What to do (none: open the terminal UI on exemplars/library.toml).
     #[command(subcommand)]
     pub command: Option<Command>,
+}
+
+impl Cli {
+    /// Parse `args` as [`clap::Parser::parse_from`] does (exiting with clap's message and
+    /// code 2 on a usage error), except that a negative number given to an option is its
+    /// value: `--size -5` is then refused as a value out of the option's kind or range,
+    /// not as an unknown flag.
+    pub fn parse_numbers_from<I, T>(args: I) -> Cli
+    where
+        I: IntoIterator<Item = T>,
+        T: Into<std::ffi::OsString> + Clone,
+    {
+        use clap::{CommandFactory, FromArgMatches};
+        let command = with_negative_numbers(Cli::command());
+        let matches = command.clone().get_matches_from(args);
+        Cli::from_arg_matches(&matches).unwrap_or_else(|e| e.format(&mut command.clone()).exit())
+    }
+}
+
+/// `command` and its subcommands with every option taking a value accepting negative
+/// numbers, and whole-number options saying what they take.
+fn with_negative_numbers(command: clap::Command) -> clap::Command {
+    command
+        .mut_args(|arg| {
+            let arg = match arg.get_action().takes_values() && !arg.is_positional() {
+                true => arg.allow_negative_numbers(true),
+                false => arg,
+            };
+            let kind = arg.get_value_parser().type_id();
+            if kind == std::any::TypeId::of::<usize>() {
+                arg.value_parser(whole::<usize>)
+            } else if kind == std::any::TypeId::of::<u64>() {
+                arg.value_parser(whole::<u64>)
+            } else {
+                arg
+            }
+        })
+        .mut_subcommands(with_negative_numbers)
+}
+
+/// A whole number 0 or more, refused with what was wrong and what is allowed.
+fn whole<T: std::str::FromStr>(text: &str) -> std::result::Result<T, String> {
+    text.trim().parse().map_err(|_| match text.trim().parse::<f64>() {
+        Ok(v) if v < 0.0 => format!("{text} is negative; give a whole number, 0 or more"),
+        Ok(_) => format!("{text} is not a whole number; give one without a fraction (0 or more)"),
+        Err(_) => format!("{text} is not a number; give a whole number, 0 or more"),
+    })
 }
 
 /// The subcommands.

@@ -317,7 +317,7 @@ pub fn noise(args: &NoiseArgs) -> Result<()> {
     if let Some(side) = args.others.max_exemplar {
         volume.meta.set(super::synth::MAX_EXEMPLAR_KEY, side.to_string());
     }
-    io::write_volume(&args.output, &volume)?;
+    super::write_volume(&args.output, &volume)?;
     tell!("wrote {} (random-phase noise with the exemplars' spectra and colours)", args.output.display());
     Ok(())
 }

@@ -239,7 +239,7 @@ pub fn run(args: &SynthArgs) -> Result<()> {
         // `quality` shrinks the exemplars alike when it is not told otherwise
         volume.meta.set(MAX_EXEMPLAR_KEY, side.to_string());
     }
-    io::write_volume(&args.output, &volume)?;
+    super::write_volume(&args.output, &volume)?;
     let [x, y, z] = volume.dims();
     tell!("wrote {} ({x}x{y}x{z}) in {:.2} s", args.output.display(), started.elapsed().as_secs_f64());
     Ok(())

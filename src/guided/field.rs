@@ -506,8 +506,9 @@ const LIC_STEPS: usize = 14;
 
 /// The field on a cut: line integral convolution of white noise along each pixel's frame x
 /// axis projected onto the cut (streaks follow the strokes' direction), coloured by that
-/// axis in model space (|x|, |y|, |z| as red, green, blue); black outside the mesh.
-pub fn streamlines(mesh: &TetMesh, field: &FrameField, view: &View) -> Rgb8 {
+/// axis in model space (|x|, |y|, |z| as red, green, blue); black outside the model
+/// (`inside`, per pixel: the model's input surface cut by the plane).
+pub fn streamlines(mesh: &TetMesh, field: &FrameField, view: &View, inside: &[bool]) -> Rgb8 {
     let (w, h) = (view.width, view.height);
     let parts: Vec<Vec<Option<f32>>> =
         (0..4).map(|k| field_cut(mesh, &field.components.iter().map(|c| c[k]).collect::<Vec<f32>>(), view)).collect();
@@ -524,7 +525,7 @@ pub fn streamlines(mesh: &TetMesh, field: &FrameField, view: &View) -> Rgb8 {
     let pixels: Vec<[u8; 3]> = (0..w * h)
         .into_par_iter()
         .map(|i| {
-            let Some(axis) = axes[i] else { return [0, 0, 0] };
+            let Some(axis) = axes[i].filter(|_| inside[i]) else { return [0, 0, 0] };
             let streak = integrate(&flow, &noise, (w, h), i);
             let tone = 0.35 + 0.65 * streak;
             axis.abs().to_array().map(|c| to_u8((0.25 + 0.75 * c) * tone))
@@ -701,11 +702,14 @@ mod tests {
         let frames = vec![(Vec3::splat(0.5), frame(Vec3::X, Vec3::Z))];
         let field = solve(&mesh, &frames).unwrap();
         let view = View::framing((Vec3::ZERO, Vec3::ONE), Vec3::splat(0.5), Vec3::Z, 96).unwrap();
-        let picture = streamlines(&mesh, &field, &view);
+        // the model's outline: a disc of 40 pixels' radius inside the cube's square
+        let inside: Vec<bool> =
+            (0..96 * 96).map(|i| ((i % 96) as f32 - 47.5).hypot((i / 96) as f32 - 47.5) < 40.0).collect();
+        let picture = streamlines(&mesh, &field, &view, &inside);
         // streaks along x: neighbours along a row differ less than along a column
         let (mut along, mut across) = (0.0, 0.0);
-        for y in 20..76 {
-            for x in 20..76 {
+        for y in 24..72 {
+            for x in 24..72 {
                 let v = |x: usize, y: usize| picture.at(x, y)[0] as f32;
                 along += (v(x + 1, y) - v(x, y)).abs();
                 across += (v(x, y + 1) - v(x, y)).abs();
@@ -713,6 +717,8 @@ mod tests {
         }
         assert!(along * 2.0 < across, "along {along} across {across}");
         assert_eq!(picture.at(0, 0), [0, 0, 0], "outside the mesh is black");
+        assert_eq!(picture.at(90, 90), [0, 0, 0], "inside the tets but outside the outline is black");
+        assert_ne!(picture.at(80, 48), [0, 0, 0], "inside the outline shows the field");
         assert!(picture.at(48, 48)[0] > picture.at(48, 48)[1], "x axis shows red");
     }
 }

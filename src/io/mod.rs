@@ -215,6 +215,24 @@ pub fn check_folder_output(output: &Path, inputs: &[&Path]) -> Result<()> {
     Ok(())
 }
 
+/// What the format of `path` does not keep of `volume`'s channel names, as a note: a
+/// `.vol` holds none, so its channels read back by position (grey, grey and alpha, RGB,
+/// RGBA, extras); `None` when the names come back as they are.
+pub fn channels_lost(path: &Path, volume: &Volume) -> Option<String> {
+    if Format::of(path).ok()? != Format::Vol {
+        return None;
+    }
+    let back = nrrd::default_channels(volume.channel_count());
+    (back != volume.channels()).then(|| {
+        format!(
+            "{}: a .vol keeps no channel names, so its channels {} read back as {} (write .exr or .nrrd to keep them)",
+            path.display(),
+            crate::volume::channel_names(volume.channels()),
+            crate::volume::channel_names(&back)
+        )
+    })
+}
+
 /// Write a volume in the format its path names (atomically).
 pub fn write_volume(path: &Path, volume: &Volume) -> Result<()> {
     match Format::of(path)? {

@@ -69,11 +69,11 @@ pub fn picture(
 ) -> Result<Picture> {
     let Guide { surface, field, depths } = field_of(filled, spec)?;
     let mesh = &filled.model.mesh;
-    let ones = vec![1.0; mesh.vertices.len()];
-    let inside: Vec<bool> = crate::fill::render::field_cut(mesh, &ones, view).iter().map(Option::is_some).collect();
+    // the outline is the model's input surface cut by the plane, as the fill's cut shows it
+    let inside = crate::fill::render::inside_surface(&filled.model.surface, view);
     let pixels = match overlay {
         Overlay::Field => {
-            let lines = streamlines(mesh, &field, view);
+            let lines = streamlines(mesh, &field, view, &inside);
             lines.data.chunks_exact(3).zip(&inside).map(|(p, i)| i.then(|| [p[0], p[1], p[2]])).collect()
         }
         Overlay::Guided if !spec.regions.is_empty() => {

@@ -286,3 +286,22 @@ fn a_flipbook_and_its_sidecar_name_the_layout() {
     assert_eq!(few.status.code(), Some(2), "{}", stderr(&few));
     assert!(stderr(&few).contains("fewer than the 8 slices"));
 }
+
+/// `.vol` keeps no channel names: converting a volume whose channels would read back as
+/// others (R,G,B,Depth as R,G,B,A) warns, naming both; one that reads back the same
+/// does not.
+#[test]
+fn a_vol_that_would_rename_channels_is_said() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let layered = random_volume([8, 8, 8], vec![Channel::R, Channel::G, Channel::B, Channel::Depth], 5);
+    write_volume(&d.join("layered.exr"), &layered).unwrap();
+    write_volume(&d.join("plain.exr"), &random_volume([8, 8, 8], Channel::rgb(), 6)).unwrap();
+    let at = |name: &str| d.join(name).to_string_lossy().into_owned();
+    let run = crate::support::solidtex(&["convert", &at("layered.exr"), &at("layered.vol")]);
+    assert!(run.status.success());
+    let said = crate::support::stderr(&run);
+    assert!(said.contains("layered.vol") && said.contains("R,G,B,Depth") && said.contains("R,G,B,A"), "{said}");
+    let run = crate::support::solidtex(&["convert", &at("plain.exr"), &at("plain.vol")]);
+    assert!(run.status.success() && !crate::support::stderr(&run).contains("warning"));
+}
