@@ -483,11 +483,16 @@ fn write_report(output: &Path, ledger: &Ledger, rows: &[Row]) -> Result<()> {
             Row::NotBuilt(name) => none(name, "not built".into()),
         };
         let (sheet, view) = (files::sheet(&name), files::view(&name));
-        let has_view = output.join(&view).is_file();
+        // a failed, cancelled or unbuilt entry shows no picture: one on disk is of an
+        // older build, not of what this report describes
+        let current = matches!(row, Row::Now(Outcome::Built(_) | Outcome::Cached(_)) | Row::Earlier(_));
+        let has_sheet = current && output.join(&sheet).is_file();
+        let has_view = current && output.join(&view).is_file();
         let warned: String = warnings.iter().map(|w| format!("; warning: {w}")).collect();
         md += &format!(
-            "| {name} | {size} | {declared} | {classified} | {} | ![{name}]({sheet}) | {} |\n",
+            "| {name} | {size} | {declared} | {classified} | {} | {} | {} |\n",
             format!("{build}{warned}").replace('|', "\\|"),
+            if has_sheet { format!("![{name}]({sheet})") } else { "-".into() },
             if has_view { format!("[3D view]({view})") } else { "-".into() }
         );
         let escaped = |t: &str| t.replace('&', "&amp;").replace('<', "&lt;");
@@ -497,7 +502,7 @@ fn write_report(output: &Path, ledger: &Ledger, rows: &[Row]) -> Result<()> {
         }
         html += &format!(
             "<tr><td>{name}<td>{size}<td>{declared}<td>{classified}<td>{cell}<td>{}{}\n",
-            if output.join(&sheet).is_file() { format!("<img src=\"{sheet}\" alt=\"{name}\">") } else { "-".into() },
+            if has_sheet { format!("<img src=\"{sheet}\" alt=\"{name}\">") } else { "-".into() },
             if has_view { viewer_cell(&view) } else { String::new() }
         );
     }

@@ -428,3 +428,23 @@ fn a_directional_photo_is_warned_about_in_builds_and_previews() {
     let (_, warnings) = solidtex::library::recipe::preview(&manifest, "grain", &text).unwrap();
     assert!(warnings.iter().any(|w| w.contains("features run one way")), "{warnings:?}");
 }
+
+/// A report shows no picture for an entry that failed: the sheet on disk is of an earlier
+/// build, not of what the row describes (its section image was removed since).
+#[test]
+fn a_failed_entry_shows_no_earlier_picture_in_the_report() {
+    let dir = tempfile::tempdir().unwrap();
+    let manifest = library(dir.path());
+    let out = at(dir.path(), "out");
+    assert!(solidtex(&["build", &manifest, "-o", &out]).status.success());
+    assert!(dir.path().join("out/c.sheet.png").is_file());
+    std::fs::remove_file(dir.path().join("section.png")).unwrap();
+    let failed = solidtex(&["build", &manifest, "-o", &out]);
+    assert!(!failed.status.success(), "{}", stderr(&failed));
+    let md = std::fs::read_to_string(dir.path().join("out/report.md")).unwrap();
+    let row = md.lines().find(|l| l.starts_with("| c |")).unwrap_or_default();
+    assert!(row.contains("failed") && !row.contains("c.sheet.png"), "{md}");
+    assert!(md.lines().any(|l| l.starts_with("| a |") && l.contains("![a](a.sheet.png)")), "{md}");
+    let html = std::fs::read_to_string(dir.path().join("out/report.html")).unwrap();
+    assert!(!html.contains("src=\"c.sheet.png\"") && html.contains("src=\"a.sheet.png\""), "{html}");
+}
