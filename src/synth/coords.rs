@@ -141,12 +141,13 @@ impl Options {
         if level == 0 { self.coarse_n } else { self.n }
     }
 
-    /// How far (in voxels, per axis) a pass at `level` reads from the voxel it corrects: a
-    /// neighbourhood offset (up to n/2 along two orthonormal axes: at most n/2·√2 along any
-    /// world axis) rounded to the nearest voxel, and the 3 x 3 candidate sources within it.
-    pub fn reach_at(&self, level: usize) -> usize {
-        let half = (self.n_at(level) / 2) as f32;
-        ((half * std::f32::consts::SQRT_2 + 0.5).floor() as usize).max(1)
+    /// How far (in voxels) from the centre of the voxel it corrects a pass at `level`
+    /// samples: a neighbourhood offset, up to n/2 along two orthonormal axes (n/2·√2), with
+    /// the 3 x 3 candidate sources within it; a sample reads the voxel it falls in
+    /// ([`Mask::grown_round`]). A hair more, so that rounding in the frames' axes never
+    /// reaches a voxel the plan left out.
+    pub fn footprint_at(&self, level: usize) -> f32 {
+        (self.n_at(level) / 2) as f32 * std::f32::consts::SQRT_2 * (1.0 + 1e-4)
     }
 }
 
@@ -505,14 +506,14 @@ pub fn plan(setup: &Setup, request: &Mask, kept: &Kept) -> Vec<Vec<Mask>> {
     let mut out: Vec<Vec<Mask>> = vec![Vec::new(); levels];
     let mut last = request.clone();
     for level in (0..levels).rev() {
-        let (passes, reach) = (setup.options.passes_at(level), setup.options.reach_at(level));
+        let (passes, reach) = (setup.options.passes_at(level), setup.options.footprint_at(level));
         let needed = match kept.get(level).copied().flatten() {
             Some(k) => last.without(k.mask()),
             None => last,
         };
         let mut versions = vec![needed];
         for _ in 0..passes {
-            let grown = versions[versions.len() - 1].grown(reach);
+            let grown = versions[versions.len() - 1].grown_round(reach);
             versions.push(grown);
         }
         versions.reverse();
@@ -1242,14 +1243,30 @@ mod tests {
         assert_eq!(weighed(&off), vec![false, false]);
     }
 
+    /// Every voxel a turned neighbourhood samples (offsets up to n/2 along two orthonormal
+    /// axes, read at the nearest voxel) lies in the footprint the plan grows by.
     #[test]
-    fn the_reach_covers_a_turned_neighbourhood() {
-        let o = Options { n: 5, ..Options::default() };
-        // offsets up to 2 along two unit axes turned 45°: 2.83 voxels, to the nearest: 3
-        assert_eq!(o.reach_at(1), 3);
-        assert_eq!(Options { n: 3, ..o }.reach_at(1), 1);
-        assert_eq!(Options { n: 7, ..o }.reach_at(1), 4);
-        assert_eq!(Options { coarse_n: 9, ..o }.reach_at(0), 6);
+    fn the_footprint_covers_a_turned_neighbourhood() {
+        for n in [3, 5, 7, 9] {
+            let o = Options { n, ..Options::default() };
+            let dims = [41; 3];
+            let mut one = Mask::empty(dims);
+            one.insert([20; 3]);
+            let grown = one.grown_round(o.footprint_at(1));
+            let h = (n / 2) as i64;
+            for k in 0..2000u64 {
+                let r = |s: u64| crate::noise::unit(crate::noise::mix64(k * 7 + s)) * 2.0 - 1.0;
+                let turn = glam::Quat::from_euler(glam::EulerRot::XYZ, r(1) * 3.2, r(2) * 3.2, r(3) * 3.2);
+                let (u, w) = (turn * Vec3::X, turn * Vec3::Y);
+                let centre = Vec3::splat(20.0);
+                for dy in -h..=h {
+                    for dx in -h..=h {
+                        let v = nearest(centre + u * dx as f32 + w * dy as f32).map(|c| c as usize);
+                        assert!(grown.contains(v), "n {n}: offset {dx},{dy} along {u}, {w} reads {v:?}");
+                    }
+                }
+            }
+        }
     }
 
     /// A 32x32 exemplar of blobs, a unit cube whose frames turn 60° about x from one face

@@ -109,11 +109,25 @@ impl Mask {
         })
     }
 
-    /// The set grown by a cube of `reach` voxels each way (clipped to the grid): per axis,
-    /// each brick's rows widened by at most one brick's side at a time.
+    /// The set grown by a cube of `reach` voxels each way (clipped to the grid).
     pub fn grown(&self, reach: usize) -> Mask {
+        self.grown_box([reach; 3])
+    }
+
+    /// The set grown by every voxel a point within `radius` of a voxel's centre falls in:
+    /// the offsets whose voxel cube comes within `radius` of the centre (clipped to the
+    /// grid). A rounded cube: for a neighbourhood of 5 (radius 2√2) the 5³ cube and a 3 x 3
+    /// patch on each face, 179 offsets against the 343 of the 7³ cube that holds them.
+    pub fn grown_round(&self, radius: f32) -> Mask {
+        let grown = round_boxes(radius).into_iter().map(|b| self.grown_box(b));
+        grown.reduce(|a, b| a.union(&b)).unwrap_or_else(|| self.clone())
+    }
+
+    /// The set grown by `reach[a]` voxels each way along axis `a` (clipped to the grid):
+    /// per axis, each brick's rows widened by at most one brick's side at a time.
+    fn grown_box(&self, reach: [usize; 3]) -> Mask {
         let mut out = self.clone();
-        for axis in 0..3 {
+        for (axis, &reach) in reach.iter().enumerate() {
             let mut left = reach;
             while left > 0 {
                 let step = left.min(BRICK);
@@ -170,6 +184,18 @@ impl Mask {
         for (b, bits) in candidates.stored.iter().zip(grown) {
             if bits.iter().any(|r| *r != 0) {
                 out.store(*b, bits);
+            }
+        }
+        out
+    }
+
+    /// The voxels of the set or of `other` (a mask of the same grid).
+    pub fn union(&self, other: &Mask) -> Mask {
+        let mut out = self.clone();
+        for (b, bits) in other.bricks() {
+            match out.table[out.brick_index(b)] {
+                u32::MAX => _ = out.store(b, *bits),
+                s => out.bits[s as usize].iter_mut().zip(bits).for_each(|(row, t)| *row |= t),
             }
         }
         out
@@ -235,6 +261,21 @@ fn in_brick(b: [usize; 3], k: usize) -> [usize; 3] {
 
 /// The middle brick of `rows` (the bricks before, at and after it along `axis`) with every
 /// flag spread `reach` ≤ [`BRICK`] voxels each way along the axis.
+/// The largest voxel offsets (one octant, per axis) whose voxel cube comes within
+/// `radius` of the centre: the corners of the boxes whose union holds every such offset
+/// (the set is the same in every octant and shrinks as any coordinate grows).
+fn round_boxes(radius: f32) -> Vec<[usize; 3]> {
+    let most = (radius + 0.5).ceil() as usize;
+    let gap = |c: usize| (c as f32 - 0.5).max(0.0);
+    let within = |o: [usize; 3]| o.iter().map(|&c| gap(c) * gap(c)).sum::<f32>() <= radius * radius;
+    let all: Vec<[usize; 3]> = (0..=most)
+        .flat_map(|x| (0..=most).flat_map(move |y| (0..=most).map(move |z| [x, y, z])))
+        .filter(|o| within(*o))
+        .collect();
+    let covered = |o: &[usize; 3], by: &[usize; 3]| o != by && (0..3).all(|a| o[a] <= by[a]);
+    all.iter().filter(|o| !all.iter().any(|by| covered(o, by))).copied().collect()
+}
+
 fn widened(rows: [&Bits; 3], axis: usize, reach: usize) -> Bits {
     let mut out = [0u8; BRICK * BRICK];
     if axis == 0 {
@@ -430,6 +471,35 @@ mod tests {
         assert!(full.is_full() && !m.is_full());
         assert_eq!(full.voxels().count(), dims.iter().product::<usize>());
         assert!(full.grown(3).is_full());
+    }
+
+    /// Grown round by a radius, a voxel gives the voxels whose cubes come within the
+    /// radius of its centre: for 2√2 (a neighbourhood of 5) the 5³ cube and a 3 x 3 patch
+    /// on each face; the union of two masks holds what either holds.
+    #[test]
+    fn growing_round_gives_the_voxels_within_the_radius() {
+        let dims = [20, 19, 21];
+        let seeds = [[10, 9, 10], [1, 1, 18]];
+        let mut m = Mask::empty(dims);
+        seeds.iter().for_each(|v| m.insert(*v));
+        let radius = 2.0 * std::f32::consts::SQRT_2;
+        let g = m.grown_round(radius);
+        let gap = |d: usize| (d as f32 - 0.5).max(0.0);
+        for i in 0..dims.iter().product() {
+            let v = grid_voxel(dims, i);
+            let near =
+                seeds.iter().any(|s| (0..3).map(|a| gap(s[a].abs_diff(v[a])).powi(2)).sum::<f32>() <= radius * radius);
+            assert_eq!(g.contains(v), near, "voxel {v:?}");
+        }
+        let mut one = Mask::empty(dims);
+        one.insert(seeds[0]);
+        assert_eq!(one.grown_round(radius).count(), 125 + 6 * 9);
+        assert_eq!(round_boxes(radius).len(), 4);
+        let (mut a, mut b) = (Mask::empty(dims), Mask::empty(dims));
+        a.insert([0, 0, 0]);
+        b.insert([19, 18, 20]);
+        let both = a.union(&b);
+        assert!(both.contains([0, 0, 0]) && both.contains([19, 18, 20]) && both.count() == 2);
     }
 
     /// Parents halve each coordinate; a store reads back what it computed and clamps.
