@@ -171,7 +171,8 @@ pub enum DensityFrom {
 /// The arguments of `solidtex render`.
 #[derive(Debug, clap::Args)]
 pub struct RenderArgs {
-    /// One or more models (.lst), combined as in `cut`.
+    /// One or more models (.lst), combined as in `cut`. Or one guided model (.guided): its
+    /// whole solid is synthesized first.
     #[arg(required = true)]
     pub models: Vec<PathBuf>,
     /// Where the picture looks from.
@@ -452,6 +453,16 @@ impl Loaded {
     }
 }
 
+/// A guided model (`.guided`) as a loaded filled model: its whole solid synthesized, read
+/// through the field's tets (`render` of a guided model).
+fn guided_loaded(path: &Path) -> Result<Loaded> {
+    let filled = super::guided::filled_from_model(path)?;
+    let full = Volume::from_fn([2, 2, 2], vec![Channel::A], |_, _, _, o| o[0] = 1.0)?;
+    let textures = Textures::new(std::slice::from_ref(&filled.volume), std::slice::from_ref(&full));
+    let (volumes, files, masks) = (vec![filled.volume], vec![path.to_path_buf()], vec![full]);
+    Ok(Loaded { model: filled.model, textures, volumes, files, masks })
+}
+
 /// The guided model (`.guided`) among `models`, when one is given alone; a usage error
 /// when one comes with other models (a guided model combines with none).
 fn guided_model(models: &[PathBuf]) -> Result<Option<&Path>> {
@@ -720,14 +731,6 @@ fn render_settings(args: &RenderArgs) -> Result<translucent::Settings> {
 
 /// Run `solidtex render`.
 pub fn run_render(args: &RenderArgs) -> Result<()> {
-    if let Some(model) = guided_model(&args.models)? {
-        return Err(usage(Error::invalid(format!(
-            "{} is a guided model; render draws filled models (.lst). Bake it (`solidtex bake {}`) for a volume, or \
-             view and cut it",
-            model.display(),
-            model.display()
-        ))));
-    }
     let settings = render_settings(args).map_err(usage)?;
     picture_output(&args.output, &args.models, args.skin.as_deref())?;
     let (needed, budget) = (translucent::memory_needed(settings.size), io::budget_from_env()?);
@@ -740,7 +743,10 @@ pub fn run_render(args: &RenderArgs) -> Result<()> {
             budget >> 20
         )));
     }
-    let loaded = load_models(&args.models)?;
+    let loaded = match guided_model(&args.models)? {
+        Some(model) => vec![guided_loaded(model)?],
+        None => load_models(&args.models)?,
+    };
     let wanted = matches!(args.density, None | Some(DensityFrom::Alpha));
     let channel: std::result::Result<Vec<Textures>, &Path> =
         if wanted { loaded.iter().map(|l| l.channel(&render::density_channels())).collect() } else { Ok(Vec::new()) };

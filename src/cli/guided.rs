@@ -228,7 +228,7 @@ pub struct GuidedArgs {
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
     /// The cut's PNG, or the solid's volume (.exr, .vol, .nrrd, .dds, .vdb, ...), or a
-    /// guided model (.guided): the recipe, which `view`, `cut` and `bake` synthesize from.
+    /// guided model (.guided): the recipe, which `view`, `cut`, `bake` and `render` synthesize from.
     #[arg(short, long)]
     pub output: PathBuf,
 }
@@ -251,8 +251,19 @@ pub enum Action {
     Solid,
     /// The model's surface seen from a camera, as a PNG.
     View(crate::fill::view::View),
-    /// The recipe, as a guided model file (`.guided`) that `view`, `cut` and `bake` read.
+    /// The recipe, as a guided model file (`.guided`) that `view`, `cut`, `bake` and `render` read.
     Model,
+    /// The whole solid kept in memory as a filled model (`render` of a guided model).
+    Keep,
+}
+
+/// A guided solid as a filled model: the field's tets, the input surface, one patch
+/// whose texture coordinates are the positions in the solid's grid.
+pub struct Filled {
+    /// The model.
+    pub model: crate::fill::model::LstModel,
+    /// The solid (its colours and the model's coverage as alpha).
+    pub volume: crate::volume::Volume,
 }
 
 /// The values of `args` checked against their ranges (usage errors), and its cut.
@@ -300,14 +311,15 @@ pub fn run_guided(args: &GuidedArgs) -> Result<()> {
         Action::Model => {
             io::guard::file_output(&args.output, &inputs, &[io::guided_model::EXTENSION], "a guided model")?
         }
+        Action::Keep => {}
     }
-    synthesize(args, action)
+    synthesize(args, action).map(|_| ())
 }
 
 /// Do `action` with the inputs of `args` (checked): the field, the exemplars (by regions,
 /// at the steps of a scale field, or one set), then the cut, the solid, the view or the
 /// model file.
-fn synthesize(args: &GuidedArgs, action: Action) -> Result<()> {
+fn synthesize(args: &GuidedArgs, action: Action) -> Result<Option<Filled>> {
     let started = Instant::now();
     let g = guide(&args.mesh, &args.spec, args.tets)?;
     let domain = Domain::around(g.surface.bounds(), args.res)?;
@@ -340,17 +352,51 @@ fn synthesize(args: &GuidedArgs, action: Action) -> Result<()> {
     if let Action::View(_) | Action::Model = action {
         return write_blend(args, &g, &domain, action, &[setup], &|_, _| 1.0, started);
     }
-    solid::check_memory(&setup, matches!(action, Action::Solid), args.res, io::budget_from_env()?)?;
+    solid::check_memory(&setup, matches!(action, Action::Solid | Action::Keep), args.res, io::budget_from_env()?)?;
     let ready = started.elapsed().as_secs_f64();
     let bar = super::fill::Bar::new();
+    let mut kept = None;
     let outcome = match action {
         Action::Cut(point, normal) => write_cut(args, &g, &setup, &domain, (point, normal), &exemplar, &bar),
-        _ => write_solid(args, &g, &setup, &domain, &bar),
+        _ => solid_of(&g, &setup, &domain, &bar).and_then(|(counts, volume)| {
+            kept = deliver(args, action, &g, &domain, volume)?;
+            Ok(counts)
+        }),
     };
     bar.0.finish_and_clear();
     let (voxels, corrections, full) = outcome?;
-    report(args, &g, &domain, started, ready, [voxels, corrections, full]);
-    Ok(())
+    report(args, action, &g, &domain, (started, ready), [voxels, corrections, full]);
+    Ok(kept)
+}
+
+/// The whole solid `action` asked for: written to the output (`Solid`), or kept as a
+/// filled model (`Keep`).
+fn deliver(
+    args: &GuidedArgs,
+    action: Action,
+    g: &Guide,
+    domain: &Domain,
+    volume: crate::volume::Volume,
+) -> Result<Option<Filled>> {
+    match action {
+        Action::Keep => Ok(Some(filled(g, domain, volume))),
+        _ => super::write_volume(&args.output, &volume).map(|_| None),
+    }
+}
+
+/// The solid over `domain` as a filled model of the guide's tets and surface: one patch
+/// whose texture coordinates place each vertex in the solid's grid (a voxel's centre at
+/// its texture point, as the fill's sampler reads a volume).
+fn filled(g: &Guide, domain: &Domain, volume: crate::volume::Volume) -> Filled {
+    use crate::fill::model::{LstModel, MaskRef, Source};
+    let extent = Vec3::from_array(domain.dims.map(|d| d as f32)) * domain.voxel;
+    let coords = g.tets.vertices.iter().map(|p| (*p - domain.origin) / extent).collect();
+    let vertices = (0..g.tets.vertices.len() as u32).collect();
+    let patch = crate::fill::patch::Patch { source: 0, vertices, coords };
+    let source = Source { exemplar: "guided".into(), volume: String::new(), mask: MaskRef::File(String::new()) };
+    let tet_patches = vec![vec![0]; g.tets.tets.len()];
+    let model = LstModel::new(g.tets.clone(), g.surface.clone(), vec![source], vec![patch], tet_patches);
+    Filled { model, volume }
 }
 
 /// The recipe of `args` as a guided model (its paths as given).
@@ -426,16 +472,35 @@ pub fn from_model(model: &Path, action: Action, size: usize, output: &Path) -> R
         Action::Solid => io::check_output(output, &inputs)?,
         Action::Model => io::guard::file_output(output, &inputs, &[io::guided_model::EXTENSION], "a guided model")?,
         Action::Cut(..) | Action::View(_) => io::guard::png_output(output, &inputs)?,
+        Action::Keep => {}
     }
-    synthesize(&args, action)
+    synthesize(&args, action).map(|_| ())
+}
+
+/// `render` of a guided model (`model`, a `.guided` file): its whole solid synthesized and
+/// kept as a filled model.
+pub fn filled_from_model(model: &Path) -> Result<Filled> {
+    let args = args_of(io::guided_model::read(model)?, 256, model);
+    checked(&args).map_err(|e| e.in_file(model))?;
+    synthesize(&args, Action::Keep)?.ok_or_else(|| Error::invalid("the guided solid was not kept"))
 }
 
 /// Say what was written, how long it took and how much of the whole solid it synthesized.
-fn report(args: &GuidedArgs, g: &Guide, domain: &Domain, started: Instant, ready: f64, counts: [usize; 3]) {
+fn report(
+    args: &GuidedArgs,
+    action: Action,
+    g: &Guide,
+    domain: &Domain,
+    (started, ready): (Instant, f64),
+    counts: [usize; 3],
+) {
     let [voxels, corrections, full] = counts;
+    let what = match action {
+        Action::Keep => "synthesized the whole solid".to_string(),
+        _ => format!("wrote {}", args.output.display()),
+    };
     tell!(
-        "wrote {}: {}x{}x{} grid, {} tets, field solved in {:.0} ms, set up in {ready:.2} s, synthesized in {:.2} s",
-        args.output.display(),
+        "{what}: {}x{}x{} grid, {} tets, field solved in {:.0} ms, set up in {ready:.2} s, synthesized in {:.2} s",
         domain.dims[0],
         domain.dims[1],
         domain.dims[2],
@@ -451,7 +516,13 @@ fn report(args: &GuidedArgs, g: &Guide, domain: &Domain, started: Instant, ready
 
 /// `guided` with the spec's `[[region]]` entries: each depth range synthesized from its
 /// own library exemplar (built first when it is not) and blended across the band.
-fn by_regions(args: &GuidedArgs, g: &Guide, domain: &Domain, action: Action, started: Instant) -> Result<()> {
+fn by_regions(
+    args: &GuidedArgs,
+    g: &Guide,
+    domain: &Domain,
+    action: Action,
+    started: Instant,
+) -> Result<Option<Filled>> {
     let given = [
         ("--exemplar", args.exemplar.is_some()),
         ("--solid", args.solid.is_some()),
@@ -499,11 +570,11 @@ fn by_regions(args: &GuidedArgs, g: &Guide, domain: &Domain, action: Action, sta
     let ranges: Vec<[f32; 2]> = spec.regions.iter().map(|r| r.depth).collect();
     let regions = Regions::new(&ranges, spec.region_band);
     let weight = |k: usize, v: [usize; 3]| regions.weight(k, solid::grid_at(&depth, v));
-    write_blend(args, g, domain, action, &parts, &weight, started)?;
+    let kept = write_blend(args, g, domain, action, &parts, &weight, started)?;
     for (region, name) in spec.regions.iter().zip(&names) {
         tell!("  depth {} to {}: {name}", region.depth[0], region.depth[1]);
     }
-    Ok(())
+    Ok(kept)
 }
 
 /// Do `action` with blended parts ([`solid::cut_blend`]): the cut or the view as a PNG,
@@ -517,21 +588,23 @@ fn write_blend(
     parts: &[Setup],
     weight: &solid::Weight,
     started: Instant,
-) -> Result<()> {
+) -> Result<Option<Filled>> {
     if let Action::Model = action {
         io::guided_model::write(&args.output, &model_of(args))?;
         tell!(
-            "wrote {}: a guided model ({}x{}x{} grid); `solidtex view`, `cut` and `bake` synthesize what they show from it",
+            "wrote {}: a guided model ({}x{}x{} grid); `solidtex view`, `cut`, `bake` and `render` synthesize what they show from it",
             args.output.display(),
             domain.dims[0],
             domain.dims[1],
             domain.dims[2]
         );
-        return Ok(());
+        return Ok(None);
     }
     for setup in parts {
-        solid::check_memory(setup, matches!(action, Action::Solid), args.res, io::budget_from_env()?)?;
+        let whole = matches!(action, Action::Solid | Action::Keep);
+        solid::check_memory(setup, whole, args.res, io::budget_from_env()?)?;
     }
+    let mut kept = None;
     let ready = started.elapsed().as_secs_f64();
     let bar = super::fill::Bar::new();
     let outcome = match action {
@@ -542,19 +615,20 @@ fn write_blend(
         }
         Action::View(view) => solid::view_blend(parts, weight, domain, &g.surface, view, &bar)
             .and_then(|(picture, counts)| io::write_rgb8(&args.output, &picture).map(|_| counts)),
-        Action::Solid | Action::Model => {
+        Action::Solid | Action::Keep | Action::Model => {
             crate::volume::check_size(domain.dims, 4, io::budget_from_env()?).and_then(|_| {
                 let alpha = coverage(&g.surface, domain);
                 let (volume, counts) = solid::solid_blend(parts, weight, &alpha, &bar)?;
-                super::write_volume(&args.output, &volume).map(|_| counts)
+                kept = deliver(args, action, g, domain, volume)?;
+                Ok(counts)
             })
         }
     };
     bar.0.finish_and_clear();
     let [voxels, corrections] = outcome?;
     let full = parts.first().map_or(0, whole);
-    report(args, g, domain, started, ready, [voxels, corrections, full]);
-    Ok(())
+    report(args, action, g, domain, (started, ready), [voxels, corrections, full]);
+    Ok(kept)
 }
 
 /// Width in octaves of the band two neighbouring scale steps blend across.
@@ -563,7 +637,13 @@ const SCALE_BAND: f32 = 0.25;
 /// `guided --exemplar` with the spec's `[[scale_at]]` points: the exemplars synthesized at
 /// half-octave steps of their size (shrunk or enlarged, each plain photo's solid cube made
 /// at that size) and each voxel blending the two steps nearest its scale.
-fn by_scales(args: &GuidedArgs, g: &Guide, domain: &Domain, action: Action, started: Instant) -> Result<()> {
+fn by_scales(
+    args: &GuidedArgs,
+    g: &Guide,
+    domain: &Domain,
+    action: Action,
+    started: Instant,
+) -> Result<Option<Filled>> {
     let path = match (&args.exemplar, &args.solid, args.layered) {
         (Some(path), None, false) => path,
         _ => {
@@ -597,10 +677,10 @@ fn by_scales(args: &GuidedArgs, g: &Guide, domain: &Domain, action: Action, star
     let borders = steps.windows(2).map(|w| (w[0] + w[1]) / 2.0).collect();
     let blend = Regions::with_borders(borders, SCALE_BAND);
     let weight = |k: usize, v: [usize; 3]| blend.weight(k, solid::grid_at(&scale, v));
-    write_blend(args, g, domain, action, &parts, &weight, started)?;
+    let kept = write_blend(args, g, domain, action, &parts, &weight, started)?;
     let sizes: Vec<String> = steps.iter().map(|s| format!("{:.2}", s.exp2())).collect();
     tell!("  the exemplar synthesized with pixels {} voxels wide, blended by the spec's scale", sizes.join(", "));
-    Ok(())
+    Ok(kept)
 }
 
 /// The exemplars per plane, alpha dropped (the solid's alpha is the model's coverage),
@@ -970,18 +1050,18 @@ fn write_cut(
     Ok((out.voxels, out.corrections, whole(setup)))
 }
 
-fn write_solid(
-    args: &GuidedArgs,
+/// The whole solid of one exemplar set: its channels and the model's coverage as alpha;
+/// also the voxels, corrections and the whole solid's voxel count.
+fn solid_of(
     g: &Guide,
     setup: &Setup,
     domain: &Domain,
     bar: &super::fill::Bar,
-) -> Result<(usize, usize, usize)> {
+) -> Result<((usize, usize, usize), crate::volume::Volume)> {
     crate::volume::check_size(domain.dims, setup.exemplars.channels() + 1, io::budget_from_env()?)?;
     let out = synth::run(setup, &synth::plan(setup, &Mask::full(domain.dims), &[]), &[], bar)?;
     let alpha = coverage(&g.surface, domain);
-    super::write_volume(&args.output, &solid::solid_volume(setup, &out, &alpha)?)?;
-    Ok((out.voxels, out.corrections, whole(setup)))
+    Ok(((out.voxels, out.corrections, whole(setup)), solid::solid_volume(setup, &out, &alpha)?))
 }
 
 /// The model's coverage of every voxel of the grid.

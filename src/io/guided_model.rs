@@ -1,6 +1,6 @@
 //! A guided model (`.guided`, TOML): the recipe of a solid synthesized along a model's
 //! frame field, as `solidtex guided` was given it (the mesh, the fill spec, the exemplars
-//! and the settings), so that `view`, `cut` and `bake` synthesize what they show on demand
+//! and the settings), so that `view`, `cut`, `bake` and `render` synthesize what they show on demand
 //! instead of reading stored voxels. Paths are relative to the model file's folder.
 
 use super::atomic;
@@ -88,7 +88,7 @@ pub fn write(path: &Path, model: &GuidedModel) -> Result<()> {
     }
     let body = toml::to_string(&relative).map_err(|e| Error::invalid(format!("writing the guided model: {e}")))?;
     let text = format!(
-        "# A guided model written by `solidtex guided`: `solidtex view`, `cut` and `bake` synthesize\n# what they show from \
+        "# A guided model written by `solidtex guided`: `solidtex view`, `cut`, `bake` and `render`\n# synthesize what they show from \
          it along the spec's frame field. Paths are relative to this file.\n{body}"
     );
     atomic::write_document(path, text.as_bytes())

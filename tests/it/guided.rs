@@ -513,8 +513,9 @@ fn a_scale_field_halves_the_texture_where_it_asks_for_half() {
 /// `guided -o X.guided` writes the recipe, not voxels: `cut X.guided` equals `guided --cut`
 /// of the same plane byte for byte, `bake X.guided` equals the whole solid `guided` writes,
 /// and `view X.guided` shows the fruit's surface in the photo's greys (shaded), the same on
-/// one thread and two, synthesizing a small share of the solid. `render` and view options
-/// for filled models are refused by name, as is a guided model combined with another.
+/// one thread and two, synthesizing a small share of the solid; `render` draws its whole
+/// solid. View options for filled models are refused by name, as is a guided model
+/// combined with another.
 #[test]
 fn a_guided_model_is_viewed_cut_and_baked_on_demand() {
     let dir = tempfile::tempdir().unwrap();
@@ -568,8 +569,17 @@ fn a_guided_model_is_viewed_cut_and_baked_on_demand() {
     let distinct: std::collections::HashSet<u8> = surface.iter().map(|p| p.0[0]).collect();
     assert!(distinct.len() > 40, "textured, not flat: {} greys", distinct.len());
 
+    // render synthesizes the whole solid and draws it through the field's tets
+    let small = at(d, "small.guided");
+    assert!(solidtex(&[&base[..9], &["--res", "32", "-o", &small]].concat()).status.success());
+    let glass = at(d, "glass.png");
+    let run = solidtex(&["render", &small, "--size", "64", "--opacity", "0.9", "-o", &glass]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let img = image::open(&glass).unwrap().to_rgb8();
+    let shown = img.pixels().filter(|p| p.0 != img.get_pixel(0, 0).0).count();
+    assert!(shown > 64 * 64 / 5, "{shown} pixels show the fruit");
+
     let refused = at(d, "refused.png");
-    crate::support::assert_usage(&solidtex(&["render", &model, "-o", &refused]), &["fruit.guided", "bake"]);
     let run = solidtex(&["view", &model, "--displacement", "0.1", "-o", &refused]);
     crate::support::assert_usage(&run, &["--displacement", "fruit.guided"]);
     crate::support::assert_usage(&solidtex(&["view", &model, &model, "-o", &refused]), &["fruit.guided", "alone"]);
