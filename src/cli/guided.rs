@@ -555,20 +555,9 @@ fn by_regions(
     let depth = solid::depth_over(&g.depth, domain).map_err(|e| e.in_file(&args.spec))?;
     let made = crate::library::guided::region_exemplars(spec, &g.depth, domain).map_err(|e| e.in_file(&args.spec))?;
     let frames = solid::frames_over(&g.tets, &g.field, domain, &g.depth, &g.axes)?;
-    let parts: Vec<Setup> = made
-        .iter()
-        .map(|(exemplars, options, layered)| Setup {
-            exemplars,
-            frames: Some(&frames),
-            wrap: [false; 3],
-            depth: layered.as_ref(),
-            dims: domain.dims,
-            seed: args.seed,
-            options: Options { coarse_n: args.coarse_n, n: args.n, ..*options },
-        })
-        .collect();
-    let ranges: Vec<[f32; 2]> = spec.regions.iter().map(|r| r.depth).collect();
-    let regions = Regions::new(&ranges, spec.region_band);
+    let settings = |o: Options| Options { coarse_n: args.coarse_n, n: args.n, ..o };
+    let parts = crate::library::guided::region_setups(&made, &frames, domain.dims, args.seed, settings);
+    let regions = crate::library::guided::region_blend(spec);
     let weight = |k: usize, v: [usize; 3]| regions.weight(k, solid::grid_at(&depth, v));
     let kept = write_blend(args, g, domain, action, &parts, &weight, started)?;
     for (region, name) in spec.regions.iter().zip(&names) {

@@ -187,26 +187,10 @@ impl FrameGrid {
     pub fn sample(mesh: &TetMesh, field: &FrameField, (lo, hi): (Vec3, Vec3), cells: usize) -> FrameGrid {
         let step = (hi - lo).max_element().max(1e-6) / cells.max(1) as f32;
         let dims = ((hi - lo) / step).ceil().to_array().map(|d| d as usize + 2);
-        let index = |i: [usize; 3]| i[0] + dims[0] * (i[1] + dims[1] * i[2]);
         let mut corners: Vec<Option<Vec4>> = vec![None; dims.iter().product()];
-        for (t, tet) in mesh.tets.iter().enumerate() {
-            let ps = tet.map(|v| mesh.vertices[v as usize]);
-            let (a, b) = ps.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(a, b), p| (a.min(*p), b.max(*p)));
-            let first = ((a - lo) / step).ceil().max(Vec3::ZERO).to_array().map(|c| c as usize);
-            let last = ((b - lo) / step).floor().to_array().map(|c| c.max(-1.0) as i64);
-            for z in first[2] as i64..=last[2].min(dims[2] as i64 - 1) {
-                for y in first[1] as i64..=last[1].min(dims[1] as i64 - 1) {
-                    for x in first[0] as i64..=last[0].min(dims[0] as i64 - 1) {
-                        let i = [x as usize, y as usize, z as usize];
-                        let p = lo + Vec3::new(x as f32, y as f32, z as f32) * step;
-                        let w = mesh.barycentric(t, p);
-                        if corners[index(i)].is_none() && w.iter().all(|c| *c >= -1e-5) {
-                            corners[index(i)] = Some(Vec4::from(field.at(*tet, w)));
-                        }
-                    }
-                }
-            }
-        }
+        corners_in_tets(mesh, (lo, step, dims), |i, t, w| {
+            corners[i].get_or_insert_with(|| Vec4::from(field.at(mesh.tets[t], w)));
+        });
         fill_outwards(&mut corners, dims);
         let corners = corners.into_iter().map(|c| c.unwrap_or(Vec4::W)).collect();
         FrameGrid { lo, step, dims, corners, gradients: None, give_way: true }
@@ -376,25 +360,11 @@ impl ScalarGrid {
     pub fn from_tets(mesh: &TetMesh, values: &[f32], (lo, hi): (Vec3, Vec3), cells: usize) -> ScalarGrid {
         let step = (hi - lo).max_element().max(1e-6) / cells.max(1) as f32;
         let dims = ((hi - lo) / step).ceil().to_array().map(|d| d as usize + 2);
-        let index = |i: [usize; 3]| i[0] + dims[0] * (i[1] + dims[1] * i[2]);
         let mut corners: Vec<Option<f32>> = vec![None; dims.iter().product()];
-        for (t, tet) in mesh.tets.iter().enumerate() {
-            let ps = tet.map(|v| mesh.vertices[v as usize]);
-            let (a, b) = ps.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(a, b), p| (a.min(*p), b.max(*p)));
-            let first = ((a - lo) / step).ceil().max(Vec3::ZERO).to_array().map(|c| c as usize);
-            let last = ((b - lo) / step).floor().to_array().map(|c| c.max(-1.0) as i64);
-            for z in first[2] as i64..=last[2].min(dims[2] as i64 - 1) {
-                for y in first[1] as i64..=last[1].min(dims[1] as i64 - 1) {
-                    for x in first[0] as i64..=last[0].min(dims[0] as i64 - 1) {
-                        let i = index([x as usize, y as usize, z as usize]);
-                        let w = mesh.barycentric(t, lo + Vec3::new(x as f32, y as f32, z as f32) * step);
-                        if corners[i].is_none() && w.iter().all(|c| *c >= -1e-5) {
-                            corners[i] = Some((0..4).map(|k| w[k] * values[tet[k] as usize]).sum());
-                        }
-                    }
-                }
-            }
-        }
+        corners_in_tets(mesh, (lo, step, dims), |i, t, w| {
+            let tet = mesh.tets[t];
+            corners[i].get_or_insert_with(|| (0..4).map(|k| w[k] * values[tet[k] as usize]).sum());
+        });
         let stride = [1, dims[0], dims[0] * dims[1]];
         while corners.iter().any(Option::is_none) && corners.iter().any(Option::is_some) {
             let next: Vec<Option<f32>> = (0..corners.len())
@@ -462,6 +432,32 @@ fn trilinear(lo: Vec3, step: f32, dims: [usize; 3], p: Vec3) -> [(usize, f32); 8
         let i = [(b[0] + dx).min(dims[0] - 1), (b[1] + dy).min(dims[1] - 1), (b[2] + dz).min(dims[2] - 1)];
         (i[0] + dims[0] * (i[1] + dims[1] * i[2]), [1.0 - f.x, f.x][dx] * [1.0 - f.y, f.y][dy] * [1.0 - f.z, f.z][dz])
     })
+}
+
+/// Every corner of the grid `(lo, step, dims)` inside a tet of `mesh`, tet by tet:
+/// `visit(corner index, tet, barycentric weights)` (a corner on a shared face is visited
+/// for each of its tets, in tet order).
+fn corners_in_tets(
+    mesh: &TetMesh,
+    (lo, step, dims): (Vec3, f32, [usize; 3]),
+    mut visit: impl FnMut(usize, usize, [f32; 4]),
+) {
+    for (t, tet) in mesh.tets.iter().enumerate() {
+        let ps = tet.map(|v| mesh.vertices[v as usize]);
+        let (a, b) = ps.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(a, b), p| (a.min(*p), b.max(*p)));
+        let first = ((a - lo) / step).ceil().max(Vec3::ZERO).to_array().map(|c| c as usize);
+        let last = ((b - lo) / step).floor().to_array().map(|c| c.max(-1.0) as i64);
+        for z in first[2] as i64..=last[2].min(dims[2] as i64 - 1) {
+            for y in first[1] as i64..=last[1].min(dims[1] as i64 - 1) {
+                for x in first[0] as i64..=last[0].min(dims[0] as i64 - 1) {
+                    let w = mesh.barycentric(t, lo + Vec3::new(x as f32, y as f32, z as f32) * step);
+                    if w.iter().all(|c| *c >= -1e-5) {
+                        visit(x as usize + dims[0] * (y as usize + dims[1] * z as usize), t, w);
+                    }
+                }
+            }
+        }
+    }
 }
 
 /// Give every unset corner the mean of its set face neighbours (flipped towards the

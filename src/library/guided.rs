@@ -9,7 +9,7 @@ use crate::error::{Error, Result};
 use crate::fill::FillPreview;
 use crate::fill::render::View;
 use crate::fill::spec::FillSpec;
-use crate::guided::field::{FrameField, ScalarGrid, sketched_frames, solve, streamlines};
+use crate::guided::field::{FrameField, FrameGrid, ScalarGrid, sketched_frames, solve, streamlines};
 use crate::guided::regions::Regions;
 use crate::guided::solid::{self, Domain};
 use crate::mesh::Mesh;
@@ -81,20 +81,8 @@ pub fn picture(
             let depth = solid::depth_over(&depths, &domain)?;
             let made = region_exemplars(spec, &depths, &domain)?;
             let frames = solid::frames_over(mesh, &field, &domain, &depths, &spec.depth.axes)?;
-            let parts: Vec<Setup> = made
-                .iter()
-                .map(|(exemplars, options, layered)| Setup {
-                    exemplars,
-                    frames: Some(&frames),
-                    wrap: [false; 3],
-                    depth: layered.as_ref(),
-                    dims: domain.dims,
-                    seed: spec.seed,
-                    options: *options,
-                })
-                .collect();
-            let ranges: Vec<[f32; 2]> = spec.regions.iter().map(|r| r.depth).collect();
-            let regions = Regions::new(&ranges, spec.region_band);
+            let parts = region_setups(&made, &frames, domain.dims, spec.seed, |o| o);
+            let regions = region_blend(spec);
             let weight = |k: usize, v: [usize; 3]| regions.weight(k, solid::grid_at(&depth, v));
             let (cut, _) = solid::cut_blend(&parts, &weight, &domain, &filled.model.surface, view, progress)?;
             shown_pixels(&cut)
@@ -146,6 +134,34 @@ pub fn region_exemplars(
             .map_err(|e| Error::invalid(format!("region[{i}] (exemplar '{}'): {e}", region.exemplar)))
     };
     spec.regions.iter().enumerate().map(each).collect()
+}
+
+/// One synthesis setup per region's exemplars (`made`, [`region_exemplars`]) along
+/// `frames` over a grid of `dims`, each region's settings passed through `settings`.
+pub fn region_setups<'a>(
+    made: &'a [(Exemplars, Options, Option<ScalarGrid>)],
+    frames: &'a FrameGrid,
+    dims: [usize; 3],
+    seed: u64,
+    settings: impl Fn(Options) -> Options,
+) -> Vec<Setup<'a>> {
+    made.iter()
+        .map(|(exemplars, options, layered)| Setup {
+            exemplars,
+            frames: Some(frames),
+            wrap: [false; 3],
+            depth: layered.as_ref(),
+            dims,
+            seed,
+            options: settings(*options),
+        })
+        .collect()
+}
+
+/// How the spec's regions blend by depth.
+pub fn region_blend(spec: &FillSpec) -> Regions {
+    let ranges: Vec<[f32; 2]> = spec.regions.iter().map(|r| r.depth).collect();
+    Regions::new(&ranges, spec.region_band)
 }
 
 /// A built exemplar volume ready to follow along a field over `domain`: with a Depth
