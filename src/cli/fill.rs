@@ -81,22 +81,41 @@ pub struct CutArgs {
     #[arg(long, allow_hyphen_values = true, conflicts_with = "plane")]
     pub stroke: Vec<String>,
     /// The direction strokes are swept along, NX,NY,NZ (needed with --stroke).
-    #[arg(long, allow_hyphen_values = true, requires = "stroke")]
+    #[arg(long, allow_hyphen_values = true, requires = "stroke", conflicts_with = "plane")]
     pub extrude: Option<String>,
     /// A point on the side of every stroke to keep, X,Y,Z (default: the model's centre).
-    #[arg(long, allow_hyphen_values = true, requires = "stroke")]
+    #[arg(long, allow_hyphen_values = true, requires = "stroke", conflicts_with = "plane")]
     pub keep: Option<String>,
     /// With --stroke: move the cut faces along their normal by SCALE x (Displacement -
     /// 0.5), the exemplars' Displacement channel sampled inside (model units, at most the
     /// model's size: the diagonal of its box).
-    #[arg(long, allow_hyphen_values = true, requires = "stroke")]
+    #[arg(long, allow_hyphen_values = true, requires = "stroke", conflicts_with = "plane")]
     pub displacement: Option<f32>,
     /// With --stroke: where the 3D view looks from.
     #[command(flatten)]
-    pub camera: CameraArgs,
+    pub camera: StrokeCamera,
     /// The PNG to write.
     #[arg(short, long)]
     pub output: PathBuf,
+}
+
+/// The camera of a stroke cut's 3D view: given without `--stroke`, a usage error (a planar
+/// cut has no camera).
+#[derive(Debug, clap::Args)]
+pub struct StrokeCamera {
+    /// With --stroke: degrees around the vertical axis, -360 to 360.
+    #[arg(long, default_value_t = 35.0, allow_hyphen_values = true, requires = "stroke", conflicts_with = "plane")]
+    pub yaw: f32,
+    /// With --stroke: degrees above the horizon, -90 to 90.
+    #[arg(long, default_value_t = 25.0, allow_hyphen_values = true, requires = "stroke", conflicts_with = "plane")]
+    pub pitch: f32,
+}
+
+impl StrokeCamera {
+    /// (yaw, pitch), each checked against its range.
+    fn checked(&self) -> Result<(f32, f32)> {
+        CameraArgs { yaw: self.yaw, pitch: self.pitch }.checked()
+    }
 }
 
 /// The arguments of `solidtex bake`.

@@ -220,3 +220,16 @@ fn negative_whole_numbers_are_refused_as_values() {
     }
     assert!(!dir.path().join("out.png").exists());
 }
+
+/// The options of a stroke cut's 3D view and sweep are refused with a planar cut, by name,
+/// before any work (a planar cut has no camera, extrusion or displacement).
+#[test]
+fn stroke_cut_options_are_refused_with_a_plane() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("cut.png").to_string_lossy().into_owned();
+    for extra in [["--yaw", "30"], ["--pitch", "-10"], ["--extrude", "0,0,1"], ["--displacement", "0.1"]] {
+        let run = solidtex(&[&["cut", "model.lst", "--plane", "0,0,0,1,0,0"][..], &extra, &["-o", &out]].concat());
+        assert_usage(&run, &[extra[0], "--plane"]);
+    }
+    assert!(!dir.path().join("cut.png").exists());
+}
