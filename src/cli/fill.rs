@@ -763,7 +763,10 @@ pub fn run_render(args: &RenderArgs) -> Result<()> {
         )));
     }
     let loaded = match guided_model(&args.models)? {
-        Some(model) => vec![guided_loaded(model)?],
+        Some(model) => {
+            super::guided::check_picture_of_model(model, &args.output)?;
+            vec![guided_loaded(model)?]
+        }
         None => load_models(&args.models)?,
     };
     let wanted = matches!(args.density, None | Some(DensityFrom::Alpha));

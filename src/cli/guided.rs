@@ -477,6 +477,13 @@ pub fn from_model(model: &Path, action: Action, size: usize, output: &Path) -> R
     synthesize(&args, action).map(|_| ())
 }
 
+/// Refuse a picture `output` that is a guided model (`model`) or one of its inputs.
+pub fn check_picture_of_model(model: &Path, output: &Path) -> Result<()> {
+    let recipe = io::guided_model::read(model)?;
+    let inputs: Vec<&Path> = recipe.inputs().into_iter().chain([model]).collect();
+    io::guard::png_output(output, &inputs)
+}
+
 /// `render` of a guided model (`model`, a `.guided` file): its whole solid synthesized and
 /// kept as a filled model.
 pub fn filled_from_model(model: &Path) -> Result<Filled> {

@@ -587,3 +587,29 @@ fn a_guided_model_is_viewed_cut_and_baked_on_demand() {
     crate::support::assert_usage(&run, &["cut.guided", "--cut writes a PNG"]);
     assert!(!d.join("refused.png").exists() && !d.join("cut.guided").exists());
 }
+
+/// A guided model's commands never write over the model's own inputs: `view`, `cut` and
+/// `render` naming the model's exemplar photo as their picture are usage errors naming it,
+/// and the photo stays as it was; so is `guided -o` naming its spec.
+#[test]
+fn a_guided_model_never_writes_over_its_inputs() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (fruit, spec) = crate::fill::kiwi_fruit(d);
+    let photo = at(d, "photo.png");
+    std::fs::copy(gravel(), &photo).unwrap();
+    let model = at(d, "fruit.guided");
+    let base = ["guided", &fruit, "--spec", &spec, "--exemplar", &photo, "--max-exemplar", "64", "--planes"];
+    let run = solidtex(&[&base[..], &["--res", "32", "-o", &model]].concat());
+    assert!(run.status.success(), "{}", stderr(&run));
+    let before = std::fs::read(&photo).unwrap();
+    for command in ["view", "cut", "render"] {
+        let run = solidtex(&[command, &model, "--size", "32", "-o", &photo]);
+        crate::support::assert_usage(&run, &["photo.png", "input"]);
+        assert_eq!(std::fs::read(&photo).unwrap(), before, "{command} left the photo as it was");
+    }
+    let spec_before = std::fs::read(&spec).unwrap();
+    let run = solidtex(&[&base[..], &["--res", "32", "-o", &spec]].concat());
+    crate::support::assert_usage(&run, &[".toml"]);
+    assert_eq!(std::fs::read(&spec).unwrap(), spec_before);
+}
