@@ -327,11 +327,16 @@ impl Graph {
         slots: &[u32],
         penalty: &Penalty,
     ) -> Vec<(u32, [i32; 2])> {
+        // the cube's points run in slot order (`slots` is sorted), each reading the new
+        // coordinates of those before it
         let mut done: Vec<(u32, [i32; 2])> = Vec::with_capacity(slots.len());
         let mut seen: Vec<[f32; 3]> = Vec::with_capacity(MAX_NEIGHBOURS);
         let mut tried: Vec<[i32; 2]> = Vec::with_capacity(PROPOSERS * COHERENCE + 1);
         for &slot in slots {
-            let read = |s: u32| done.iter().rev().find(|(d, _)| *d == s).map_or(coords[s as usize], |(_, v)| *v);
+            let read = |s: u32| match slots[..done.len()].binary_search(&s) {
+                Ok(j) => done[j].1,
+                Err(_) => coords[s as usize],
+            };
             let range = self.neighbours(slot as usize);
             seen.clear();
             seen.extend(self.slots[range.clone()].iter().map(|&s| colour(ex, read(s))));
@@ -354,8 +359,8 @@ impl Graph {
                 let q = read(self.slots[i]);
                 let [dx, dy] = self.offsets_px[i].map(|v| v.round() as i64);
                 let source = ex.clamped_slot(i64::from(q[0]) - dx, i64::from(q[1]) - dy);
-                for k in 0..ex.k {
-                    let candidate = prepared_pixel(ex, ex.centres[ex.coherence[source * ex.k + k] as usize]);
+                for (k, &similar) in ex.coherence_of(source).iter().enumerate() {
+                    let candidate = prepared_pixel(ex, ex.centres[similar as usize]);
                     if tried.contains(&candidate) {
                         continue;
                     }
@@ -481,13 +486,21 @@ fn finer(
 }
 
 /// The exemplar's colour at `(x, y)` pixels, bilinear between pixel centres, clamped.
+#[inline(always)]
 fn bilinear(ex: &Prepared, x: f32, y: f32) -> [f32; 3] {
     let (x0, y0) = (x.floor(), y.floor());
     let (tx, ty) = (x - x0, y - y0);
     let (x0, y0) = (x0 as i32, y0 as i32);
-    let a = colour(ex, [x0, y0]);
-    let b = colour(ex, [x0 + 1, y0]);
-    let c = colour(ex, [x0, y0 + 1]);
-    let d = colour(ex, [x0 + 1, y0 + 1]);
-    [0, 1, 2].map(|k| (a[k] * (1.0 - tx) + b[k] * tx) * (1.0 - ty) + (c[k] * (1.0 - tx) + d[k] * tx) * ty)
+    let (right, bottom) = (ex.width as i32 - 1, ex.height as i32 - 1);
+    let (xa, xb) = (x0.clamp(0, right) as usize, (x0 + 1).clamp(0, right) as usize);
+    let (ya, yb) = (y0.clamp(0, bottom) as usize, (y0 + 1).clamp(0, bottom) as usize);
+    let (c, last) = (ex.channels, ex.channels - 1);
+    let at = |x: usize, y: usize, k: usize| ex.colours[(y * ex.width + x) * c + k.min(last)];
+    let mut out = [0.0; 3];
+    for (k, o) in out.iter_mut().enumerate() {
+        let (a, b) = (at(xa, ya, k), at(xb, ya, k));
+        let (c, d) = (at(xa, yb, k), at(xb, yb, k));
+        *o = (a * (1.0 - tx) + b * tx) * (1.0 - ty) + (c * (1.0 - tx) + d * tx) * ty;
+    }
+    out
 }

@@ -13,6 +13,7 @@ use super::pca::Pca;
 use crate::noise::mix64;
 use crate::volume::Image2d;
 use rayon::prelude::*;
+use std::sync::OnceLock;
 
 /// Most neighbourhood vectors used to fit the PCA basis (evenly strided).
 const PCA_SAMPLES: usize = 4096;
@@ -50,8 +51,8 @@ pub struct Prepared {
     pub pca: Pca,
     /// The projected neighbourhood of every centre, one row per slot.
     pub projected: LineRows,
-    /// `centres.len() x k` slots (indices into `centres`): the k-coherence set of each centre.
-    pub coherence: Vec<u32>,
+    /// The k-coherence sets, each found when first asked for ([`Prepared::coherence_of`]).
+    coherence: Coherence,
     /// Size of each coherence set.
     pub k: usize,
     /// Every centre's slot by its first [`LOOKUP_DIMS`] projected components: the
@@ -92,7 +93,7 @@ impl Prepared {
             centre_xy,
             pca: Pca { input: 0, dims: 0, mean: vec![], basis: vec![], explained: 0.0 },
             projected: LineRows::new(&[], 1),
-            coherence: Vec::new(),
+            coherence: Coherence { tree: KdTree::build(Vec::new(), 0), low: 0, sets: Vec::new() },
             k: opt.k,
             lookup: KdTree::build(Vec::new(), 0),
         };
@@ -103,7 +104,10 @@ impl Prepared {
         let low = prepared.pca.dims.min(LOOKUP_DIMS);
         prepared.lookup = KdTree::build(prepared.projected.packed(low), low);
         if opt.k > 0 {
-            prepared.coherence = prepared.coherence_sets();
+            let low = prepared.pca.dims.min(TREE_DIMS);
+            let tree = KdTree::build(prepared.projected.packed(low), low);
+            let sets = (0..prepared.centres.len()).map(|_| OnceLock::new()).collect();
+            prepared.coherence = Coherence { tree, low, sets };
         }
         prepared
     }
@@ -169,43 +173,43 @@ impl Prepared {
     /// For every centre: itself, then its k - 1 most alike centres that are not its
     /// close spatial neighbours (those would add nothing new). The centres are searched in
     /// the tree's leaf order (the answers of an exact search do not depend on it).
-    fn coherence_sets(&self) -> Vec<u32> {
-        let dims = self.pca.dims;
-        let low = dims.min(TREE_DIMS);
-        let tree = KdTree::build(self.projected.packed(low), low);
+    /// The k-coherence set of the centre in `slot` (its own slot first, then the centres
+    /// at least `max(n / 2, 2)` pixels away whose neighbourhoods are nearest, in the
+    /// projection), found on first use: a large photo's search visits a fraction of its
+    /// centres, and a set is the same whichever thread asks first.
+    pub fn coherence_of(&self, slot: usize) -> &[u32] {
+        self.coherence.sets[slot].get_or_init(|| self.coherence_set(slot))
+    }
+
+    fn coherence_set(&self, slot: usize) -> Box<[u32]> {
+        let Coherence { tree, low, .. } = &self.coherence;
         let k = self.k;
         let away = (self.n / 2).max(2) as i64;
-        let set_of = |slot: usize| {
-            let here = self.projection(slot);
-            let (mx, my) = self.slot_xy(slot);
-            let mut hits: Vec<(f32, u32)> = tree
-                .nearest(&here[..low], 2 * k + 6)
-                .into_iter()
-                .map(|(_, i)| (super::knn::squared(here, self.projection(i as usize)), i))
-                .collect();
-            hits.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-            let others = hits.into_iter().map(|(_, i)| i).filter(move |&i| {
-                let (px, py) = self.slot_xy(i as usize);
-                (px - mx).abs().max((py - my).abs()) >= away
-            });
-            let mut set: Vec<u32> = std::iter::once(slot as u32).chain(others).take(k).collect();
-            set.resize(k, slot as u32);
-            set
-        };
-        const CHUNK: usize = 256;
-        let order = tree.leaf_order();
-        let found: Vec<Vec<u32>> = order
-            .par_chunks(CHUNK)
-            .map(|chunk| chunk.iter().flat_map(|&slot| set_of(slot as usize)).collect())
+        let here = self.projection(slot);
+        let (mx, my) = self.slot_xy(slot);
+        let mut hits: Vec<(f32, u32)> = tree
+            .nearest(&here[..*low], 2 * k + 6)
+            .into_iter()
+            .map(|(_, i)| (super::knn::squared(here, self.projection(i as usize)), i))
             .collect();
-        let mut sets = vec![0u32; self.centres.len() * k];
-        for (chunk, found) in order.chunks(CHUNK).zip(found) {
-            for (&slot, set) in chunk.iter().zip(found.chunks_exact(k)) {
-                sets[slot as usize * k..(slot as usize + 1) * k].copy_from_slice(set);
-            }
-        }
-        sets
+        hits.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        let others = hits.into_iter().map(|(_, i)| i).filter(move |&i| {
+            let (px, py) = self.slot_xy(i as usize);
+            (px - mx).abs().max((py - my).abs()) >= away
+        });
+        let mut set: Vec<u32> = std::iter::once(slot as u32).chain(others).take(k).collect();
+        set.resize(k, slot as u32);
+        set.into_boxed_slice()
     }
+}
+
+/// The k-coherence sets of an exemplar level: the kd-tree over the leading
+/// [`TREE_DIMS`] projected components that finds them, and each centre's set once found.
+#[derive(Debug, Clone)]
+struct Coherence {
+    tree: KdTree,
+    low: usize,
+    sets: Vec<OnceLock<Box<[u32]>>>,
 }
 
 /// Rows of equal length laid out on 64-byte cache lines: a row of up to 16 values lies
