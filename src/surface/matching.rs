@@ -329,6 +329,7 @@ impl Graph {
     ) -> Vec<(u32, [i32; 2])> {
         // the cube's points run in slot order (`slots` is sorted), each reading the new
         // coordinates of those before it
+        debug_assert!(slots.windows(2).all(|w| w[0] < w[1]), "a cube's points in slot order");
         let mut done: Vec<(u32, [i32; 2])> = Vec::with_capacity(slots.len());
         let mut seen: Vec<[f32; 3]> = Vec::with_capacity(MAX_NEIGHBOURS);
         let mut tried: Vec<[i32; 2]> = Vec::with_capacity(PROPOSERS * COHERENCE + 1);
