@@ -341,19 +341,25 @@ impl Graph {
             let range = self.neighbours(slot as usize);
             seen.clear();
             seen.extend(self.slots[range.clone()].iter().map(|&s| colour(ex, read(s))));
-            let cost = |u: [i32; 2]| -> f32 {
-                let over = penalty.at(ex, u);
+            // the cost of `u` times `factor`, or `None` once its partial sum shows it cannot
+            // come under `bound` (the terms are not negative, and rounding keeps a larger sum
+            // larger, so the candidate chosen is the one the whole sums choose)
+            let cost = |u: [i32; 2], factor: f32, bound: f32| -> Option<f32> {
+                let over = 1.0 + penalty.at(ex, u);
                 let mut sum = 0.0;
                 for (k, i) in range.clone().enumerate() {
                     let [dx, dy] = self.offsets_px[i];
                     let c = bilinear(ex, u[0] as f32 + dx, u[1] as f32 + dy);
                     let d = (c[0] - seen[k][0]).powi(2) + (c[1] - seen[k][1]).powi(2) + (c[2] - seen[k][2]).powi(2);
                     sum += self.weights[i] * d;
+                    if k % 8 == 7 && sum * over * factor >= bound {
+                        return None;
+                    }
                 }
-                sum * (1.0 + over)
+                Some(sum * over * factor)
             };
             let mine = coords[slot as usize];
-            let mut best = (cost(mine), mine);
+            let mut best = (cost(mine, 1.0, f32::INFINITY).unwrap_or(f32::INFINITY), mine);
             tried.clear();
             tried.push(mine);
             for i in range.clone().take(PROPOSERS) {
@@ -366,8 +372,8 @@ impl Graph {
                         continue;
                     }
                     tried.push(candidate);
-                    let c = cost(candidate) * if k == 0 { 1.0 - COHERENT } else { 1.0 };
-                    if c < best.0 {
+                    let factor = if k == 0 { 1.0 - COHERENT } else { 1.0 };
+                    if let Some(c) = cost(candidate, factor, best.0).filter(|c| *c < best.0) {
                         best = (c, candidate);
                     }
                 }
