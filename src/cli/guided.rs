@@ -715,22 +715,30 @@ fn load_exemplars(args: &GuidedArgs, exemplar: &Path, rows: Option<usize>, facto
     Ok([ex, ey, ez])
 }
 
+/// The longest side a scale field may resize an exemplar to: preparing it keeps every
+/// pixel's neighbourhood (n² x channels numbers), about 400 MB at 1024².
+const MOST_SCALED_SIDE: usize = 1024;
+
 /// `image` resized by `factor` (1: as it is); an error naming the size when it would fall
-/// below 8 pixels on a side.
+/// below 8 pixels on a side or grow past [`MOST_SCALED_SIDE`].
 fn resized_by(image: Image2d, factor: f32) -> Result<Image2d> {
     if factor == 1.0 {
         return Ok(image);
     }
-    let size = |s: usize| (s as f32 * factor).round() as usize;
+    let size = |s: usize| (s as f64 * f64::from(factor)).round();
     let (w, h) = (size(image.width()), size(image.height()));
-    if w.min(h) < 8 {
+    let (name, most) = (format!("{}x{}", image.width(), image.height()), MOST_SCALED_SIDE);
+    if !(w.min(h) >= 8.0) {
         return Err(Error::invalid(format!(
-            "the scale field shrinks the {}x{} exemplar to {w}x{h} pixels, under 8; ask for larger scales",
-            image.width(),
-            image.height()
+            "the [[scale_at]] scales shrink the {name} exemplar to {w}x{h} pixels, under 8; ask for larger scales"
         )));
     }
-    image.resized(w, h)
+    if w.max(h) > most as f64 {
+        return Err(Error::invalid(format!(
+            "the [[scale_at]] scales grow the {name} exemplar to {w:.0}x{h:.0} pixels, over {most}; ask for smaller scales"
+        )));
+    }
+    image.resized(w as usize, h as usize)
 }
 
 /// The image with a feature channel: the mask's grey (the mean of its colour channels).
