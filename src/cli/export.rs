@@ -65,7 +65,7 @@ pub fn run(args: &ExportArgs) -> Result<()> {
     {
         return export_skin(args, one);
     }
-    let loaded = load_models(&args.models)?;
+    let loaded = load_models(&args.models, &args.output)?;
     if let Some(scale) = args.displacement {
         within_models("--displacement", scale, &loaded)?;
     }

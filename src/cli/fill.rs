@@ -5,7 +5,7 @@ use super::commands::usage;
 use crate::error::{Error, Result};
 use crate::fill::render::{self, Textures, View};
 use crate::fill::view::Shading;
-use crate::fill::{self, Job, LstModel, mesher, translucent};
+use crate::fill::{self, Job, LstModel, MaskRef, mesher, translucent};
 use crate::io::{self, fill_spec, lst_file};
 use crate::library;
 use crate::library::fill::load_mask;
@@ -465,6 +465,16 @@ pub(super) struct Loaded {
 }
 
 impl Loaded {
+    /// The files the model reads besides itself: its sources' volumes and mask files.
+    fn sources(&self, model: &Path) -> Vec<PathBuf> {
+        let base = model.parent().unwrap_or(Path::new("."));
+        let masks = self.model.sources.iter().filter_map(|s| match &s.mask {
+            MaskRef::File(file) => Some(base.join(file)),
+            _ => None,
+        });
+        self.files.iter().cloned().chain(masks).collect()
+    }
+
     /// Textures sampling the first of `wanted` each source has; `Err` names the volume
     /// file that has none.
     fn channel(&self, wanted: &[Channel]) -> std::result::Result<Textures, &Path> {
@@ -549,7 +559,9 @@ fn carried_channels(list: &str, shared: &[Channel]) -> Result<Vec<Channel>> {
     Ok(out)
 }
 
-pub(super) fn load_models(paths: &[PathBuf]) -> Result<Vec<Loaded>> {
+/// The models at `paths` with what they read, refusing an `output` that is one of the
+/// files they read (a source's volume or mask: writing it would change the models).
+pub(super) fn load_models(paths: &[PathBuf], output: &Path) -> Result<Vec<Loaded>> {
     if paths.len() > render::MAX_MODELS {
         return Err(usage(Error::invalid(format!(
             "{} models given; at most {} combine in one picture or volume",
@@ -557,7 +569,10 @@ pub(super) fn load_models(paths: &[PathBuf]) -> Result<Vec<Loaded>> {
             render::MAX_MODELS
         ))));
     }
-    paths.iter().map(|p| load_model(p)).collect()
+    let loaded: Vec<Loaded> = paths.iter().map(|p| load_model(p)).collect::<Result<_>>()?;
+    let sources: Vec<PathBuf> = loaded.iter().zip(paths).flat_map(|(l, p)| l.sources(p)).collect();
+    io::guard::not_an_input(output, &sources.iter().map(PathBuf::as_path).collect::<Vec<_>>())?;
+    Ok(loaded)
 }
 
 fn pairs(loaded: &[Loaded]) -> Vec<(&LstModel, &Textures)> {
@@ -679,7 +694,7 @@ pub fn run_cut(args: &CutArgs) -> Result<()> {
     let plane = cut_values(args).map_err(usage)?;
     let wanted = args.channel.as_deref().map(Channel::parse).transpose().map_err(usage)?;
     picture_output(&args.output, &args.models, None)?;
-    let loaded = load_models(&args.models)?;
+    let loaded = load_models(&args.models, &args.output)?;
     let channel = match &wanted {
         None => None,
         Some(c) => Some(channel_textures(&loaded, c)?),
@@ -767,7 +782,7 @@ pub fn run_render(args: &RenderArgs) -> Result<()> {
             super::guided::check_picture_of_model(model, &args.output)?;
             vec![guided_loaded(model)?]
         }
-        None => load_models(&args.models)?,
+        None => load_models(&args.models, &args.output)?,
     };
     let wanted = matches!(args.density, None | Some(DensityFrom::Alpha));
     let channel: std::result::Result<Vec<Textures>, &Path> =
@@ -835,7 +850,7 @@ pub fn run_bake(args: &BakeArgs) -> Result<()> {
     }
     let models: Vec<&Path> = args.models.iter().map(PathBuf::as_path).collect();
     io::check_output(&args.output, &models)?;
-    let loaded = load_models(&args.models)?;
+    let loaded = load_models(&args.models, &args.output)?;
     let (shared, left_out) = shared_channels(&loaded);
     let shared = match args.carry.as_deref() {
         None => {
@@ -968,7 +983,7 @@ pub fn run_view(args: &ViewArgs) -> Result<()> {
     {
         return view_skin(args, one);
     }
-    let loaded = load_models(&args.models)?;
+    let loaded = load_models(&args.models, &args.output)?;
     let started = Instant::now();
     let shading = if args.flat { Shading::Flat } else { Shading::Smooth { crease: args.crease } };
     let camera = (args.camera.yaw, args.camera.pitch);

@@ -304,16 +304,24 @@ pub fn run_guided(args: &GuidedArgs) -> Result<()> {
         (None, true) => Action::Model,
         (None, false) => Action::Solid,
     };
-    let inputs = inputs(args);
-    match action {
-        Action::Cut(..) | Action::View(_) => io::guard::png_output(&args.output, &inputs)?,
-        Action::Solid => io::check_output(&args.output, &inputs)?,
-        Action::Model => {
-            io::guard::file_output(&args.output, &inputs, &[io::guided_model::EXTENSION], "a guided model")?
-        }
-        Action::Keep => {}
-    }
+    check_output_of(action, &args.output, args, None)?;
     synthesize(args, action).map(|_| ())
+}
+
+/// Refuse an `output` that is not of the kind `action` writes, or that is one of the
+/// inputs of `args` (and the guided `model` they come from): the built volumes of the
+/// spec's regions included.
+fn check_output_of(action: Action, output: &Path, args: &GuidedArgs, model: Option<&Path>) -> Result<()> {
+    let fill = fill_spec::read_fill_spec(&args.spec)?;
+    let regions: Vec<PathBuf> =
+        fill.regions.iter().map(|r| crate::library::files::volume(&fill.built, &r.exemplar)).collect();
+    let inputs: Vec<&Path> = inputs(args).into_iter().chain(model).chain(regions.iter().map(PathBuf::as_path)).collect();
+    match action {
+        Action::Cut(..) | Action::View(_) => io::guard::png_output(output, &inputs),
+        Action::Solid => io::check_output(output, &inputs),
+        Action::Model => io::guard::file_output(output, &inputs, &[io::guided_model::EXTENSION], "a guided model"),
+        Action::Keep => Ok(()),
+    }
 }
 
 /// Do `action` with the inputs of `args` (checked): the field, the exemplars (by regions,
@@ -467,13 +475,7 @@ pub fn cut_model(model: &Path, plane: Option<(Vec3, Vec3)>, size: usize, output:
 pub fn from_model(model: &Path, action: Action, size: usize, output: &Path) -> Result<()> {
     let args = args_of(io::guided_model::read(model)?, size, output);
     checked(&args).map_err(|e| e.in_file(model))?;
-    let inputs: Vec<&Path> = inputs(&args).into_iter().chain([model]).collect();
-    match action {
-        Action::Solid => io::check_output(output, &inputs)?,
-        Action::Model => io::guard::file_output(output, &inputs, &[io::guided_model::EXTENSION], "a guided model")?,
-        Action::Cut(..) | Action::View(_) => io::guard::png_output(output, &inputs)?,
-        Action::Keep => {}
-    }
+    check_output_of(action, output, &args, Some(model))?;
     synthesize(&args, action).map(|_| ())
 }
 

@@ -125,7 +125,7 @@ fn volumes(inputs: &[&Path], title: &str) -> Result<(String, String)> {
 
 /// Filled models: baked at `--res`, lowered until the page fits `--max-mb`.
 fn models(args: &WebArgs, title: &str) -> Result<(String, String)> {
-    let loaded = load_models(&args.inputs)?;
+    let loaded = load_models(&args.inputs, &args.output)?;
     let cap = args.max_mb * 1_000_000;
     let mut res = args.res;
     loop {

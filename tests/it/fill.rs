@@ -1085,6 +1085,31 @@ fn filled_models_are_shaded_as_smoothly_as_their_mesh() {
     }
 }
 
+/// The volumes and mask files a model reads are its inputs: a bake naming one is a usage
+/// error, and the file stays as it was (writing it would change the model silently).
+#[test]
+fn a_models_exemplar_and_masks_are_never_written_over() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (mesh, spec) = kiwi_fruit(d);
+    fill(d, &mesh, &spec, "k.lst");
+    let model = at(d, "k.lst");
+    let lst = solidtex::io::lst_file::read_lst(Path::new(&model)).unwrap();
+    let mut read: Vec<std::path::PathBuf> = lst.sources.iter().map(|s| d.join(&s.volume)).collect();
+    read.extend(lst.sources.iter().filter_map(|s| match &s.mask {
+        solidtex::fill::MaskRef::File(file) => Some(d.join(file)),
+        _ => None,
+    }));
+    assert!(read.len() >= 2, "{read:?}");
+    for file in read {
+        let before = std::fs::read(&file).unwrap();
+        let name = file.file_name().unwrap().to_string_lossy().into_owned();
+        let run = solidtex(&["bake", &model, "--res", "16", "-o", &file.to_string_lossy()]);
+        crate::support::assert_usage(&run, &[&name, "input"]);
+        assert_eq!(std::fs::read(&file).unwrap(), before, "{name} as it was");
+    }
+}
+
 /// A depth-varying exemplar whose depth field leaves most of the model near depth 0 (all
 /// skin) is warned about, naming the share; the kiwi in its fruit is not.
 #[test]

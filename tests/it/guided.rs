@@ -456,6 +456,17 @@ fn regions_give_the_log_one_exemplar_outside_and_another_inside() {
     let run = solidtex(&[&args[..10], &["--exemplar", &photo, "-o", &refused]].concat());
     crate::support::assert_usage(&run, &["--exemplar", "regions.toml", "[[region]]"]);
     assert!(!d.join("refused.png").exists());
+
+    // a region's built volume is an input: neither the solid nor a guided model's bake
+    // writes over it
+    let blue = d.join("built/blue.exr");
+    let before = std::fs::read(&blue).unwrap();
+    let model = at(d, "regions.guided");
+    assert!(solidtex(&[&args[..6], &["-o", &model]].concat()).status.success());
+    let blue = blue.to_string_lossy();
+    crate::support::assert_usage(&solidtex(&[&args[..6], &["-o", &blue]].concat()), &["blue.exr", "input"]);
+    crate::support::assert_usage(&solidtex(&["bake", &model, "-o", &blue]), &["blue.exr", "input"]);
+    assert_eq!(std::fs::read(d.join("built/blue.exr")).unwrap(), before);
 }
 
 /// A spec's `[[scale_at]]` points scale the texture: on a block whose left end asks for
