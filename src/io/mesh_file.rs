@@ -64,8 +64,27 @@ pub fn read_mesh(path: &Path) -> Result<Mesh> {
         Kind::Ply => parse_ply(&bytes),
     }
     .map_err(|e| e.in_file(path))?;
-    Mesh::new(soup.vertices, soup.triangles).map_err(|e| e.in_file(path))
+    let mesh = Mesh::new(soup.vertices, soup.triangles).map_err(|e| e.in_file(path))?;
+    let (lo, hi) = mesh.bounds();
+    let across = lo.distance(hi);
+    if !SIZES.contains(&across) {
+        return Err(Error::file(
+            path,
+            format!(
+                "is {across:.3e} units across (the diagonal of its box); solidtex takes meshes {:.0e} to {:.0e} units \
+                 across: scale it (e.g. to metres or millimetres)",
+                SIZES.start(),
+                SIZES.end()
+            ),
+        ));
+    }
+    Ok(mesh)
 }
+
+/// How large a mesh may be, the diagonal of its box in its own units: far outside, the
+/// mesher's and the surface matching's tolerances (near single precision's) break, and a
+/// tet mesh or a skin comes out wrong or not at all.
+pub const SIZES: std::ops::RangeInclusive<f32> = 1e-6..=1e8;
 
 /// A mesh with one colour per vertex (in [0, 1]).
 #[derive(Debug, Clone, PartialEq)]

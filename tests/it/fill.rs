@@ -1085,6 +1085,33 @@ fn filled_models_are_shaded_as_smoothly_as_their_mesh() {
     }
 }
 
+/// A mesh far smaller or larger than the tolerances allow (a tetrahedron 1e-10 or 1e12
+/// units across) is refused with its size and the range, by `fill` and `surface` alike
+/// (they panicked, or wrote a skin of twice the points asked).
+#[test]
+fn meshes_outside_the_sizes_solidtex_takes_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (_, spec) = kiwi_fruit(d);
+    let photo = at(d, "grey.png");
+    image::RgbImage::from_pixel(32, 32, image::Rgb([90, 90, 90])).save(&photo).unwrap();
+    for (name, size) in [("tiny", 1e-10f64), ("huge", 1e12)] {
+        let mesh = at(d, &format!("{name}.obj"));
+        let corners = [[0.0, 0.0, 0.0], [size, 0.0, 0.0], [0.0, size, 0.0], [0.0, 0.0, size]];
+        let mut text: String = corners.iter().map(|[x, y, z]| format!("v {x:e} {y:e} {z:e}\n")).collect();
+        text += "f 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";
+        std::fs::write(&mesh, text).unwrap();
+        let fill = solidtex(&["fill", &mesh, "--spec", &spec, "-o", &at(d, "out.lst")]);
+        let surface = solidtex(&["surface", &mesh, "--exemplar", &photo, "--points", "200", "-o", &at(d, "out.ply")]);
+        for run in [fill, surface] {
+            assert_eq!(run.status.code(), Some(1), "{}", stderr(&run));
+            assert!(stderr(&run).contains(&format!("{name}.obj: is ")), "{}", stderr(&run));
+            assert!(stderr(&run).contains("units across: scale it"), "{}", stderr(&run));
+        }
+        assert!(!d.join("out.lst").exists() && !d.join("out.ply").exists());
+    }
+}
+
 /// The volumes and mask files a model reads are its inputs: a bake naming one is a usage
 /// error, and the file stays as it was (writing it would change the model silently).
 #[test]
