@@ -38,8 +38,21 @@ pub struct SurfaceArgs {
 
 /// Run `solidtex surface`.
 pub fn run(args: &SurfaceArgs) -> Result<()> {
+    let (lo, hi) = (*surface::POINTS.start(), *surface::POINTS.end());
+    io::values::within("--points", args.points, lo, hi).map_err(super::commands::usage)?;
+    if let Some(texel) = args.texel.filter(|t| !(t.is_finite() && *t > 0.0)) {
+        return Err(Error::usage(format!("--texel {texel} must be a length greater than 0")));
+    }
     check_output(&args.output, &[&args.mesh, &args.exemplar])?;
     let mesh = mesh_file::read_mesh(&args.mesh)?;
+    let (lo, hi) = mesh.bounds();
+    if let Some(texel) = args.texel.filter(|t| *t > lo.distance(hi)) {
+        return Err(Error::usage(format!(
+            "--texel {texel}: one exemplar pixel would cover all of {} ({:.4} units across); give at most that",
+            args.mesh.display(),
+            lo.distance(hi)
+        )));
+    }
     let guide = guide(args, &mesh)?;
     let exemplar = io::read_image(&args.exemplar)?;
     surface::check_exemplar(&exemplar).map_err(|e| e.in_file(&args.exemplar))?;

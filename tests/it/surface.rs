@@ -126,14 +126,19 @@ fn the_surface_command_writes_a_coloured_ply_and_refuses_bad_input() {
         assert!(!run.status.success(), "{args:?} succeeded");
         assert!(stderr(&run).contains(says), "{args:?}: {}", stderr(&run));
     };
-    bad(
-        &["surface", &mesh, "--exemplar", photo, "--points", "50", "-o", &out],
-        "points = 50 is out of range; allowed: 100 to 500000",
-    );
+    // option values out of range are usage errors (exit 2) naming the option
+    for (args, says) in [
+        (["--points", "50"], "--points 50 is out of range; allowed: 100 to 500000"),
+        (["--texel", "-1"], "--texel -1 must be a length greater than 0"),
+        (["--texel", "1e30"], "one exemplar pixel would cover all of"),
+    ] {
+        let run = solidtex(&[&["surface", &mesh, "--exemplar", photo], &args[..], &["-o", &out]].concat());
+        assert_eq!(run.status.code(), Some(2), "{args:?}: {}", stderr(&run));
+        assert!(stderr(&run).contains(says), "{args:?}: {}", stderr(&run));
+    }
     let help = String::from_utf8(solidtex(&["surface", "--help"]).stdout).unwrap();
     assert!(help.contains("skin gets, 100 to 500000"), "the help gives the range checked: {help}");
     bad(&["surface", &mesh, "--exemplar", photo, "--direction", "0,0,0", "-o", &out], "must be a non-zero vector");
-    bad(&["surface", &mesh, "--exemplar", photo, "--texel", "-1", "-o", &out], "must be a length greater than 0");
     bad(&["surface", &mesh, "--exemplar", photo, "-o", &at(dir.path(), "skin.obj")], "writes the skin as a .ply");
     bad(&["surface", &mesh, "--exemplar", &mesh, "-o", &out], "blob.obj");
     let small = at(dir.path(), "small.png");
