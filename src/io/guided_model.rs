@@ -100,6 +100,9 @@ pub fn read(path: &Path) -> Result<GuidedModel> {
     let mut model: GuidedModel = toml::from_str(&text).map_err(|e| {
         Error::file(path, format!("is not a guided model as `solidtex guided` writes it: {}", e.message()))
     })?;
+    if model.exemplar.is_some() && model.solid.is_some() {
+        return Err(Error::file(path, "gives both exemplar and solid; a guided model takes one of them"));
+    }
     let folder = path.parent().unwrap_or(Path::new(""));
     for p in model.paths_mut() {
         *p = folder.join(&*p);
@@ -117,7 +120,8 @@ mod tests {
     use super::*;
 
     /// A model reads back as written, its paths relative to its folder on disk and
-    /// resolved again on reading; a file that is not one is refused by name.
+    /// resolved again on reading; a file that is not one, or that gives both an exemplar
+    /// and a solid, is refused by name.
     #[test]
     fn a_guided_model_reads_back_with_its_paths_resolved() {
         let dir = tempfile::tempdir().unwrap();
@@ -152,6 +156,9 @@ mod tests {
         std::fs::write(d.join("bad.guided"), "mesh = 3\n").unwrap();
         let e = read(&d.join("bad.guided")).unwrap_err().to_string();
         assert!(e.contains("bad.guided") && e.contains("not a guided model"), "{e}");
+        std::fs::write(d.join("both.guided"), format!("{text}solid = \"cube.exr\"\n")).unwrap();
+        let e = read(&d.join("both.guided")).unwrap_err().to_string();
+        assert!(e.contains("both.guided") && e.contains("both exemplar and solid"), "{e}");
     }
 
     /// Whether two paths name one place, `..` and `.` resolved by their text.
