@@ -276,6 +276,9 @@ fn checked(args: &GuidedArgs) -> Result<Option<(Vec3, Vec3)>> {
         odd_side("--n", args.n)?;
         check_tets(args.tets)?;
         args.others.check()?;
+        if let Some(folder) = args.cache.as_deref().filter(|f| f.exists() && !f.is_dir()) {
+            return Err(Error::invalid(format!("--cache {}: is a file; name a folder for the cache", folder.display())));
+        }
         args.cut.as_deref().map(|text| super::fill::plane("--cut", text)).transpose()
     };
     checks().map_err(usage)

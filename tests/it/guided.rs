@@ -129,6 +129,9 @@ fn a_guided_cut_is_synthesized_on_demand_and_cached() {
     args[last - 3] = "--n";
     args[last - 2] = "13";
     crate::support::assert_usage(&solidtex(&args), &["--n 13", "3 to 11"]);
+    args[last - 2] = "5";
+    args.extend(["--cache", &fruit]);
+    crate::support::assert_usage(&solidtex(&args), &["--cache", "fruit.obj", "is a file"]);
     assert!(!d.join("even.png").exists());
 
     let (first, second) = (at(d, "first.png"), at(d, "second.png"));
