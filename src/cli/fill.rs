@@ -125,9 +125,10 @@ pub struct BakeArgs {
     /// whole solid at its own resolution, with its exemplar's channels and alpha.
     #[arg(required = true)]
     pub models: Vec<PathBuf>,
-    /// Voxels along the longest side, 2 to 512 (not for a guided model).
-    #[arg(long, default_value_t = 128)]
-    pub res: usize,
+    /// Voxels along the longest side, 2 to 512 [default: 128] (not for a guided model,
+    /// which bakes at its own resolution).
+    #[arg(long)]
+    pub res: Option<usize>,
     /// The volume to write: R, G, B, the carried channels (`--carry`), then A (1 inside
     /// the model).
     #[arg(short, long)]
@@ -835,10 +836,21 @@ pub fn run_render(args: &RenderArgs) -> Result<()> {
     Ok(())
 }
 
+/// Voxels along a bake's longest side when `--res` is not given.
+const DEFAULT_BAKE_RES: usize = 128;
+
 /// Run `solidtex bake`.
 pub fn run_bake(args: &BakeArgs) -> Result<()> {
-    io::values::within("--res", args.res, 2, 512).map_err(usage)?;
+    let res = args.res.unwrap_or(DEFAULT_BAKE_RES);
+    io::values::within("--res", res, 2, 512).map_err(usage)?;
     if let Some(model) = guided_model(&args.models)? {
+        if args.res.is_some() {
+            return Err(usage(Error::invalid(format!(
+                "--res sets the bake of filled models (.lst); {} is a guided model, baked at the resolution it was \
+                 made with (its res)",
+                model.display()
+            ))));
+        }
         if args.carry.is_some() {
             return Err(usage(Error::invalid(format!(
                 "--carry chooses the channels of filled models (.lst); {} is a guided model (its solid carries its \
@@ -868,7 +880,7 @@ pub fn run_bake(args: &BakeArgs) -> Result<()> {
         .map(|(c, t)| render::Carried { channel: c.clone(), textures: t.iter().collect() })
         .collect();
     let started = Instant::now();
-    let volume = render::bake(&pairs(&loaded), &carried, args.res, io::budget_from_env()?)?;
+    let volume = render::bake(&pairs(&loaded), &carried, res, io::budget_from_env()?)?;
     // the models and their textures are done with: free them before the writer copies the
     // volume into its own layout
     drop(carried);

@@ -567,6 +567,9 @@ fn a_guided_model_is_viewed_cut_and_baked_on_demand() {
     assert!(run.status.success(), "{}", stderr(&run));
     let read = |p: &str| solidtex::io::read_volume(std::path::Path::new(p), 1 << 30).unwrap();
     assert_eq!(read(&solid).data(), read(&baked).data(), "the same solid");
+    let other = at(d, "other.exr");
+    crate::support::assert_usage(&solidtex(&["bake", &model, "--res", "32", "-o", &other]), &["--res", "fruit.guided"]);
+    assert!(!d.join("other.exr").exists());
 
     let views: Vec<Vec<u8>> = ["1", "2"]
         .iter()
