@@ -376,7 +376,7 @@ fn synthesize(args: &GuidedArgs, action: Action) -> Result<Option<Filled>> {
     };
     bar.0.finish_and_clear();
     let (voxels, corrections, full) = outcome?;
-    report(args, action, &g, &domain, (started, ready), [voxels, corrections, full]);
+    report(args, action, &g, &domain, (started, ready), [voxels, corrections, full, 1]);
     Ok(kept)
 }
 
@@ -504,9 +504,10 @@ fn report(
     g: &Guide,
     domain: &Domain,
     (started, ready): (Instant, f64),
-    counts: [usize; 3],
+    counts: [usize; 4],
 ) {
-    let [voxels, corrections, full] = counts;
+    let [voxels, corrections, full, solids] = counts;
+    let whole = if solids == 1 { "a whole solid needs".to_string() } else { format!("{solids} whole solids need") };
     let what = match action {
         Action::Keep => "synthesized the whole solid".to_string(),
         _ => format!("wrote {}", args.output.display()),
@@ -521,7 +522,7 @@ fn report(
         started.elapsed().as_secs_f64() - ready
     );
     tell!(
-        "voxels synthesized: {voxels} of the {full} a whole solid needs ({:.1} %), {corrections} corrections",
+        "voxels synthesized: {voxels} of the {full} {whole} ({:.1} %), {corrections} corrections",
         100.0 * voxels as f64 / full.max(1) as f64
     );
 }
@@ -627,8 +628,8 @@ fn write_blend(
     };
     bar.0.finish_and_clear();
     let [voxels, corrections] = outcome?;
-    let full = parts.first().map_or(0, whole);
-    report(args, action, g, domain, (started, ready), [voxels, corrections, full]);
+    let full = parts.iter().map(whole).sum();
+    report(args, action, g, domain, (started, ready), [voxels, corrections, full, parts.len()]);
     Ok(kept)
 }
 
