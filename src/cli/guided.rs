@@ -277,7 +277,10 @@ fn checked(args: &GuidedArgs) -> Result<Option<(Vec3, Vec3)>> {
         check_tets(args.tets)?;
         args.others.check()?;
         if let Some(folder) = args.cache.as_deref().filter(|f| f.exists() && !f.is_dir()) {
-            return Err(Error::invalid(format!("--cache {}: is a file; name a folder for the cache", folder.display())));
+            return Err(Error::invalid(format!(
+                "--cache {}: is a file; name a folder for the cache",
+                folder.display()
+            )));
         }
         args.cut.as_deref().map(|text| super::fill::plane("--cut", text)).transpose()
     };
@@ -318,7 +321,8 @@ fn check_output_of(action: Action, output: &Path, args: &GuidedArgs, model: Opti
     let fill = fill_spec::read_fill_spec(&args.spec)?;
     let regions: Vec<PathBuf> =
         fill.regions.iter().map(|r| crate::library::files::volume(&fill.built, &r.exemplar)).collect();
-    let inputs: Vec<&Path> = inputs(args).into_iter().chain(model).chain(regions.iter().map(PathBuf::as_path)).collect();
+    let inputs: Vec<&Path> =
+        inputs(args).into_iter().chain(model).chain(regions.iter().map(PathBuf::as_path)).collect();
     match action {
         Action::Cut(..) | Action::View(_) => io::guard::png_output(output, &inputs),
         Action::Solid => io::check_output(output, &inputs),
@@ -734,7 +738,7 @@ fn resized_by(image: Image2d, factor: f32) -> Result<Image2d> {
     let size = |s: usize| (s as f64 * f64::from(factor)).round();
     let (w, h) = (size(image.width()), size(image.height()));
     let (name, most) = (format!("{}x{}", image.width(), image.height()), MOST_SCALED_SIDE);
-    if !(w.min(h) >= 8.0) {
+    if w.is_nan() || h.is_nan() || w.min(h) < 8.0 {
         return Err(Error::invalid(format!(
             "the [[scale_at]] scales shrink the {name} exemplar to {w}x{h} pixels, under 8; ask for larger scales"
         )));

@@ -526,7 +526,10 @@ fn a_scale_field_halves_the_texture_where_it_asks_for_half() {
     // a scale that would grow the exemplar past what synthesis can hold is refused before
     // anything is allocated (it took all the memory, or aborted)
     for huge in ["1000", "1e30"] {
-        let body = format!("{}[[scale_at]]\npoint = [0, 0, 0]\nscale = {huge}\n", "exemplar = \"gravel\"\ntets = 3000\n[[direction]]\npoints = [[-0.9, 0, 0], [0.9, 0, 0]]\n");
+        let body = format!(
+            "{}[[scale_at]]\npoint = [0, 0, 0]\nscale = {huge}\n",
+            "exemplar = \"gravel\"\ntets = 3000\n[[direction]]\npoints = [[-0.9, 0, 0], [0.9, 0, 0]]\n"
+        );
         let spec = crate::fill::spec(d, "huge.toml", &body);
         let run = solidtex(&["guided", &block, "--spec", &spec, "--exemplar", &photo, "--res", "64", "-o", &refused]);
         assert_eq!(run.status.code(), Some(1), "{}", stderr(&run));
