@@ -170,13 +170,11 @@ impl Prepared {
         (mix64(hash) % self.centres.len() as u64) as usize
     }
 
-    /// For every centre: itself, then its k - 1 most alike centres that are not its
-    /// close spatial neighbours (those would add nothing new). The centres are searched in
-    /// the tree's leaf order (the answers of an exact search do not depend on it).
-    /// The k-coherence set of the centre in `slot` (its own slot first, then the centres
-    /// at least `max(n / 2, 2)` pixels away whose neighbourhoods are nearest, in the
-    /// projection), found on first use: a large photo's search visits a fraction of its
-    /// centres, and a set is the same whichever thread asks first.
+    /// The k-coherence set of the centre in `slot`: itself, then its k - 1 most alike
+    /// centres (in the projection) that are at least `max(n / 2, 2)` pixels away (close
+    /// spatial neighbours would add nothing new). Found on first use: a large photo's
+    /// search visits a fraction of its centres, and a set is the same whichever thread
+    /// asks first.
     pub fn coherence_of(&self, slot: usize) -> &[u32] {
         self.coherence.sets[slot].get_or_init(|| self.coherence_set(slot))
     }

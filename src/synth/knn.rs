@@ -71,12 +71,6 @@ impl KdTree {
             .1
     }
 
-    /// The points' indices in leaf order: queries made in this order walk the tree along
-    /// the same paths one after another, so they find its nodes and leaves in cache.
-    pub fn leaf_order(&self) -> &[u32] {
-        &self.order
-    }
-
     /// Dimensions.
     pub fn dims(&self) -> usize {
         self.dims
