@@ -77,9 +77,9 @@ fn guide(mesh: &Path, spec: &Path, tets: Option<usize>) -> Result<Guide> {
     Ok(Guide { surface, tets: tet_mesh, field, depth, axes, texture_axes, frames, solve_ms, spec: fill })
 }
 
-fn check_tets(tets: Option<usize>) -> Result<()> {
+fn check_tets(label: &str, tets: Option<usize>) -> Result<()> {
     if let Some(tets) = tets {
-        io::values::within("--tets", tets, *fill_spec::TETS.start(), *fill_spec::TETS.end())?;
+        io::values::within(label, tets, *fill_spec::TETS.start(), *fill_spec::TETS.end())?;
     }
     Ok(())
 }
@@ -88,7 +88,7 @@ fn check_tets(tets: Option<usize>) -> Result<()> {
 pub fn run(args: &FieldArgs) -> Result<()> {
     let checks = || -> Result<Option<(Vec3, Vec3)>> {
         io::values::within("--size", args.size, 8, 4096)?;
-        check_tets(args.tets)?;
+        check_tets("--tets", args.tets)?;
         args.plane.as_deref().map(|text| super::fill::plane("--plane", text)).transpose()
     };
     let plane = checks().map_err(usage)?;
@@ -274,7 +274,7 @@ fn checked(args: &GuidedArgs) -> Result<Option<(Vec3, Vec3)>> {
         io::values::within("--cache-mb", args.cache_mb, *CACHE_MB.start(), *CACHE_MB.end())?;
         odd_side("--coarse-n", args.coarse_n)?;
         odd_side("--n", args.n)?;
-        check_tets(args.tets)?;
+        check_tets("--tets", args.tets)?;
         args.others.check()?;
         if let Some(folder) = args.cache.as_deref().filter(|f| f.exists() && !f.is_dir()) {
             return Err(Error::invalid(format!(
@@ -477,10 +477,27 @@ pub fn cut_model(model: &Path, plane: Option<(Vec3, Vec3)>, size: usize, output:
     from_model(model, Action::Cut(point, normal), size, output)
 }
 
+/// A guided model read from `path`, its settings checked against their ranges and named as
+/// the file names them (an error in the file, not a usage error).
+fn read_model(path: &Path) -> Result<io::guided_model::GuidedModel> {
+    let model = io::guided_model::read(path)?;
+    let checks = || -> Result<()> {
+        io::values::within("res =", model.res, *solid::RESOLUTION.start(), *solid::RESOLUTION.end())?;
+        odd_side("n =", model.n)?;
+        odd_side("coarse_n =", model.coarse_n)?;
+        check_tets("tets =", model.tets)?;
+        let (lo, hi) = crate::synth::SynthParams::EXEMPLAR_SIDE;
+        model.max_exemplar.map(|m| io::values::within("max_exemplar =", m, lo, hi)).transpose()?;
+        Ok(())
+    };
+    checks().map_err(|e| e.in_file(path))?;
+    Ok(model)
+}
+
 /// `view`, `cut` or `bake` of a guided model (`model`, a `.guided` file): `action` with
 /// the model's recipe, writing `output` (`size`: a picture's side).
 pub fn from_model(model: &Path, action: Action, size: usize, output: &Path) -> Result<()> {
-    let args = args_of(io::guided_model::read(model)?, size, output);
+    let args = args_of(read_model(model)?, size, output);
     checked(&args).map_err(|e| e.in_file(model))?;
     check_output_of(action, output, &args, Some(model))?;
     synthesize(&args, action).map(|_| ())
@@ -496,7 +513,7 @@ pub fn check_picture_of_model(model: &Path, output: &Path) -> Result<()> {
 /// `render` of a guided model (`model`, a `.guided` file): its whole solid synthesized and
 /// kept as a filled model.
 pub fn filled_from_model(model: &Path) -> Result<Filled> {
-    let args = args_of(io::guided_model::read(model)?, 256, model);
+    let args = args_of(read_model(model)?, 256, model);
     checked(&args).map_err(|e| e.in_file(model))?;
     synthesize(&args, Action::Keep)?.ok_or_else(|| Error::invalid("the guided solid was not kept"))
 }

@@ -92,9 +92,24 @@ fn with_negative_numbers(command: clap::Command) -> clap::Command {
         .mut_subcommands(with_negative_numbers)
 }
 
+/// A whole-number type's largest value, for the message refusing a larger one.
+trait Most: std::str::FromStr {
+    const MOST: u64;
+}
+
+impl Most for usize {
+    const MOST: u64 = usize::MAX as u64;
+}
+
+impl Most for u64 {
+    const MOST: u64 = u64::MAX;
+}
+
 /// A whole number 0 or more, refused with what was wrong and what is allowed.
-fn whole<T: std::str::FromStr>(text: &str) -> std::result::Result<T, String> {
+fn whole<T: Most>(text: &str) -> std::result::Result<T, String> {
+    let digits = |t: &str| !t.is_empty() && t.bytes().all(|b| b.is_ascii_digit());
     text.trim().parse().map_err(|_| match text.trim().parse::<f64>() {
+        _ if digits(text.trim()) => format!("{text} is too large; give a whole number from 0 to {}", T::MOST),
         Ok(v) if v < 0.0 => format!("{text} is negative; give a whole number, 0 or more"),
         Ok(_) => format!("{text} is not a whole number; give one without a fraction (0 or more)"),
         Err(_) => format!("{text} is not a number; give a whole number, 0 or more"),

@@ -76,6 +76,11 @@ pub fn run(args: &SurfaceArgs) -> Result<()> {
         skin.texel,
         skin.levels
     );
+    let across = (skin.mesh.bounds().1 - skin.mesh.bounds().0).max_element();
+    let side = exemplar.width().min(exemplar.height());
+    if let Some(note) = surface::scale_note(across, skin.texel, side, skin.spacing) {
+        tell!("note: {note}");
+    }
     tell!(
         "histogram distance to the exemplar: R {:.3}  G {:.3}  B {:.3} (0 = equal, 2 = disjoint)",
         hist[0],

@@ -169,6 +169,14 @@ fn le_u64(bytes: &[u8], at: usize) -> u64 {
     u64::from_le_bytes(bytes[at..at + 8].try_into().expect("eight bytes"))
 }
 
+/// The error for a file at a cache's name that is not `what` solidtex wrote there (an empty
+/// file said as such): it is left as it is.
+fn not_ours(path: &Path, what: &str) -> Error {
+    let empty = std::fs::metadata(path).is_ok_and(|m| m.len() == 0);
+    let is = if empty { format!("is empty, not {what}") } else { format!("is not {what}") };
+    Error::file(path, format!("{is}; solidtex does not overwrite it (move it away or give another --cache folder)"))
+}
+
 /// The cube file of `key` in `folder`.
 pub fn cube_path(folder: &Path, key: u64) -> PathBuf {
     folder.join(format!("guided-cube-{key:016x}.cache"))
@@ -181,13 +189,8 @@ pub fn read_cube(path: &Path, key: u64, side: usize, channels: usize, range: (f3
         let fits = le_u64(h, 23) == key && le_u32(h, 31) == side && le_u32(h, 35) == channels;
         owner(h, CUBE_MAGIC, OLD_CUBE_MAGICS).filter(|_| fits)
     };
-    let found = read_checked(path, CUBE_HEADER, Size::Body(4 * side * side * side * channels), ours)?.ok_or_else(|| {
-        Error::file(
-            path,
-            "is not the solid cube of these exemplars; solidtex does not overwrite it (move it away or give another \
-             --cache folder)",
-        )
-    })?;
+    let found = read_checked(path, CUBE_HEADER, Size::Body(4 * side * side * side * channels), ours)?
+        .ok_or_else(|| not_ours(path, "the solid cube of these exemplars"))?;
     Ok(found.and_then(|bytes| colours_within(&bytes[CUBE_HEADER + CHECKSUM..], range)))
 }
 
@@ -244,13 +247,8 @@ pub fn read(
             le_u64(h, 24) == key && le_u32(h, 32) == dims.len() && [36, 40, 44].map(|at| le_u32(h, at)) == finest;
         owner(h, MAGIC, OLD_MAGICS).filter(|_| fits)
     };
-    let found = read_checked(path, HEADER, Size::AtMost(most), ours)?.ok_or_else(|| {
-        Error::file(
-            path,
-            "is not the guided-synthesis cache of these inputs; solidtex does not overwrite it (move it away or \
-             give another --cache folder)",
-        )
-    })?;
+    let found = read_checked(path, HEADER, Size::AtMost(most), ours)?
+        .ok_or_else(|| not_ours(path, "the guided-synthesis cache of these inputs"))?;
     Ok(found.and_then(|bytes| match bricks(&bytes[HEADER + CHECKSUM..], dims, slots, &voxel) {
         Ok(levels) => Cached::Good(levels),
         Err(why) => damaged(why),
@@ -346,7 +344,8 @@ mod tests {
     }
 
     /// A cube reads back as written; a missing file is `Missing`; a file with another
-    /// key, side or channel count, or another magic, is refused by name.
+    /// key, side or channel count, or another magic, is refused by name, an empty one said
+    /// to be empty.
     #[test]
     fn a_cube_reads_back_and_a_foreign_file_is_refused() {
         let dir = tempfile::tempdir().unwrap();
@@ -360,7 +359,11 @@ mod tests {
             assert!(err.contains("guided-cube-") && err.contains("does not overwrite"), "{err}");
         }
         std::fs::write(&path, b"my notes").unwrap();
-        assert!(read_cube(&path, 7, 2, 3, RANGE).unwrap_err().to_string().contains("not the solid cube"));
+        assert!(read_cube(&path, 7, 2, 3, RANGE).unwrap_err().to_string().contains("is not the solid cube"));
+        std::fs::write(&path, b"").unwrap();
+        let err = read_cube(&path, 7, 2, 3, RANGE).unwrap_err().to_string();
+        assert!(err.contains("is empty, not the solid cube") && err.contains("does not overwrite"), "{err}");
+        assert_eq!(std::fs::read(&path).unwrap(), b"", "left as it was");
     }
 
     /// A cube file of the key whose samples were overwritten (zeros, -1e30, one flipped

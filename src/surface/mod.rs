@@ -93,6 +93,32 @@ pub fn synthesize(mesh: &Mesh, exemplar: &Image2d, options: &Options, progress: 
     Ok(Skin { mesh: tiled, colours, pixels, ups, spacing, texel, levels })
 }
 
+/// A skin showing less of its photo across the model than this share of the photo's shorter
+/// side gets [`scale_note`]: the photo's features then look large on the model.
+pub const SMALL_SHARE: f32 = 0.5;
+
+/// What to tell a designer whose model, `across` units along its longest side, spans fewer
+/// exemplar pixels (`texel` units each) than [`SMALL_SHARE`] of the photo's shorter side
+/// (`photo_side` pixels): how much of the photo shows and what makes its features smaller.
+/// `None` when the model shows enough of the photo.
+pub fn scale_note(across: f32, texel: f32, photo_side: usize, spacing: f32) -> Option<String> {
+    let pixels = across / texel;
+    if pixels >= SMALL_SHARE * photo_side as f32 {
+        return None;
+    }
+    let finest = (texel / spacing).max(1.0);
+    let more = if finest > 1.05 {
+        format!("--texel {:.4} (one point per pixel) shows {:.1} times as much", spacing, finest)
+    } else {
+        "the points are already one per pixel".to_string()
+    };
+    Some(format!(
+        "the model is about {pixels:.0} exemplar pixels across, the photo {photo_side}: its features look large on the \
+         model; {more}, more --points (up to {}) more still, or give a photo shrunk so its features span fewer pixels",
+        POINTS.end()
+    ))
+}
+
 /// Refuses an exemplar smaller than [`MIN_EXEMPLAR`] on a side.
 pub fn check_exemplar(exemplar: &Image2d) -> Result<()> {
     if exemplar.width() < MIN_EXEMPLAR || exemplar.height() < MIN_EXEMPLAR {
@@ -263,5 +289,22 @@ impl<'a> SkinLookup<'a> {
         let wc = 1.0 - wa - wb;
         let [ca, cb, cc] = [a, b, c].map(|v| self.colours[v as usize]);
         (p.distance(q), [0, 1, 2].map(|k| wa * ca[k] + wb * cb[k] + wc * cc[k]))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_model_showing_little_of_its_photo_is_told_how_to_show_more() {
+        // 2 units across at 0.05 units a pixel: 40 pixels of a 512-px photo
+        let note = scale_note(2.0, 0.05, 512, 0.025).expect("a note");
+        assert!(note.contains("about 40 exemplar pixels across, the photo 512"), "{note}");
+        assert!(note.contains("--texel 0.0250 (one point per pixel) shows 2.0 times as much"), "{note}");
+        assert!(scale_note(2.0, 0.025, 512, 0.025).unwrap().contains("already one per pixel"));
+        // 400 pixels of a 512-px photo, or 40 of a 64-px one: enough shows
+        assert_eq!(scale_note(2.0, 0.005, 512, 0.0025), None);
+        assert_eq!(scale_note(2.0, 0.05, 64, 0.025), None);
     }
 }

@@ -611,6 +611,17 @@ fn a_guided_model_is_viewed_cut_and_baked_on_demand() {
     assert!(shown > 64 * 64 / 5, "{shown} pixels show the fruit");
 
     let refused = at(d, "refused.png");
+    // a model file's settings out of range are errors in the file, named as it names them
+    for (line, says) in [("res = 100000", "res = 100000 is out of range"), ("n = 4", "n = 4 must be odd")] {
+        let bad = at(d, "bad.guided");
+        let field = line.split(' ').next().unwrap();
+        let edited: Vec<String> = text
+            .lines()
+            .map(|l| if l.starts_with(&format!("{field} =")) { line.to_string() } else { l.to_string() })
+            .collect();
+        std::fs::write(&bad, edited.join("\n")).unwrap();
+        crate::support::assert_fails(&solidtex(&["view", &bad, "-o", &refused]), &["bad.guided", says]);
+    }
     let run = solidtex(&["view", &model, "--displacement", "0.1", "-o", &refused]);
     crate::support::assert_usage(&run, &["--displacement", "fruit.guided"]);
     crate::support::assert_usage(&solidtex(&["view", &model, &model, "-o", &refused]), &["fruit.guided", "alone"]);

@@ -110,6 +110,9 @@ fn the_surface_command_writes_a_coloured_ply_and_refuses_bad_input() {
         solidtex(&["surface", &mesh, "--exemplar", photo, "--points", "3000", "--direction", "0,0,1", "-o", &out]);
     assert!(run.status.success(), "{}", stderr(&run));
     assert!(stderr(&run).contains("histogram distance"), "{}", stderr(&run));
+    // 3,000 points show a few dozen of the 512-px photo's pixels: the designer is told
+    assert!(stderr(&run).contains("exemplar pixels across, the photo 512"), "{}", stderr(&run));
+    assert!(stderr(&run).contains("more --points"), "{}", stderr(&run));
     let skin = read_coloured_ply(Path::new(&out)).unwrap();
     assert_eq!(skin.colours.len(), skin.mesh.vertices.len());
     assert!((2700..=3300).contains(&skin.mesh.vertices.len()));
