@@ -4,15 +4,16 @@
 //! covered.
 //!
 //! ```text
-//!   uncovered list --random seed--> rigid map --grow--> clump --optimize--> coords
-//!        ^                                                 ^         |
-//!        |                                                 +-regrow--+
-//!        +----- remove tets whose 165 samples all reach full alpha <--- coverage
+//!   uncovered queue --least priority--> rigid map --grow--> clump --optimize--> coords
+//!        ^                                                       ^         |
+//!        |                                                       +-regrow--+
+//!        +----- remove tets whose 165 samples all reach full alpha <--- coverage (record)
 //! ```
 //! Coverage uses the 165 points `(i, j, k, l) / 8` with `i + j + k + l = 8` in every tet; a
-//! patch adds `255 x alpha` (saturating) at each. Everything random comes from one PCG
-//! stream seeded by the caller, and per-tet work is collected in order, so the result does
-//! not depend on the thread count.
+//! patch adds `255 x alpha` (saturating) at each. Everything random comes from the caller's
+//! seed mixed with a tet and an attempt, so a patch's placement depends on its seed tet and
+//! attempt alone: the next patch is placed while the last is recorded. Per-tet work is
+//! collected in order, so the result does not depend on the thread count.
 
 use super::field::Field;
 use super::patch::{
@@ -28,9 +29,11 @@ use crate::error::{Error, Result};
 use crate::progress::Progress;
 use crate::volume::Volume;
 use glam::Vec3;
-use rand::{RngExt, SeedableRng};
+use rand::SeedableRng;
 use rand_pcg::Pcg64Mcg;
 use rayon::prelude::*;
+use std::cmp::Reverse;
+use std::collections::BinaryHeap;
 
 /// Times a seed tet may stay uncovered by its own patch before it is given up.
 const STRIKES: u8 = 6;
@@ -95,8 +98,8 @@ pub struct Pasted {
     pub stats: Stats,
 }
 
-/// Mutable state of a fill.
-pub struct Paster<'a> {
+/// What a fill reads and never changes: the mesh, its field and the masks.
+struct Context<'a> {
     mesh: &'a TetMesh,
     neighbours: Vec<[u32; 4]>,
     field: &'a Field,
@@ -106,11 +109,29 @@ pub struct Paster<'a> {
     samples: Vec<[f32; 4]>,
     /// The same samples in batches.
     batches: Vec<[[f32; BATCH]; 4]>,
+}
+
+/// A patch placed but not yet recorded: its texture coordinates over its tets (sorted), and
+/// the seed frame it follows (none for a patch pasted by hand).
+struct Placed {
+    patch: Patch,
+    tets: Vec<u32>,
+    frame: Option<Frame>,
+}
+
+/// What a fill changes: the coverage and what it made.
+struct State {
     coverage: Vec<u8>,
     /// The tets whose coverage the last patch recorded added to.
     recorded: Vec<u32>,
     out: Pasted,
     angles: Vec<f32>,
+}
+
+/// A fill under way.
+pub struct Paster<'a> {
+    ctx: Context<'a>,
+    state: State,
 }
 
 impl<'a> Paster<'a> {
@@ -123,88 +144,148 @@ impl<'a> Paster<'a> {
         }
         let tets = mesh.tets.len();
         let out = Pasted { patches: Vec::new(), tet_patches: vec![Vec::new(); tets], stats: Stats::default() };
-        let (samples, coverage) = (sample_points(), vec![0; tets * SAMPLES]);
         let masks: Vec<Sampler> = masks.iter().map(Sampler::mask).collect();
         let bounds = masks.iter().map(AlphaBounds::new).collect();
-        Ok(Paster {
+        let ctx = Context {
             mesh,
             neighbours: mesh.neighbours(),
             field,
             masks,
             bounds,
             params,
-            samples,
+            samples: sample_points(),
             batches: sample_batches(),
-            coverage,
-            recorded: Vec::new(),
-            out,
-            angles: Vec::new(),
-        })
+        };
+        let state = State { coverage: vec![0; tets * SAMPLES], recorded: Vec::new(), out, angles: Vec::new() };
+        Ok(Paster { ctx, state })
     }
 
-    /// Pastes until every tet is covered.
+    /// Pastes until every tet is covered. The seed of each patch is the uncovered tet of
+    /// least priority, a random number per tet and attempt (so a uniformly random uncovered
+    /// tet); a patch's placement depends on its seed and attempt alone. While one patch is
+    /// recorded, the patch of the seed that comes next if the recording covers neither it
+    /// nor brings the last seed back is placed beside it, and kept when that seed does come
+    /// next: the result is the same on one thread (which places nothing ahead) and on many.
     pub fn fill(&mut self, progress: &dyn Progress) -> Result<()> {
-        let tets = self.mesh.tets.len();
-        let mut rng = Pcg64Mcg::seed_from_u64(self.params.seed);
-        let mut uncovered: Vec<u32> = (0..tets as u32).collect();
+        let tets = self.ctx.mesh.tets.len();
+        let key = self.ctx.params.seed;
+        let priority = |t: usize, strike: u8| mix(key, t as u64, strike as u64);
+        let mut queue: BinaryHeap<Reverse<(u64, u32)>> =
+            (0..tets).map(|t| Reverse((priority(t, 0), t as u32))).collect();
         let mut strikes = vec![0u8; tets];
-        // a tet leaves the list once covered or struck out; only a patch's own tets and
-        // its seed can change that
+        // a tet leaves the queue once covered or struck out; only a patch's own tets and its
+        // seed can change that
         let mut done = vec![false; tets];
-        while !uncovered.is_empty() {
+        let (mut left, ahead_at_all) = (tets, rayon::current_num_threads() > 1);
+        let mut ahead: Option<(usize, u8, Placed)> = None;
+        while let Some(seed) = next_seed(&mut queue, &done) {
             if progress.cancelled() {
                 return Err(Error::Cancelled);
             }
-            let seed = uncovered[rng.random_range(0..uncovered.len())] as usize;
-            let mut frame = self.seed_frame(seed, &mut rng);
-            frame.scale *= GROWTH.powi(strikes[seed] as i32);
-            self.paste_auto(seed, frame, strikes[seed]);
+            let placed = match ahead.take() {
+                Some((s, strike, placed)) if s == seed && strike == strikes[seed] => placed,
+                _ => self.ctx.place(seed, strikes[seed]),
+            };
+            let guess = if ahead_at_all { peek_seed(&mut queue, &done) } else { None };
+            let (ctx, state, tried) = (&self.ctx, &mut self.state, &strikes);
+            (_, ahead) =
+                rayon::join(|| state.record(ctx, placed), || guess.map(|s| (s, tried[s], ctx.place(s, tried[s]))));
             strikes[seed] += 1;
-            if strikes[seed] >= STRIKES && !self.covered(seed) {
-                self.out.stats.forced += 1;
+            if strikes[seed] >= STRIKES && !state.covered(seed) {
+                state.out.stats.forced += 1;
             }
-            for &t in self.recorded.iter().chain([&(seed as u32)]) {
-                done[t as usize] = self.covered(t as usize) || strikes[t as usize] >= STRIKES;
+            for &t in state.recorded.iter().chain([&(seed as u32)]) {
+                let now = state.covered(t as usize) || strikes[t as usize] >= STRIKES;
+                left -= usize::from(now && !done[t as usize]);
+                done[t as usize] = now;
             }
-            uncovered.retain(|&t| !done[t as usize]);
-            progress.update("pasting", 1.0 - uncovered.len() as f32 / tets as f32);
+            if !done[seed] {
+                queue.push(Reverse((priority(seed, strikes[seed]), seed as u32)));
+            }
+            progress.update("pasting", 1.0 - left as f32 / tets as f32);
         }
         Ok(())
     }
 
     /// Pastes one patch by hand: texture centre at `at`, rigid (not warped).
     pub fn paste_manual(&mut self, at: Vec3, frame: Frame, source: u16) -> Result<()> {
-        let (seed, _) = super::field::locate(self.mesh, at);
-        if self.masks.get(source as usize).is_none() {
+        let ctx = &self.ctx;
+        let (seed, _) = super::field::locate(ctx.mesh, at);
+        if ctx.masks.get(source as usize).is_none() {
             return Err(Error::invalid(format!("paste source {source} has no mask")));
         }
-        let map = Rigid::new(&frame, self.params.axes, at, Vec3::splat(0.5));
-        let coords = |v: u32| map.apply(self.mesh.vertices[v as usize]);
-        let tets = self.grow(seed, &coords, source, None);
-        let vertices = vertices_of(self.mesh, &tets);
+        let map = Rigid::new(&frame, ctx.params.axes, at, Vec3::splat(0.5));
+        let coords = |v: u32| map.apply(ctx.mesh.vertices[v as usize]);
+        let tets = ctx.grow(seed, &coords, source, None);
+        let vertices = vertices_of(ctx.mesh, &tets);
         let all: Vec<Vec3> = vertices.iter().map(|&v| coords(v)).collect();
-        self.record(Patch { source, vertices, coords: all }, &tets, None);
+        self.state.record(ctx, Placed { patch: Patch { source, vertices, coords: all }, tets, frame: None });
         Ok(())
     }
 
     /// The result so far.
-    pub fn finish(mut self) -> Pasted {
-        let stats = &mut self.out.stats;
-        stats.patches = self.out.patches.len();
-        let layers: usize = self.out.tet_patches.iter().map(Vec::len).sum();
-        stats.mean_layers = layers as f64 / self.out.tet_patches.len().max(1) as f64;
-        self.angles.sort_by(f32::total_cmp);
-        if !self.angles.is_empty() {
-            stats.angle_mean = self.angles.iter().map(|a| *a as f64).sum::<f64>() / self.angles.len() as f64;
-            stats.angle_p95 = self.angles[(self.angles.len() * 95 / 100).min(self.angles.len() - 1)] as f64;
+    pub fn finish(self) -> Pasted {
+        let State { mut out, mut angles, .. } = self.state;
+        let stats = &mut out.stats;
+        stats.patches = out.patches.len();
+        let layers: usize = out.tet_patches.iter().map(Vec::len).sum();
+        stats.mean_layers = layers as f64 / out.tet_patches.len().max(1) as f64;
+        angles.sort_by(f32::total_cmp);
+        if !angles.is_empty() {
+            stats.angle_mean = angles.iter().map(|a| *a as f64).sum::<f64>() / angles.len() as f64;
+            stats.angle_p95 = angles[(angles.len() * 95 / 100).min(angles.len() - 1)] as f64;
         }
-        self.out
+        out
     }
+}
 
+impl State {
     fn covered(&self, t: usize) -> bool {
         self.coverage[t * SAMPLES..(t + 1) * SAMPLES].iter().all(|c| *c == 255)
     }
 
+    /// Adds a patch: samples its mask in each clump tet, accumulates coverage, lists it
+    /// where it shows, and measures how well it follows the field.
+    fn record(&mut self, ctx: &Context, placed: Placed) {
+        let Placed { patch, tets, frame } = placed;
+        let tets = &tets[..];
+        let (mask, bounds) = (&ctx.masks[patch.source as usize], &ctx.bounds[patch.source as usize]);
+        let mut alphas = vec![0u8; tets.len() * SAMPLES];
+        let mut angles = vec![None; tets.len()];
+        let local = local_index(ctx.mesh, &patch.vertices);
+        let corners_of = |t: u32| ctx.mesh.tets[t as usize].map(|v| patch.coords[local[v as usize] as usize]);
+        alphas.par_chunks_mut(SAMPLES).zip(&mut angles).zip(tets).for_each(|((a, angle), &t)| {
+            let corners = corners_of(t);
+            if self.covered(t as usize) {
+                // nothing to add: only whether the patch shows there (and shows half) matters
+                a.fill(0);
+                a[0] = tet_shows(mask, bounds, &ctx.samples, corners);
+            } else {
+                let coverage = &self.coverage[t as usize * SAMPLES..(t as usize + 1) * SAMPLES];
+                tet_alphas(mask, bounds, &ctx.batches, corners, coverage, a);
+            }
+            if let (Some(f), true) = (&frame, a.iter().any(|x| *x >= 128)) {
+                *angle = Some(ctx.angle(t as usize, corners, f));
+            }
+        });
+        let index = self.out.patches.len() as u32;
+        self.recorded.clear();
+        for ((&t, a), angle) in tets.iter().zip(alphas.chunks_exact(SAMPLES)).zip(angles) {
+            if a.iter().all(|x| *x == 0) {
+                continue;
+            }
+            let cov = &mut self.coverage[t as usize * SAMPLES..(t as usize + 1) * SAMPLES];
+            cov.iter_mut().zip(a).for_each(|(c, x)| *c = c.saturating_add(*x));
+            self.recorded.push(t);
+            self.out.tet_patches[t as usize].push(index);
+            self.angles.extend(angle);
+        }
+        self.out.stats.mean_clump += (tets.len() as f64 - self.out.stats.mean_clump) / (index as f64 + 1.0);
+        self.out.patches.push(prune(patch, &local, ctx.mesh, tets, &alphas));
+    }
+}
+
+impl Context<'_> {
     fn depth_at(&self, v: u32) -> Option<f32> {
         self.field.depth.as_ref().map(|d| d[v as usize])
     }
@@ -229,8 +310,10 @@ impl<'a> Paster<'a> {
         }
     }
 
-    fn seed_frame(&self, t: usize, rng: &mut Pcg64Mcg) -> Frame {
-        let random = random_frame(rng);
+    /// The frame of a patch seeded at tet `t` on its `strike`-th attempt: the field's,
+    /// completed or replaced by a random frame of that seed and attempt.
+    fn seed_frame(&self, t: usize, strike: u8) -> Frame {
+        let random = random_frame(&mut Pcg64Mcg::seed_from_u64(mix(self.params.seed, t as u64, 0x100 + strike as u64)));
         let r = self.field.primary[t];
         let s = self.field.secondary[t];
         let dirs = if r == Vec3::ZERO {
@@ -258,7 +341,11 @@ impl<'a> Paster<'a> {
         Frame { dirs, scale: self.field.scale[t] * boost }
     }
 
-    fn paste_auto(&mut self, seed: usize, frame: Frame, strike: u8) {
+    /// The patch of `seed` at its `strike`-th attempt: a rigid map of a frame from the field
+    /// (random where the field gives none), grown, warped along the field and regrown.
+    fn place(&self, seed: usize, strike: u8) -> Placed {
+        let mut frame = self.seed_frame(seed, strike);
+        frame.scale *= GROWTH.powi(strike as i32);
         let axes = self.params.axes;
         let anchor = self.mesh.centroid(seed);
         let mut centre = Vec3::splat(0.5);
@@ -292,7 +379,7 @@ impl<'a> Paster<'a> {
                 break;
             }
         }
-        self.record(Patch { source, vertices, coords }, &tets, Some(frame));
+        Placed { patch: Patch { source, vertices, coords }, tets, frame: Some(frame) }
     }
 
     fn with_depth(&self, v: u32, mut w: Vec3) -> Vec3 {
@@ -435,44 +522,6 @@ impl<'a> Paster<'a> {
         (all, new_vertices, sorted_coords)
     }
 
-    /// Adds a patch: samples its mask in each clump tet, accumulates coverage, lists it
-    /// where it shows, and measures how well it follows the field.
-    fn record(&mut self, patch: Patch, tets: &[u32], frame: Option<Frame>) {
-        let (mask, bounds) = (&self.masks[patch.source as usize], &self.bounds[patch.source as usize]);
-        let mut alphas = vec![0u8; tets.len() * SAMPLES];
-        let mut angles = vec![None; tets.len()];
-        let local = local_index(self.mesh, &patch.vertices);
-        let corners_of = |t: u32| self.mesh.tets[t as usize].map(|v| patch.coords[local[v as usize] as usize]);
-        alphas.par_chunks_mut(SAMPLES).zip(&mut angles).zip(tets).for_each(|((a, angle), &t)| {
-            let corners = corners_of(t);
-            if self.covered(t as usize) {
-                // nothing to add: only whether the patch shows there (and shows half) matters
-                a.fill(0);
-                a[0] = tet_shows(mask, bounds, &self.samples, corners);
-            } else {
-                let coverage = &self.coverage[t as usize * SAMPLES..(t as usize + 1) * SAMPLES];
-                tet_alphas(mask, bounds, &self.batches, corners, coverage, a);
-            }
-            if let (Some(f), true) = (&frame, a.iter().any(|x| *x >= 128)) {
-                *angle = Some(self.angle(t as usize, corners, f));
-            }
-        });
-        let index = self.out.patches.len() as u32;
-        self.recorded.clear();
-        for ((&t, a), angle) in tets.iter().zip(alphas.chunks_exact(SAMPLES)).zip(angles) {
-            if a.iter().all(|x| *x == 0) {
-                continue;
-            }
-            let cov = &mut self.coverage[t as usize * SAMPLES..(t as usize + 1) * SAMPLES];
-            cov.iter_mut().zip(a).for_each(|(c, x)| *c = c.saturating_add(*x));
-            self.recorded.push(t);
-            self.out.tet_patches[t as usize].push(index);
-            self.angles.extend(angle);
-        }
-        self.out.stats.mean_clump += (tets.len() as f64 - self.out.stats.mean_clump) / (index as f64 + 1.0);
-        self.out.patches.push(prune(patch, &local, self.mesh, tets, &alphas));
-    }
-
     /// The largest angle (degrees) between a field axis mapped by the patch (its texture
     /// coordinates at tet `t`'s `corners`) and its texture axis: the primary for 1-a/1-b,
     /// primary and secondary for 2-a/2-b, none for type 0.
@@ -491,6 +540,36 @@ impl<'a> Paster<'a> {
             })
             .fold(0.0, f32::max)
     }
+}
+
+/// The uncovered tet of least priority, taken off the queue (entries of tets done since
+/// they were queued are dropped).
+fn next_seed(queue: &mut BinaryHeap<Reverse<(u64, u32)>>, done: &[bool]) -> Option<usize> {
+    peek_seed(queue, done).inspect(|_| {
+        queue.pop();
+    })
+}
+
+/// The uncovered tet of least priority, left on the queue.
+fn peek_seed(queue: &mut BinaryHeap<Reverse<(u64, u32)>>, done: &[bool]) -> Option<usize> {
+    while let Some(Reverse((_, t))) = queue.peek() {
+        if !done[*t as usize] {
+            return Some(*t as usize);
+        }
+        queue.pop();
+    }
+    None
+}
+
+/// A well-mixed 64-bit number of a fill's seed, a tet and an attempt (SplitMix64 steps).
+fn mix(seed: u64, t: u64, attempt: u64) -> u64 {
+    let step = |x: u64| {
+        let mut z = x.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        z ^ (z >> 31)
+    };
+    step(step(step(seed) ^ t) ^ attempt)
 }
 
 /// A mask value at least this high shows as full coverage (255) at every sample.
@@ -582,6 +661,7 @@ mod tests {
     use crate::fill::tets::cube_lattice;
     use crate::mask;
     use crate::progress::NoProgress;
+    use rand::RngExt;
 
     fn fill(kind: TextureType, c: &Constraints, masks: &[Volume], seed: u64) -> (TetMesh, Pasted) {
         let mesh = cube_lattice([6, 6, 6], 1.0 / 6.0);
@@ -617,6 +697,25 @@ mod tests {
         let (_, out) = fill(TextureType::T1a, &c, &masks, 5);
         assert_eq!(out.stats.forced, 0);
         assert!(out.stats.angle_mean < 8.0 && out.stats.angle_p95 < 20.0, "{:?}", out.stats);
+    }
+
+    /// The next patch placed beside the recording of the last (on more than one thread)
+    /// gives the fill of one thread, which places each patch when its seed comes up.
+    #[test]
+    fn placing_the_next_patch_ahead_changes_nothing() {
+        let masks = [mask::splotch(16, 0.1, 1).unwrap()];
+        let c = Constraints {
+            directions: vec![(Vec3::new(0.1, 0.5, 0.5), Vec3::X), (Vec3::new(0.9, 0.5, 0.5), Vec3::new(1.0, 1.0, 0.0))],
+            scale: 0.3,
+            ..Default::default()
+        };
+        let on = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            pool.install(|| fill(TextureType::T1a, &c, &masks, 9).1)
+        };
+        let one = on(1);
+        assert!(one.stats.patches > 10, "{:?}", one.stats);
+        assert_eq!(one, on(3));
     }
 
     /// Every sample, as if none were skipped.
