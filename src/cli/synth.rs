@@ -222,6 +222,13 @@ pub fn run(args: &SynthArgs) -> Result<()> {
     );
     let volume = if args.layered {
         let depth = args.depth.as_deref().map(|p| args.others.load(p, "depth image")).transpose()?;
+        if let (None, Some(warning)) = (&depth, synth::layering_warning(&ex)) {
+            tell!(
+                "warning: {}: {warning}. Turn the image so its rows are the layers, or give each pixel's depth with \
+                 --depth",
+                args.exemplar.display()
+            );
+        }
         let layered = LayeredParams { anti_sweeping: !args.no_anti_sweeping, depth_weight: args.depth_weight };
         synth::synthesize_layered(&ex, depth.as_ref(), &params, &layered, args.seed, &bar)
             .map_err(|e| e.in_file(&args.exemplar))?

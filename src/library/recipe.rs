@@ -89,6 +89,12 @@ fn synthesized(spec: &SynthSpec, size: [usize; 3], seed: u64, none: &dyn Progres
     let params = synth::SynthParams { size, levels: spec.levels, ..synth::SynthParams::default() };
     let volume = if spec.layered {
         let depth = spec.depth.as_deref().map(read).transpose()?;
+        if let (None, Some(warning)) = (&depth, synth::layering_warning(&ex)) {
+            none.warn(&format!(
+                "{}: {warning}. Turn the image so its rows are the layers, or give each pixel's depth (depth_image = \"...\")",
+                spec.image.display()
+            ));
+        }
         synth::synthesize_layered(&ex, depth.as_ref(), &params, &synth::LayeredParams::default(), seed, none)
     } else {
         let ey = spec.ey.as_deref().map(read).transpose()?;

@@ -41,6 +41,65 @@ pub fn directional_warning(image: &Image2d) -> Option<String> {
     })
 }
 
+/// Share of an image's grey variance its row means hold at least for its rows to read as
+/// layers on their own. Measured on the photos shrunk to 128 px: the library's sections
+/// 0.90-0.96, the strata 0.75, the layered cliff 0.15, long-grain wood 0.16-0.28; granite,
+/// marble, gravel, grass, pebbles and walnut 0.01-0.06 (docs/synthesis.md).
+pub const LAYERED_ROWS: f64 = 0.1;
+
+/// How much of an image's grey variance (channels averaged) its row means and its column
+/// means hold, each 0 to 1: a layered exemplar's rows, each one depth, differ from each
+/// other far more than its columns do.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RowShares {
+    /// The variance of the row means over the image's variance.
+    pub rows: f64,
+    /// The variance of the column means over the image's variance.
+    pub columns: f64,
+}
+
+/// Measure `image`'s [`RowShares`] (0 and 0 for a flat image).
+pub fn row_shares(image: &Image2d) -> RowShares {
+    let (w, h, n) = (image.width(), image.height(), image.channel_count());
+    let grey: Vec<f64> =
+        image.data().chunks_exact(n).map(|p| p.iter().map(|v| *v as f64).sum::<f64>() / n as f64).collect();
+    let variance = |values: &[f64]| {
+        let mean = values.iter().sum::<f64>() / values.len().max(1) as f64;
+        values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / values.len().max(1) as f64
+    };
+    let total = variance(&grey);
+    if total <= 1e-12 {
+        return RowShares { rows: 0.0, columns: 0.0 };
+    }
+    let rows: Vec<f64> = grey.chunks_exact(w).map(|r| r.iter().sum::<f64>() / w as f64).collect();
+    let columns: Vec<f64> = (0..w).map(|x| (0..h).map(|y| grey[y * w + x]).sum::<f64>() / h as f64).collect();
+    RowShares { rows: variance(&rows) / total, columns: variance(&columns) / total }
+}
+
+/// What to tell a designer who asks for a layered solid from `image` with each row as one
+/// depth, when its rows do not read as layers (`None` when they do): its layers run down
+/// the columns (column means hold twice the row means' share and at least
+/// [`LAYERED_ROWS`]), or its rows hold under [`LAYERED_ROWS`] without dominating the
+/// columns threefold. Front ends add how to give the depth otherwise.
+pub fn layering_warning(image: &Image2d) -> Option<String> {
+    let RowShares { rows, columns } = row_shares(image);
+    let shares = format!("row means hold {:.0} % of its variance, column means {:.0} %", rows * 100.0, columns * 100.0);
+    if columns >= LAYERED_ROWS && columns > 2.0 * rows {
+        Some(format!(
+            "its layers run down the columns, not along the rows ({shares}); layered synthesis takes each row as one \
+             depth"
+        ))
+    } else if rows < LAYERED_ROWS && rows <= 3.0 * columns {
+        Some(format!(
+            "its rows do not read as layers ({shares}; a layered photo's rows hold {:.0} % or more); layered \
+             synthesis takes each row as one depth",
+            LAYERED_ROWS * 100.0
+        ))
+    } else {
+        None
+    }
+}
+
 /// Measure `image` (all its channels, averaged).
 pub fn direction(image: &Image2d) -> Direction {
     let (w, h, n) = (image.width(), image.height(), image.channel_count());
@@ -116,5 +175,25 @@ mod tests {
         let speckle = direction(&image(|x, y| (hash3(1, x as i64, y as i64, 0) % 1000) as f32 / 1000.0));
         assert!(speckle.coherence < DIRECTIONAL / 2.0, "{speckle:?}");
         assert_eq!(direction(&image(|_, _| 0.5)).coherence, 0.0);
+    }
+
+    #[test]
+    fn rows_read_as_layers_only_when_they_differ_more_than_the_columns() {
+        let stripes = |t: usize| ((t as f32) * 0.5).sin() * 0.5 + 0.5;
+        let layers = image(|x, y| stripes(y) * 0.9 + (hash3(2, x as i64, y as i64, 0) % 100) as f32 / 1000.0);
+        let shares = row_shares(&layers);
+        assert!(shares.rows > 0.9 && shares.columns < 0.01, "{shares:?}");
+        assert_eq!(layering_warning(&layers), None);
+        let upright = layering_warning(&image(|x, _| stripes(x))).expect("a warning");
+        assert!(upright.contains("run down the columns") && upright.contains("column means 100 %"), "{upright}");
+        let speckle = image(|x, y| (hash3(1, x as i64, y as i64, 0) % 1000) as f32 / 1000.0);
+        let said = layering_warning(&speckle).expect("a warning");
+        assert!(said.contains("rows do not read as layers"), "{said}");
+        // fine grain along the rows: a small share, but three times the columns'
+        let grain = image(|x, y| stripes(y) * 0.2 + (hash3(3, x as i64, y as i64, 0) % 1000) as f32 / 1000.0);
+        let shares = row_shares(&grain);
+        assert!(shares.rows < LAYERED_ROWS && shares.rows > 3.0 * shares.columns, "{shares:?}");
+        assert_eq!(layering_warning(&grain), None);
+        assert_eq!(layering_warning(&image(|_, _| 0.5)).map(|w| w.contains("do not read")), Some(true));
     }
 }

@@ -36,7 +36,9 @@ pub(crate) mod spectrum;
 pub mod triples;
 mod whole;
 
-pub use direction::{DIRECTIONAL, Direction, direction, directional_warning};
+pub use direction::{
+    DIRECTIONAL, Direction, LAYERED_ROWS, RowShares, direction, directional_warning, layering_warning, row_shares,
+};
 pub(crate) use driver::image_pyramid;
 pub use params::{Core, LayeredParams, SynthParams};
 

@@ -387,7 +387,8 @@ fn a_name_too_long_for_a_file_is_refused_at_once() {
 /// One image whose features run one way, asked for a homogeneous solid, gets the directional
 /// warning in a build (on the error stream, named by entry), in the library report (also
 /// after a second build that took the entry from the cache) and in the editor's preview
-/// (for the terminal UI's status line); an image without a direction gets none.
+/// (for the terminal UI's status line); an image without a direction gets none. The same
+/// image asked for a layered solid, its stripes down the columns, gets the layering warning.
 #[test]
 fn a_directional_photo_is_warned_about_in_builds_and_previews() {
     let dir = tempfile::tempdir().unwrap();
@@ -404,7 +405,10 @@ fn a_directional_photo_is_warned_about_in_builds_and_previews() {
     let entry = |name: &str, image: &str| {
         format!("[[exemplar]]\nname = \"{name}\"\nrecipe = \"synth\"\nimage = \"{image}\"\nsize = 8\nlevels = 1\n")
     };
-    let text = entry("grain", "grain.png") + &entry("checks", "checks.png");
+    // the same stripes for a layered solid run down the columns, not along the rows
+    let layered =
+        "[[exemplar]]\nname = \"upright\"\nrecipe = \"synth-layered\"\nimage = \"grain.png\"\nsize = 8\nlevels = 1\n";
+    let text = entry("grain", "grain.png") + &entry("checks", "checks.png") + layered;
     std::fs::write(&manifest, &text).unwrap();
     let run = solidtex(&["build", &manifest.to_string_lossy(), "-o", &at(dir.path(), "out")]);
     assert!(run.status.success(), "{}", stderr(&run));
@@ -412,6 +416,8 @@ fn a_directional_photo_is_warned_about_in_builds_and_previews() {
     assert!(err.contains("warning: grain:") && err.contains("features run one way"), "{err}");
     assert!(err.contains("synth-layered"), "the advice names the manifest's keys: {err}");
     assert!(!err.contains("warning: checks:"), "{err}");
+    assert!(err.contains("warning: upright:") && err.contains("layers run down the columns"), "{err}");
+    assert!(err.contains("depth_image"), "the advice names the manifest's key: {err}");
     for build in ["first", "cached"] {
         if build == "cached" {
             let again = solidtex(&["build", &manifest.to_string_lossy(), "-o", &at(dir.path(), "out")]);
@@ -427,6 +433,8 @@ fn a_directional_photo_is_warned_about_in_builds_and_previews() {
     }
     let (_, warnings) = solidtex::library::recipe::preview(&manifest, "grain", &text).unwrap();
     assert!(warnings.iter().any(|w| w.contains("features run one way")), "{warnings:?}");
+    let (_, warnings) = solidtex::library::recipe::preview(&manifest, "upright", &text).unwrap();
+    assert!(warnings.iter().any(|w| w.contains("layers run down the columns")), "{warnings:?}");
 }
 
 /// A report shows no picture for an entry that failed: the sheet on disk is of an earlier

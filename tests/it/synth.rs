@@ -310,6 +310,34 @@ fn a_directional_image_alone_gets_a_warning_naming_ey_ez_and_layered() {
     assert!(!run(&speckle).contains("warning"), "an isotropic image is not directional");
 }
 
+/// `--layered` takes each row of the image as one depth: an image whose rows are its
+/// layers gets no warning, one whose stripes run down the columns is told to turn it or
+/// give a depth image, and with `--depth` nothing is said.
+#[test]
+fn a_layered_image_whose_rows_are_not_layers_gets_a_warning() {
+    let dir = tempfile::tempdir().unwrap();
+    let save = |name: &str, f: &dyn Fn(u32, u32) -> u8| {
+        let path = dir.path().join(name);
+        image::GrayImage::from_fn(32, 32, |x, y| image::Luma([f(x, y)])).save(&path).unwrap();
+        path.to_string_lossy().into_owned()
+    };
+    let rows = save("rows.png", &|_, y| if (y / 3) % 2 == 0 { 40 } else { 200 });
+    let upright = save("upright.png", &|x, _| if (x / 3) % 2 == 0 { 40 } else { 200 });
+    let ramp = save("ramp.png", &|_, y| (y * 8) as u8);
+    let out = dir.path().join("v.exr").to_string_lossy().into_owned();
+    let run = |args: &[&str]| {
+        let base = ["synth", "--layered", "--size", "8", "--levels", "1", "-o", &out];
+        let output = crate::support::solidtex(&[&base[..], args].concat());
+        assert!(output.status.success(), "{}", crate::support::stderr(&output));
+        crate::support::stderr(&output)
+    };
+    assert!(!run(&[&rows]).contains("warning"));
+    let warned = run(&[&upright]);
+    assert!(warned.contains("warning: ") && warned.contains("upright.png"), "{warned}");
+    assert!(warned.contains("layers run down the columns") && warned.contains("--depth"), "{warned}");
+    assert!(!run(&[&upright, "--depth", &ramp]).contains("warning"));
+}
+
 /// The three central slices of a known solid (the procedural marble) as Ex, Ey, Ez: the
 /// synthesized volume's grey-level shares stay within 2 points of the truth's, and on every
 /// axis its two-point correlation is at most 1.5 times as far from the truth's as the
