@@ -730,7 +730,15 @@ fn load_exemplars(args: &GuidedArgs, exemplar: &Path, rows: Option<usize>, facto
             None => image,
         };
         match rows {
-            Some(rows) => with_depth(fitted(image, rows, path)?).map_err(|e| e.in_file(path)),
+            Some(rows) => {
+                if let Some(warning) = crate::synth::layering_warning(&image) {
+                    tell!(
+                        "warning: {}: {warning}. Turn the image so its rows run from the surface inward",
+                        path.display()
+                    );
+                }
+                with_depth(fitted(image, rows, path)?).map_err(|e| e.in_file(path))
+            }
             None => Ok(image),
         }
     };

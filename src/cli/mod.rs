@@ -92,27 +92,17 @@ fn with_negative_numbers(command: clap::Command) -> clap::Command {
         .mut_subcommands(with_negative_numbers)
 }
 
-/// A whole-number type's largest value, for the message refusing a larger one.
-trait Most: std::str::FromStr {
-    const MOST: u64;
-}
-
-impl Most for usize {
-    const MOST: u64 = usize::MAX as u64;
-}
-
-impl Most for u64 {
-    const MOST: u64 = u64::MAX;
-}
-
-/// A whole number 0 or more, refused with what was wrong and what is allowed.
-fn whole<T: Most>(text: &str) -> std::result::Result<T, String> {
-    let digits = |t: &str| !t.is_empty() && t.bytes().all(|b| b.is_ascii_digit());
-    text.trim().parse().map_err(|_| match text.trim().parse::<f64>() {
-        _ if digits(text.trim()) => format!("{text} is too large; give a whole number from 0 to {}", T::MOST),
-        Ok(v) if v < 0.0 => format!("{text} is negative; give a whole number, 0 or more"),
-        Ok(_) => format!("{text} is not a whole number; give one without a fraction (0 or more)"),
-        Err(_) => format!("{text} is not a number; give a whole number, 0 or more"),
+/// A whole number, refused with what was wrong; the option's own range (in its help) is
+/// checked after parsing.
+fn whole<T: std::str::FromStr>(text: &str) -> std::result::Result<T, String> {
+    let trimmed = text.trim();
+    let digits = !trimmed.is_empty() && trimmed.bytes().all(|b| b.is_ascii_digit());
+    trimmed.parse().map_err(|_| match trimmed.parse::<f64>() {
+        _ if trimmed.is_empty() => "an empty value is not a number; give a whole number".to_string(),
+        _ if digits => format!("{text} is too large; give a whole number within the option's range (see --help)"),
+        Ok(v) if v < 0.0 => format!("{text} is negative; give a whole number within the option's range (see --help)"),
+        Ok(_) => format!("{text} is not a whole number; give one without a fraction"),
+        Err(_) => format!("{text} is not a number; give a whole number"),
     })
 }
 

@@ -68,17 +68,25 @@ pub fn run(args: &SurfaceArgs) -> Result<()> {
     let hist = surface::histogram_distances(&skin.colours, &exemplar)?;
     let mesh_note = if mesh.boundary_edges() > 0 { " (open: its borders stay)" } else { "" };
     tell!(
-        "wrote {}: {} points, {} triangles{mesh_note}, spacing {:.4}, {:.4} units per exemplar pixel, {} levels, in {seconds:.2} s",
+        "wrote {}: {} points, {} triangles{mesh_note}, spacing {:.4}, {:.4} units per exemplar pixel, {} level{}, in \
+         {seconds:.2} s",
         args.output.display(),
         skin.mesh.vertices.len(),
         skin.mesh.triangles.len(),
         skin.spacing,
         skin.texel,
-        skin.levels
+        skin.levels,
+        if skin.levels == 1 { "" } else { "s" }
     );
-    let across = (skin.mesh.bounds().1 - skin.mesh.bounds().0).max_element();
-    let side = exemplar.width().min(exemplar.height());
-    if let Some(note) = surface::scale_note(across, skin.texel, side, skin.spacing) {
+    let scale = surface::Scale {
+        across: (skin.mesh.bounds().1 - skin.mesh.bounds().0).max_element(),
+        texel: skin.texel,
+        texel_given: args.texel.is_some(),
+        spacing: skin.spacing,
+        points: args.points,
+        photo_side: exemplar.width().min(exemplar.height()),
+    };
+    if let Some(note) = surface::scale_note(&scale) {
         tell!("note: {note}");
     }
     tell!(
@@ -105,7 +113,13 @@ fn guide(args: &SurfaceArgs, mesh: &crate::mesh::Mesh) -> Result<Guide> {
         return Ok(Guide::Strokes(samples));
     }
     match &args.direction {
-        Some(text) => Ok(Guide::Along(io::values::point("--direction", text).map_err(super::commands::usage)?)),
+        Some(text) => {
+            let d = io::values::point("--direction", text).map_err(super::commands::usage)?;
+            if !(d.is_finite() && d.length() > 1e-6) {
+                return Err(Error::usage(format!("--direction {text} must be a non-zero vector")));
+            }
+            Ok(Guide::Along(d))
+        }
         None => Ok(Guide::Along(glam::Vec3::Y)),
     }
 }

@@ -73,8 +73,22 @@ impl GuidedModel {
 
     /// Every input file the model names.
     pub fn inputs(&self) -> Vec<&Path> {
-        let optional = [&self.exemplar, &self.solid, &self.ey, &self.ez, &self.mask, &self.ey_mask, &self.ez_mask];
-        [&self.mesh, &self.spec].into_iter().chain(optional.into_iter().flatten()).map(PathBuf::as_path).collect()
+        self.named_inputs().into_iter().map(|(_, p)| p).collect()
+    }
+
+    /// Every input file the model names, with its field's name.
+    pub fn named_inputs(&self) -> Vec<(&'static str, &Path)> {
+        let optional = [
+            ("exemplar", &self.exemplar),
+            ("solid", &self.solid),
+            ("ey", &self.ey),
+            ("ez", &self.ez),
+            ("mask", &self.mask),
+            ("ey_mask", &self.ey_mask),
+            ("ez_mask", &self.ez_mask),
+        ];
+        let given = optional.into_iter().filter_map(|(name, p)| p.as_deref().map(|p| (name, p)));
+        [("mesh", self.mesh.as_path()), ("spec", self.spec.as_path())].into_iter().chain(given).collect()
     }
 }
 
@@ -98,16 +112,40 @@ pub fn write(path: &Path, model: &GuidedModel) -> Result<()> {
 pub fn read(path: &Path) -> Result<GuidedModel> {
     let text = atomic::read_text(path, "guided model")?;
     let mut model: GuidedModel = toml::from_str(&text).map_err(|e| {
-        Error::file(path, format!("is not a guided model as `solidtex guided` writes it: {}", e.message()))
+        let at = e.span().map(|span| where_in(&text, span.start)).unwrap_or_default();
+        let why = e
+            .message()
+            .replace("expected usize", "expected a whole number")
+            .replace("expected u64", "expected a whole number");
+        Error::file(path, format!("{at}is not a guided model as `solidtex guided` writes it: {why}"))
     })?;
-    if model.exemplar.is_some() && model.solid.is_some() {
-        return Err(Error::file(path, "gives both exemplar and solid; a guided model takes one of them"));
+    match (&model.exemplar, &model.solid) {
+        (Some(_), Some(_)) => {
+            return Err(Error::file(path, "gives both exemplar and solid; a guided model takes one of them"));
+        }
+        (None, None) => return Err(Error::file(path, "gives neither exemplar nor solid; a guided model takes one")),
+        _ => {}
     }
     let folder = path.parent().unwrap_or(Path::new(""));
     for p in model.paths_mut() {
         *p = folder.join(&*p);
     }
+    for (field, file) in model.named_inputs() {
+        if !file.is_file() {
+            return Err(Error::file(
+                path,
+                format!("{field} = {}: no such file (paths are relative to the model's folder)", file.display()),
+            ));
+        }
+    }
     Ok(model)
+}
+
+/// "line N (TEXT): " for the byte `at` of `text`: where a parse error is.
+fn where_in(text: &str, at: usize) -> String {
+    let line = text[..at.min(text.len())].matches('\n').count();
+    let content = text.lines().nth(line).unwrap_or("").trim();
+    format!("line {} ({content}): ", line + 1)
 }
 
 /// Whether `path` names a guided model (by its extension).
@@ -120,8 +158,9 @@ mod tests {
     use super::*;
 
     /// A model reads back as written, its paths relative to its folder on disk and
-    /// resolved again on reading; a file that is not one, or that gives both an exemplar
-    /// and a solid, is refused by name.
+    /// resolved again on reading; a file that is not one, that gives both an exemplar and a
+    /// solid or neither, whose value does not parse (named by its line) or whose input is
+    /// missing (named by its field) is refused by name.
     #[test]
     fn a_guided_model_reads_back_with_its_paths_resolved() {
         let dir = tempfile::tempdir().unwrap();
@@ -146,6 +185,9 @@ mod tests {
             seed: 3,
             tets: None,
         };
+        for file in ["fruit.obj", "kiwi.toml", "photo.png"] {
+            std::fs::write(d.join(file), b"").unwrap();
+        }
         let path = d.join("models/fruit.guided");
         write(&path, &model).unwrap();
         let text = std::fs::read_to_string(&path).unwrap();
@@ -159,6 +201,16 @@ mod tests {
         std::fs::write(d.join("both.guided"), format!("{text}solid = \"cube.exr\"\n")).unwrap();
         let e = read(&d.join("both.guided")).unwrap_err().to_string();
         assert!(e.contains("both.guided") && e.contains("both exemplar and solid"), "{e}");
+        let edited = |from: &str, to: &str| {
+            std::fs::write(d.join("edited.guided"), text.replace(from, to)).unwrap();
+            read(&d.join("edited.guided")).unwrap_err().to_string()
+        };
+        let e = edited("exemplar = \"../photo.png\"\n", "");
+        assert!(e.contains("edited.guided") && e.contains("neither exemplar nor solid"), "{e}");
+        let e = edited("res = 256", "res = -5");
+        assert!(e.contains("edited.guided: line ") && e.contains("(res = -5)") && e.contains("whole number"), "{e}");
+        let e = edited("../fruit.obj", "../nope.obj");
+        assert!(e.contains("edited.guided: mesh = ") && e.contains("nope.obj: no such file"), "{e}");
     }
 
     /// Whether two paths name one place, `..` and `.` resolved by their text.

@@ -97,25 +97,53 @@ pub fn synthesize(mesh: &Mesh, exemplar: &Image2d, options: &Options, progress: 
 /// side gets [`scale_note`]: the photo's features then look large on the model.
 pub const SMALL_SHARE: f32 = 0.5;
 
-/// What to tell a designer whose model, `across` units along its longest side, spans fewer
-/// exemplar pixels (`texel` units each) than [`SMALL_SHARE`] of the photo's shorter side
-/// (`photo_side` pixels): how much of the photo shows and what makes its features smaller.
-/// `None` when the model shows enough of the photo.
-pub fn scale_note(across: f32, texel: f32, photo_side: usize, spacing: f32) -> Option<String> {
-    let pixels = across / texel;
-    if pixels >= SMALL_SHARE * photo_side as f32 {
+/// How a skin was scaled, for [`scale_note`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Scale {
+    /// The model's longest side, in model units.
+    pub across: f32,
+    /// Model units per exemplar pixel.
+    pub texel: f32,
+    /// Whether the texel was given (else [`DEFAULT_TEXEL`] point spacings).
+    pub texel_given: bool,
+    /// The points' spacing.
+    pub spacing: f32,
+    /// The points asked for.
+    pub points: usize,
+    /// The photo's shorter side, in pixels.
+    pub photo_side: usize,
+}
+
+/// What to tell a designer whose model spans fewer exemplar pixels along its longest side
+/// than [`SMALL_SHARE`] of the photo's shorter side: how much of the photo shows, and each
+/// change that would show more of it (a smaller texel down to one point per pixel, more
+/// points where the texel follows them, a smaller photo). `None` when enough shows.
+pub fn scale_note(scale: &Scale) -> Option<String> {
+    let pixels = scale.across / scale.texel;
+    if pixels >= SMALL_SHARE * scale.photo_side as f32 {
         return None;
     }
-    let finest = (texel / spacing).max(1.0);
-    let more = if finest > 1.05 {
-        format!("--texel {:.4} (one point per pixel) shows {:.1} times as much", spacing, finest)
-    } else {
-        "the points are already one per pixel".to_string()
+    let mut ways = Vec::new();
+    let per_point = scale.texel / scale.spacing;
+    if per_point > 1.05 {
+        ways.push(format!("--texel {:.4} (one point per pixel) shows {per_point:.1} times as much", scale.spacing));
+    }
+    let more_points = scale.points < *POINTS.end();
+    match (scale.texel_given, more_points) {
+        (false, true) => ways.push(format!("more --points (up to {}) more still", POINTS.end())),
+        (true, true) => ways.push("more --points and a smaller --texel show more at a point per pixel".to_string()),
+        _ => {}
+    }
+    if scale.photo_side >= 2 * MIN_EXEMPLAR {
+        ways.push("a photo shrunk so its features span fewer pixels".to_string());
+    }
+    let how = match ways.len() {
+        0 => String::new(),
+        _ => format!("; {}", ways.join(", or ")),
     };
     Some(format!(
-        "the model is about {pixels:.0} exemplar pixels across, the photo {photo_side}: its features look large on the \
-         model; {more}, more --points (up to {}) more still, or give a photo shrunk so its features span fewer pixels",
-        POINTS.end()
+        "the model is about {pixels:.0} exemplar pixels across, the photo {}: its features look large on the model{how}",
+        scale.photo_side
     ))
 }
 
@@ -298,13 +326,29 @@ mod tests {
 
     #[test]
     fn a_model_showing_little_of_its_photo_is_told_how_to_show_more() {
-        // 2 units across at 0.05 units a pixel: 40 pixels of a 512-px photo
-        let note = scale_note(2.0, 0.05, 512, 0.025).expect("a note");
+        // 2 units across at 0.05 units a pixel (two spacings, the default): 40 pixels of 512
+        let default =
+            Scale { across: 2.0, texel: 0.05, texel_given: false, spacing: 0.025, points: 20_000, photo_side: 512 };
+        let note = scale_note(&default).expect("a note");
         assert!(note.contains("about 40 exemplar pixels across, the photo 512"), "{note}");
         assert!(note.contains("--texel 0.0250 (one point per pixel) shows 2.0 times as much"), "{note}");
-        assert!(scale_note(2.0, 0.025, 512, 0.025).unwrap().contains("already one per pixel"));
+        assert!(note.contains("more --points (up to 500000)") && note.contains("a photo shrunk"), "{note}");
+        // a texel given: points alone change nothing, and at a point per pixel no smaller
+        // texel is offered; at the most points none are offered; a 16-px photo is not shrunk
+        let given = Scale { texel_given: true, ..default };
+        let note = scale_note(&given).unwrap();
+        assert!(!note.contains("more --points (up to") && note.contains("--texel 0.0250"), "{note}");
+        let fine = Scale { texel: 0.01, texel_given: true, ..default };
+        let note = scale_note(&Scale { across: 1.0, ..fine }).unwrap();
+        assert!(
+            !note.contains("one point per pixel") && note.contains("more --points and a smaller --texel"),
+            "{note}"
+        );
+        let most = Scale { points: 500_000, photo_side: 16, across: 0.2, ..default };
+        let note = scale_note(&most).unwrap();
+        assert!(!note.contains("--points") && !note.contains("shrunk"), "{note}");
         // 400 pixels of a 512-px photo, or 40 of a 64-px one: enough shows
-        assert_eq!(scale_note(2.0, 0.005, 512, 0.0025), None);
-        assert_eq!(scale_note(2.0, 0.05, 64, 0.025), None);
+        assert_eq!(scale_note(&Scale { texel: 0.005, spacing: 0.0025, ..default }), None);
+        assert_eq!(scale_note(&Scale { photo_side: 64, ..default }), None);
     }
 }

@@ -369,7 +369,7 @@ fn a_feature_mask_steers_the_match_and_is_not_shown() {
 }
 
 /// `--layered` scales the exemplar so that its rows span the model's depth in voxels (and
-/// says so), and the kiwi section's pale core, its innermost rows, fills the middle of a
+/// says so; the section turned a quarter is warned about), and the kiwi section's pale core, its innermost rows, fills the middle of a
 /// cut across the fruit's axis. A resolution too low for one row per voxel is refused by
 /// name with the one that would do, with nothing written.
 #[test]
@@ -383,6 +383,13 @@ fn a_layered_cut_shows_the_innermost_rows_at_the_axis() {
     let run = solidtex(&[&base[..], &["--res", "128", "--size", "64", "-o", &png]].concat());
     assert!(run.status.success(), "{}", stderr(&run));
     assert!(stderr(&run).contains("kiwi_section.png scaled from 64x64 to"), "{}", stderr(&run));
+    assert!(!stderr(&run).contains("warning"), "its rows are its layers: {}", stderr(&run));
+    let turned = at(d, "turned.png");
+    image::open(kiwi).unwrap().rotate90().save(&turned).unwrap();
+    let args = ["guided", &fruit, "--spec", &spec, "--exemplar", &turned, "--layered", "--cut", "0,0,0,1,0,0"];
+    let run = solidtex(&[&args[..], &["--res", "64", "--size", "16", "-o", &at(d, "turned_cut.png")]].concat());
+    assert!(run.status.success(), "{}", stderr(&run));
+    assert!(stderr(&run).contains("turned.png: its layers run down the columns"), "{}", stderr(&run));
     let img = image::open(&png).unwrap().to_rgb8();
     let pale = (30..34).flat_map(|y| (30..34).map(move |x| (x, y))).filter(|&(x, y)| {
         let [r, g, b] = img.get_pixel(x, y).0;

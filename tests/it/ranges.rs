@@ -207,17 +207,17 @@ fn an_output_folder_holding_other_files_is_refused_before_any_input_is_read() {
     assert_eq!(listing(&folder), ["notes.txt"]);
 }
 
-/// A negative, fractional or too large number given to a whole-number option is refused as
-/// a value of that option (exit 2), saying what it takes, not mistaken for an unknown flag.
+/// A negative, fractional, empty or too large number given to a whole-number option is
+/// refused as a value of that option (exit 2), saying what it takes, not mistaken for an
+/// unknown flag.
 #[test]
 fn negative_whole_numbers_are_refused_as_values() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("out.png").to_string_lossy().into_owned();
-    let too_large = (
-        "99999999999999999999",
-        "99999999999999999999 is too large; give a whole number from 0 to 18446744073709551615",
-    );
-    for (value, said) in [("-5", "-5 is negative"), ("2.5", "2.5 is not a whole number"), too_large] {
+    let cases =
+        [("-5", "-5 is negative"), ("2.5", "2.5 is not a whole number"), ("", "an empty value is not a number")];
+    let too_large = ("99999999999999999999", "99999999999999999999 is too large; give a whole number within");
+    for (value, said) in cases.into_iter().chain([too_large]) {
         let run = crate::support::solidtex(&["make", "marble", "--seed", value, "-o", &out]);
         crate::support::assert_usage(&run, &["--seed", said, "whole number"]);
         assert!(!crate::support::stderr(&run).contains("unexpected argument"));
