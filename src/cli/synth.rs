@@ -230,6 +230,21 @@ pub fn run(args: &SynthArgs) -> Result<()> {
             );
         }
         let layered = LayeredParams { anti_sweeping: !args.no_anti_sweeping, depth_weight: args.depth_weight };
+        if let (Some(d), Some(path)) = (&depth, &args.depth)
+            && (d.width(), d.height()) != (ex.width(), ex.height())
+        {
+            return Err(Error::file(
+                path,
+                format!(
+                    "the depth image is {}x{} pixels but the exemplar {} is {}x{}; they must be the same size",
+                    d.width(),
+                    d.height(),
+                    args.exemplar.display(),
+                    ex.width(),
+                    ex.height()
+                ),
+            ));
+        }
         synth::synthesize_layered(&ex, depth.as_ref(), &params, &layered, args.seed, &bar)
             .map_err(|e| e.in_file(&args.exemplar))?
     } else {

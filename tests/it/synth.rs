@@ -312,7 +312,8 @@ fn a_directional_image_alone_gets_a_warning_naming_ey_ez_and_layered() {
 
 /// `--layered` takes each row of the image as one depth: an image whose rows are its
 /// layers gets no warning, one whose stripes run down the columns is told to turn it or
-/// give a depth image, and with `--depth` nothing is said.
+/// give a depth image, and with `--depth` nothing is said; a depth image of another size is
+/// refused by its own name.
 #[test]
 fn a_layered_image_whose_rows_are_not_layers_gets_a_warning() {
     let dir = tempfile::tempdir().unwrap();
@@ -336,6 +337,12 @@ fn a_layered_image_whose_rows_are_not_layers_gets_a_warning() {
     assert!(warned.contains("warning: ") && warned.contains("upright.png"), "{warned}");
     assert!(warned.contains("layers run down the columns") && warned.contains("--depth"), "{warned}");
     assert!(!run(&[&upright, "--depth", &ramp]).contains("warning"));
+    // a depth image of another size is named as the file at fault
+    let small = dir.path().join("small.png");
+    image::GrayImage::from_fn(16, 16, |_, y| image::Luma([(y * 16) as u8])).save(&small).unwrap();
+    let base = ["synth", "--layered", "--size", "8", "--levels", "1", "-o", &out];
+    let run = crate::support::solidtex(&[&base[..], &[&upright, "--depth", &small.to_string_lossy()]].concat());
+    crate::support::assert_fails(&run, &["small.png: the depth image is 16x16 pixels", "upright.png is 32x32"]);
 }
 
 /// The three central slices of a known solid (the procedural marble) as Ex, Ey, Ez: the
