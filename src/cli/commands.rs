@@ -158,6 +158,9 @@ pub fn make(recipe: &str, size: &str, seed: u64, output: &Path) -> Result<()> {
 pub fn parse_size(text: &str) -> Result<[usize; 3]> {
     let dims = match text.parse::<usize>() {
         Ok(n) => [n; 3],
+        Err(_) if !text.is_empty() && text.bytes().all(|b| b.is_ascii_digit()) => {
+            return Err(Error::usage(format!("--size {text} is too large; allowed: each side at most {MAX_SIDE}")));
+        }
         Err(_) => io::parse_dims(text)
             .map_err(|_| Error::usage(format!("--size {text:?} is not N or XxYxZ (for example 64 or 64x64x32)")))?,
     };

@@ -990,10 +990,16 @@ pub fn run_view(args: &ViewArgs) -> Result<()> {
         return super::guided::from_model(model, super::guided::Action::View(view), args.size, &args.output);
     }
     picture_output(&args.output, &args.models, args.skin.as_deref())?;
-    if let [one] = args.models.as_slice()
-        && one.extension().is_some_and(|e| e.eq_ignore_ascii_case("ply"))
-    {
-        return view_skin(args, one);
+    let is_ply = |p: &PathBuf| p.extension().is_some_and(|e| e.eq_ignore_ascii_case("ply"));
+    match args.models.as_slice() {
+        [one] if is_ply(one) => return view_skin(args, one),
+        [_, _, ..] if args.models.iter().any(is_ply) => {
+            return Err(usage(Error::invalid(format!(
+                "{}: a skin (.ply) is viewed alone; filled models (.lst) are viewed together",
+                args.models.iter().find(|p| is_ply(p)).expect("a .ply").display()
+            ))));
+        }
+        _ => {}
     }
     let loaded = load_models(&args.models, &args.output)?;
     let started = Instant::now();

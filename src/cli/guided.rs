@@ -346,7 +346,11 @@ fn synthesize(args: &GuidedArgs, action: Action) -> Result<Option<Filled>> {
     }
     let depth =
         args.layered.then(|| solid::depth_over(&g.depth, &domain)).transpose().map_err(|e| e.in_file(&args.spec))?;
-    let rows = depth.as_ref().map(|d| solid::layer_rows(d, args.res)).transpose()?;
+    let rows = depth
+        .as_ref()
+        .map(|d| solid::layer_rows(d, args.res))
+        .transpose()
+        .map_err(|e| Error::file(&args.mesh, format!("--res {}: {e}", args.res)))?;
     let (prepared, options, exemplar) = match &args.solid {
         Some(path) => solid_exemplar(args, path, rows, g.texture_axes).map_err(|e| e.in_file(path))?,
         None => {

@@ -402,7 +402,7 @@ fn a_layered_cut_shows_the_innermost_rows_at_the_axis() {
     let low = at(d, "low.png");
     crate::support::assert_fails(
         &solidtex(&[&base[..], &["--res", "32", "-o", &low]].concat()),
-        &["resolution 32", "raise the resolution to"],
+        &["fruit.obj: --res 32:", "resolution 32", "raise the resolution to"],
     );
     assert!(!d.join("low.png").exists());
 }

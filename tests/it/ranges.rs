@@ -72,7 +72,7 @@ fn scattering_ten_million_seeds_is_a_usage_error() {
 fn out_of_range_numbers_of_other_commands_are_usage_errors_before_any_file_is_read() {
     let dir = tempfile::tempdir().unwrap();
     let (missing, out) = (at(dir.path(), "missing.png"), at(dir.path(), "out.exr"));
-    let cases: [(Vec<&str>, &str); 8] = [
+    let cases: [(Vec<&str>, &str); 9] = [
         (vec!["synth", &missing, "--levels", "99", "-o", &out], "--levels 99 is out of range; allowed: 1 to 8"),
         (vec!["synth", &missing, "--pca-variance", "nan", "-o", &out], "--pca-variance NaN is out of range"),
         (vec!["synth", &missing, "--size", "100000", "-o", &out], "--size \"100000\" is out of range"),
@@ -83,6 +83,10 @@ fn out_of_range_numbers_of_other_commands_are_usage_errors_before_any_file_is_re
         (
             vec!["make", "marble", "--size", "0", "-o", &out],
             "--size \"0\" is out of range; allowed: each side at least 1 and at most 512",
+        ),
+        (
+            vec!["make", "marble", "--size", "99999999999999999999", "-o", &out],
+            "is too large; allowed: each side at most 512",
         ),
     ];
     for (args, needle) in cases {

@@ -203,6 +203,10 @@ fn a_filled_model_is_viewed_with_its_skin() {
     assert!(!d.join("far.png").exists());
     let run = view(&["--skin", &fruit], &at(d, "obj.png"));
     assert!(!run.status.success() && stderr(&run).contains(".ply"), "{}", stderr(&run));
+    // a skin is viewed alone, not beside a model
+    let run = solidtex(&["view", &model, &skin, "-o", &at(d, "both.png")]);
+    crate::support::assert_usage(&run, &["skin.ply", "viewed alone"]);
+    assert!(!d.join("both.png").exists());
 }
 
 /// The skin gets the points asked within 8 %, also from a coarse input (the shared sphere's
