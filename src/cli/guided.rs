@@ -495,6 +495,12 @@ fn read_model(path: &Path) -> Result<io::guided_model::GuidedModel> {
         Ok(())
     };
     checks().map_err(|e| e.in_file(path))?;
+    if model.exemplar.is_none() && model.solid.is_none() && fill_spec::read_fill_spec(&model.spec)?.regions.is_empty() {
+        return Err(Error::file(
+            path,
+            "gives neither exemplar nor solid, and its spec has no [[region]]; a guided model takes one of them",
+        ));
+    }
     Ok(model)
 }
 

@@ -119,12 +119,8 @@ pub fn read(path: &Path) -> Result<GuidedModel> {
             .replace("expected u64", "expected a whole number");
         Error::file(path, format!("{at}is not a guided model as `solidtex guided` writes it: {why}"))
     })?;
-    match (&model.exemplar, &model.solid) {
-        (Some(_), Some(_)) => {
-            return Err(Error::file(path, "gives both exemplar and solid; a guided model takes one of them"));
-        }
-        (None, None) => return Err(Error::file(path, "gives neither exemplar nor solid; a guided model takes one")),
-        _ => {}
+    if model.exemplar.is_some() && model.solid.is_some() {
+        return Err(Error::file(path, "gives both exemplar and solid; a guided model takes one of them"));
     }
     let folder = path.parent().unwrap_or(Path::new(""));
     for p in model.paths_mut() {
@@ -159,8 +155,8 @@ mod tests {
 
     /// A model reads back as written, its paths relative to its folder on disk and
     /// resolved again on reading; a file that is not one, that gives both an exemplar and a
-    /// solid or neither, whose value does not parse (named by its line) or whose input is
-    /// missing (named by its field) is refused by name.
+    /// solid, whose value does not parse (named by its line) or whose input is missing (named
+    /// by its field) is refused by name.
     #[test]
     fn a_guided_model_reads_back_with_its_paths_resolved() {
         let dir = tempfile::tempdir().unwrap();
@@ -205,8 +201,6 @@ mod tests {
             std::fs::write(d.join("edited.guided"), text.replace(from, to)).unwrap();
             read(&d.join("edited.guided")).unwrap_err().to_string()
         };
-        let e = edited("exemplar = \"../photo.png\"\n", "");
-        assert!(e.contains("edited.guided") && e.contains("neither exemplar nor solid"), "{e}");
         let e = edited("res = 256", "res = -5");
         assert!(e.contains("edited.guided: line ") && e.contains("(res = -5)") && e.contains("whole number"), "{e}");
         let e = edited("../fruit.obj", "../nope.obj");

@@ -629,6 +629,11 @@ fn a_guided_model_is_viewed_cut_and_baked_on_demand() {
         std::fs::write(&bad, edited.join("\n")).unwrap();
         crate::support::assert_fails(&solidtex(&["view", &bad, "-o", &refused]), &["bad.guided", says]);
     }
+    let bad = at(d, "bad.guided");
+    let without: Vec<&str> = text.lines().filter(|l| !l.starts_with("exemplar =")).collect();
+    std::fs::write(&bad, without.join("\n")).unwrap();
+    let run = solidtex(&["cut", &bad, "-o", &refused]);
+    crate::support::assert_fails(&run, &["bad.guided", "neither exemplar nor solid"]);
     let run = solidtex(&["view", &model, "--displacement", "0.1", "-o", &refused]);
     crate::support::assert_usage(&run, &["--displacement", "fruit.guided"]);
     crate::support::assert_usage(&solidtex(&["view", &model, &model, "-o", &refused]), &["fruit.guided", "alone"]);
