@@ -78,9 +78,11 @@ pub struct SynthArgs {
     /// The synthesis core: `blend` blends matched colours and matches the photo's
     /// histogram and spectrum (Kopf 2007); `coordinates` copies exemplar pixels in coherent
     /// patches, each voxel one pixel (joints and channels stay more connected, labels stay
-    /// labels; slower). A --start volume is always refined by `blend`.
-    #[arg(long, default_value = "blend", value_parser = ["blend", "coordinates"])]
-    pub core: String,
+    /// labels, layers stay crisp; slower). Default: `coordinates` with --layered, `blend`
+    /// otherwise; --start, --no-anti-sweeping and --depth-weight belong to `blend` and
+    /// select it.
+    #[arg(long, value_parser = ["blend", "coordinates"])]
+    pub core: Option<String>,
     /// Output size: N for a cube, or XxYxZ; each side 1 to 512, within the voxel budget.
     #[arg(long, default_value = "64")]
     pub size: String,
@@ -175,6 +177,18 @@ fn check_values(args: &SynthArgs) -> Result<[usize; 3]> {
     Ok(size)
 }
 
+/// The core `args` ask for: named, or by default the coordinate core for a layered solid
+/// (crisp layers: docs/synthesis.md) unless a blend-only option is given.
+fn core_of(args: &SynthArgs) -> synth::Core {
+    let blend_only = args.start.is_some() || args.no_anti_sweeping || args.depth_weight != 1.0;
+    match args.core.as_deref() {
+        Some("coordinates") => synth::Core::Coordinates,
+        Some(_) => synth::Core::Blend,
+        None if args.layered && !blend_only => synth::Core::Coordinates,
+        None => synth::Core::Blend,
+    }
+}
+
 /// Warn when one directional image is asked to make a homogeneous solid: the same grain
 /// in all three cut directions leaves one cut a smear.
 fn warn_if_directional(image: &crate::volume::Image2d, path: &Path) {
@@ -195,7 +209,7 @@ pub fn run(args: &SynthArgs) -> Result<()> {
     io::check_output(&args.output, &inputs)?;
     let budget = io::budget_from_env()?;
     let params = SynthParams {
-        core: if args.core == "coordinates" { synth::Core::Coordinates } else { synth::Core::Blend },
+        core: core_of(args),
         size,
         levels: args.levels,
         max_iterations: args.iterations,

@@ -86,7 +86,9 @@ impl Progress for Warnings {
 fn synthesized(spec: &SynthSpec, size: [usize; 3], seed: u64, none: &dyn Progress) -> Result<Volume> {
     let read = |p: &Path| io::read_image_fit(p, spec.max_exemplar);
     let ex = read(&spec.image)?;
-    let params = synth::SynthParams { size, levels: spec.levels, ..synth::SynthParams::default() };
+    // layers come out crisp from the coordinate core (docs/synthesis.md)
+    let core = if spec.layered { synth::Core::Coordinates } else { synth::Core::Blend };
+    let params = synth::SynthParams { core, size, levels: spec.levels, ..synth::SynthParams::default() };
     let volume = if spec.layered {
         let depth = spec.depth.as_deref().map(read).transpose()?;
         if let (None, Some(warning)) = (&depth, synth::layering_warning(&ex)) {

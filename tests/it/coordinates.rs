@@ -81,6 +81,18 @@ fn the_command_line_takes_a_core_and_refuses_others() {
     let bad = solidtex(&["synth", &p, "--size", "16", "--core", "mean", "-o", &o]);
     assert_usage(&bad, &["--core", "mean"]);
     assert!(crate::support::stderr(&bad).contains("possible values: blend, coordinates"));
+    // by default a layered solid comes from the coordinate core, a homogeneous one (or a
+    // layered one with a blend-only option) from the blend core
+    let core_of = |args: &[&str]| {
+        let base = ["synth", &p, "--size", "8", "--levels", "1", "-o", &o];
+        let run = solidtex(&[&base[..], args].concat());
+        assert!(run.status.success(), "{}", crate::support::stderr(&run));
+        solidtex::io::read_volume(&out, u64::MAX).unwrap().meta.get("core").map(str::to_string)
+    };
+    assert_eq!(core_of(&["--layered"]).as_deref(), Some("coordinates"));
+    assert_eq!(core_of(&[]).as_deref(), Some("blend"));
+    assert_eq!(core_of(&["--layered", "--no-anti-sweeping"]).as_deref(), Some("blend"));
+    assert_eq!(core_of(&["--layered", "--core", "blend"]).as_deref(), Some("blend"));
 }
 
 /// Three exemplars with 20, 40 and 60 % white (mean 0.407): without the balance the
