@@ -686,15 +686,20 @@ mod tests {
         assert_ne!(a.patches, other.patches);
     }
 
+    /// Two strokes across the lattice, along x at one end and turned 45 degrees at the
+    /// other: a field that bends, at texture scale `scale`.
+    fn bent(scale: f32) -> Constraints {
+        Constraints {
+            directions: vec![(Vec3::new(0.1, 0.5, 0.5), Vec3::X), (Vec3::new(0.9, 0.5, 0.5), Vec3::new(1.0, 1.0, 0.0))],
+            scale,
+            ..Default::default()
+        }
+    }
+
     #[test]
     fn warped_patches_follow_the_field() {
         let masks = [mask::splotch(16, 0.1, 1).unwrap()];
-        let c = Constraints {
-            directions: vec![(Vec3::new(0.1, 0.5, 0.5), Vec3::X), (Vec3::new(0.9, 0.5, 0.5), Vec3::new(1.0, 1.0, 0.0))],
-            scale: 0.5,
-            ..Default::default()
-        };
-        let (_, out) = fill(TextureType::T1a, &c, &masks, 5);
+        let (_, out) = fill(TextureType::T1a, &bent(0.5), &masks, 5);
         assert_eq!(out.stats.forced, 0);
         assert!(out.stats.angle_mean < 8.0 && out.stats.angle_p95 < 20.0, "{:?}", out.stats);
     }
@@ -704,11 +709,7 @@ mod tests {
     #[test]
     fn placing_the_next_patch_ahead_changes_nothing() {
         let masks = [mask::splotch(16, 0.1, 1).unwrap()];
-        let c = Constraints {
-            directions: vec![(Vec3::new(0.1, 0.5, 0.5), Vec3::X), (Vec3::new(0.9, 0.5, 0.5), Vec3::new(1.0, 1.0, 0.0))],
-            scale: 0.3,
-            ..Default::default()
-        };
+        let c = bent(0.3);
         let on = |threads: usize| {
             let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
             pool.install(|| fill(TextureType::T1a, &c, &masks, 9).1)
