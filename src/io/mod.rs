@@ -192,7 +192,7 @@ pub fn check_output(output: &Path, inputs: &[&Path]) -> Result<()> {
 /// [`check_output`] for a command that edits the volume `edited` (`stamp`, `scatter`,
 /// `blur`): the output may be that volume, written atomically, but none of the `others`.
 pub fn check_edit_output(output: &Path, edited: &Path, others: &[&Path]) -> Result<()> {
-    if Format::of(output)? == Format::PngStack {
+    if Format::of(output).map_err(|e| Error::usage(e.to_string()))? == Format::PngStack {
         let all: Vec<&Path> = others.iter().copied().chain([edited]).collect();
         return check_folder_output(output, &all);
     }

@@ -187,6 +187,10 @@ fn hand_made_bad_input_is_refused() {
         &["wholly outside"],
     );
     assert_usage(&solidtex(&["stamp", &vol, &seed, "--at", "1,2", "--color", "0,0,0", "-o", &out]), &["--at \"1,2\""]);
+    // an output in no volume format is a usage error, as for every command that writes one
+    let obj = at(dir.path(), "stamped.obj");
+    let run = solidtex(&["stamp", &vol, &seed, "--at", "1,1,1", "--color", "0,0,0", "-o", &obj]);
+    assert_usage(&run, &["stamped.obj", "unknown volume extension .obj"]);
     assert_fails(
         &solidtex(&[
             "scatter",
