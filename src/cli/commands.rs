@@ -158,7 +158,7 @@ pub fn make(recipe: &str, size: &str, seed: u64, output: &Path) -> Result<()> {
 pub fn parse_size(text: &str) -> Result<[usize; 3]> {
     let dims = match text.parse::<usize>() {
         Ok(n) => [n; 3],
-        Err(_) if !text.is_empty() && text.bytes().all(|b| b.is_ascii_digit()) => {
+        Err(_) if super::all_digits(text) => {
             return Err(Error::usage(format!("--size {text} is too large; allowed: each side at most {MAX_SIDE}")));
         }
         Err(_) => io::parse_dims(text)

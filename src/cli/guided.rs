@@ -266,16 +266,25 @@ pub struct Filled {
     pub volume: crate::volume::Volume,
 }
 
+/// The settings a guided model keeps (resolution, neighbourhoods, tets, exemplar side)
+/// checked against their ranges, each named by `name` of its field (`res`, `coarse_n`, ...):
+/// as a flag on the command line, as a field in a `.guided` file.
+fn recipe_checked(args: &GuidedArgs, name: &dyn Fn(&str) -> String) -> Result<()> {
+    io::values::within(&name("res"), args.res, *solid::RESOLUTION.start(), *solid::RESOLUTION.end())?;
+    odd_side(&name("coarse_n"), args.coarse_n)?;
+    odd_side(&name("n"), args.n)?;
+    check_tets(&name("tets"), args.tets)?;
+    let (lo, hi) = crate::synth::SynthParams::EXEMPLAR_SIDE;
+    args.others.max_exemplar.map(|m| io::values::within(&name("max_exemplar"), m, lo, hi)).transpose()?;
+    Ok(())
+}
+
 /// The values of `args` checked against their ranges (usage errors), and its cut.
 fn checked(args: &GuidedArgs) -> Result<Option<(Vec3, Vec3)>> {
     let checks = || -> Result<Option<(Vec3, Vec3)>> {
-        io::values::within("--res", args.res, *solid::RESOLUTION.start(), *solid::RESOLUTION.end())?;
+        recipe_checked(args, &|field| format!("--{}", field.replace('_', "-")))?;
         io::values::within("--size", args.size, 8, 4096)?;
         io::values::within("--cache-mb", args.cache_mb, *CACHE_MB.start(), *CACHE_MB.end())?;
-        odd_side("--coarse-n", args.coarse_n)?;
-        odd_side("--n", args.n)?;
-        check_tets("--tets", args.tets)?;
-        args.others.check()?;
         if let Some(folder) = args.cache.as_deref().filter(|f| f.exists() && !f.is_dir()) {
             return Err(Error::invalid(format!(
                 "--cache {}: is a file; name a folder for the cache",
@@ -481,33 +490,26 @@ pub fn cut_model(model: &Path, plane: Option<(Vec3, Vec3)>, size: usize, output:
     from_model(model, Action::Cut(point, normal), size, output)
 }
 
-/// A guided model read from `path`, its settings checked against their ranges and named as
-/// the file names them (an error in the file, not a usage error).
-fn read_model(path: &Path) -> Result<io::guided_model::GuidedModel> {
+/// The arguments of the guided model at `path` (a picture `size` pixels wide into
+/// `output`), its settings checked against their ranges and named as the file names them
+/// (an error in the file, not a usage error).
+fn model_args(path: &Path, size: usize, output: &Path) -> Result<GuidedArgs> {
     let model = io::guided_model::read(path)?;
-    let checks = || -> Result<()> {
-        io::values::within("res =", model.res, *solid::RESOLUTION.start(), *solid::RESOLUTION.end())?;
-        odd_side("n =", model.n)?;
-        odd_side("coarse_n =", model.coarse_n)?;
-        check_tets("tets =", model.tets)?;
-        let (lo, hi) = crate::synth::SynthParams::EXEMPLAR_SIDE;
-        model.max_exemplar.map(|m| io::values::within("max_exemplar =", m, lo, hi)).transpose()?;
-        Ok(())
-    };
-    checks().map_err(|e| e.in_file(path))?;
     if model.exemplar.is_none() && model.solid.is_none() && fill_spec::read_fill_spec(&model.spec)?.regions.is_empty() {
         return Err(Error::file(
             path,
             "gives neither exemplar nor solid, and its spec has no [[region]]; a guided model takes one of them",
         ));
     }
-    Ok(model)
+    let args = args_of(model, size, output);
+    recipe_checked(&args, &|field| format!("{field} =")).map_err(|e| e.in_file(path))?;
+    Ok(args)
 }
 
 /// `view`, `cut` or `bake` of a guided model (`model`, a `.guided` file): `action` with
 /// the model's recipe, writing `output` (`size`: a picture's side).
 pub fn from_model(model: &Path, action: Action, size: usize, output: &Path) -> Result<()> {
-    let args = args_of(read_model(model)?, size, output);
+    let args = model_args(model, size, output)?;
     checked(&args).map_err(|e| e.in_file(model))?;
     check_output_of(action, output, &args, Some(model))?;
     synthesize(&args, action).map(|_| ())
@@ -523,7 +525,7 @@ pub fn check_picture_of_model(model: &Path, output: &Path) -> Result<()> {
 /// `render` of a guided model (`model`, a `.guided` file): its whole solid synthesized and
 /// kept as a filled model.
 pub fn filled_from_model(model: &Path) -> Result<Filled> {
-    let args = args_of(read_model(model)?, 256, model);
+    let args = model_args(model, 256, model)?;
     checked(&args).map_err(|e| e.in_file(model))?;
     synthesize(&args, Action::Keep)?.ok_or_else(|| Error::invalid("the guided solid was not kept"))
 }

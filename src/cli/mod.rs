@@ -96,7 +96,7 @@ fn with_negative_numbers(command: clap::Command) -> clap::Command {
 /// checked after parsing.
 fn whole<T: std::str::FromStr>(text: &str) -> std::result::Result<T, String> {
     let trimmed = text.trim();
-    let digits = !trimmed.is_empty() && trimmed.bytes().all(|b| b.is_ascii_digit());
+    let digits = all_digits(trimmed);
     trimmed.parse().map_err(|_| match trimmed.parse::<f64>() {
         _ if trimmed.is_empty() => "an empty value is not a number; give a whole number".to_string(),
         _ if digits => format!("{text} is too large; give a whole number within the option's range (see --help)"),
@@ -104,6 +104,11 @@ fn whole<T: std::str::FromStr>(text: &str) -> std::result::Result<T, String> {
         Ok(_) => format!("{text} is not a whole number; give one without a fraction"),
         Err(_) => format!("{text} is not a number; give a whole number"),
     })
+}
+
+/// Whether `text` is digits only (a whole number that failed to parse is then too large).
+fn all_digits(text: &str) -> bool {
+    !text.is_empty() && text.bytes().all(|b| b.is_ascii_digit())
 }
 
 /// The subcommands.

@@ -26,6 +26,7 @@ use super::tets::{NONE, TetMesh};
 use super::warp::{Frame, Rigid, Warp, jacobian};
 use crate::TextureType;
 use crate::error::{Error, Result};
+use crate::noise::hash3;
 use crate::progress::Progress;
 use crate::volume::Volume;
 use glam::Vec3;
@@ -169,7 +170,7 @@ impl<'a> Paster<'a> {
     pub fn fill(&mut self, progress: &dyn Progress) -> Result<()> {
         let tets = self.ctx.mesh.tets.len();
         let key = self.ctx.params.seed;
-        let priority = |t: usize, strike: u8| mix(key, t as u64, strike as u64);
+        let priority = |t: usize, strike: u8| hash3(key, t as i64, strike as i64, 0);
         let mut queue: BinaryHeap<Reverse<(u64, u32)>> =
             (0..tets).map(|t| Reverse((priority(t, 0), t as u32))).collect();
         let mut strikes = vec![0u8; tets];
@@ -313,7 +314,7 @@ impl Context<'_> {
     /// The frame of a patch seeded at tet `t` on its `strike`-th attempt: the field's,
     /// completed or replaced by a random frame of that seed and attempt.
     fn seed_frame(&self, t: usize, strike: u8) -> Frame {
-        let random = random_frame(&mut Pcg64Mcg::seed_from_u64(mix(self.params.seed, t as u64, 0x100 + strike as u64)));
+        let random = random_frame(&mut Pcg64Mcg::seed_from_u64(hash3(self.params.seed, t as i64, strike as i64, 1)));
         let r = self.field.primary[t];
         let s = self.field.secondary[t];
         let dirs = if r == Vec3::ZERO {
@@ -559,17 +560,6 @@ fn peek_seed(queue: &mut BinaryHeap<Reverse<(u64, u32)>>, done: &[bool]) -> Opti
         queue.pop();
     }
     None
-}
-
-/// A well-mixed 64-bit number of a fill's seed, a tet and an attempt (SplitMix64 steps).
-fn mix(seed: u64, t: u64, attempt: u64) -> u64 {
-    let step = |x: u64| {
-        let mut z = x.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    };
-    step(step(step(seed) ^ t) ^ attempt)
 }
 
 /// A mask value at least this high shows as full coverage (255) at every sample.
