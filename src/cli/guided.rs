@@ -689,7 +689,7 @@ fn by_scales(
             ))));
         }
     };
-    let side = load_exemplars(args, path, None, 1.0)?[0].width();
+    let side = load_exemplars(args, path, None, 1.0)?.0[0].width();
     let scale = solid::scale_over(&g.tets, &g.spec.scales, side, domain).map_err(|e| e.in_file(&args.spec))?;
     let steps = solid::scale_steps(&scale).map_err(|e| e.in_file(&args.spec))?;
     let made: Vec<(Exemplars, Options)> = steps
@@ -720,8 +720,13 @@ fn by_scales(
 
 /// The exemplars per plane, alpha dropped (the solid's alpha is the model's coverage),
 /// with their feature masks and (layered, `rows`) scaled so that their rows span the
-/// model's depth in voxels, with a Depth channel.
-fn load_exemplars(args: &GuidedArgs, exemplar: &Path, rows: Option<usize>, factor: f32) -> Result<[Image2d; 3]> {
+/// model's depth in voxels, with a Depth channel; and the most rows any had before.
+fn load_exemplars(
+    args: &GuidedArgs,
+    exemplar: &Path,
+    rows: Option<usize>,
+    factor: f32,
+) -> Result<([Image2d; 3], usize)> {
     let shrink = super::synth::OtherExemplars {
         ey: None,
         ez: None,
@@ -735,12 +740,14 @@ fn load_exemplars(args: &GuidedArgs, exemplar: &Path, rows: Option<usize>, facto
             ))));
         }
     }
+    let source_rows = std::cell::Cell::new(0);
     let load = |path: &Path, mask: Option<&PathBuf>, what: &str| -> Result<Image2d> {
         let image = resized_by(without_alpha(shrink.load(path, what)?)?, factor).map_err(|e| e.in_file(path))?;
         let image = match mask {
             Some(m) => with_mask(image, &resized_by(shrink.load(m, "feature mask")?, factor)?, path, m)?,
             None => image,
         };
+        source_rows.set(source_rows.get().max(image.height()));
         match rows {
             Some(rows) => {
                 if let Some(warning) = crate::synth::layering_warning(&image) {
@@ -759,7 +766,7 @@ fn load_exemplars(args: &GuidedArgs, exemplar: &Path, rows: Option<usize>, facto
     let ez = args.others.ez.as_deref().map(|p| load(p, args.ez_mask.as_ref(), "Ez exemplar")).transpose()?;
     let ey = ey.unwrap_or_else(|| ex.clone());
     let ez = ez.unwrap_or_else(|| ey.clone());
-    Ok([ex, ey, ez])
+    Ok(([ex, ey, ez], source_rows.get()))
 }
 
 /// The longest side a scale field may resize an exemplar to: preparing it keeps every
@@ -888,11 +895,16 @@ fn plane_exemplars(
     rows: Option<usize>,
     factor: f32,
 ) -> Result<(Exemplars, Options, Image2d)> {
-    let exemplars = load_exemplars(args, path, rows, factor)?;
+    let (exemplars, source_rows) = load_exemplars(args, path, rows, factor)?;
     let through_cube = !args.layered && args.mask.is_none() && !args.planes;
     let side =
         if through_cube { cube::SIDE } else { exemplars.iter().map(|e| e.width().min(e.height())).min().unwrap_or(0) };
     let options = Options { layered: args.layered, coarse_n: args.coarse_n, n: args.n, ..Options::for_exemplar(side) };
+    let options = match rows {
+        Some(rows) => options.magnifying(source_rows, rows),
+        None => options,
+    };
+    say_magnified(&options);
     let prepared = if through_cube {
         cube_volume(args, &exemplars).and_then(|cube| Exemplars::of_volume(&cube, &options))
     } else {
@@ -902,6 +914,18 @@ fn plane_exemplars(
     .map_err(|e| e.in_file(path))?;
     let [first, ..] = exemplars;
     Ok((prepared, options, first))
+}
+
+/// Tell which levels only magnify a layered exemplar fitted up to the model's depth.
+fn say_magnified(options: &Options) {
+    if options.magnified > 0 {
+        tell!(
+            "layered: the finest {} of {} levels magnify the level below (the exemplar holds no finer detail): their \
+             rows follow the model's depth, nothing is matched there",
+            options.magnified,
+            options.levels
+        );
+    }
 }
 
 /// The prepared solid exemplar of `--solid`, its settings, and its central slice across x
@@ -925,7 +949,8 @@ fn solid_exemplar(
             )))
         })?;
         let options =
-            Options { coarse_n: args.coarse_n, n: args.n, ..crate::library::guided::section_options(&planes) };
+            Options { coarse_n: args.coarse_n, n: args.n, ..crate::library::guided::section_options(&planes, &volume) };
+        say_magnified(&options);
         let prepared = Exemplars::prepare([&planes[0], &planes[1], &planes[2]], &options)?;
         let [first, ..] = planes;
         return Ok((prepared, options, first));
@@ -968,10 +993,10 @@ fn cube_volume(args: &GuidedArgs, images: &[Image2d; 3]) -> Result<crate::volume
 /// Megabytes the cache may hold in memory.
 const CACHE_MB: std::ops::RangeInclusive<usize> = 16..=65536;
 
-/// Compute every level below the finest over the whole grid into `levels` (the cache's,
-/// coarsest first) unless the cache holds them already or they would take more than a
-/// quarter of its `most` bricks: later cuts then compute only their finest level. Whether
-/// it computed them.
+/// Compute the coarse levels ([`synth::Options::coarse_levels`]) over the whole grid into `levels`
+/// (the cache's, coarsest first) unless the cache holds them already or they would take
+/// more than a quarter of its `most` bricks: later cuts then compute only the levels above
+/// them. Whether it computed them.
 fn whole_coarse_levels(
     setup: &Setup,
     levels: &mut Vec<Sparse<synth::Voxel>>,
@@ -979,7 +1004,7 @@ fn whole_coarse_levels(
     bar: &super::fill::Bar,
 ) -> Result<bool> {
     let dims = setup.level_dims();
-    let Some(below) = dims.len().checked_sub(2) else { return Ok(false) };
+    let Some(below) = setup.options.coarse_levels().checked_sub(1) else { return Ok(false) };
     let bricks: usize = dims[..=below].iter().map(|d| d.iter().map(|n| n.div_ceil(BRICK)).product::<usize>()).sum();
     if levels.get(below).is_some_and(|l| l.mask().is_full()) || 4 * bricks > most {
         return Ok(false);

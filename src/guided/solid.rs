@@ -355,15 +355,16 @@ pub fn scale_steps(scale: &ScalarGrid) -> Result<Vec<f32>> {
     Ok((first..=last).map(|j| j as f32 / SCALE_STEPS_PER_OCTAVE).collect())
 }
 
-/// Every level below the finest computed over the whole grid, coarsest first (none when
-/// there is one level): kept, a cut computes only its finest level.
+/// Every level below the finest that makes corrections ([`synth::Options::coarse_levels`]) computed
+/// over the whole grid, coarsest first (none when there is one level): kept, a cut computes
+/// only the levels above them.
 pub fn coarse_levels(setup: &Setup, progress: &dyn Progress) -> Result<Vec<Sparse<Voxel>>> {
-    let levels = setup.options.levels;
-    if levels < 2 {
+    let coarse = setup.options.coarse_levels();
+    if coarse == 0 {
         return Ok(Vec::new());
     }
     let mut masks = synth::plan(setup, &Mask::full(setup.dims), &[]);
-    masks.truncate(levels - 1);
+    masks.truncate(coarse);
     let out = synth::run(setup, &masks, &[], progress)?;
     Ok(out.coarser.into_iter().chain([out.values]).collect())
 }

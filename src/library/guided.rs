@@ -177,7 +177,7 @@ pub fn volume_exemplars(
 ) -> Result<(Exemplars, Options, Option<ScalarGrid>)> {
     match layered_slices(volume, given, depths, domain)? {
         Some((planes, depth)) => {
-            let options = section_options(&planes);
+            let options = section_options(&planes, volume);
             Ok((Exemplars::prepare([&planes[0], &planes[1], &planes[2]], &options)?, options, Some(depth)))
         }
         None => {
@@ -235,11 +235,16 @@ fn layered_slices(
     Ok(layered_planes(volume, given, rows)?.map(|planes| (planes, depth)))
 }
 
-/// The settings for a built cross-section's layered planes ([`layered_planes`]): layered,
-/// their depth held at [`SECTION_DEPTH_SHARE`] while the layers are laid out.
-pub fn section_options(planes: &[Image2d; 3]) -> Options {
+/// The settings for a built cross-section's layered planes ([`layered_planes`] of
+/// `volume`): layered, their depth held at [`SECTION_DEPTH_SHARE`] while the layers are
+/// laid out, and the levels that only magnify the volume's depth ([`Options::magnifying`]).
+pub fn section_options(planes: &[Image2d; 3], volume: &Volume) -> Options {
     let side = planes.iter().map(|e| e.width().min(e.height())).min().unwrap_or(0);
-    Options { layered: true, coarse_depth_share: SECTION_DEPTH_SHARE, ..Options::for_exemplar(side) }
+    let options = Options { layered: true, coarse_depth_share: SECTION_DEPTH_SHARE, ..Options::for_exemplar(side) };
+    match volume.depth_axis() {
+        Some(axis) => options.magnifying(volume.dims()[axis], planes[0].height()),
+        None => options,
+    }
 }
 
 /// For a volume with a Depth channel (a library cross-section's build): the two central

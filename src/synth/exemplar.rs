@@ -76,13 +76,32 @@ pub struct PrepareOptions {
 impl Prepared {
     /// Prepare `image` with per-channel `weights`.
     pub fn new(image: &Image2d, weights: &[f32], opt: PrepareOptions) -> Prepared {
+        let mut prepared = Prepared::unsearched(image, weights, opt);
+        let vectors = prepared.all_vectors();
+        let m = opt.n * opt.n * prepared.channels;
+        prepared.pca = fit_sampled(&vectors, m, opt.variance, opt.max_dims);
+        prepared.projected = LineRows::new(&project_all(&prepared.pca, &vectors, m), prepared.pca.dims);
+        let low = prepared.pca.dims.min(LOOKUP_DIMS);
+        prepared.lookup = KdTree::build(prepared.projected.packed(low), low);
+        if opt.k > 0 {
+            let low = prepared.pca.dims.min(TREE_DIMS);
+            let tree = KdTree::build(prepared.projected.packed(low), low);
+            let sets = (0..prepared.centres.len()).map(|_| OnceLock::new()).collect();
+            prepared.coherence = Coherence { tree, low, sets };
+        }
+        prepared
+    }
+
+    /// `image`'s pixels and neighbourhood centres without anything to search them by: for
+    /// a level that is never matched, only read (a level that only magnifies the one below).
+    pub fn unsearched(image: &Image2d, weights: &[f32], opt: PrepareOptions) -> Prepared {
         let (width, height, channels) = (image.width(), image.height(), image.channel_count());
         let h = opt.n / 2;
         let centres: Vec<u32> = (h..=height - opt.n + h)
             .flat_map(|y| (h..=width - opt.n + h).map(move |x| (y * width + x) as u32))
             .collect();
         let centre_xy = centres.iter().map(|&c| [c % width as u32, c / width as u32]).collect();
-        let mut prepared = Prepared {
+        Prepared {
             width,
             height,
             channels,
@@ -96,20 +115,7 @@ impl Prepared {
             coherence: Coherence { tree: KdTree::build(Vec::new(), 0), low: 0, sets: Vec::new() },
             k: opt.k,
             lookup: KdTree::build(Vec::new(), 0),
-        };
-        let vectors = prepared.all_vectors();
-        let m = opt.n * opt.n * channels;
-        prepared.pca = fit_sampled(&vectors, m, opt.variance, opt.max_dims);
-        prepared.projected = LineRows::new(&project_all(&prepared.pca, &vectors, m), prepared.pca.dims);
-        let low = prepared.pca.dims.min(LOOKUP_DIMS);
-        prepared.lookup = KdTree::build(prepared.projected.packed(low), low);
-        if opt.k > 0 {
-            let low = prepared.pca.dims.min(TREE_DIMS);
-            let tree = KdTree::build(prepared.projected.packed(low), low);
-            let sets = (0..prepared.centres.len()).map(|_| OnceLock::new()).collect();
-            prepared.coherence = Coherence { tree, low, sets };
         }
-        prepared
     }
 
     /// Offset range start: offsets run from `-half` to `n - 1 - half`.

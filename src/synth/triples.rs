@@ -86,6 +86,11 @@ impl Bars {
 }
 
 impl Triples {
+    /// No triples: for a level that is never corrected.
+    pub fn none() -> Triples {
+        Triples { k: 0, sets: [Vec::new(), Vec::new(), Vec::new()] }
+    }
+
     /// The candidate triples of `planes` (one level of each plane's exemplar).
     pub fn new(planes: [&Prepared; 3], k: usize) -> Triples {
         let bars = all_bars(planes);

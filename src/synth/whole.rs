@@ -60,6 +60,7 @@ pub fn options(params: &SynthParams, layered: bool) -> Options {
         balance_every_level: false,
         keep_shown_plane: true,
         coarse_depth_share: super::coords::DEPTH_SHARE,
+        magnified: 0,
     }
 }
 

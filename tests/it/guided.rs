@@ -398,6 +398,18 @@ fn a_layered_cut_shows_the_innermost_rows_at_the_axis() {
     assert!(pale.count() >= 14, "the middle 4x4 pixels are mostly the pale core");
     let [r, g, _] = img.get_pixel(32, 8).0;
     assert!(g > r + 30, "green flesh between the core and the skin: {:?}", img.get_pixel(32, 8).0);
+    // a section of fewer rows than the depth spans is magnified at the finest level: said,
+    // and its core still lands at the axis
+    let small = at(d, "small.png");
+    image::open(kiwi).unwrap().resize_exact(24, 24, image::imageops::FilterType::Triangle).save(&small).unwrap();
+    let args = ["guided", &fruit, "--spec", &spec, "--exemplar", &small, "--layered", "--cut", "0,0,0,1,0,0"];
+    let magnified = at(d, "magnified.png");
+    let run = solidtex(&[&args[..], &["--res", "256", "--size", "64", "-o", &magnified]].concat());
+    assert!(run.status.success(), "{}", stderr(&run));
+    assert!(stderr(&run).contains("the finest 1 of 2 levels magnify the level below"), "{}", stderr(&run));
+    let img = image::open(&magnified).unwrap().to_rgb8();
+    let [r, g, b] = img.get_pixel(32, 32).0;
+    assert!(r > 180 && g > 180 && b > 140, "the pale core at the axis: {:?}", [r, g, b]);
 
     let low = at(d, "low.png");
     crate::support::assert_fails(
