@@ -200,11 +200,11 @@ pub struct GuidedArgs {
     pub res: usize,
     /// Neighbourhood side at the coarsest level (odd, 3 to 11): 7 or 9 keep long
     /// structures (grooves, grain) longer, a little less sharp (docs/guided.md).
-    #[arg(long, default_value_t = 5)]
+    #[arg(long, default_value_t = DEFAULT_N)]
     pub coarse_n: usize,
     /// Neighbourhood side at the finer levels (odd, 3 to 11): Zhang et al. use 9 with
     /// `--coarse-n 7`, at about three times the time (docs/guided.md).
-    #[arg(long, default_value_t = 5)]
+    #[arg(long, default_value_t = DEFAULT_N)]
     pub n: usize,
     /// Synthesize only the cut PX,PY,PZ,NX,NY,NZ (a point and a normal) and write it as a
     /// PNG; without it, the whole solid is written as a volume.
@@ -586,6 +586,15 @@ fn by_regions(
             args.spec.display()
         ))));
     }
+    for (flag, value) in [("--n", args.n), ("--coarse-n", args.coarse_n)] {
+        if value != DEFAULT_N {
+            return Err(usage(Error::invalid(format!(
+                "{flag} {value}: the spec {} synthesizes each [[region]] with its exemplar's own neighbourhoods \
+                 ({DEFAULT_N}); leave out {flag}",
+                args.spec.display()
+            ))));
+        }
+    }
     let spec = &g.spec;
     if !spec.scales.is_empty() {
         tell!(
@@ -601,13 +610,13 @@ fn by_regions(
     let depth = solid::depth_over(&g.depth, domain).map_err(|e| e.in_file(&args.spec))?;
     let made = crate::library::guided::region_exemplars(spec, &g.depth, domain).map_err(|e| e.in_file(&args.spec))?;
     let frames = solid::frames_over(&g.tets, &g.field, domain, &g.depth, &g.axes)?;
-    let settings = |o: Options| Options { coarse_n: args.coarse_n, n: args.n, ..o };
-    let parts = crate::library::guided::region_setups(&made, &frames, domain.dims, args.seed, settings);
+    let parts = crate::library::guided::region_setups(&made, &frames, domain.dims, args.seed, |o| o);
     let regions = crate::library::guided::region_blend(spec);
     let weight = |k: usize, v: [usize; 3]| regions.weight(k, solid::grid_at(&depth, v));
     let kept = write_blend(args, g, domain, action, &parts, &weight, started)?;
-    for (region, name) in spec.regions.iter().zip(&names) {
+    for ((region, name), (_, options, _)) in spec.regions.iter().zip(&names).zip(&made) {
         tell!("  depth {} to {}: {name}", region.depth[0], region.depth[1]);
+        say_magnified(options);
     }
     Ok(kept)
 }
@@ -720,7 +729,8 @@ fn by_scales(
 
 /// The exemplars per plane, alpha dropped (the solid's alpha is the model's coverage),
 /// with their feature masks and (layered, `rows`) scaled so that their rows span the
-/// model's depth in voxels, with a Depth channel; and the most rows any had before.
+/// model's depth in voxels, with a Depth channel; and the most rows any has as loaded
+/// (before fitting).
 fn load_exemplars(
     args: &GuidedArgs,
     exemplar: &Path,
@@ -740,14 +750,14 @@ fn load_exemplars(
             ))));
         }
     }
-    let source_rows = std::cell::Cell::new(0);
-    let load = |path: &Path, mask: Option<&PathBuf>, what: &str| -> Result<Image2d> {
+    // each image with its rows as loaded, before fitting
+    let load = |path: &Path, mask: Option<&PathBuf>, what: &str| -> Result<(Image2d, usize)> {
         let image = resized_by(without_alpha(shrink.load(path, what)?)?, factor).map_err(|e| e.in_file(path))?;
         let image = match mask {
             Some(m) => with_mask(image, &resized_by(shrink.load(m, "feature mask")?, factor)?, path, m)?,
             None => image,
         };
-        source_rows.set(source_rows.get().max(image.height()));
+        let source = image.height();
         match rows {
             Some(rows) => {
                 if let Some(warning) = crate::synth::layering_warning(&image) {
@@ -756,17 +766,18 @@ fn load_exemplars(
                         path.display()
                     );
                 }
-                with_depth(fitted(image, rows, path)?).map_err(|e| e.in_file(path))
+                Ok((with_depth(fitted(image, rows, path)?).map_err(|e| e.in_file(path))?, source))
             }
-            None => Ok(image),
+            None => Ok((image, source)),
         }
     };
-    let ex = load(exemplar, args.mask.as_ref(), "exemplar")?;
+    let (ex, rows_x) = load(exemplar, args.mask.as_ref(), "exemplar")?;
     let ey = args.others.ey.as_deref().map(|p| load(p, args.ey_mask.as_ref(), "Ey exemplar")).transpose()?;
     let ez = args.others.ez.as_deref().map(|p| load(p, args.ez_mask.as_ref(), "Ez exemplar")).transpose()?;
-    let ey = ey.unwrap_or_else(|| ex.clone());
-    let ez = ez.unwrap_or_else(|| ey.clone());
-    Ok(([ex, ey, ez], source_rows.get()))
+    let most_rows = [Some(rows_x), ey.as_ref().map(|e| e.1), ez.as_ref().map(|e| e.1)].into_iter().flatten().max();
+    let ey = ey.map_or_else(|| ex.clone(), |e| e.0);
+    let ez = ez.map_or_else(|| ey.clone(), |e| e.0);
+    Ok(([ex, ey, ez], most_rows.unwrap_or(rows_x)))
 }
 
 /// The longest side a scale field may resize an exemplar to: preparing it keeps every
@@ -823,6 +834,9 @@ fn with_mask(image: Image2d, mask: &Image2d, path: &Path, mask_path: &Path) -> R
     let names = image.channels().iter().cloned().chain([Channel::Named(synth::FEATURE.into())]).collect();
     Image2d::from_data(image.width(), image.height(), names, data)
 }
+
+/// The neighbourhood side at every level unless `--n` and `--coarse-n` say.
+const DEFAULT_N: usize = 5;
 
 /// Exemplars are shrunk to this many pixels on their longer side unless `--max-exemplar` says.
 const DEFAULT_EXEMPLAR: usize = 128;

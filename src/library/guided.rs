@@ -237,7 +237,8 @@ fn layered_slices(
 
 /// The settings for a built cross-section's layered planes ([`layered_planes`] of
 /// `volume`): layered, their depth held at [`SECTION_DEPTH_SHARE`] while the layers are
-/// laid out, and the levels that only magnify the volume's depth ([`Options::magnifying`]).
+/// laid out, and the levels that only magnify the section, fitted past the volume's rows
+/// along its depth ([`Options::magnifying`]).
 pub fn section_options(planes: &[Image2d; 3], volume: &Volume) -> Options {
     let side = planes.iter().map(|e| e.width().min(e.height())).min().unwrap_or(0);
     let options = Options { layered: true, coarse_depth_share: SECTION_DEPTH_SHARE, ..Options::for_exemplar(side) };

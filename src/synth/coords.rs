@@ -64,7 +64,8 @@ pub struct Options {
     pub coarse_passes: usize,
     /// Correction passes at every finer level.
     pub passes: usize,
-    /// Candidate triples per exemplar pixel (the finest level offers at most [`FINEST_TRIPLES`]).
+    /// Candidate triples per exemplar pixel (the finest matched level offers at most
+    /// [`FINEST_TRIPLES`]).
     pub k: usize,
     /// Most PCA dimensions.
     pub max_dims: usize,
@@ -90,7 +91,7 @@ pub struct Options {
     /// How many times the colours' summed variance the depth channel's weighted variance
     /// is at the levels above the finest: how tightly a layered exemplar's rows keep to
     /// their depth while the layers are laid out ([`DEPTH_SHARE`]; [`SECTION_DEPTH_SHARE`]
-    /// for a built cross-section). The finest level matches at [`DEPTH_SHARE`].
+    /// for a built cross-section). The finest matched level matches at [`DEPTH_SHARE`].
     pub coarse_depth_share: f32,
     /// How many of the finest levels only magnify the level below: a layered exemplar
     /// fitted up to the model's depth ([`Options::magnifying`]) holds no detail there that
@@ -135,11 +136,20 @@ impl Options {
     /// levels whose exemplar is more than [`MAGNIFIED`] times the source's rows only
     /// magnify (at most all but the coarsest).
     pub fn magnifying(self, source: usize, fitted: usize) -> Options {
-        let mut magnified = 0;
-        while magnified + 1 < self.levels && (fitted >> magnified) as f32 > MAGNIFIED * source as f32 {
+        let (mut magnified, mut rows) = (0, fitted);
+        while magnified + 1 < self.levels && rows as f32 > MAGNIFIED * source as f32 {
             magnified += 1;
+            // each level halves its image's rows, rounding up ([`crate::synth::image_pyramid`])
+            rows = rows.div_ceil(2);
         }
         Options { magnified, ..self }
+    }
+
+    /// The finest level that is matched (0: coarsest): the finest, or the one below the
+    /// levels that only magnify. The finest level's rules ([`FINEST_TRIPLES`], the depth
+    /// at [`DEPTH_SHARE`], the colour balance of a photo) apply there.
+    pub fn finest_matched(&self) -> usize {
+        self.levels.saturating_sub(1 + self.magnified)
     }
 
     /// Whether `level` (0: coarsest) only magnifies the level below.
@@ -150,7 +160,7 @@ impl Options {
     /// The coarse levels: those below the finest that make corrections, which a guided
     /// cache may hold whole so that a cut computes only the levels above them.
     pub fn coarse_levels(&self) -> usize {
-        (self.levels - self.magnified.max(1)).min(self.levels.saturating_sub(1))
+        self.levels.saturating_sub(self.magnified.max(1))
     }
 
     /// Correction passes at `level` (0: coarsest).
@@ -165,10 +175,10 @@ impl Options {
     }
 
     /// Candidate triples kept per exemplar pixel at `level` (0: coarsest): `k`, at most
-    /// [`FINEST_TRIPLES`] at the finest level (the fewer kept, the smaller the table each
+    /// [`FINEST_TRIPLES`] at the finest matched level (the fewer kept, the smaller the table each
     /// correction reads at random).
     pub fn triples_at(&self, level: usize) -> usize {
-        if level + 1 == self.levels { self.k.min(FINEST_TRIPLES) } else { self.k }
+        if level == self.finest_matched() { self.k.min(FINEST_TRIPLES) } else { self.k }
     }
 
     /// The neighbourhood side at `level` (0: coarsest).
@@ -218,7 +228,7 @@ pub fn matched_only(channel: &Channel) -> bool {
 pub struct Exemplars {
     /// Per plane (orthogonal to frame x, y, z), its pyramid; planes sharing an image share it.
     pub planes: [Arc<Vec<Prepared>>; 3],
-    /// Per level, the candidate triples.
+    /// Per level, the candidate triples (none at a level that only magnifies).
     pub triples: Vec<Triples>,
     /// The channels shown: the exemplars' own, a feature mask and a Depth channel (matched,
     /// not shown) aside.
@@ -281,7 +291,7 @@ impl Exemplars {
                 .iter()
                 .enumerate()
                 .map(|(l, image)| {
-                    let weights = if l + 1 == options.levels { &finest } else { &coarse };
+                    let weights = if l >= options.finest_matched() { &finest } else { &coarse };
                     let image = padded_rows(image, pad_rows(options, l))?;
                     let prepare = if options.magnifies(l) { Prepared::unsearched } else { Prepared::new };
                     Ok(prepare(&image, weights, opt(l)))
@@ -400,7 +410,7 @@ pub const DEPTH_SHARE: f32 = 16.0;
 /// 24 times the log's guided cuts had no bark; at 32 it darkens 54-72 % of the outer band
 /// from `--res 256` up (the lapped fill 40 %; at 128, where the bark is one voxel thick,
 /// none), the kiwi's seeds as at 16; at 64 the bark is the same and the seeds fainter.
-/// Held that tight at the finest level too, neighbouring voxels took their columns apart
+/// Held that tight at the finest matched level too, neighbouring voxels took their columns apart
 /// and the rings turned to a comb (gradient ratio 1.54 at `--res 1024`, 0.90 without).
 pub const SECTION_DEPTH_SHARE: f32 = 32.0;
 
@@ -656,7 +666,7 @@ pub fn run(setup: &Setup, masks: &[Vec<Mask>], kept: &Kept, progress: &dyn Progr
 /// the whole grid.
 fn balance_at(setup: &Setup, level: usize, versions: &[Mask]) -> Option<Balance> {
     let whole = versions.iter().all(Mask::is_full);
-    let weighed = setup.options.balance_every_level || level + 1 == setup.options.levels;
+    let weighed = setup.options.balance_every_level || level == setup.options.finest_matched();
     if setup.options.histogram <= 0.0 || setup.exemplars.cube.is_some() || !whole || !weighed {
         return None;
     }
@@ -778,7 +788,9 @@ pub fn fingerprint(setup: &Setup) -> u64 {
     let flags = usize::from(o.layered) | usize::from(o.keep_shown_plane) << 1;
     [o.levels, o.n, o.coarse_n, o.coarse_passes, o.passes, o.k, o.max_dims, flags].iter().for_each(|v| add(*v as u64));
     add(u64::from(o.coarse_depth_share.to_bits()));
-    add(o.magnified as u64);
+    if o.magnified > 0 {
+        add(o.magnified as u64);
+    }
     add(setup.seed);
     h
 }
@@ -837,10 +849,9 @@ fn upsampled(setup: &Setup, level: usize, parents: &Level, v: [usize; 3]) -> Vox
         let y = 2 * (py - pad[0]) + local[sa].round() as i64 + pad[1];
         fine.clamped_slot(x, y) as u32
     });
-    let slot = match setup.depth {
-        Some(depth) if setup.options.layered && setup.options.magnifies(level) => {
-            let scale = (1usize << (setup.options.levels - 1 - level)) as f32;
-            rows_of_depth(setup, level, slot, depth.at(Vec3::from_array(v.map(|c| c as f32)) * scale))
+    let slot = match (setup.depth, setup.exemplars.depth) {
+        (Some(depth), Some(channel)) if setup.options.layered && setup.options.magnifies(level) => {
+            rows_of_depth(setup, level, slot, v, (depth, channel))
         }
         _ => slot,
     };
@@ -850,20 +861,35 @@ fn upsampled(setup: &Setup, level: usize, parents: &Level, v: [usize; 3]) -> Vox
     if setup.options.keep_shown_plane { setup.restored(level, slot, parent.shown) } else { setup.voxel(level, slot) }
 }
 
-/// `slot` with the layered planes' rows set to the row of `depth` (their Depth channel is
-/// the row over the rows less one, the pad rows aside). Where a level only magnifies, the
-/// layers then bend with the model's depth from voxel to voxel, not in the doubled steps
-/// of the level below. (Keeping the parent's offset from its depth's row, doubled, kept
-/// those steps: the log's rings at `--res 1024` measured gradient 1.41-1.47, against
-/// 1.17-1.27 this way.)
-fn rows_of_depth(setup: &Setup, level: usize, mut slot: [u32; 3], depth: f32) -> [u32; 3] {
-    let pad = pad_rows(&setup.options, level) as i64;
+/// `slot` of voxel `v` with each layered plane's row set to the row whose Depth channel
+/// (`channel`, rising down the rows) is nearest the model's `depth` at `v`, in the slot's
+/// column. Where a level only magnifies, the layers then bend with the model's depth from
+/// voxel to voxel; the parent's rows doubled draw them in steps of two and four voxels
+/// (the log's rings at `--res 1024`: gradient ratio 1.41-1.47 with the parent's offset
+/// from its depth's row doubled, 1.17-1.27 from the depth alone).
+fn rows_of_depth(
+    setup: &Setup,
+    level: usize,
+    mut slot: [u32; 3],
+    v: [usize; 3],
+    (depth, channel): (&ScalarGrid, usize),
+) -> [u32; 3] {
+    let scale = (1usize << (setup.options.levels - 1 - level)) as f32;
+    let wanted = depth.at(Vec3::from_array(v.map(|c| c as f32)) * scale);
+    let pad = pad_rows(&setup.options, level);
     for (a, s) in slot.iter_mut().enumerate().take(2) {
         let ex = setup.exemplar(a, level);
-        let rows = ex.height as i64 - 2 * pad;
         let (x, _) = ex.slot_xy(*s as usize);
-        let y = pad + (depth.clamp(0.0, 1.0) * (rows - 1) as f32).round() as i64;
-        *s = ex.clamped_slot(x, y) as u32;
+        let at = |y: usize| ex.colours[(y * ex.width + x as usize) * ex.channels + channel];
+        // the first row at or past the depth, or the one before it, whichever is nearer
+        let (first, last) = (pad, ex.height - pad - 1);
+        let (mut lo, mut hi) = (first, last);
+        while lo < hi {
+            let mid = (lo + hi) / 2;
+            if at(mid) < wanted { lo = mid + 1 } else { hi = mid }
+        }
+        let y = if lo > first && wanted - at(lo - 1) < at(lo) - wanted { lo - 1 } else { lo };
+        *s = ex.clamped_slot(x, y as i64) as u32;
     }
     slot
 }
@@ -1563,7 +1589,7 @@ mod tests {
 
     /// Layered settings, frames whose z runs along x and a depth rising from 0 to 1 along x,
     /// over a 32³ grid.
-    fn layered_along_x() -> (Options, FrameGrid, crate::guided::field::ScalarGrid) {
+    fn layered_along_x() -> (Options, FrameGrid, ScalarGrid) {
         let options = Options { coarse_n: 5, layered: true, ..options() };
         let z_along_x = Quat::from_rotation_y(std::f32::consts::FRAC_PI_2);
         assert!((z_along_x * Vec3::Z).distance(Vec3::X) < 1e-6);
@@ -1633,17 +1659,19 @@ mod tests {
         let four = Options::default();
         assert_eq!(four.levels, 4);
         let count = |source, fitted| four.magnifying(source, fitted).magnified;
-        assert_eq!([count(64, 64), count(64, 87), count(64, 100), count(64, 216), count(4, 4096)], [0, 0, 1, 2, 3]);
+        let counts = [count(64, 64), count(64, 87), count(64, 100), count(64, 181), count(64, 216), count(4, 4096)];
+        assert_eq!(counts, [0, 0, 1, 2, 2, 3], "181 rows halve to 91, past 90.5");
         let magnified = four.magnifying(64, 216);
         assert_eq!((0..4).map(|l| magnified.passes_at(l)).collect::<Vec<_>>(), [4, 2, 0, 0]);
         assert_eq!((magnified.coarse_levels(), four.coarse_levels()), (2, 3));
+        // the finest level's rules go to the finest matched level
+        assert_eq!((magnified.finest_matched(), four.finest_matched()), (1, 3));
+        assert_eq!((magnified.triples_at(1), four.triples_at(1)), (FINEST_TRIPLES, four.k));
     }
 
-    /// At a level that only magnifies, every voxel's layered rows are its depth's row
-    /// (the layers bend with the depth voxel by voxel) and nothing is corrected; matched,
-    /// the same level puts some voxels' rows elsewhere.
-    #[test]
-    fn a_magnifying_level_takes_its_rows_from_the_depth() {
+    /// Rows of faint noise whose Depth channel rises down them, prepared with `magnified`
+    /// levels magnifying, and the setup of a 32³ grid whose depth rises along x.
+    fn magnifying_world(magnified: usize) -> (Exemplars, Options, FrameGrid, ScalarGrid) {
         let (w, h) = (32, 32);
         let data = (0..w * h)
             .flat_map(|i| {
@@ -1653,18 +1681,27 @@ mod tests {
             .collect();
         let image = Image2d::from_data(w, h, vec![Channel::R, Channel::G, Channel::Depth], data).unwrap();
         let (layered, frames, depth) = layered_along_x();
+        let options = Options { magnified, ..layered };
+        (Exemplars::prepare([&image, &image, &image], &options).unwrap(), options, frames, depth)
+    }
+
+    fn layered_setup<'a>(
+        exemplars: &'a Exemplars,
+        options: Options,
+        frames: &'a FrameGrid,
+        depth: &'a ScalarGrid,
+    ) -> Setup<'a> {
+        Setup { exemplars, frames: Some(frames), wrap: [false; 3], depth: Some(depth), dims: [32; 3], seed: 3, options }
+    }
+
+    /// At a level that only magnifies, every voxel's layered rows are its depth's row
+    /// (the layers bend with the depth voxel by voxel) and nothing is corrected; matched,
+    /// the same level puts some voxels' rows elsewhere.
+    #[test]
+    fn a_magnifying_level_takes_its_rows_from_the_depth() {
         let off_their_depth = |magnified: usize| {
-            let options = Options { magnified, ..layered };
-            let exemplars = Exemplars::prepare([&image, &image, &image], &options).unwrap();
-            let setup = Setup {
-                exemplars: &exemplars,
-                frames: Some(&frames),
-                wrap: [false; 3],
-                depth: Some(&depth),
-                dims: [32; 3],
-                seed: 3,
-                options,
-            };
+            let (exemplars, options, frames, depth) = magnifying_world(magnified);
+            let setup = layered_setup(&exemplars, options, &frames, &depth);
             let masks = plan(&setup, &Mask::full([32; 3]), &[]);
             let out = run(&setup, &masks, &[], &crate::progress::NoProgress).unwrap();
             let coarse: usize = masks[0][1..].iter().map(Mask::count).sum();
@@ -1673,26 +1710,24 @@ mod tests {
                 .filter(|&i| {
                     let v = grid_voxel([32; 3], i);
                     let slot = out.values.at(v.map(|c| c as i64)).slot;
-                    let row =
-                        pad + (depth.at(Vec3::from_array(v.map(|c| c as f32))).clamp(0.0, 1.0) * 31.0).round() as i64;
+                    let d = depth.at(Vec3::from_array(v.map(|c| c as f32))).clamp(0.0, 1.0);
+                    let row = pad + (d * 31.0).round() as i64;
                     (0..2).any(|a| exemplars.planes[a][1].slot_xy(slot[a] as usize).1 != row)
                 })
                 .count();
             (off, out.corrections == coarse)
         };
         assert_eq!(off_their_depth(1), (0, true));
-        // a cut alone is the whole solid's plane, on one thread and three
-        let options = Options { magnified: 1, ..layered };
-        let exemplars = Exemplars::prepare([&image, &image, &image], &options).unwrap();
-        let setup = Setup {
-            exemplars: &exemplars,
-            frames: Some(&frames),
-            wrap: [false; 3],
-            depth: Some(&depth),
-            dims: [32; 3],
-            seed: 3,
-            options,
-        };
+        let (off, only_coarse) = off_their_depth(0);
+        assert!(off > 1000 && !only_coarse, "{off} voxels off their depth's row when matched");
+    }
+
+    /// With a level that only magnifies, a cut alone is the whole solid's plane, on one
+    /// thread and three.
+    #[test]
+    fn a_magnified_cut_alone_equals_the_whole_solid_on_any_thread_count() {
+        let (exemplars, options, frames, depth) = magnifying_world(1);
+        let setup = layered_setup(&exemplars, options, &frames, &depth);
         let cut: Vec<[usize; 3]> = (0..32 * 32).map(|i| [i % 32, 9 + i / 32 % 32 / 4, i / 32]).collect();
         let mut request = Mask::empty(setup.dims);
         cut.iter().for_each(|v| request.insert(*v));
@@ -1703,8 +1738,6 @@ mod tests {
         let whole = colours(&setup, &on(1, &Mask::full(setup.dims)), &cut);
         assert_eq!(colours(&setup, &on(1, &request), &cut), whole);
         assert_eq!(colours(&setup, &on(3, &request), &cut), whole);
-        let (off, only_coarse) = off_their_depth(0);
-        assert!(off > 1000 && !only_coarse, "{off} voxels off their depth's row when matched");
     }
 
     /// A layered exemplar's outermost and innermost rows (a skin, a core, two rows each,

@@ -1,6 +1,7 @@
 //! One exemplar at one pyramid level, prepared for search: its neighbourhood vectors
 //! projected by PCA, and k-coherence sets (for every valid centre, the k centres
-//! whose neighbourhoods are most alike, itself first).
+//! whose neighbourhoods are most alike, itself first); or, for a level never matched,
+//! only its pixels and centres ([`Prepared::unsearched`]).
 //!
 //! A centre is valid when its whole n x n neighbourhood lies inside the image:
 //!

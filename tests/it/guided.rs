@@ -399,7 +399,7 @@ fn a_layered_cut_shows_the_innermost_rows_at_the_axis() {
     let [r, g, _] = img.get_pixel(32, 8).0;
     assert!(g > r + 30, "green flesh between the core and the skin: {:?}", img.get_pixel(32, 8).0);
     // a section of fewer rows than the depth spans is magnified at the finest level: said,
-    // and its core still lands at the axis
+    // and its core lands at the axis
     let small = at(d, "small.png");
     image::open(kiwi).unwrap().resize_exact(24, 24, image::imageops::FilterType::Triangle).save(&small).unwrap();
     let args = ["guided", &fruit, "--spec", &spec, "--exemplar", &small, "--layered", "--cut", "0,0,0,1,0,0"];
@@ -477,6 +477,9 @@ fn regions_give_the_log_one_exemplar_outside_and_another_inside() {
     let refused = at(d, "refused.png");
     let run = solidtex(&[&args[..10], &["--exemplar", &photo, "-o", &refused]].concat());
     crate::support::assert_usage(&run, &["--exemplar", "regions.toml", "[[region]]"]);
+    // each region keeps its exemplar's neighbourhoods: another size is refused by name
+    let run = solidtex(&[&args[..10], &["--n", "7", "-o", &refused]].concat());
+    crate::support::assert_usage(&run, &["--n 7", "regions.toml", "[[region]]"]);
     assert!(!d.join("refused.png").exists());
 
     // a region's built volume is an input: neither the solid nor a guided model's bake
