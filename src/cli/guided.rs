@@ -1131,6 +1131,7 @@ fn write_cut(
             l.0,
             l.1
         );
+        say_lines(&solid::cut_lines(&picture, exemplar)?);
     } else if shown {
         tell!(
             "sharpness against the exemplar: not measured, a pixel spans {scale:.2} voxels (--size {} gives about one)",
@@ -1138,6 +1139,35 @@ fn write_cut(
         );
     }
     Ok((out.voxels, out.corrections, whole(setup)))
+}
+
+/// Tell a cut's line figures against its exemplar, or that its exemplar's lines form no
+/// long pieces for them to apply.
+fn say_lines(lines: &crate::lines::Lines) {
+    let p = &lines.lines;
+    if !lines.applies {
+        tell!(
+            "line structure: the exemplar's {} lines form no long pieces (top-3 share {:.2}, under {}); not measured",
+            p.name,
+            p.exemplar.top3_share,
+            crate::lines::APPLIES
+        );
+        return;
+    }
+    let (pieces, share) = (crate::lines::PIECES_BAND, crate::lines::SHARE_BAND);
+    tell!(
+        "line structure against the exemplar ({} lines): pieces ratio {:.2}, top-3 share ratio {:.2}, line share \
+         ratio {:.2} (targets {}-{}, at least {}, {}-{})",
+        p.name,
+        p.pieces_ratio,
+        p.top3_ratio,
+        p.share_ratio,
+        pieces.0,
+        pieces.1,
+        crate::lines::TOP3_LEAST,
+        share.0,
+        share.1
+    );
 }
 
 /// The whole solid of one exemplar set: its channels and the model's coverage as alpha;

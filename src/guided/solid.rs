@@ -453,6 +453,20 @@ pub fn solid_volume(setup: &Setup, out: &Synthesized, alpha: &[f32]) -> Result<V
 /// opaque pixels against the exemplar's shown channels (a feature mask or depth left out):
 /// meaningful when a pixel spans about one voxel.
 pub fn cut_sharpness(picture: &Image2d, exemplar: &Image2d) -> Result<crate::sharpness::AxisSharpness> {
+    let (square, exemplar, shown) = shown_square(picture, exemplar)?;
+    crate::sharpness::compare(&[square], &exemplar, &shown)
+}
+
+/// The line-structure yardstick ([`crate::lines`]) of the same square against the same
+/// channels as [`cut_sharpness`].
+pub fn cut_lines(picture: &Image2d, exemplar: &Image2d) -> Result<crate::lines::Lines> {
+    let (square, exemplar, shown) = shown_square(picture, exemplar)?;
+    crate::lines::compare(&[square], &exemplar, &shown)
+}
+
+/// A cut's largest centred square of opaque pixels, the exemplar's shown channels, and
+/// which of the square's channels hold them.
+fn shown_square(picture: &Image2d, exemplar: &Image2d) -> Result<(Image2d, Image2d, Vec<usize>)> {
     let shown: Vec<usize> =
         (0..exemplar.channel_count()).filter(|&c| !synth::matched_only(&exemplar.channels()[c])).collect();
     let mut colours = Vec::with_capacity(exemplar.width() * exemplar.height() * shown.len());
@@ -463,7 +477,7 @@ pub fn cut_sharpness(picture: &Image2d, exemplar: &Image2d) -> Result<crate::sha
     }
     let names = shown.iter().map(|&c| exemplar.channels()[c].clone()).collect();
     let exemplar = Image2d::from_data(exemplar.width(), exemplar.height(), names, colours)?;
-    crate::sharpness::compare(&[inside_square(picture)?], &exemplar, &shown)
+    Ok((inside_square(picture)?, exemplar, shown))
 }
 
 /// The largest centred square of opaque pixels (alpha: the last channel), without alpha.
