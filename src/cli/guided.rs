@@ -610,7 +610,7 @@ fn by_regions(
     let depth = solid::depth_over(&g.depth, domain).map_err(|e| e.in_file(&args.spec))?;
     let made = crate::library::guided::region_exemplars(spec, &g.depth, domain).map_err(|e| e.in_file(&args.spec))?;
     let frames = solid::frames_over(&g.tets, &g.field, domain, &g.depth, &g.axes)?;
-    let parts = crate::library::guided::region_setups(&made, &frames, domain.dims, args.seed, |o| o);
+    let parts = crate::library::guided::region_setups(&made, &frames, domain.dims, args.seed);
     let regions = crate::library::guided::region_blend(spec);
     let weight = |k: usize, v: [usize; 3]| regions.weight(k, solid::grid_at(&depth, v));
     let kept = write_blend(args, g, domain, action, &parts, &weight, started)?;

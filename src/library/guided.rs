@@ -81,7 +81,7 @@ pub fn picture(
             let depth = solid::depth_over(&depths, &domain)?;
             let made = region_exemplars(spec, &depths, &domain)?;
             let frames = solid::frames_over(mesh, &field, &domain, &depths, &spec.depth.axes)?;
-            let parts = region_setups(&made, &frames, domain.dims, spec.seed, |o| o);
+            let parts = region_setups(&made, &frames, domain.dims, spec.seed);
             let regions = region_blend(spec);
             let weight = |k: usize, v: [usize; 3]| regions.weight(k, solid::grid_at(&depth, v));
             let (cut, _) = solid::cut_blend(&parts, &weight, &domain, &filled.model.surface, view, progress)?;
@@ -137,13 +137,12 @@ pub fn region_exemplars(
 }
 
 /// One synthesis setup per region's exemplars (`made`, [`region_exemplars`]) along
-/// `frames` over a grid of `dims`, each region's settings passed through `settings`.
+/// Each region's setup over a grid of `dims` along `frames`, with its own settings.
 pub fn region_setups<'a>(
     made: &'a [(Exemplars, Options, Option<ScalarGrid>)],
     frames: &'a FrameGrid,
     dims: [usize; 3],
     seed: u64,
-    settings: impl Fn(Options) -> Options,
 ) -> Vec<Setup<'a>> {
     made.iter()
         .map(|(exemplars, options, layered)| Setup {
@@ -153,7 +152,7 @@ pub fn region_setups<'a>(
             depth: layered.as_ref(),
             dims,
             seed,
-            options: settings(*options),
+            options: *options,
         })
         .collect()
 }
