@@ -186,7 +186,9 @@ pub struct GuidedArgs {
     #[arg(long, requires = "mask", requires = "ez")]
     pub ez_mask: Option<PathBuf>,
     /// Layered exemplars: their rows run along depth (frame z: the outside in), like the
-    /// library's cross-sections; the plane along a layer is left free.
+    /// library's cross-sections; the plane along a layer is left free. The rows are fitted
+    /// to the voxels the model's depth spans; levels past √2 times the exemplar's own rows
+    /// only magnify it (docs/guided.md).
     #[arg(long)]
     pub layered: bool,
     /// Match the three planes' 2D exemplars directly (Zhang et al.'s coordinate triples)
