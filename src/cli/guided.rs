@@ -1122,7 +1122,7 @@ fn write_cut(
     }
     let scale = view.right.length() / domain.voxel;
     if shown && (0.8..=1.25).contains(&scale) {
-        let s = solid::cut_sharpness(&picture, exemplar)?;
+        let (s, lines) = solid::cut_figures(&picture, exemplar)?;
         let (g, l) = (crate::sharpness::GRADIENT_RANGE, crate::sharpness::LENGTH_RANGE);
         tell!(
             "sharpness against the exemplar: gradient ratio {:.2}, length ratio {:.2} (targets {}-{} and {}-{})",
@@ -1133,7 +1133,7 @@ fn write_cut(
             l.0,
             l.1
         );
-        say_lines(&solid::cut_lines(&picture, exemplar)?);
+        say_lines(&lines);
     } else if shown {
         tell!(
             "sharpness against the exemplar: not measured, a pixel spans {scale:.2} voxels (--size {} gives about one)",

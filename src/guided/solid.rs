@@ -457,11 +457,15 @@ pub fn cut_sharpness(picture: &Image2d, exemplar: &Image2d) -> Result<crate::sha
     crate::sharpness::compare(&[square], &exemplar, &shown)
 }
 
-/// The line-structure yardstick ([`crate::lines`]) of the same square against the same
-/// channels as [`cut_sharpness`].
-pub fn cut_lines(picture: &Image2d, exemplar: &Image2d) -> Result<crate::lines::Lines> {
+/// [`cut_sharpness`] and the line-structure yardstick ([`crate::lines`]) of the same
+/// square against the same channels, the square found once.
+pub fn cut_figures(
+    picture: &Image2d,
+    exemplar: &Image2d,
+) -> Result<(crate::sharpness::AxisSharpness, crate::lines::Lines)> {
     let (square, exemplar, shown) = shown_square(picture, exemplar)?;
-    crate::lines::compare(&[square], &exemplar, &shown)
+    let square = [square];
+    Ok((crate::sharpness::compare(&square, &exemplar, &shown)?, crate::lines::compare(&square, &exemplar, &shown)?))
 }
 
 /// A cut's largest centred square of opaque pixels, the exemplar's shown channels, and
