@@ -139,9 +139,9 @@ pub fn read(path: &Path) -> Result<GuidedModel> {
 
 /// "line N (TEXT): " for the byte `at` of `text`: where a parse error is.
 fn where_in(text: &str, at: usize) -> String {
-    let line = text[..at.min(text.len())].matches('\n').count();
-    let content = text.lines().nth(line).unwrap_or("").trim();
-    format!("line {} ({content}): ", line + 1)
+    let line = super::manifest::line_at(text, at);
+    let content = text.lines().nth(line - 1).unwrap_or("").trim();
+    format!("line {line} ({content}): ")
 }
 
 /// Whether `path` names a guided model (by its extension).

@@ -373,7 +373,7 @@ pub(crate) fn line_of(text: &str, path: &str) -> Option<usize> {
 }
 
 /// The line (from 1) of byte `offset` of `text`.
-fn line_at(text: &str, offset: usize) -> usize {
+pub(crate) fn line_at(text: &str, offset: usize) -> usize {
     text.as_bytes()[..offset.min(text.len())].iter().filter(|b| **b == b'\n').count() + 1
 }
 
