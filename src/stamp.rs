@@ -58,9 +58,20 @@ pub fn stamp(volume: &mut Volume, mesh: &Mesh, placement: &Placement, colour: [f
     let stamped = stamp_covered(volume, mesh, placement, colour)?;
     if stamped.voxels == 0 {
         let d = volume.dims();
+        let placed = mesh.transformed(placement.matrix());
+        let (lo, hi) = placed.bounds();
+        let top = glam::Vec3::new(d[0] as f32, d[1] as f32, d[2] as f32);
+        let overlaps = lo.cmplt(top).all() && hi.cmpgt(glam::Vec3::ZERO).all();
+        let why = if !overlaps {
+            format!("lies wholly outside the {}x{}x{} volume", d[0], d[1], d[2])
+        } else if placed.boundary_edges() > 0 || placed.signed_volume().abs() < 1e-9 {
+            "encloses no volume (a flat or open mesh); a seed must be a closed surface".to_string()
+        } else {
+            "covers no voxel's centre: it is smaller than a voxel (raise --scale)".to_string()
+        };
         return Err(Error::invalid(format!(
-            "the seed placed at ({}, {}, {}) lies wholly outside the {}x{}x{} volume",
-            placement.at.x, placement.at.y, placement.at.z, d[0], d[1], d[2]
+            "the seed placed at ({}, {}, {}) {why}",
+            placement.at.x, placement.at.y, placement.at.z
         )));
     }
     Ok(stamped)
@@ -430,5 +441,8 @@ mod tests {
         assert_eq!(scatter(&mut v, &seed, &tiny, 1).unwrap().placed.len(), 3);
         let outside = stamp(&mut v, &seed, &placed(Vec3::splat(500.0), 1.0), [0.0; 3]).unwrap_err();
         assert!(outside.to_string().contains("wholly outside"), "{outside}");
+        let flat = Mesh::new(vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![[0, 1, 2]]).unwrap();
+        let none = stamp(&mut v, &flat, &placed(Vec3::splat(4.0), 3.0), [0.0; 3]).unwrap_err();
+        assert!(none.to_string().contains("encloses no volume"), "{none}");
     }
 }

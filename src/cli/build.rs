@@ -32,23 +32,23 @@ pub struct BuildArgs {
 
 /// Parse `K/N` or `auto/N` (K from the scheduler's environment).
 pub fn parse_shard(text: &str) -> Result<(u64, u64)> {
-    let bad = || Error::invalid(format!("--shard {text:?} is not K/N with 0 <= K < N (or auto/N)"));
+    let bad = || Error::usage(format!("--shard {text:?} is not K/N with 0 <= K < N (or auto/N)"));
     let (k, n) = text.split_once('/').ok_or_else(bad)?;
     let n: u64 = n.parse().map_err(|_| bad())?;
-    let k: u64 = if k == "auto" {
-        let from_env = ["JOB_COMPLETION_INDEX", "SLURM_ARRAY_TASK_ID"].iter().find_map(|v| std::env::var(v).ok());
-        let value = from_env.ok_or_else(|| {
-            Error::invalid("--shard auto/N needs JOB_COMPLETION_INDEX or SLURM_ARRAY_TASK_ID in the environment")
-        })?;
-        value
-            .trim()
-            .parse()
-            .map_err(|_| Error::invalid(format!("the shard index {value:?} from the environment is not a number")))?
-    } else {
-        k.parse().map_err(|_| bad())?
-    };
+    if k != "auto" {
+        let k: u64 = k.parse().map_err(|_| bad())?;
+        return if n == 0 || k >= n { Err(bad()) } else { Ok((k, n)) };
+    }
+    let names = ["JOB_COMPLETION_INDEX", "SLURM_ARRAY_TASK_ID"];
+    let (name, value) = names.iter().find_map(|v| std::env::var(v).ok().map(|value| (*v, value))).ok_or_else(|| {
+        Error::usage("--shard auto/N needs JOB_COMPLETION_INDEX or SLURM_ARRAY_TASK_ID in the environment")
+    })?;
+    let k: u64 = value
+        .trim()
+        .parse()
+        .map_err(|_| Error::usage(format!("the shard index {name}={value:?} is not a whole number")))?;
     if n == 0 || k >= n {
-        return Err(bad());
+        return Err(Error::usage(format!("--shard {text:?}: the shard index {name}={k} is not below N = {n}")));
     }
     Ok((k, n))
 }
@@ -73,7 +73,10 @@ pub fn run(args: &BuildArgs) -> Result<()> {
         lines.finish();
         outcomes?
     } else {
-        build::merge(&request, &args.merge)?
+        let outcomes = build::merge(&request, &args.merge)?;
+        let lines = Lines { bar: None };
+        outcomes.iter().filter(|o| matches!(o, Outcome::Failed(..))).for_each(|o| lines.finished(o));
+        outcomes
     };
     summarize(&outcomes, &request)
 }

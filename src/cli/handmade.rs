@@ -303,6 +303,7 @@ pub struct DrawArgs {
 
 /// `solidtex draw cake`: the layer meshes and one fill spec per layer, in a folder.
 fn draw_cake(args: &DrawArgs) -> Result<()> {
+    io::check_folder_output(&args.output, &[])?;
     let here = std::env::current_dir().map_err(|e| Error::io(Path::new("."), e))?;
     let (library, built) = (here.join(&args.library), here.join(&args.built));
     if !library.is_file() {

@@ -23,6 +23,6 @@ pub fn run(volume: &Path, output: Option<&Path>, check: Option<&Path>, tolerance
             tell!("{} matches {}", volume.display(), snap.display());
             Ok(())
         }
-        _ => Err(Error::invalid("give either -o NAME.snap (write) or --check NAME.snap (compare)")),
+        _ => Err(Error::usage("give either -o NAME.snap (write) or --check NAME.snap (compare)")),
     }
 }

@@ -96,6 +96,7 @@ fn fill_here(job: &Job, mesh: TetMesh, progress: &dyn Progress) -> Result<(LstMo
     progress.update("tensor field", 0.0);
     let mut field = field::build(&mesh, job.kind, &constraints, Some(job.surface))?;
     let raised = check_scale(&mesh, &mut field, job.kind)?;
+    check_paste_scales(&mesh, job.spec)?;
     let params = paste::Params { kind: job.kind, axes: job.axes, seed: job.spec.seed };
     let auto = if field.depth.is_some() { 3 } else { 1 };
     let mut paster = paste::Paster::new(&mesh, &field, &job.masks, params)?;
@@ -207,6 +208,20 @@ fn check_scale(mesh: &TetMesh, field: &mut field::Field, kind: TextureType) -> R
     let low = field.scale.iter().filter(|s| **s < floor).count();
     field.scale.iter_mut().for_each(|s| *s = s.max(floor));
     Ok(low)
+}
+
+/// Refuse a manual paste whose texture cube is smaller than [`MIN_SCALE_EDGES`] tet edges:
+/// its patch could cover no tet, and the paste would show nowhere.
+fn check_paste_scales(mesh: &TetMesh, spec: &FillSpec) -> Result<()> {
+    let floor = MIN_SCALE_EDGES * mean_edge(mesh);
+    match spec.pastes.iter().position(|p| p.scale < floor) {
+        Some(i) => Err(Error::invalid(format!(
+            "paste[{i}].scale {} is below {MIN_SCALE_EDGES} tet edges ({floor:.4}): the paste could cover no tet; \
+             raise it or use more tets",
+            spec.pastes[i].scale
+        ))),
+        None => Ok(()),
+    }
 }
 
 /// The mean edge length of the tets.

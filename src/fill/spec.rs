@@ -160,6 +160,9 @@ pub fn constraints(spec: &FillSpec, surface: &Mesh, default_scale: f32) -> Resul
     for (i, (p, _)) in spec.scales.iter().enumerate() {
         check_inside(surface, &[*p], &format!("scale_at[{i}]"))?;
     }
+    for (i, paste) in spec.pastes.iter().enumerate() {
+        check_inside(surface, &[paste.at], &format!("paste[{i}].at"))?;
+    }
     Ok(Constraints {
         directions,
         depth,

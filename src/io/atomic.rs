@@ -262,9 +262,24 @@ pub fn check_folder(path: &Path) -> Result<()> {
     }
 }
 
+/// Refuse a file output that is a symbolic link: written atomically, the link itself would
+/// be replaced by the new file (documents the user edits are written through their links,
+/// [`write_document`]).
+pub fn not_a_link(path: &Path) -> Result<()> {
+    match fs::symlink_metadata(path) {
+        Ok(meta) if meta.file_type().is_symlink() => Err(Error::usage(format!(
+            "{}: is a symbolic link; solidtex neither replaces a link nor writes where it points (name the file \
+             it points to, or another name)",
+            path.display()
+        ))),
+        _ => Ok(()),
+    }
+}
+
 /// Write `path` atomically with `body` filling a buffered writer.
 pub fn write_file(path: &Path, body: impl FnOnce(&mut BufWriter<File>) -> Result<()>) -> Result<()> {
     check_folder(path)?;
+    not_a_link(path)?;
     if path.is_dir() {
         return Err(Error::file(
             path,

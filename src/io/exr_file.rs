@@ -104,6 +104,14 @@ pub fn read(path: &Path, budget: u64) -> Result<Volume> {
     Ok(volume.with_meta(described.meta))
 }
 
+/// The size a solidtex volume's description names, read from an EXR's header alone;
+/// `None` for any other EXR (a 2D image) or bytes that are no EXR.
+pub fn volume_dims(bytes: &[u8]) -> Option<[usize; 3]> {
+    let meta = exr::meta::MetaData::read_from_buffered(std::io::Cursor::new(bytes), false).ok()?;
+    let lines = meta.headers.iter().find_map(|h| description(&h.own_attributes.other))?;
+    fields::parse(&lines).ok()?.dims
+}
+
 /// The `tiles` field, if present, must match the layout of `dims`.
 fn check_tiles(lines: &[(String, String)], dims: [usize; 3]) -> Result<()> {
     let Some((_, value)) = lines.iter().find(|(k, _)| k == "tiles") else { return Ok(()) };

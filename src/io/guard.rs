@@ -63,6 +63,7 @@ pub fn extension(output: &Path, allowed: &[&str], what: &str) -> Result<()> {
 pub fn file_output(output: &Path, inputs: &[&Path], allowed: &[&str], what: &str) -> Result<()> {
     extension(output, allowed, what)?;
     atomic::check_folder(output)?;
+    atomic::not_a_link(output)?;
     if output.is_dir() {
         return Err(Error::file(output, "is a folder; name a file to write"));
     }

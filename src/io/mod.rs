@@ -67,25 +67,35 @@ pub enum Format {
 impl Format {
     /// The format a path names by its extension; a path without one is a slice folder.
     pub fn of(path: &Path) -> Result<Format> {
-        let text = path.to_string_lossy();
-        if text.ends_with('/') || path.is_dir() {
+        if path.to_string_lossy().ends_with('/') {
             return Ok(Format::PngStack);
         }
-        match path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase()) {
-            Some(e) if e == "exr" => Ok(Format::Exr),
-            Some(e) if e == "nrrd" => Ok(Format::Nrrd),
-            Some(e) if e == "vol" => Ok(Format::Vol),
-            Some(e) if e == "png" => Ok(Format::PngAtlas),
-            Some(e) if e == "vdb" => Ok(Format::Vdb),
-            Some(e) if e == "dds" => Ok(Format::Dds),
-            None => Ok(Format::PngStack),
-            Some(e) => Err(Error::file(
+        let format = match path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase()) {
+            Some(e) if e == "exr" => Format::Exr,
+            Some(e) if e == "nrrd" => Format::Nrrd,
+            Some(e) if e == "vol" => Format::Vol,
+            Some(e) if e == "png" => Format::PngAtlas,
+            Some(e) if e == "vdb" => Format::Vdb,
+            Some(e) if e == "dds" => Format::Dds,
+            None => return Ok(Format::PngStack),
+            Some(_) if path.is_dir() => return Ok(Format::PngStack),
+            Some(e) => {
+                return Err(Error::file(
+                    path,
+                    format!(
+                        "unknown volume extension .{e}; allowed: .exr, .nrrd, .vol, .png, .vdb, .dds, or a folder for a PNG slice stack"
+                    ),
+                ));
+            }
+        };
+        if path.is_dir() {
+            return Err(Error::file(
                 path,
-                format!(
-                    "unknown volume extension .{e}; allowed: .exr, .nrrd, .vol, .png, .vdb, .dds, or a folder for a PNG slice stack"
-                ),
-            )),
+                "is a folder, though its name ends like a volume file; name a file, or end the name with / for a \
+                 folder of PNG slices",
+            ));
         }
+        Ok(format)
     }
 }
 
@@ -181,6 +191,7 @@ pub fn check_output(output: &Path, inputs: &[&Path]) -> Result<()> {
     let format = Format::of(output).map_err(|e| Error::usage(e.to_string()))?;
     if format != Format::PngStack {
         check_folder(output)?;
+        atomic::not_a_link(output)?;
         if output.is_dir() {
             return Err(Error::file(output, "is a folder; name a file to write"));
         }
@@ -199,8 +210,21 @@ pub fn check_edit_output(output: &Path, edited: &Path, others: &[&Path]) -> Resu
     check_output(output, others)
 }
 
+/// The extensions of the volume files solidtex writes.
+const VOLUME_EXTENSIONS: [&str; 6] = ["exr", "nrrd", "vol", "png", "vdb", "dds"];
+
 /// [`check_output`] for an output that is a folder whatever its name (a set of masks).
 pub fn check_folder_output(output: &Path, inputs: &[&Path]) -> Result<()> {
+    let ext = output.extension().map(|e| e.to_string_lossy().to_ascii_lowercase());
+    if let Some(ext) =
+        ext.filter(|e| VOLUME_EXTENSIONS.contains(&e.as_str()) && !output.to_string_lossy().ends_with('/'))
+    {
+        return Err(Error::usage(format!(
+            "{}: this command writes a folder of files, but the name ends in .{ext}, like a volume file; give a \
+             folder name without an extension",
+            output.display()
+        )));
+    }
     check_folder(output)?;
     atomic::writable_folder(output)?;
     let Some(folder) = atomic::canonical(output) else { return Ok(()) };
@@ -266,8 +290,42 @@ pub fn relative_to(path: &Path, base: &Path) -> PathBuf {
 /// How a file in the folder `base` names `path`: both resolved (through links where they
 /// exist), then [`relative_to`], with `/` between the parts.
 pub fn written_relative(path: &Path, base: &Path) -> String {
-    let resolve = |p: &Path| p.canonicalize().or_else(|_| std::path::absolute(p)).unwrap_or_else(|_| p.to_path_buf());
-    relative_to(&resolve(path), &resolve(base)).to_string_lossy().replace('\\', "/")
+    relative_to(&resolved(path), &resolved(base)).to_string_lossy().replace('\\', "/")
+}
+
+/// `path` made absolute, its `.` and `..` taken away and its links followed as far as it
+/// exists (a `..` after a link leaves the link's target, as the system reads it); the part
+/// that does not exist yet follows as written.
+pub fn resolved(path: &Path) -> PathBuf {
+    use std::path::Component;
+    let absolute = std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf());
+    let mut out = PathBuf::new();
+    for part in absolute.components() {
+        match part {
+            Component::CurDir => {}
+            Component::ParentDir => {
+                if let Ok(real) = out.canonicalize() {
+                    out = real;
+                }
+                out.pop();
+            }
+            other => out.push(other),
+        }
+    }
+    let mut existing = out.as_path();
+    let mut missing = Vec::new();
+    while !existing.exists() {
+        match (existing.parent(), existing.file_name()) {
+            (Some(parent), Some(name)) => {
+                missing.push(name);
+                existing = parent;
+            }
+            _ => return out.clone(),
+        }
+    }
+    let mut real = existing.canonicalize().unwrap_or_else(|_| existing.to_path_buf());
+    real.extend(missing.iter().rev());
+    real
 }
 
 /// Load a 2D image (PNG, JPEG, EXR, TIFF, HDR) as f32 samples in its own channels:
@@ -281,6 +339,7 @@ pub fn read_image_fit(path: &Path, max_side: Option<usize>) -> Result<Image2d> {
     let budget = budget_from_env()?;
     let bytes = atomic::read_bytes_within(path, atomic::file_cap(budget))?;
     check_image_memory(path, &bytes, budget)?;
+    refuse_volume(path, &bytes)?;
     let mut reader = image::ImageReader::new(std::io::Cursor::new(&bytes[..]))
         .with_guessed_format()
         .map_err(|e| Error::io(path, e))?;
@@ -327,6 +386,27 @@ pub fn read_image_fit(path: &Path, max_side: Option<usize>) -> Result<Image2d> {
     Ok(image)
 }
 
+/// Refuse a solidtex volume (an EXR or PNG flipbook atlas with its description) where a 2D
+/// image is asked for: its tiles would be read as one picture, empty tiles and all.
+fn refuse_volume(path: &Path, bytes: &[u8]) -> Result<()> {
+    let dims = match bytes {
+        [0x76, 0x2f, 0x31, 0x01, ..] => exr_file::volume_dims(bytes),
+        [0x89, b'P', b'N', b'G', ..] => png_file::volume_dims(bytes),
+        _ => None,
+    };
+    match dims {
+        Some([x, y, z]) => Err(Error::file(
+            path,
+            format!(
+                "this is a solidtex volume ({x}x{y}x{z} voxels, stored as a flipbook of its slices), not a 2D \
+                 image; give one of its slices instead (`solidtex slice {} --axis z -o slice.png`)",
+                path.display()
+            ),
+        )),
+        None => Ok(()),
+    }
+}
+
 /// Refuse an image whose decoding would need more than `budget` bytes at its peak, from
 /// its header alone: the decoded pixels, their f32 copy, and a shrunk copy of that.
 fn check_image_memory(path: &Path, bytes: &[u8], budget: u64) -> Result<()> {
@@ -365,5 +445,27 @@ mod tests {
         assert_eq!(rel("/w/data/a.png", "/w/lib"), PathBuf::from("../data/a.png"));
         assert_eq!(rel("/w/lib/a.png", "/w/lib"), PathBuf::from("a.png"));
         assert_eq!(rel("lib/a.png", "/w"), PathBuf::from("lib/a.png"), "no shared root: as given");
+    }
+
+    /// A folder given with `..`, through a link or not there yet names a file as the
+    /// system finds it from that folder.
+    #[test]
+    fn a_file_is_named_as_found_from_a_folder_given_with_dots_or_links() {
+        let dir = tempfile::tempdir().unwrap();
+        let root = dir.path().canonicalize().unwrap();
+        std::fs::create_dir_all(root.join("proj/out")).unwrap();
+        std::fs::create_dir_all(root.join("renders")).unwrap();
+        let volume = root.join("proj/out/marble.exr");
+        std::fs::write(&volume, b"v").unwrap();
+        let found = |base: &Path| base.join(written_relative(&volume, base)).canonicalize().unwrap();
+        assert_eq!(found(&root.join("proj/../renders")), volume);
+        assert_eq!(found(&root.join("proj/./out/../../renders")), volume);
+        assert_eq!(written_relative(&volume, &root.join("proj/../renders/new/deeper")), "../../../proj/out/marble.exr");
+        #[cfg(unix)]
+        {
+            std::os::unix::fs::symlink(root.join("proj/out"), root.join("renders/link")).unwrap();
+            // renders/link/.. is proj, where the link leads
+            assert_eq!(written_relative(&volume, &root.join("renders/link/..")), "out/marble.exr");
+        }
     }
 }

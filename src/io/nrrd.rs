@@ -98,12 +98,29 @@ fn parse(bytes: &[u8], budget: u64) -> Result<Volume> {
             body.len()
         )));
     }
+    if body.len() > need {
+        return Err(Error::invalid(format!(
+            "NRRD data holds {} bytes, more than the {need} its sizes and type promise: the header does not \
+             describe the data",
+            body.len()
+        )));
+    }
     let data = decode(&body[..need], header.sample, header.big_endian);
     if let Some(i) = data.iter().position(|v| !v.is_finite()) {
         return Err(Error::invalid(format!("NRRD sample {i} is {}; NaN and infinity are not allowed", data[i])));
     }
     let described = fields::parse(&strip_prefix(&header.extra))?;
-    let channels = described.channels.filter(|c| c.len() == channels.len()).unwrap_or(channels);
+    let channels = match described.channels {
+        Some(named) if named.len() != channels.len() => {
+            return Err(Error::invalid(format!(
+                "NRRD field solidtex_channels names {} channel(s) ({}) but the sizes give {}; they must be the same",
+                named.len(),
+                crate::volume::channel_names(&named),
+                channels.len()
+            )));
+        }
+        named => named.unwrap_or(channels),
+    };
     Ok(Volume::from_data(dims, channels, data)?.with_meta(described.meta))
 }
 
@@ -120,8 +137,10 @@ fn find_blank_line(bytes: &[u8]) -> Option<(usize, usize)> {
 fn parse_header(text: &str) -> Result<Header> {
     let mut header = Header { sizes: Vec::new(), sample: Sample::F32, big_endian: false, extra: Vec::new() };
     let mut dimension = None;
+    let mut seen: Vec<String> = Vec::new();
     for line in text.lines().skip(1).map(str::trim).filter(|l| !l.starts_with('#') && !l.is_empty()) {
         if let Some((k, v)) = line.split_once(":=") {
+            once(&mut seen, k.trim())?;
             header.extra.push((k.trim().to_string(), v.to_string()));
             continue;
         }
@@ -129,6 +148,7 @@ fn parse_header(text: &str) -> Result<Header> {
             return Err(Error::invalid(format!("NRRD header line {line:?} has no ':'")));
         };
         let value = value.trim();
+        once(&mut seen, key.trim())?;
         match key.trim() {
             "type" => header.sample = sample_type(value)?,
             "dimension" => dimension = value.parse::<usize>().ok(),
@@ -143,13 +163,22 @@ fn parse_header(text: &str) -> Result<Header> {
             _ => {}
         }
     }
-    if dimension != Some(header.sizes.len()) {
-        return Err(Error::invalid(format!(
-            "NRRD dimension {dimension:?} does not match the {} sizes given",
-            header.sizes.len()
-        )));
+    match dimension {
+        None => Err(Error::invalid("NRRD header has no dimension field (a whole number: 3 or 4)")),
+        Some(d) if d != header.sizes.len() => {
+            Err(Error::invalid(format!("NRRD dimension {d} does not match the {} sizes given", header.sizes.len())))
+        }
+        Some(_) => Ok(header),
     }
-    Ok(header)
+}
+
+/// Refuse a header field given twice (which of the two would count is not said).
+fn once(seen: &mut Vec<String>, key: &str) -> Result<()> {
+    if seen.iter().any(|k| k == key) {
+        return Err(Error::invalid(format!("NRRD header gives the field {key:?} twice")));
+    }
+    seen.push(key.to_string());
+    Ok(())
 }
 
 fn sample_type(value: &str) -> Result<Sample> {
@@ -262,6 +291,26 @@ mod tests {
         let gz = b"NRRD0004\ntype: float\ndimension: 3\nsizes: 2 1 1\nencoding: gzip\n\n";
         assert!(parse(gz, u64::MAX).unwrap_err().to_string().contains("allowed: raw"));
         let dim = b"NRRD0004\ntype: float\ndimension: 2\nsizes: 2 1 1\nencoding: raw\n\n";
-        assert!(parse(dim, u64::MAX).unwrap_err().to_string().contains("dimension"));
+        assert!(parse(dim, u64::MAX).unwrap_err().to_string().contains("dimension 2 does not match the 3 sizes"));
+        let none = b"NRRD0004\ntype: float\nencoding: raw\n\n";
+        assert!(parse(none, u64::MAX).unwrap_err().to_string().contains("no dimension field"));
+    }
+
+    /// A header that contradicts itself or its data is refused: a field given twice, a
+    /// channel list of another length than the sizes, more data than the sizes promise.
+    #[test]
+    fn refuses_a_header_at_odds_with_itself_or_its_data() {
+        let file = |header: &str, samples: usize| {
+            let mut bytes = format!("NRRD0004\ntype: uchar\nencoding: raw\n{header}\n").into_bytes();
+            bytes.extend(std::iter::repeat_n(7u8, samples));
+            parse(&bytes, u64::MAX).map(|v| v.channel_count())
+        };
+        assert_eq!(file("dimension: 4\nsizes: 3 2 2 2\nsolidtex_channels:=R,G,B\n", 24).unwrap(), 3);
+        let twice = file("dimension: 4\nsizes: 3 2 2 2\nsizes: 2 2 2 2\n", 24).unwrap_err().to_string();
+        assert!(twice.contains("\"sizes\" twice"), "{twice}");
+        let named = file("dimension: 4\nsizes: 3 2 2 2\nsolidtex_channels:=R,G\n", 24).unwrap_err().to_string();
+        assert!(named.contains("names 2 channel(s) (R,G) but the sizes give 3"), "{named}");
+        let more = file("dimension: 4\nsizes: 2 2 2 2\n", 24).unwrap_err().to_string();
+        assert!(more.contains("holds 24 bytes, more than the 16"), "{more}");
     }
 }

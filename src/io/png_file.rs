@@ -153,6 +153,19 @@ fn decode(path: &Path, budget: u64) -> Result<Decoded> {
     Ok(Decoded { width: info.width as usize, height: info.height as usize, channels, samples, text })
 }
 
+/// The size a solidtex volume atlas' description names, read from a PNG's header alone;
+/// `None` for a slice (its description names the slice), any other PNG, or bytes that are
+/// no PNG.
+pub fn volume_dims(bytes: &[u8]) -> Option<[usize; 3]> {
+    let reader = png::Decoder::new(std::io::Cursor::new(bytes)).read_info().ok()?;
+    let text = reader.info().uncompressed_latin1_text.iter().find(|t| t.keyword == KEYWORD)?;
+    let lines = fields::from_lines(&text.text);
+    if lines.iter().any(|(key, _)| key == "slice") {
+        return None;
+    }
+    fields::parse(&lines).ok()?.dims
+}
+
 /// Read a PNG atlas written by [`write_atlas`].
 pub fn read_atlas(path: &Path, budget: u64) -> Result<Volume> {
     let png = decode(path, budget)?;

@@ -115,11 +115,11 @@ fn source(spec: &FillSpec, name: &str, layer: Option<Layer>, depth: Axis, size: 
     };
     let (falloff, seed) = (spec.mask_falloff.unwrap_or(crate::mask::DEFAULT_FALLOFF), spec.seed);
     let mask = match layer {
-        _ if file.exists() => MaskRef::File(relative(&file, base)),
+        _ if file.exists() => MaskRef::File(io::written_relative(&file, base)),
         Some(layer) => MaskRef::Layered { layer, depth, size, falloff, seed },
         None => MaskRef::Splotch { size, falloff, seed },
     };
-    Source { exemplar: name.to_string(), volume: relative(&files::volume(&spec.built, name), base), mask }
+    Source { exemplar: name.to_string(), volume: io::written_relative(&files::volume(&spec.built, name), base), mask }
 }
 
 /// A source's mask: generated from its parameters, or read from its file (relative to `base`).
@@ -128,14 +128,6 @@ pub fn load_mask(mask: &MaskRef, base: &Path) -> Result<Volume> {
         (Some(generated), _) => generated,
         (None, MaskRef::File(path)) => io::read_volume(&base.join(path), io::budget_from_env()?),
         (None, _) => unreachable!("only files are not generated"),
-    }
-}
-
-/// `target` relative to the folder `base` (both made absolute), or as given if that fails.
-fn relative(target: &Path, base: &Path) -> String {
-    match (std::path::absolute(target), std::path::absolute(base)) {
-        (Ok(t), Ok(b)) => io::relative_to(&t, &b).to_string_lossy().into_owned(),
-        _ => target.to_string_lossy().into_owned(),
     }
 }
 

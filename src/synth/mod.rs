@@ -214,6 +214,22 @@ fn check_exemplars(images: &[&Image2d], names: &[&str], params: &SynthParams) ->
         if let Some([x, y, c]) = image.first_non_finite() {
             return Err(Error::invalid(format!("{name}: pixel ({x}, {y}) channel {c} is not finite")));
         }
+        // every pixel's neighbourhood as a vector (f32), with a channel of features or depth
+        let vectors = image.width() as u128
+            * image.height() as u128
+            * (params.neighbourhood * params.neighbourhood * (image.channel_count() + 1) * 4) as u128;
+        if vectors > params.budget_bytes as u128 {
+            return Err(Error::invalid(format!(
+                "{name} is {}x{} pixels: preparing it for synthesis takes about {:.1} GB (every pixel's {n}x{n} \
+                 neighbourhood), over the memory budget of {:.1} GB; shrink it with --max-exemplar (128 or 256 for \
+                 a photo) or raise SOLIDTEX_MAX_BYTES",
+                image.width(),
+                image.height(),
+                vectors as f64 / 1e9,
+                params.budget_bytes as f64 / 1e9,
+                n = params.neighbourhood
+            )));
+        }
         let shrink = |s: usize| (1..params.levels).fold(s, |s, _| s.div_ceil(2));
         let (w, h) = (shrink(image.width()), shrink(image.height()));
         let need = params.neighbourhood + 2;

@@ -267,3 +267,43 @@ fn a_nul_byte_in_a_file_name_is_named() {
     let says = "x\\0y.exr\" holds a NUL byte (shown as \\0); no file name may contain one";
     assert!(stderr(&run).contains(says), "{}", stderr(&run));
 }
+
+/// A volume (EXR or PNG flipbook atlas) where a 2D photo is asked for is refused by name,
+/// with its size, and nothing is written; one of its slices is a 2D image and is taken.
+#[test]
+fn a_volume_is_not_taken_for_a_photo() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    for name in ["v.exr", "v.png"] {
+        let volume = good(d, name);
+        let before = listing(d);
+        assert_fails(
+            &solidtex(&["synth", &volume, "--size", "8", "--levels", "1", "-o", &at(d, "s.exr")]),
+            &[name, "solidtex volume (8x8x8 voxels", "solidtex slice"],
+        );
+        assert_fails(&solidtex(&["noise", &volume, "--size", "8", "-o", &at(d, "n.exr")]), &[name, "not a 2D"]);
+        assert_eq!(listing(d), before, "{name}: files left behind");
+    }
+    let slice = at(d, "slice.png");
+    assert!(solidtex(&["slice", &at(d, "v.exr"), "--axis", "z", "-o", &slice]).status.success());
+    assert_eq!(read_image(Path::new(&slice)).unwrap().width(), 8, "a slice reads as a picture");
+}
+
+/// A photo too large to prepare for synthesis within the memory budget is refused with its
+/// size and the way out (`--max-exemplar`), before the work; shrunk, it is taken.
+#[test]
+fn a_photo_too_large_to_prepare_names_max_exemplar() {
+    let dir = tempfile::tempdir().unwrap();
+    let photo = dir.path().join("big.png");
+    let grey = (0..256 * 256).map(|i| (solidtex::noise::hash3(5, i, 0, 0) % 256) as f32 / 255.0).collect();
+    solidtex::io::write_image(&photo, &solidtex::volume::Image2d::from_data(256, 256, Channel::grey(), grey).unwrap())
+        .unwrap();
+    let out = at(dir.path(), "s.exr");
+    let budget = [("SOLIDTEX_MAX_BYTES", "4000000")];
+    let run = solidtex_env(&["synth", &photo.to_string_lossy(), "--size", "8", "-o", &out], &budget);
+    assert_fails(&run, &["pixels", "preparing it for synthesis", "--max-exemplar"]);
+    assert!(!Path::new(&out).exists());
+    let small =
+        solidtex_env(&["synth", &photo.to_string_lossy(), "--size", "8", "--max-exemplar", "64", "-o", &out], &budget);
+    assert!(small.status.success(), "{}", stderr(&small));
+}

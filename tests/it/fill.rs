@@ -706,6 +706,24 @@ fn bad_fills_are_refused_with_the_reason_and_nothing_written() {
             vec!["depth.axis[0]", "outside the model"],
         ),
         (fruit.clone(), spec(d, "tiny.toml", "exemplar = \"marble\"\nscale = 0.001\n"), vec!["scale", "tet edges"]),
+        (
+            fruit.clone(),
+            spec(
+                d,
+                "far.toml",
+                "exemplar = \"marble\"\n[[paste]]\nexemplar = \"marble\"\nat = [50, 0, 0]\nscale = 0.4\n",
+            ),
+            vec!["paste[0].at", "outside the model"],
+        ),
+        (
+            fruit.clone(),
+            spec(
+                d,
+                "speck.toml",
+                "exemplar = \"marble\"\n[[paste]]\nexemplar = \"marble\"\nat = [0, 0, 0]\nscale = 1e-9\n",
+            ),
+            vec!["paste[0].scale", "tet edges"],
+        ),
     ];
     for (mesh, spec, needles) in cases {
         assert_fails(&solidtex(&["fill", &mesh, "--spec", &spec, "-o", &out]), &needles);
@@ -1157,4 +1175,31 @@ fn a_fill_that_is_mostly_skin_is_warned_about() {
     assert!(share > 0.5, "{stats}");
     let said = stderr(&run);
     assert!(said.contains(&format!("{:.0} % of the volume lies in the outer 10 % of depth", share * 100.0)), "{said}");
+}
+
+/// A model written into a folder named with `..` from where `fill` runs names its volume and
+/// masks as they are found from the model's own folder: cut from there, it shows the kiwi.
+#[test]
+fn a_model_written_up_a_folder_finds_its_volume_and_masks() {
+    let dir = tempfile::tempdir().unwrap();
+    let (proj, renders) = (dir.path().join("proj"), dir.path().join("renders"));
+    std::fs::create_dir_all(&proj).unwrap();
+    std::fs::create_dir_all(&renders).unwrap();
+    let (mesh, spec) = kiwi_fruit(&proj);
+    let run = std::process::Command::new(env!("CARGO_BIN_EXE_solidtex"))
+        .args(["fill", &mesh, "--spec", &spec, "-o", "../renders/k.lst"])
+        .current_dir(&proj)
+        .output()
+        .unwrap();
+    assert!(run.status.success(), "{}", stderr(&run));
+    let model = String::from_utf8_lossy(&std::fs::read(renders.join("k.lst")).unwrap()).into_owned();
+    assert!(model.contains("../proj/built/kiwi.exr"), "the volume as found from renders/: {model}");
+    let cut = std::process::Command::new(env!("CARGO_BIN_EXE_solidtex"))
+        .args(["cut", "k.lst", "--plane", "0,0,0,1,0,0", "--size", "64", "-o", "k.png"])
+        .current_dir(&renders)
+        .output()
+        .unwrap();
+    assert!(cut.status.success(), "{}", stderr(&cut));
+    let shown = image::open(renders.join("k.png")).unwrap().to_rgba8().pixels().filter(|p| p.0[3] > 0).count();
+    assert!(shown > 64 * 64 / 4, "the cut shows the fruit: {shown} pixels");
 }

@@ -115,6 +115,13 @@ fn three_shards_merged_equal_one_build() {
             .collect()
     };
     assert_eq!(rows("single"), rows("merged"));
+    // a merge missing shards names what is missing and why, line by line
+    let partial = solidtex(&["build", &manifest, "-o", &at(dir.path(), "partial"), "--merge", &shards[0]]);
+    assert_eq!(partial.status.code(), Some(1), "{}", stderr(&partial));
+    let err = stderr(&partial);
+    let failed = err.matches("FAILED ").count();
+    assert!(failed >= 1 && err.matches("built by none of the merged folders").count() == failed, "{err}");
+    assert!(err.contains(&format!("{failed} failed")), "{err}");
 }
 
 #[test]
@@ -122,14 +129,22 @@ fn shard_arguments_are_checked_and_taken_from_the_scheduler() {
     let dir = tempfile::tempdir().unwrap();
     let manifest = library(dir.path());
     let out = at(dir.path(), "out");
-    crate::support::assert_fails(
+    crate::support::assert_usage(
         &solidtex(&["build", &manifest, "-o", &out, "--shard", "3/3"]),
         &["--shard \"3/3\"", "0 <= K < N"],
     );
-    crate::support::assert_fails(
+    crate::support::assert_usage(
         &solidtex(&["build", &manifest, "-o", &out, "--shard", "auto/2"]),
         &["JOB_COMPLETION_INDEX", "SLURM_ARRAY_TASK_ID"],
     );
+    crate::support::assert_usage(
+        &crate::support::solidtex_env(
+            &["build", &manifest, "-o", &out, "--shard", "auto/2"],
+            &[("JOB_COMPLETION_INDEX", "7")],
+        ),
+        &["JOB_COMPLETION_INDEX=7", "below N = 2"],
+    );
+    assert!(!Path::new(&out).exists(), "nothing built");
     let run = crate::support::solidtex_env(
         &["build", &manifest, "-o", &out, "--shard", "auto/2"],
         &[("SLURM_ARRAY_TASK_ID", "1")],

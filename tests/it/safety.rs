@@ -87,16 +87,24 @@ fn the_named_output_file_may_be_the_input() {
     assert_eq!(listing(dir.path()), ["v.exr"]);
 }
 
+/// A symbolic link named as a file output is refused before any work (exit 2): it is not
+/// replaced (the link is the user's) nor written through (the file it names may be anything).
 #[test]
-fn an_output_that_is_a_link_is_replaced_not_followed() {
+fn an_output_that_is_a_link_is_neither_replaced_nor_followed() {
     let dir = tempfile::tempdir().unwrap();
     let v = volume_file(dir.path(), "v.exr", 2);
     let elsewhere = dir.path().join("elsewhere.txt");
     std::fs::write(&elsewhere, "precious").unwrap();
-    std::os::unix::fs::symlink(&elsewhere, dir.path().join("out.nrrd")).unwrap();
-    assert!(solidtex(&["convert", &v, &at(dir.path(), "out.nrrd")]).status.success());
+    for name in ["out.nrrd", "out.png"] {
+        std::os::unix::fs::symlink(&elsewhere, dir.path().join(name)).unwrap();
+    }
+    let link = at(dir.path(), "out.nrrd");
+    crate::support::assert_usage(&solidtex(&["convert", &v, &link]), &["out.nrrd", "symbolic link"]);
+    crate::support::assert_usage(&solidtex(&["slice", &v, "-o", &at(dir.path(), "out.png")]), &["symbolic link"]);
     assert_eq!(std::fs::read_to_string(&elsewhere).unwrap(), "precious");
-    assert!(std::fs::symlink_metadata(dir.path().join("out.nrrd")).unwrap().is_file());
+    for name in ["out.nrrd", "out.png"] {
+        assert!(std::fs::symlink_metadata(dir.path().join(name)).unwrap().file_type().is_symlink(), "{name} stays");
+    }
 }
 
 #[test]
@@ -364,4 +372,34 @@ fn a_stopped_command_leaves_no_temporary() {
         assert_eq!(child.wait().unwrap().code(), Some(code), "SIG{signal}");
         assert_eq!(listing(dir.path()), Vec::<String>::new(), "SIG{signal}: nothing is left");
     }
+}
+
+/// A name that ends like a volume file never becomes a folder: an existing folder of that
+/// name is refused (left empty), and commands that write folders refuse such a name.
+#[test]
+fn a_file_name_never_becomes_a_folder() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let input = volume_file(d, "v.exr", 3);
+    std::fs::create_dir(d.join("d.exr")).unwrap();
+    crate::support::assert_usage(&solidtex(&["convert", &input, &at(d, "d.exr")]), &["d.exr", "is a folder"]);
+    assert!(listing(&d.join("d.exr")).is_empty(), "nothing written into the folder");
+    let before = listing(d);
+    crate::support::assert_usage(
+        &solidtex(&["mask", "layered", "--size", "8", "-o", &at(d, "lay.exr")]),
+        &["lay.exr", "writes a folder", "without an extension"],
+    );
+    let library = Path::new(env!("CARGO_MANIFEST_DIR")).join("exemplars/library.toml");
+    crate::support::assert_usage(
+        &solidtex(&["draw", "cake", "-o", &at(d, "cake.exr"), "--library", &library.to_string_lossy()]),
+        &["cake.exr", "writes a folder"],
+    );
+    assert_eq!(listing(d), before, "nothing written");
+    assert!(solidtex(&["mask", "layered", "--size", "8", "-o", &format!("{}/", at(d, "lay.exr"))]).status.success());
+    assert_eq!(
+        listing(&d.join("lay.exr")).len(),
+        4,
+        "a name ending in / is a folder: {:?}",
+        listing(&d.join("lay.exr"))
+    );
 }
