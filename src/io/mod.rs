@@ -296,7 +296,7 @@ pub fn written_relative(path: &Path, base: &Path) -> String {
 /// `path` made absolute, its `.` and `..` taken away and its links followed as far as it
 /// exists (a `..` after a link leaves the link's target, as the system reads it); the part
 /// that does not exist yet follows as written.
-pub fn resolved(path: &Path) -> PathBuf {
+fn resolved(path: &Path) -> PathBuf {
     use std::path::Component;
     let absolute = std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf());
     let mut out = PathBuf::new();
