@@ -27,6 +27,10 @@ pub struct OtherExemplars {
 /// The provenance key of the `--max-exemplar` a volume was synthesized with.
 pub const MAX_EXEMPLAR_KEY: &str = "max_exemplar";
 
+/// The longer side past which an exemplar read at its own size gets a note about
+/// `--max-exemplar`.
+const LARGE_EXEMPLAR: usize = 512;
+
 impl OtherExemplars {
     /// Check `--max-exemplar` against its range (a usage error).
     pub fn check(&self) -> Result<()> {
@@ -226,6 +230,15 @@ pub fn run(args: &SynthArgs) -> Result<()> {
         ..SynthParams::default()
     };
     let ex = args.others.load(&args.exemplar, "exemplar")?;
+    if args.others.max_exemplar.is_none() && ex.width().max(ex.height()) > LARGE_EXEMPLAR {
+        tell!(
+            "note: {} is {}x{} pixels; synthesis prepares every pixel's neighbourhood, which takes long at this size: \
+             photos are usually shrunk with --max-exemplar 128 or 256",
+            args.exemplar.display(),
+            ex.width(),
+            ex.height()
+        );
+    }
     if let Some(path) = &args.start {
         synth::check_start(&params, ex.channels(), args.layered).map_err(|e| e.in_file(path))?;
     }

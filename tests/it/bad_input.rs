@@ -289,19 +289,21 @@ fn a_volume_is_not_taken_for_a_photo() {
     assert_eq!(read_image(Path::new(&slice)).unwrap().width(), 8, "a slice reads as a picture");
 }
 
-/// A photo too large to prepare for synthesis within the memory budget is refused with its
-/// size and the way out (`--max-exemplar`), before the work; shrunk, it is taken.
+/// A large photo read at its own size gets a note about `--max-exemplar`; one too large to
+/// prepare within the memory budget is refused with its size and that way out, before the
+/// work; shrunk, it is taken.
 #[test]
 fn a_photo_too_large_to_prepare_names_max_exemplar() {
     let dir = tempfile::tempdir().unwrap();
     let photo = dir.path().join("big.png");
-    let grey = (0..256 * 256).map(|i| (solidtex::noise::hash3(5, i, 0, 0) % 256) as f32 / 255.0).collect();
-    solidtex::io::write_image(&photo, &solidtex::volume::Image2d::from_data(256, 256, Channel::grey(), grey).unwrap())
+    let grey = (0..600 * 600).map(|i| (solidtex::noise::hash3(5, i, 0, 0) % 256) as f32 / 255.0).collect();
+    solidtex::io::write_image(&photo, &solidtex::volume::Image2d::from_data(600, 600, Channel::grey(), grey).unwrap())
         .unwrap();
     let out = at(dir.path(), "s.exr");
     let budget = [("SOLIDTEX_MAX_BYTES", "4000000")];
     let run = solidtex_env(&["synth", &photo.to_string_lossy(), "--size", "8", "-o", &out], &budget);
-    assert_fails(&run, &["pixels", "preparing it for synthesis", "--max-exemplar"]);
+    assert_fails(&run, &["600x600 pixels", "preparing it for synthesis", "--max-exemplar"]);
+    assert!(stderr(&run).contains("note: ") && stderr(&run).contains("--max-exemplar 128 or 256"), "{}", stderr(&run));
     assert!(!Path::new(&out).exists());
     let small =
         solidtex_env(&["synth", &photo.to_string_lossy(), "--size", "8", "--max-exemplar", "64", "-o", &out], &budget);
