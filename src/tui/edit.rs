@@ -453,17 +453,27 @@ pub fn removed(old: &str, new: &str, name: &str) -> Removed {
     let room = new.len() - prefix;
     let suffix = old.bytes().rev().zip(new.bytes().rev()).take(room).take_while(|(a, b)| a == b).count();
     let (mut start, mut end) = (prefix, old.len() - suffix);
-    // The same removal can sit anywhere along a run of repeated bytes: slide it as far up
-    // as it goes, then down to the first place where it starts a line of text (a header or
-    // a comment), so it goes back whole.
+    // The same removal can sit anywhere along a run of repeated bytes (entries that end
+    // alike): slide it as far up as it goes, then down to the last place, not past the
+    // entry's own header, where it starts a line, so it goes back whole and the entry
+    // above keeps its lines.
     let bytes = old.as_bytes();
     while start > 0 && bytes[start - 1] == bytes[end - 1] {
         (start, end) = (start - 1, end - 1);
     }
-    let starts_line = |i: usize| (i == 0 || bytes[i - 1] == b'\n') && bytes[i] != b'\n';
-    while end < old.len() && bytes[start] == bytes[end] && !starts_line(start) {
+    let header = block(old, name).map_or(old.len(), |r| r.start);
+    let starts_line = |i: usize| i == 0 || bytes[i - 1] == b'\n';
+    let mut chosen = None;
+    loop {
+        if starts_line(start) && start <= header {
+            chosen = Some((start, end));
+        }
+        if end >= old.len() || bytes[start] != bytes[end] || start >= header {
+            break;
+        }
         (start, end) = (start + 1, end + 1);
     }
+    (start, end) = chosen.unwrap_or((start, end));
     let names = super::entry_names_of(old);
     let after = names.iter().position(|n| n == name).and_then(|i| i.checked_sub(1)).map(|i| names[i].clone());
     let anchor = after.as_deref().and_then(|a| block(old, a)).map_or(0, |r| r.end).min(start);
@@ -538,6 +548,26 @@ mod tests {
         }
         let back = with_entry_of(&mine, &gone, "a").unwrap();
         assert_eq!(entry_text(&back, "a"), entry_text(&mine, "a"), "an entry deleted outside comes back at the end");
+    }
+
+    /// Entries that end alike (the same last field, a blank line between): a deleted one
+    /// comes back byte for byte, in its place, and the one above keeps its fields.
+    #[test]
+    fn a_deletion_among_entries_that_end_alike_is_undone_exactly() {
+        let entry = |name: &str, recipe: &str| {
+            format!("[[exemplar]]\nname = \"{name}\"\nrecipe = \"procedural:{recipe}\"\nsize = 32\n")
+        };
+        let text = [entry("a", "marble"), entry("b", "wood"), entry("c", "strata")].join("\n");
+        let library = include_str!("../../exemplars/library.toml");
+        let plain = ["a", "b", "c"].map(String::from).to_vec();
+        for (text, names) in [(text.as_str(), plain), (library, super::super::entry_names_of(library))] {
+            for name in names.iter().map(String::as_str) {
+                let deleted = delete(text, name).unwrap();
+                let what = removed(text, &deleted, name);
+                assert!(what.chunk.contains(&format!("name = \"{name}\"")), "{name}: {what:?}");
+                assert_eq!(restore(&deleted, &what).unwrap(), text, "{name} is back byte for byte");
+            }
+        }
     }
 
     const TEXT: &str = "# the library\n\n[[exemplar]]\nname = \"a\"   # first\nrecipe = \"procedural:marble\"\nsize = 64\n\n[[exemplar]]\nname = \"b\"\nrecipe = \"procedural:strata\"\nsize = 32\n  [[exemplar.steps]]\n  blur = \"1,1,1\"\n  radius = 2\n";
