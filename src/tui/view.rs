@@ -150,6 +150,7 @@ fn library(frame: &mut Frame, model: &Model, area: Rect, regions: &mut Regions) 
     if !model.filter.is_empty() {
         title += &format!("filter {:?} ({} of {}) ", model.filter, rows.len(), model.items.len());
     }
+    let area = if model.errors.is_empty() { area } else { manifest_errors(frame, model, area) };
     if model.first_run || model.items.is_empty() {
         return first_run(frame, model, area, &title);
     }
@@ -159,28 +160,6 @@ fn library(frame: &mut Frame, model: &Model, area: Rect, regions: &mut Regions) 
             block.title_bottom(Line::styled(batch_line(model, batch), Style::new().fg(Color::Yellow)).right_aligned())
         }
         None => block,
-    };
-    let area = if model.errors.is_empty() {
-        area
-    } else {
-        // Every error, wrapped, up to half the screen.
-        let wrapped: u16 = model.errors.iter().map(|e| wrapped_lines(e, area.width.saturating_sub(2))).sum();
-        let lines = (wrapped + 2).min(area.height / 2).max(3);
-        let [list, errors] = Layout::vertical([Constraint::Min(3), Constraint::Length(lines)]).areas(area);
-        let text: Vec<Line> =
-            model.errors.iter().map(|e| Line::styled(e.as_str(), Style::new().fg(Color::Red))).collect();
-        let hidden = wrapped.saturating_sub(lines - 2);
-        let scroll = (model.error_scroll as u16).min(hidden);
-        let more = if hidden > 0 {
-            format!("lines {}-{} of {wrapped}, [ ] scroll; ", scroll + 1, scroll + lines - 2)
-        } else {
-            String::new()
-        };
-        let title = format!(" the manifest has {} error(s) ({more}the other exemplars work) ", model.errors.len());
-        let box_ = Block::default().borders(Borders::ALL).title(fitted(&title, errors.width));
-        let paragraph = Paragraph::new(text).wrap(ratatui::widgets::Wrap { trim: false }).scroll((scroll, 0));
-        frame.render_widget(paragraph.block(box_), errors);
-        list
     };
     let table_rows = rows.iter().map(|&i| {
         let item = &model.items[i];
@@ -253,6 +232,29 @@ fn library(frame: &mut Frame, model: &Model, area: Rect, regions: &mut Regions) 
     }
 }
 
+/// The manifest's mistakes in red below the list, wrapped, up to half of `area` (scrolled
+/// by `[` and `]`); the area left for the list.
+fn manifest_errors(frame: &mut Frame, model: &Model, area: Rect) -> Rect {
+    let wrapped: u16 = model.errors.iter().map(|e| wrapped_lines(e, area.width.saturating_sub(2))).sum();
+    let lines = (wrapped + 2).min(area.height / 2).max(3);
+    let [list, errors] = Layout::vertical([Constraint::Min(3), Constraint::Length(lines)]).areas(area);
+    let text: Vec<Line> = model.errors.iter().map(|e| Line::styled(e.as_str(), Style::new().fg(Color::Red))).collect();
+    let hidden = wrapped.saturating_sub(lines - 2);
+    let scroll = (model.error_scroll as u16).min(hidden);
+    let more = if hidden > 0 {
+        format!("lines {}-{} of {wrapped}, [ ] scroll; ", scroll + 1, scroll + lines - 2)
+    } else {
+        String::new()
+    };
+    let rest =
+        if model.items.is_empty() { "fix the file, then Ctrl-R reads it again" } else { "the other exemplars work" };
+    let title = format!(" the manifest has {} error(s) ({more}{rest}) ", model.errors.len());
+    let box_ = Block::default().borders(Borders::ALL).title(fitted(&title, errors.width));
+    let paragraph = Paragraph::new(text).wrap(ratatui::widgets::Wrap { trim: false }).scroll((scroll, 0));
+    frame.render_widget(paragraph.block(box_), errors);
+    list
+}
+
 /// The library when it has no entry yet: how to start one.
 fn first_run(frame: &mut Frame, model: &Model, area: Rect, title: &str) {
     let text = if model.first_run {
@@ -262,6 +264,12 @@ fn first_run(frame: &mut Frame, model: &Model, area: Rect, title: &str) {
             Line::from("Press enter to start one there (an empty manifest with a comment on its format),"),
             Line::from("then n to add your first exemplar from a photo, a cross-section or a recipe."),
             Line::from("q quits and writes nothing."),
+        ]
+    } else if !model.errors.is_empty() {
+        vec![
+            Line::from("No exemplar can be read from this manifest: its mistakes are listed below."),
+            Line::from(""),
+            Line::from("Fix them in the file (in a text editor), then press Ctrl-R to read it again."),
         ]
     } else {
         vec![
@@ -722,6 +730,18 @@ mod tests {
             .filter(|p| buffer[*p].fg == Color::Rgb(0, 0, 255))
             .count();
         assert!(blue > 50, "{blue} cells of the level preview");
+    }
+
+    /// A manifest that does not load shows its mistakes, not an empty library inviting a
+    /// first entry.
+    #[test]
+    fn a_manifest_that_does_not_load_shows_why() {
+        let error = "lib.toml: invalid manifest at line 5: duplicate key `size`".to_string();
+        let m = Model::new(PathBuf::from("lib.toml"), PathBuf::from("out"), Vec::new(), vec![error]);
+        let (text, _) = screen(&m, 80, 24);
+        assert!(text.contains("duplicate key `size`") && text.contains("1 error(s)"), "{text}");
+        assert!(text.contains("No exemplar can be read") && text.contains("Ctrl-R"), "{text}");
+        assert!(!text.contains("has no exemplar yet"), "{text}");
     }
 
     #[test]
