@@ -17,6 +17,17 @@ fn parse(text: &str) -> Result<DocumentMut, String> {
     text.parse::<DocumentMut>().map_err(|e| format!("the manifest is not valid TOML: {e}"))
 }
 
+/// Whether `text` reads as TOML; what is wrong and where, on one line, when not (an edit
+/// applied to a file that does not read would find none of its entries).
+pub fn readable(text: &str) -> Result<(), String> {
+    text.parse::<DocumentMut>().map(|_| ()).map_err(|e| {
+        let message = e.to_string();
+        let lines: Vec<&str> = message.lines().map(str::trim).filter(|l| !l.is_empty()).collect();
+        let (first, last) = (lines.first().copied().unwrap_or(""), lines.last().copied().unwrap_or(""));
+        if first == last { first.to_string() } else { format!("{first}: {last}") }
+    })
+}
+
 /// The fields of the `[[exemplar]]` named `name`, then those of its steps as
 /// `steps[i].KEY`.
 pub fn fields(text: &str, name: &str) -> Result<Vec<Field>, String> {

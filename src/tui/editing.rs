@@ -421,6 +421,10 @@ fn onto(editor: &mut Editor, theirs: &str, mine: String) {
 /// it, or the designer is asked when the entry changed there too.
 fn rebased(model: &mut Model, theirs: String, saving: bool) -> Vec<Effect> {
     let Screen::Editor(editor) = &mut model.screen else { return Vec::new() };
+    if let Err(e) = edit::readable(&theirs) {
+        model.status = format!("the manifest on disk does not read ({e}); your edits are kept: fix the file, then s");
+        return Vec::new();
+    }
     let mine = editor.text.clone().unwrap_or_default();
     match edit::rebase(&editor.saved, &mine, &theirs, &editor.name) {
         Some(merged) => {

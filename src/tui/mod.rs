@@ -591,6 +591,12 @@ fn save_editor(manifest: &Path, name: &str, base: &str, text: &str) -> Message {
         Ok(theirs) => theirs,
         Err(e) => return Message::Saved(Err(e.to_string())),
     };
+    if let Err(e) = edit::readable(&theirs) {
+        return Message::Saved(Err(format!(
+            "{} on disk does not read ({e}); fix it there, then s saves (your edits are kept)",
+            manifest.display()
+        )));
+    }
     match edit::rebase(base, text, &theirs, name) {
         Some(merged) => Message::Saved(write_manifest(manifest, &merged).map(|_| merged).map_err(|e| e.to_string())),
         None => Message::SaveConflict(theirs),
@@ -1329,6 +1335,21 @@ mod tests {
             assert_eq!(back, original.clone() + "# noted outside\n", "{what}");
             std::fs::write(&manifest, &original).unwrap();
         }
+    }
+
+    /// A save onto a manifest that no longer reads as TOML (a half-typed entry outside) is
+    /// refused with where the file breaks, and the file is left as it is: applied to it,
+    /// the edit found no entry of its name and added a second one.
+    #[test]
+    fn a_save_onto_a_manifest_that_does_not_read_is_refused() {
+        let (dir, manifest) = two_broken();
+        let original = std::fs::read_to_string(&manifest).unwrap();
+        let broken = format!("{original}\n[[exemplar]]\nname = \"new-one\n");
+        std::fs::write(&manifest, &broken).unwrap();
+        let e = save_editor(&manifest, "a", &original, &original.replace("size = 8", "size = 9"));
+        assert!(matches!(&e, Message::Saved(Err(e)) if e.contains("does not read") && e.contains("line")), "{e:?}");
+        assert_eq!(std::fs::read_to_string(&manifest).unwrap(), broken);
+        drop(dir);
     }
 
     /// A read-only manifest is flagged, never written (its edits are refused with the
