@@ -99,6 +99,9 @@ pub fn run(args: &FieldArgs) -> Result<()> {
     let view = View::framing(bounds, point, normal, args.size)?;
     let inside = crate::fill::render::inside_surface(&g.surface, &view);
     io::write_rgb8(&args.output, &streamlines(&g.tets, &g.field, &view, &inside))?;
+    if !inside.iter().any(|i| *i) {
+        tell!("warning: the plane misses the model; the picture is black");
+    }
     tell!(
         "wrote {} ({} tets, {} sketched frames; the field solved in {:.0} ms)",
         args.output.display(),

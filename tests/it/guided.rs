@@ -25,6 +25,9 @@ fn the_field_of_a_kiwi_spec_follows_its_stroke_on_a_cut() {
     }
     assert!(red >= 30, "{red} of 36 pixels along the axis show x as red");
     assert!(stderr(&run).contains("the frames turn by at most"), "{}", stderr(&run));
+    assert!(!stderr(&run).contains("misses the model"), "{}", stderr(&run));
+    let run = solidtex(&["field", &fruit, "--spec", &spec, "--size", "32", "--plane", "9,0,0,1,0,0", "-o", &png]);
+    assert!(stderr(&run).contains("warning: the plane misses the model"), "{}", stderr(&run));
 
     // one straight stroke and no depth: the same frame everywhere, no turn anywhere
     let straight = crate::fill::spec(
