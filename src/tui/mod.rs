@@ -40,7 +40,7 @@ use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::Mutex;
-use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
 use std::sync::mpsc::{Receiver, Sender, channel};
 use std::time::Duration;
 
@@ -156,7 +156,44 @@ pub fn run(manifest: &Path, output: &Path) -> Result<()> {
     }));
     let result = event_loop(&mut terminal, &mut model, &send, &receive, graphics.as_mut());
     restore_terminal();
+    stop_builds();
     result
+}
+
+/// Build workers running (each counts itself while it runs).
+static BUILDS: AtomicUsize = AtomicUsize::new(0);
+
+/// How long quitting waits for cancelled builds to stop.
+const STOP_WAIT: Duration = Duration::from_secs(60);
+
+/// On quitting: cancel the builds still running and wait (up to [`STOP_WAIT`]) until they
+/// have stopped, so none is cut off half-way through writing a file.
+fn stop_builds() {
+    if BUILDS.load(Ordering::SeqCst) == 0 {
+        return;
+    }
+    CANCELS.fetch_add(1, Ordering::SeqCst);
+    eprintln!("cancelling the running builds; their previous outputs are kept");
+    let asked = std::time::Instant::now();
+    while BUILDS.load(Ordering::SeqCst) > 0 && asked.elapsed() < STOP_WAIT {
+        std::thread::sleep(Duration::from_millis(50));
+    }
+}
+
+/// A build worker counted in [`BUILDS`] while it lives.
+struct Counted;
+
+impl Counted {
+    fn new() -> Counted {
+        BUILDS.fetch_add(1, Ordering::SeqCst);
+        Counted
+    }
+}
+
+impl Drop for Counted {
+    fn drop(&mut self) {
+        BUILDS.fetch_sub(1, Ordering::SeqCst);
+    }
 }
 
 /// What cannot be written, said when the library opens: a read-only manifest or output
@@ -316,7 +353,9 @@ fn edit_outside(
 fn start(effects: Vec<Effect>, model: &Model, send: &Sender<Message>) {
     for effect in effects {
         let (send, manifest, output) = (send.clone(), model.manifest.clone(), model.output.clone());
+        let counted = matches!(effect, Effect::Build(_)).then(Counted::new);
         std::thread::spawn(move || {
+            let _counted = counted;
             let building = if let Effect::Build(names) = &effect { names.clone() } else { Vec::new() };
             let run = || {
                 work(effect, &send, &manifest, &output);

@@ -338,11 +338,12 @@ fn exported(result: Result<(String, Vec<String>, Vec<String>), String>) -> Strin
     }
 }
 
-/// Whether `message` comes from a key (not from a worker's result).
+/// Whether `message` comes from a key (not from a worker's result or the clock).
 fn from_key(message: &Message) -> bool {
     !matches!(
         message,
-        Message::Loaded(..)
+        Message::Tick(_)
+            | Message::Loaded(..)
             | Message::EntriesChanged(_)
             | Message::Built(..)
             | Message::BuildCancelled(..)
@@ -503,14 +504,22 @@ fn reload(model: &mut Model) -> Vec<Effect> {
     vec![Effect::Reload(select)]
 }
 
-/// `q` or Ctrl-C: quit, asking first when recipe edits or stamps are unsaved.
+/// `q` or Ctrl-C: quit, asking first when recipe edits or stamps are unsaved or builds run
+/// (quitting cancels them; their previous outputs are kept).
 fn quit(model: &mut Model, asked: Option<Confirm>) {
+    let building = model.items.iter().filter(|i| i.state.busy()).count();
     match unsaved(model) {
-        Some((what, how)) if asked != Some(Confirm::Quit) => {
+        _ if asked == Some(Confirm::Quit) => model.quit = true,
+        Some((what, how)) => {
             model.confirm = Some(Confirm::Quit);
             model.status = format!("q again quits without saving; unsaved {what}: {how}");
         }
-        _ => model.quit = true,
+        None if building > 0 => {
+            model.confirm = Some(Confirm::Quit);
+            model.status =
+                format!("q again quits and cancels the {building} build(s) running (their previous outputs are kept)");
+        }
+        None => model.quit = true,
     }
 }
 
@@ -1125,6 +1134,13 @@ mod tests {
         assert!(!m.quit && m.status.contains("q quits"), "esc on the library goes nowhere: {}", m.status);
         update(&mut m, Message::Quit);
         assert!(m.quit);
+        // with a build running, q asks first and says the build is cancelled
+        let mut m = model();
+        m.items[0].state = BuildState::Building;
+        update(&mut m, Message::Quit);
+        assert!(!m.quit && m.status.contains("cancels the 1 build(s) running"), "{}", m.status);
+        update(&mut m, Message::Quit);
+        assert!(m.quit);
     }
 
     /// R builds the entries changed since their last build and those never built; a build
@@ -1199,8 +1215,9 @@ mod tests {
         update(&mut m, Message::Quit);
         assert!(!m.quit, "another key in between asks again");
         update(&mut m, Message::Previewed(99, Err("late".into()), Vec::new()));
+        update(&mut m, Message::Tick(std::time::Duration::from_secs(5)));
         update(&mut m, Message::Quit);
-        assert!(m.quit, "the second q quits; a worker's result in between does not reset the question");
+        assert!(m.quit, "the second q quits; a worker's result or the clock in between does not reset the question");
         let mut m = edited();
         update(&mut m, Message::Cancel);
         assert!(matches!(m.screen, Screen::Editor(_)) && m.status.contains("esc again"), "{}", m.status);
