@@ -157,6 +157,8 @@ pub fn build(request: &Request, entries: &[Entry], observer: &dyn Observer) -> R
 enum Row<'a> {
     /// How this build ended for the entry.
     Now(&'a Outcome),
+    /// This build failed or was cancelled, and the last good build's files are kept.
+    Kept(&'a Outcome, Box<Record>),
     /// Not asked this time: its last build's record.
     Earlier(Box<Record>),
     /// Not asked this time and never built.
@@ -172,6 +174,10 @@ fn report_rows<'a>(request: &Request, outcomes: &'a [Outcome]) -> Vec<Row<'a>> {
     let mut rows: Vec<Row> = entries
         .iter()
         .map(|e| match outcomes.iter().find(|o| o.name() == e.name) {
+            Some(o @ (Outcome::Failed(..) | Outcome::Cancelled(_))) => match kept_record(request, &e.name) {
+                Some(record) => Row::Kept(o, Box::new(record)),
+                None => Row::Now(o),
+            },
             Some(o) => Row::Now(o),
             None => match cache::read_record(&request.output, &e.name) {
                 Some(record) => Row::Earlier(Box::new(record)),
@@ -182,6 +188,13 @@ fn report_rows<'a>(request: &Request, outcomes: &'a [Outcome]) -> Vec<Row<'a>> {
     let listed = |o: &Outcome| entries.iter().any(|e| e.name == o.name());
     rows.extend(outcomes.iter().filter(|o| !listed(o)).map(Row::Now));
     rows
+}
+
+/// The record of entry `name`'s last good build when its volume is still in the output
+/// folder (kept when a later build failed or was cancelled).
+fn kept_record(request: &Request, name: &str) -> Option<Record> {
+    let record = cache::read_record(&request.output, name)?;
+    files::volume(&request.output, name).is_file().then_some(record)
 }
 
 /// The reports a build writes into its output folder.
@@ -478,14 +491,16 @@ fn write_report(output: &Path, ledger: &Ledger, rows: &[Row]) -> Result<()> {
             Row::Now(Outcome::Built(r)) => recorded(r, format!("{:.2} s", r.seconds)),
             Row::Now(Outcome::Cached(r)) => recorded(r, "cached".into()),
             Row::Earlier(r) => recorded(r, "earlier build".into()),
+            Row::Kept(Outcome::Failed(_, why), r) => recorded(r, format!("failed: {why} (earlier build kept)")),
+            Row::Kept(_, r) => recorded(r, "cancelled (earlier build kept)".into()),
             Row::Now(Outcome::Failed(name, why)) => none(name, format!("failed: {why}")),
             Row::Now(Outcome::Cancelled(name)) => none(name, "cancelled".into()),
             Row::NotBuilt(name) => none(name, "not built".into()),
         };
         let (sheet, view) = (files::sheet(&name), files::view(&name));
-        // a failed, cancelled or unbuilt entry shows no picture: one on disk is of an
-        // older build, not of what this report describes
-        let current = matches!(row, Row::Now(Outcome::Built(_) | Outcome::Cached(_)) | Row::Earlier(_));
+        // a failed, cancelled or unbuilt entry without a kept build shows no picture: one on
+        // disk would be of a build this report does not describe
+        let current = matches!(row, Row::Now(Outcome::Built(_) | Outcome::Cached(_)) | Row::Earlier(_) | Row::Kept(..));
         let has_sheet = current && output.join(&sheet).is_file();
         let has_view = current && output.join(&view).is_file();
         let warned: String = warnings.iter().map(|w| format!("; warning: {w}")).collect();

@@ -452,22 +452,28 @@ fn a_directional_photo_is_warned_about_in_builds_and_previews() {
     assert!(warnings.iter().any(|w| w.contains("layers run down the columns")), "{warnings:?}");
 }
 
-/// A report shows no picture for an entry that failed: the sheet on disk is of an earlier
-/// build, not of what the row describes (its section image was removed since).
+/// A report row of an entry that failed while its earlier build is kept says so and shows
+/// that build (its size and sheet, labelled as the earlier one); the others are as built.
 #[test]
-fn a_failed_entry_shows_no_earlier_picture_in_the_report() {
+fn a_failed_entry_shows_its_kept_earlier_build_in_the_report() {
     let dir = tempfile::tempdir().unwrap();
     let manifest = library(dir.path());
     let out = at(dir.path(), "out");
     assert!(solidtex(&["build", &manifest, "-o", &out]).status.success());
     assert!(dir.path().join("out/c.sheet.png").is_file());
     std::fs::remove_file(dir.path().join("section.png")).unwrap();
-    let failed = solidtex(&["build", &manifest, "-o", &out]);
+    std::fs::write(&manifest, std::fs::read_to_string(&manifest).unwrap() + "\n").unwrap();
+    let failed = solidtex(&["build", &manifest, "-o", &out, "--force"]);
     assert!(!failed.status.success(), "{}", stderr(&failed));
     let md = std::fs::read_to_string(dir.path().join("out/report.md")).unwrap();
     let row = md.lines().find(|l| l.starts_with("| c |")).unwrap_or_default();
-    assert!(row.contains("failed") && !row.contains("c.sheet.png"), "{md}");
+    assert!(row.contains("failed") && row.contains("(earlier build kept)") && row.contains("c.sheet.png"), "{md}");
+    assert!(!row.contains("| - | - |"), "the kept build's size and types: {row}");
     assert!(md.lines().any(|l| l.starts_with("| a |") && l.contains("![a](a.sheet.png)")), "{md}");
-    let html = std::fs::read_to_string(dir.path().join("out/report.html")).unwrap();
-    assert!(!html.contains("src=\"c.sheet.png\"") && html.contains("src=\"a.sheet.png\""), "{html}");
+    // without a kept build, a failed row shows nothing of an older one
+    std::fs::remove_file(dir.path().join("out/c.exr")).unwrap();
+    assert!(!solidtex(&["build", &manifest, "-o", &out]).status.success());
+    let md = std::fs::read_to_string(dir.path().join("out/report.md")).unwrap();
+    let row = md.lines().find(|l| l.starts_with("| c |")).unwrap_or_default();
+    assert!(row.contains("failed") && !row.contains("c.sheet.png"), "{md}");
 }
