@@ -824,12 +824,28 @@ fn open_in_browser(path: &Path, browser: Option<&str>) -> Option<String> {
             .stdout(std::process::Stdio::null())
             .stderr(std::process::Stdio::null())
             .spawn();
-        if let Ok(mut child) = started {
+        if let Ok(mut child) = started
+            && !failed_at_once(&mut child)
+        {
             std::thread::spawn(move || child.wait());
             return Some(program.to_string());
         }
     }
     None
+}
+
+/// Whether a program just started ended within a second with a failure (no browser
+/// there, or it could not open the page); one still running or done well did not fail.
+fn failed_at_once(child: &mut std::process::Child) -> bool {
+    let started = std::time::Instant::now();
+    while started.elapsed() < Duration::from_secs(1) {
+        match child.try_wait() {
+            Ok(Some(status)) => return !status.success(),
+            Ok(None) => std::thread::sleep(Duration::from_millis(20)),
+            Err(_) => return false,
+        }
+    }
+    false
 }
 
 /// `STEM.EXT` in `folder`, or the first of `STEM-2.EXT`, `STEM-3.EXT` ... that is free: an
@@ -1054,6 +1070,8 @@ mod tests {
         assert!(text.starts_with("<!doctype html>") && text.contains("\"dims\":[6,5,4]"));
         let told = super::web_view(&m.output, name, subject, Some("no-such-browser-here")).unwrap();
         assert!(told.contains("opened it with xdg-open") || told.contains("open it in a browser"), "{told}");
+        let told = super::web_view(&m.output, name, subject, Some("false")).unwrap();
+        assert!(!told.contains("opened it with false") && told.contains(&page.display().to_string()), "{told}");
         std::fs::write(page.with_file_name("notes.txt"), "mine").unwrap();
         let refused = super::web_view(&m.output, name, subject, Some("true")).unwrap_err().to_string();
         assert!(refused.contains("ramp.view"), "a folder holding a person's file is left alone: {refused}");
