@@ -296,15 +296,12 @@ fn build_entry(
     let outputs = files::outputs(entry);
     ledger.claim(&outputs)?;
     let progress = EntryProgress { name: &entry.name, observer, warnings: Default::default() };
-    let volume = recipe::make_with(entry, &progress)?;
-    if progress.cancelled() {
-        return Err(Error::Cancelled);
-    }
-    io::write_volume(&files::volume(output, &entry.name), &volume)?;
-    io::write_rgb8(&output.join(files::sheet(&entry.name)), &crate::render::sheet(&volume, &entry.name))?;
-    io::write_bytes(&output.join(files::view(&entry.name)), io::web::preview_page(&entry.name, &volume)?.as_bytes())?;
-    recipe::extras(entry, &volume, output)?;
+    let made = make_and_write(entry, output, &progress);
+    // what is there now is solidtex's either way: the new files, or the earlier build's
+    // where this one stopped first (a claim left pending would let a later run replace a
+    // file a person changed in between)
     ledger.record(&outputs)?;
+    let volume = made?;
     let classified =
         crate::classify::classify(&volume).map(|c| c.texture_type.to_string()).unwrap_or_else(|_| "-".into());
     let record = Record {
@@ -322,6 +319,19 @@ fn build_entry(
     };
     cache::write_record(output, &record)?;
     Ok(Outcome::Built(record))
+}
+
+/// Make entry `entry`'s volume and write its files into `output` (unless cancelled first).
+fn make_and_write(entry: &Entry, output: &Path, progress: &EntryProgress) -> Result<crate::volume::Volume> {
+    let volume = recipe::make_with(entry, progress)?;
+    if progress.cancelled() {
+        return Err(Error::Cancelled);
+    }
+    io::write_volume(&files::volume(output, &entry.name), &volume)?;
+    io::write_rgb8(&output.join(files::sheet(&entry.name)), &crate::render::sheet(&volume, &entry.name))?;
+    io::write_bytes(&output.join(files::view(&entry.name)), io::web::preview_page(&entry.name, &volume)?.as_bytes())?;
+    recipe::extras(entry, &volume, output)?;
+    Ok(volume)
 }
 
 /// Copy the outputs of shard builds (`folders`) into `request`'s output folder and write

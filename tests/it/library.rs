@@ -454,6 +454,7 @@ fn a_directional_photo_is_warned_about_in_builds_and_previews() {
 
 /// A report row of an entry that failed while its earlier build is kept says so and shows
 /// that build (its size and sheet, labelled as the earlier one); the others are as built.
+/// The kept files stay in the ledger as solidtex's (not left claimed by the failed build).
 #[test]
 fn a_failed_entry_shows_its_kept_earlier_build_in_the_report() {
     let dir = tempfile::tempdir().unwrap();
@@ -470,6 +471,9 @@ fn a_failed_entry_shows_its_kept_earlier_build_in_the_report() {
     assert!(row.contains("failed") && row.contains("(earlier build kept)") && row.contains("c.sheet.png"), "{md}");
     assert!(!row.contains("| - | - |"), "the kept build's size and types: {row}");
     assert!(md.lines().any(|l| l.starts_with("| a |") && l.contains("![a](a.sheet.png)")), "{md}");
+    // the kept files stay recorded as solidtex's, none left claimed
+    let ledger = std::fs::read_to_string(dir.path().join("out/.cache/written.txt")).unwrap();
+    assert!(!ledger.contains("pending") && ledger.lines().any(|l| l.ends_with("  c.exr")), "{ledger}");
     // without a kept build, a failed row shows nothing of an older one
     std::fs::remove_file(dir.path().join("out/c.exr")).unwrap();
     assert!(!solidtex(&["build", &manifest, "-o", &out]).status.success());
