@@ -64,7 +64,7 @@ pub fn stamp(volume: &mut Volume, mesh: &Mesh, placement: &Placement, colour: [f
         let overlaps = lo.cmplt(top).all() && hi.cmpgt(glam::Vec3::ZERO).all();
         let why = if !overlaps {
             format!("lies wholly outside the {}x{}x{} volume", d[0], d[1], d[2])
-        } else if placed.boundary_edges() > 0 || placed.signed_volume().abs() < 1e-9 {
+        } else if flat(mesh) {
             "encloses no volume (a flat or open mesh); a seed must be a closed surface".to_string()
         } else {
             "covers no voxel's centre: it is smaller than a voxel (raise --scale)".to_string()
@@ -75,6 +75,13 @@ pub fn stamp(volume: &mut Volume, mesh: &Mesh, placement: &Placement, colour: [f
         )));
     }
     Ok(stamped)
+}
+
+/// Whether `mesh` encloses no volume: open, or flat (its volume a negligible share of its
+/// bounding box's), at whatever scale it is placed.
+fn flat(mesh: &Mesh) -> bool {
+    let (lo, hi) = mesh.bounds();
+    mesh.boundary_edges() > 0 || mesh.signed_volume().abs() <= 1e-6 * (hi - lo).length().powi(3)
 }
 
 /// [`stamp`] without the check that the seed covers some voxel (a scattered seed may be
@@ -344,6 +351,8 @@ pub fn blur(volume: &mut Volume, at: Vec3, radius: f32, strength: f32) -> Result
     }
     let blurred = box_gaussian(volume, lo, hi);
     let n = volume.channel_count();
+    // Depth is where a voxel lies between the skin and the core, not a colour: it stays
+    let blurs: Vec<usize> = (0..n).filter(|&c| volume.channels()[c] != Channel::Depth).collect();
     let mut changed = 0;
     for z in lo[2]..hi[2] {
         for y in lo[1]..hi[1] {
@@ -355,7 +364,7 @@ pub fn blur(volume: &mut Volume, at: Vec3, radius: f32, strength: f32) -> Result
                 let w = strength * (1.0 - r * r).powi(2);
                 let i = ((z - lo[2]) * (hi[1] - lo[1]) + (y - lo[1])) * (hi[0] - lo[0]) + (x - lo[0]);
                 let voxel = volume.voxel_mut(x, y, z);
-                for c in 0..n {
+                for &c in &blurs {
                     voxel[c] += w * (blurred[i * n + c] - voxel[c]);
                 }
                 changed += 1;
@@ -444,5 +453,25 @@ mod tests {
         let flat = Mesh::new(vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![[0, 1, 2]]).unwrap();
         let none = stamp(&mut v, &flat, &placed(Vec3::splat(4.0), 3.0), [0.0; 3]).unwrap_err();
         assert!(none.to_string().contains("encloses no volume"), "{none}");
+        let small = stamp(&mut v, &seed, &placed(Vec3::splat(4.0), 0.001), [0.0; 3]).unwrap_err();
+        assert!(small.to_string().contains("smaller than a voxel"), "a closed seed at the least scale: {small}");
+    }
+
+    /// A blur softens the colours and leaves Depth (where a voxel lies between skin and
+    /// core) as it was.
+    #[test]
+    fn a_blur_keeps_depth() {
+        let channels = vec![Channel::R, Channel::G, Channel::B, Channel::Depth];
+        let ramp = |_: usize, _: usize, z: usize, o: &mut [f32]| {
+            let d = z as f32 / 7.0;
+            o.copy_from_slice(&[if z.is_multiple_of(2) { 1.0 } else { 0.0 }, 0.5, 0.5, d]);
+        };
+        let before = Volume::from_fn([8; 3], channels.clone(), ramp).unwrap();
+        let mut v = before.clone();
+        blur(&mut v, Vec3::splat(4.0), 8.0, 1.0).unwrap();
+        let (d, r) = (v.channel_index(&Channel::Depth).unwrap(), v.channel_index(&Channel::R).unwrap());
+        let (b, a) = (before.data(), v.data());
+        assert!((0..512).all(|i| a[i * 4 + d] == b[i * 4 + d]), "depth as it was");
+        assert!((0..512).any(|i| (a[i * 4 + r] - b[i * 4 + r]).abs() > 0.1), "the stripes are softened");
     }
 }
