@@ -70,23 +70,18 @@ impl Format {
         if path.to_string_lossy().ends_with('/') {
             return Ok(Format::PngStack);
         }
-        let format = match path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase()) {
-            Some(e) if e == "exr" => Format::Exr,
-            Some(e) if e == "nrrd" => Format::Nrrd,
-            Some(e) if e == "vol" => Format::Vol,
-            Some(e) if e == "png" => Format::PngAtlas,
-            Some(e) if e == "vdb" => Format::Vdb,
-            Some(e) if e == "dds" => Format::Dds,
-            None => return Ok(Format::PngStack),
-            Some(_) if path.is_dir() => return Ok(Format::PngStack),
-            Some(e) => {
-                return Err(Error::file(
+        let Some(format) = Format::named(path) else {
+            return match path.extension() {
+                None => Ok(Format::PngStack),
+                Some(_) if path.is_dir() => Ok(Format::PngStack),
+                Some(e) => Err(Error::file(
                     path,
                     format!(
-                        "unknown volume extension .{e}; allowed: .exr, .nrrd, .vol, .png, .vdb, .dds, or a folder for a PNG slice stack"
+                        "unknown volume extension .{}; allowed: .exr, .nrrd, .vol, .png, .vdb, .dds, or a folder for a PNG slice stack",
+                        e.to_string_lossy().to_ascii_lowercase()
                     ),
-                ));
-            }
+                )),
+            };
         };
         if path.is_dir() {
             return Err(Error::file(
@@ -96,6 +91,19 @@ impl Format {
             ));
         }
         Ok(format)
+    }
+
+    /// The volume file format `path`'s extension names, if it names one.
+    fn named(path: &Path) -> Option<Format> {
+        Some(match path.extension()?.to_string_lossy().to_ascii_lowercase().as_str() {
+            "exr" => Format::Exr,
+            "nrrd" => Format::Nrrd,
+            "vol" => Format::Vol,
+            "png" => Format::PngAtlas,
+            "vdb" => Format::Vdb,
+            "dds" => Format::Dds,
+            _ => return None,
+        })
     }
 }
 
@@ -210,15 +218,10 @@ pub fn check_edit_output(output: &Path, edited: &Path, others: &[&Path]) -> Resu
     check_output(output, others)
 }
 
-/// The extensions of the volume files solidtex writes.
-const VOLUME_EXTENSIONS: [&str; 6] = ["exr", "nrrd", "vol", "png", "vdb", "dds"];
-
 /// [`check_output`] for an output that is a folder whatever its name (a set of masks).
 pub fn check_folder_output(output: &Path, inputs: &[&Path]) -> Result<()> {
-    let ext = output.extension().map(|e| e.to_string_lossy().to_ascii_lowercase());
-    if let Some(ext) =
-        ext.filter(|e| VOLUME_EXTENSIONS.contains(&e.as_str()) && !output.to_string_lossy().ends_with('/'))
-    {
+    if Format::named(output).is_some() && !output.to_string_lossy().ends_with('/') {
+        let ext = output.extension().map(|e| e.to_string_lossy()).unwrap_or_default();
         return Err(Error::usage(format!(
             "{}: this command writes a folder of files, but the name ends in .{ext}, like a volume file; give a \
              folder name without an extension",

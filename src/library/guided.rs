@@ -136,8 +136,8 @@ pub fn region_exemplars(
     spec.regions.iter().enumerate().map(each).collect()
 }
 
-/// One synthesis setup per region's exemplars (`made`, [`region_exemplars`]) along
-/// Each region's setup over a grid of `dims` along `frames`, with its own settings.
+/// One synthesis setup per region's exemplars (`made`, [`region_exemplars`]) over a grid
+/// of `dims` along `frames`, each with its own settings.
 pub fn region_setups<'a>(
     made: &'a [(Exemplars, Options, Option<ScalarGrid>)],
     frames: &'a FrameGrid,
