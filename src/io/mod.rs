@@ -301,6 +301,8 @@ pub fn written_relative(path: &Path, base: &Path) -> String {
 /// that does not exist yet follows as written.
 fn resolved(path: &Path) -> PathBuf {
     use std::path::Component;
+    // the folder of a bare file name is the empty path: the current folder
+    let path = if path.as_os_str().is_empty() { Path::new(".") } else { path };
     let absolute = std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf());
     let mut out = PathBuf::new();
     for part in absolute.components() {

@@ -1177,6 +1177,32 @@ fn a_fill_that_is_mostly_skin_is_warned_about() {
     assert!(said.contains(&format!("{:.0} % of the volume lies in the outer 10 % of depth", share * 100.0)), "{said}");
 }
 
+/// A model written by a bare file name (into the folder `fill` runs in) names its volume
+/// relative to that folder, so the folder can be moved and the model still cuts.
+#[test]
+fn a_model_written_by_a_bare_name_moves_with_its_folder() {
+    let dir = tempfile::tempdir().unwrap();
+    let proj = dir.path().join("proj");
+    std::fs::create_dir_all(&proj).unwrap();
+    let (mesh, spec) = kiwi_fruit(&proj);
+    let run = std::process::Command::new(env!("CARGO_BIN_EXE_solidtex"))
+        .args(["fill", &mesh, "--spec", &spec, "-o", "k.lst"])
+        .current_dir(&proj)
+        .output()
+        .unwrap();
+    assert!(run.status.success(), "{}", stderr(&run));
+    let model = String::from_utf8_lossy(&std::fs::read(proj.join("k.lst")).unwrap()).into_owned();
+    assert!(model.contains("built/kiwi.exr") && !model.contains(&*dir.path().to_string_lossy()), "{model}");
+    let moved = dir.path().join("moved");
+    std::fs::rename(&proj, &moved).unwrap();
+    let cut = std::process::Command::new(env!("CARGO_BIN_EXE_solidtex"))
+        .args(["cut", "k.lst", "--plane", "0,0,0,1,0,0", "--size", "64", "-o", "k.png"])
+        .current_dir(&moved)
+        .output()
+        .unwrap();
+    assert!(cut.status.success(), "{}", stderr(&cut));
+}
+
 /// A model written into a folder named with `..` from where `fill` runs names its volume and
 /// masks as they are found from the model's own folder: cut from there, it shows the kiwi.
 #[test]
