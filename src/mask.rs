@@ -54,12 +54,20 @@ impl Layer {
     }
 }
 
-/// Allowed mask sides, in voxels.
-pub const SIZE: (usize, usize) = (4, 512);
+/// Allowed mask sides, in voxels. The least is the smallest cube whose splotch and layers
+/// are opaque somewhere at the default fall-off, for any seed: the ball's radius is
+/// (size / 2 - 1) / (1 + WOBBLE), at least 0.85 of that where the wobble shrinks it, and
+/// must reach a fall-off band past the voxel centres nearest the middle (0.87 voxels away
+/// in an even cube). Size 6 leaves 1.48 - 0.87 = 0.61 voxels against a band of 0.45; size 5
+/// one opaque voxel; size 4 none (its ball, 0.74 to 1.0 voxels, ends inside the band).
+pub const SIZE: (usize, usize) = (6, 512);
+/// Alpha at or above this counts as opaque.
+const OPAQUE: f32 = 0.999;
 
 fn check(size: usize, falloff: f32) -> Result<()> {
-    if !(SIZE.0..=SIZE.1).contains(&size) {
-        return Err(Error::invalid(format!("mask size {size} is out of range; allowed 4 to 512 voxels")));
+    let (lo, hi) = SIZE;
+    if !(lo..=hi).contains(&size) {
+        return Err(Error::invalid(format!("mask size {size} is out of range; allowed {lo} to {hi} voxels")));
     }
     if falloff.is_nan() || falloff <= 0.0 || falloff >= 0.5 {
         return Err(Error::invalid(format!(
@@ -110,7 +118,21 @@ pub fn layered(size: usize, falloff: f32, seed: u64, layer: Layer, depth: Axis) 
         }
         o[0] = alpha;
     })?;
+    check_opaque(&volume, size, falloff)?;
     Ok(with_meta(volume, &format!("mask:{}", layer.name()), seed))
+}
+
+/// A mask must be opaque somewhere: a patch pasted with it covers the model only where it
+/// is. A fall-off band as wide as the shape's radius leaves no voxel opaque, at any size.
+fn check_opaque(mask: &Volume, size: usize, falloff: f32) -> Result<()> {
+    if mask.data().iter().any(|a| *a >= OPAQUE) {
+        return Ok(());
+    }
+    Err(Error::invalid(format!(
+        "a mask of size {size} with fall-off {falloff} is opaque nowhere: its soft band ({:.1} voxels) is as \
+         wide as the shape; a smaller fall-off (or, for a small mask, a larger size) leaves an opaque core",
+        falloff * size as f32
+    )))
 }
 
 fn with_meta(volume: Volume, recipe: &str, seed: u64) -> Volume {
@@ -149,6 +171,7 @@ pub fn from_mesh(mesh: &Mesh, size: usize, falloff: f32) -> Result<Volume> {
         }
         o[0] = (distance_to_surface(&placed, p) / band).clamp(0.0, 1.0);
     })?;
+    check_opaque(&volume, size, falloff)?;
     Ok(with_meta(volume, "mask:mesh", 0))
 }
 
@@ -177,7 +200,7 @@ pub struct MaskMeasures {
 pub fn measure(mask: &Volume) -> MaskMeasures {
     let n = mask.channel_count();
     let alpha: Vec<f32> = mask.data().iter().step_by(n).copied().collect();
-    let opaque = alpha.iter().filter(|a| **a >= 0.999).count() as f64 / alpha.len() as f64;
+    let opaque = alpha.iter().filter(|a| **a >= OPAQUE).count() as f64 / alpha.len() as f64;
     let centre = opaque_centre(mask);
     let inner = directions(64).into_iter().map(|dir| opaque_reach(mask, centre, dir)).fold(f32::INFINITY, f32::min);
     MaskMeasures {
@@ -220,7 +243,7 @@ fn opaque_centre(mask: &Volume) -> Vec3 {
     for z in 0..d[2] {
         for y in 0..d[1] {
             for x in 0..d[0] {
-                if mask.get(x, y, z, 0) >= 0.999 {
+                if mask.get(x, y, z, 0) >= OPAQUE {
                     sum += Vec3::new(x as f32, y as f32, z as f32);
                     count += 1.0;
                 }
@@ -241,7 +264,7 @@ fn opaque_reach(mask: &Volume, centre: Vec3, dir: Vec3) -> f32 {
             return r;
         }
         mask.sample_trilinear(p, crate::volume::Edge::Clamp, &mut out);
-        if out[0] < 0.999 {
+        if out[0] < OPAQUE {
             return r;
         }
         r += 0.05;
@@ -304,6 +327,20 @@ mod tests {
             }
         }
         assert!(outer.get(12, 12, 23, 0) == 0.0 && inner.get(12, 12, 0, 0) == 0.0);
+    }
+
+    #[test]
+    fn masks_of_the_least_size_are_opaque_somewhere_for_every_seed_and_layer() {
+        for seed in 1..=40 {
+            for layer in Layer::ALL {
+                let m = layered(SIZE.0, DEFAULT_FALLOFF, seed, layer, Axis::Z).unwrap();
+                assert!(measure(&m).opaque_fraction > 0.0, "seed {seed}, {}", layer.name());
+            }
+        }
+        let err = splotch(4, DEFAULT_FALLOFF, 1).unwrap_err().to_string();
+        assert!(err.contains("size 4 is out of range; allowed 6 to 512"), "{err}");
+        let err = splotch(64, 0.45, 1).unwrap_err().to_string();
+        assert!(err.contains("opaque nowhere") && err.contains("smaller fall-off"), "{err}");
     }
 
     #[test]

@@ -17,6 +17,10 @@ use crate::volume::Volume;
 
 /// Thumbnail side.
 pub const THUMB: usize = 8;
+/// Decimals a snapshot file keeps of each statistic.
+const STAT_DIGITS: usize = 6;
+/// Decimals a snapshot file keeps of each thumbnail value.
+const THUMB_DIGITS: usize = 4;
 
 /// A volume's snapshot.
 #[derive(Debug, Clone, PartialEq)]
@@ -59,10 +63,11 @@ impl Snapshot {
         let mut out = format!("solidtex-snapshot 1\ndims {x} {y} {z}\nchannels {}\n", self.channels.join(","));
         out += &format!("type {}\nhash {}\n", self.texture_type.as_deref().unwrap_or("-"), self.hash);
         for (name, s) in self.channels.iter().zip(&self.stats) {
-            out += &format!("stat {name} {:.6} {:.6} {:.6} {:.6}\n", s[0], s[1], s[2], s[3]);
+            let values: Vec<String> = s.iter().map(|v| format!("{v:.STAT_DIGITS$}")).collect();
+            out += &format!("stat {name} {}\n", values.join(" "));
         }
         for (name, t) in self.channels.iter().zip(&self.thumbs) {
-            let values: Vec<String> = t.iter().map(|v| format!("{v:.4}")).collect();
+            let values: Vec<String> = t.iter().map(|v| format!("{v:.THUMB_DIGITS$}")).collect();
             out += &format!("thumb {name} {}\n", values.join(" "));
         }
         out
@@ -142,19 +147,21 @@ impl Snapshot {
     }
 
     /// Differences from `expected`: none means equal (tolerance 0: the hash must match;
-    /// otherwise stats and thumbnail values may differ by up to `tolerance`).
+    /// otherwise stats and thumbnail values may differ by up to `tolerance`). Both sides are
+    /// compared as a file stores them (stats to 6 decimals, thumbnails to 4), so a volume
+    /// always matches the snapshot file written of it, at any tolerance.
     pub fn differences(&self, expected: &Snapshot, tolerance: f64) -> Vec<String> {
         let mut out = Vec::new();
         if self.dims != expected.dims {
-            out.push(format!("dims {:?}, expected {:?}", self.dims, expected.dims));
+            out.push(format!("dims {}, expected {}", dims_text(self.dims), dims_text(expected.dims)));
         }
         if self.channels != expected.channels || self.texture_type != expected.texture_type {
             out.push(format!(
-                "channels {} type {:?}, expected {} type {:?}",
+                "channels {} type {}, expected {} type {}",
                 self.channels.join(","),
-                self.texture_type,
+                self.texture_type.as_deref().unwrap_or("none"),
                 expected.channels.join(","),
-                expected.texture_type
+                expected.texture_type.as_deref().unwrap_or("none")
             ));
         }
         if !out.is_empty() {
@@ -166,7 +173,6 @@ impl Snapshot {
             }
             return out;
         }
-        let worst = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max);
         for (c, name) in self.channels.iter().enumerate() {
             let (Some(a), Some(b), Some(e), Some(f)) =
                 (self.stats.get(c), self.thumbs.get(c), expected.stats.get(c), expected.thumbs.get(c))
@@ -174,15 +180,31 @@ impl Snapshot {
                 out.push(format!("channel {name}: statistics or thumbnail missing"));
                 continue;
             };
-            let (s, t) = (worst(a, e), worst(b, f));
+            let (s, t) = (worst(a, e, STAT_DIGITS), worst(b, f, THUMB_DIGITS));
             if s > tolerance || t > tolerance {
                 out.push(format!(
-                    "channel {name}: stats differ by {s:.4}, thumbnail by {t:.4} (tolerance {tolerance})"
+                    "channel {name}: stats differ by {s:.STAT_DIGITS$}, thumbnail by {t:.THUMB_DIGITS$} \
+                     (tolerance {tolerance})"
                 ));
             }
         }
         out
     }
+}
+
+/// Dims as `XxYxZ`.
+fn dims_text([x, y, z]: [usize; 3]) -> String {
+    format!("{x}x{y}x{z}")
+}
+
+/// `value` as a snapshot file keeps it: rounded to `digits` decimals.
+fn stored(value: f64, digits: usize) -> f64 {
+    format!("{value:.digits$}").parse().unwrap_or(value)
+}
+
+/// The largest difference of two lists of values, each rounded as a file keeps it.
+fn worst(a: &[f64], b: &[f64], digits: usize) -> f64 {
+    a.iter().zip(b).map(|(x, y)| (stored(*x, digits) - stored(*y, digits)).abs()).fold(0.0, f64::max)
 }
 
 /// Block means of the central z-slice of channel `c`.
@@ -228,6 +250,19 @@ mod tests {
         assert!(other.differences(&snap, 0.5).is_empty(), "within a loose tolerance");
         assert!(!other.differences(&snap, 0.001).is_empty());
         assert!(Snapshot::parse("hello").unwrap_err().to_string().contains("first line"));
+    }
+
+    #[test]
+    fn a_volume_matches_the_snapshot_file_written_of_it_at_any_tolerance() {
+        let v = Volume::from_fn([9, 7, 5], Channel::rgb(), |x, y, z, o| {
+            o.copy_from_slice(&[x as f32 / 7.0, (y * z) as f32 / 13.0, 1.0 / (1.0 + x as f32)])
+        })
+        .unwrap();
+        let snap = Snapshot::of(&v);
+        let file = Snapshot::parse(&snap.to_text()).unwrap();
+        for tolerance in [0.0, 1e-12, 1e-7, 1e-5, 4.9e-5, 1e-3] {
+            assert_eq!(snap.differences(&file, tolerance), Vec::<String>::new(), "tolerance {tolerance}");
+        }
     }
 
     #[test]

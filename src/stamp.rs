@@ -7,7 +7,7 @@
 
 use crate::error::{Error, Result};
 use crate::mesh::{Mesh, voxelize};
-use crate::volume::{Channel, Volume};
+use crate::volume::{Channel, Volume, luminance};
 use glam::{Affine3A, Quat, Vec3};
 use rand::{RngExt, SeedableRng};
 use rand_pcg::Pcg64;
@@ -88,14 +88,14 @@ fn flat(mesh: &Mesh) -> bool {
 /// smaller than a sample spacing).
 fn stamp_covered(volume: &mut Volume, mesh: &Mesh, placement: &Placement, colour: [f32; 3]) -> Result<Stamped> {
     check_placement(placement)?;
-    let targets = colour_channels(volume)?;
+    let targets = colour_targets(volume, colour)?;
     let placed = mesh.transformed(placement.matrix());
     let cover = voxelize(&placed, volume.dims(), SUPERSAMPLE);
     let mut stamped = Stamped { voxels: 0, volume: 0.0 };
     for (i, &alpha) in cover.alpha.iter().enumerate().filter(|(_, a)| **a > 0.0) {
         let [x, y, z] = crate::volume::unindex(cover.dims, i);
         let voxel = volume.voxel_mut(cover.origin[0] + x, cover.origin[1] + y, cover.origin[2] + z);
-        for (&c, value) in targets.iter().zip(colour) {
+        for &(c, value) in &targets {
             voxel[c] += alpha * (value - voxel[c]);
         }
         stamped.voxels += 1;
@@ -128,11 +128,17 @@ fn check_placement(p: &Placement) -> Result<()> {
     Ok(())
 }
 
-/// Positions of R, G and B (a grey volume takes the first channel for all three).
-fn colour_channels(volume: &Volume) -> Result<Vec<usize>> {
-    let rgb: Vec<usize> = [Channel::R, Channel::G, Channel::B].iter().filter_map(|c| volume.channel_index(c)).collect();
-    match rgb.len() {
-        0 => Err(Error::invalid("the volume has no R, G or B channel to stamp a colour into")),
+/// Each colour channel of the volume with the value `colour` gives it. A grey volume (one
+/// colour channel, stored as R) takes the colour's luminance.
+fn colour_targets(volume: &Volume, colour: [f32; 3]) -> Result<Vec<(usize, f32)>> {
+    let rgb: Vec<(usize, f32)> = [Channel::R, Channel::G, Channel::B]
+        .iter()
+        .zip(colour)
+        .filter_map(|(c, value)| Some((volume.channel_index(c)?, value)))
+        .collect();
+    match rgb.as_slice() {
+        [] => Err(Error::invalid("the volume has no R, G or B channel to stamp a colour into")),
+        [(grey, _)] => Ok(vec![(*grey, luminance(colour))]),
         _ => Ok(rgb),
     }
 }
@@ -165,19 +171,24 @@ pub struct Scatter {
 /// What a scatter did.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Scattered {
-    /// Placements of the seeds stamped, in order.
+    /// Placements of the seeds stamped (each changed some voxels), in order.
     pub placed: Vec<Placement>,
     /// Candidate positions rejected (overlap, outside, or out of the region).
     pub rejected: usize,
+    /// Seeds that found room but were drawn smaller than a voxel, so they changed no voxel
+    /// (a larger scale places them).
+    pub too_small: usize,
 }
 
 /// Scatter up to `params.count` seeds with random orientation and scale, never overlapping
-/// (their bounding spheres stay apart) and wholly inside the volume. Reproducible from `seed`.
+/// (their bounding capsules stay apart) and wholly inside the volume. A seed that covers no
+/// voxel (smaller than one) is counted in `too_small`, not placed, and takes no room.
+/// Reproducible from `seed`.
 pub fn scatter(volume: &mut Volume, mesh: &Mesh, params: &Scatter, seed: u64) -> Result<Scattered> {
     check_scatter(volume, params)?;
     let capsule = bounding_capsule(mesh);
     let mut rng = Pcg64::seed_from_u64(seed);
-    let mut out = Scattered { placed: Vec::new(), rejected: 0 };
+    let mut out = Scattered { placed: Vec::new(), rejected: 0, too_small: 0 };
     let mut taken: Vec<Capsule> = Vec::new();
     for _ in 0..params.count {
         for _ in 0..params.attempts.max(1) {
@@ -187,9 +198,12 @@ pub fn scatter(volume: &mut Volume, mesh: &Mesh, params: &Scatter, seed: u64) ->
             let placement = Placement { at, rotation, scale: Vec3::splat(scale) };
             let moved = capsule.placed(&placement);
             if moved.inside(volume.dims()) && taken.iter().all(|c| !c.overlaps(&moved)) {
-                stamp_covered(volume, mesh, &placement, params.colour)?;
-                taken.push(moved);
-                out.placed.push(placement);
+                if stamp_covered(volume, mesh, &placement, params.colour)?.voxels == 0 {
+                    out.too_small += 1;
+                } else {
+                    taken.push(moved);
+                    out.placed.push(placement);
+                }
                 break;
             }
             out.rejected += 1;
@@ -268,21 +282,48 @@ fn check_scatter(volume: &Volume, p: &Scatter) -> Result<()> {
             p.scale.0, p.scale.1
         )));
     }
-    if let Region::Box(a, b) = p.region {
-        let limit = POSITION_LIMIT;
-        if !(within_limit(a) && within_limit(b)) {
-            return Err(Error::invalid(format!(
-                "scatter region box {a}..{b} is out of range; allowed: each coordinate -{limit} to {limit}"
-            )));
+    check_region(p.region)?;
+    check_region_fits(volume, p.region)
+}
+
+/// A region's own values: a box within the allowed positions, its first corner nowhere past
+/// its second; a depth band with 0 <= from <= to <= 1.
+pub fn check_region(region: Region) -> Result<()> {
+    match region {
+        Region::Box(a, b) => {
+            let limit = POSITION_LIMIT;
+            if !(within_limit(a) && within_limit(b)) {
+                return Err(Error::invalid(format!(
+                    "scatter region box {a}..{b} is out of range; allowed: each coordinate -{limit} to {limit}"
+                )));
+            }
+            if let Some(k) = (0..3).find(|&k| a[k] > b[k]) {
+                let axis = ["x", "y", "z"][k];
+                return Err(Error::invalid(format!(
+                    "scatter region box {a}..{b} has its corners reversed: {axis} {} is past {}; \
+                     allowed: X0,Y0,Z0 each at most X1,Y1,Z1",
+                    a[k], b[k]
+                )));
+            }
+        }
+        Region::Depth(lo, hi) => {
+            if !(0.0..=1.0).contains(&lo) || !(lo..=1.0).contains(&hi) {
+                return Err(Error::invalid(format!("depth band {lo}..{hi} must satisfy 0 <= from <= to <= 1")));
+            }
         }
     }
-    if let Region::Depth(lo, hi) = p.region {
-        if volume.channel_index(&Channel::Depth).is_none() {
-            return Err(Error::invalid("scattering in a depth band needs a volume with a Depth channel"));
-        }
-        if !(0.0..=1.0).contains(&lo) || !(lo..=1.0).contains(&hi) {
-            return Err(Error::invalid(format!("depth band {lo}..{hi} must satisfy 0 <= from <= to <= 1")));
-        }
+    Ok(())
+}
+
+/// Whether `volume` has what `region` reads: a depth band needs a Depth channel.
+pub fn check_region_fits(volume: &Volume, region: Region) -> Result<()> {
+    if matches!(region, Region::Depth(..)) && volume.channel_index(&Channel::Depth).is_none() {
+        let names = crate::volume::channel_names(volume.channels());
+        return Err(Error::invalid(format!(
+            "the volume has no Depth channel (its channels: {names}), so it has no depth band to scatter \
+             in; a sweep with a depth axis makes one (sweep --depth-axis, or depth_axis in a manifest), or \
+             scatter in a box"
+        )));
     }
     Ok(())
 }
@@ -324,7 +365,8 @@ fn random_point(volume: &Volume, region: Region, rng: &mut Pcg64) -> Vec3 {
 }
 
 /// A local blur: Gaussian-blurred values blended in inside a sphere, fully (times
-/// `strength`) at the centre and fading to nothing at the radius.
+/// `strength`) at the centre and fading to nothing at the radius. Returns how many voxels
+/// it blended: those whose centre lies inside the sphere, none at strength 0.
 pub fn blur(volume: &mut Volume, at: Vec3, radius: f32, strength: f32) -> Result<usize> {
     let (lo, hi) = RADIUS;
     if !((lo..=hi).contains(&radius) && (0.0..=1.0).contains(&strength)) {
@@ -362,6 +404,9 @@ pub fn blur(volume: &mut Volume, at: Vec3, radius: f32, strength: f32) -> Result
                     continue;
                 }
                 let w = strength * (1.0 - r * r).powi(2);
+                if w <= 0.0 {
+                    continue;
+                }
                 let i = ((z - lo[2]) * (hi[1] - lo[1]) + (y - lo[1])) * (hi[0] - lo[0]) + (x - lo[0]);
                 let voxel = volume.voxel_mut(x, y, z);
                 for &c in &blurs {
@@ -437,7 +482,7 @@ mod tests {
     }
 
     #[test]
-    fn a_scattered_seed_smaller_than_a_sample_is_placed_without_error() {
+    fn a_scattered_seed_smaller_than_a_voxel_is_counted_as_too_small_not_placed() {
         let seed = crate::sections::seed_mesh(8, 8).unwrap();
         let mut v = grey();
         let tiny = Scatter {
@@ -447,7 +492,9 @@ mod tests {
             colour: [0.0; 3],
             attempts: 200,
         };
-        assert_eq!(scatter(&mut v, &seed, &tiny, 1).unwrap().placed.len(), 3);
+        let done = scatter(&mut v, &seed, &tiny, 1).unwrap();
+        assert_eq!((done.placed.len(), done.too_small), (0, 3));
+        assert_eq!(v, grey(), "no voxel changed");
         let outside = stamp(&mut v, &seed, &placed(Vec3::splat(500.0), 1.0), [0.0; 3]).unwrap_err();
         assert!(outside.to_string().contains("wholly outside"), "{outside}");
         let flat = Mesh::new(vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![[0, 1, 2]]).unwrap();

@@ -12,7 +12,7 @@
 
 use crate::error::{Error, Result};
 use crate::noise::{Fbm, fbm};
-use crate::volume::{Axis, Channel, Image2d, Meta, Volume};
+use crate::volume::{Axis, Channel, Image2d, Meta, Volume, luminance};
 use glam::Vec3;
 
 /// Allowed displacement amplitudes, in voxels.
@@ -120,7 +120,7 @@ pub fn sweep(image: &Image2d, params: &Sweep, seed: u64) -> Result<Volume> {
     })?;
     let mut volume = volume;
     if let (Some(skin), Some(d)) = (&params.skin, params.depth_axis) {
-        add_skin(&mut volume, skin, d, &colour, seed)?;
+        add_skin(&mut volume, skin, d, &colour, seed);
     }
     let mut meta = Meta::default();
     meta.set("recipe", "sweep");
@@ -159,9 +159,28 @@ fn check(image: &Image2d, params: &Sweep) -> Result<()> {
     if let Some(skin) = &params.skin {
         within("skin width", skin.width, SKIN_WIDTH)?;
         within("skin width noise", skin.width_noise, SKIN_WIDTH)?;
+        check_skin(image, skin)?;
     }
     if let Some([x, y, c]) = image.first_non_finite() {
         return Err(Error::invalid(format!("cross-section pixel ({x}, {y}) channel {c} is not finite")));
+    }
+    Ok(())
+}
+
+/// Whether `skin` can cover a volume swept from `image`: a skin image needs R, G and B when
+/// the cross-section has them (a grey skin image suits only a grey cross-section). The
+/// error is about the skin image, so a caller can name its file.
+pub fn check_skin(image: &Image2d, skin: &Skin) -> Result<()> {
+    if let SkinLook::Image(look) = &skin.look
+        && look.channel_count() < 3
+        && colour_positions(image).is_ok_and(|c| c.len() == 3)
+    {
+        return Err(Error::invalid(format!(
+            "the skin image has {} channel(s) ({}) but the cross-section has R, G and B; a skin image must \
+             have R, G and B channels for a colour volume",
+            look.channel_count(),
+            crate::volume::channel_names(look.channels())
+        )));
     }
     Ok(())
 }
@@ -245,16 +264,11 @@ fn sample_bilinear(image: &Image2d, x: f32, y: f32, out: &mut [f32]) {
 }
 
 /// Paint the skin over the first `width (+ noise)` voxels along `depth`, blending the last one.
-fn add_skin(volume: &mut Volume, skin: &Skin, depth: Axis, colour: &[usize], seed: u64) -> Result<()> {
+fn add_skin(volume: &mut Volume, skin: &Skin, depth: Axis, colour: &[usize], seed: u64) {
     let dims = volume.dims();
     let d = depth.index();
     let (u, v) = depth.plane_axes();
-    let look = match &skin.look {
-        SkinLook::Image(img) if img.channel_count() < 3 && colour.len() == 3 => {
-            return Err(Error::invalid("a skin image must have R, G and B channels for a colour volume"));
-        }
-        other => other,
-    };
+    let grey = colour.len() == 1;
     for j in 0..dims[v] {
         for i in 0..dims[u] {
             let mut p = [0; 3];
@@ -262,7 +276,7 @@ fn add_skin(volume: &mut Volume, skin: &Skin, depth: Axis, colour: &[usize], see
             p[v] = j;
             let wobble = skin.width_noise * fbm(seed ^ 0x5c1, cell(p, dims, 6.0), period(6.0), 2);
             let width = (skin.width + wobble).max(0.0);
-            let rgb = skin_colour(look, i, j, dims[u], dims[v]);
+            let rgb = skin_colour(&skin.look, i, j, dims[u], dims[v], grey);
             for k in 0..(width.ceil() as usize).min(dims[d]) {
                 p[d] = k;
                 let share = (width - k as f32).clamp(0.0, 1.0);
@@ -273,19 +287,23 @@ fn add_skin(volume: &mut Volume, skin: &Skin, depth: Axis, colour: &[usize], see
             }
         }
     }
-    Ok(())
 }
 
-fn skin_colour(look: &SkinLook, i: usize, j: usize, w: usize, h: usize) -> [f32; 3] {
-    match look {
+/// The skin at face position (i, j) of a `w` x `h` face: R, G, B, or for a `grey` volume its
+/// luminance three times (a grey skin image's own value).
+fn skin_colour(look: &SkinLook, i: usize, j: usize, w: usize, h: usize, grey: bool) -> [f32; 3] {
+    let rgb = match look {
         SkinLook::Colour(c) => *c,
         SkinLook::Image(img) => {
             let x = (i * img.width() / w.max(1)).min(img.width() - 1);
             let y = (j * img.height() / h.max(1)).min(img.height() - 1);
-            let px = img.pixel(x, y);
-            [px[0], px[1.min(px.len() - 1)], px[2.min(px.len() - 1)]]
+            match img.pixel(x, y) {
+                [r, g, b, ..] => [*r, *g, *b],
+                px => return [px[0]; 3],
+            }
         }
-    }
+    };
+    if grey { [luminance(rgb); 3] } else { rgb }
 }
 
 #[cfg(test)]

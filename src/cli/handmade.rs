@@ -97,6 +97,9 @@ pub fn run_sweep(args: &SweepArgs) -> Result<()> {
     io::check_output(&args.output, &inputs)?;
     let params = sweep_params(args)?;
     let image = io::read_image(&args.image)?;
+    if let (Some(skin), Some(path)) = (&params.skin, skin_file) {
+        sweep::check_skin(&image, skin).map_err(|e| e.in_file(path))?;
+    }
     let (dims, channels) = sweep::swept_shape(&image, &params);
     crate::volume::check_size(dims, channels.len(), io::budget_from_env()?)?;
     let volume = sweep::sweep(&image, &params, args.seed).map_err(|e| e.in_file(&args.image))?;
@@ -221,13 +224,28 @@ pub fn run_scatter(args: &ScatterArgs) -> Result<()> {
         colour,
         attempts: 200,
     };
+    stamp::check_region_fits(&volume, params.region).map_err(|e| e.in_file(&args.volume))?;
     let done =
         stamp::scatter(&mut volume, &mesh, &params, args.seed).map_err(|e| about(e, &args.mesh, &args.volume))?;
-    if done.placed.len() < args.count {
-        tell!("warning: placed {} of {} seeds: no room for the rest without overlaps", done.placed.len(), args.count);
-    }
-    tell!("placed {} seeds ({} positions rejected)", done.placed.len(), done.rejected);
+    tell_scattered(&done, args.count);
     write(&args.output, &volume)
+}
+
+/// How many seeds a scatter placed, and warnings for those it did not: too small to
+/// change a voxel, or no room.
+fn tell_scattered(done: &stamp::Scattered, count: usize) {
+    let placed = done.placed.len();
+    if done.too_small > 0 {
+        tell!(
+            "warning: {} of {count} seeds were smaller than a voxel and changed nothing; a larger --scale places them",
+            done.too_small
+        );
+    }
+    let no_room = count - placed - done.too_small;
+    if no_room > 0 {
+        tell!("warning: placed {placed} of {count} seeds: no room for {no_room} more without overlaps");
+    }
+    tell!("placed {placed} seeds ({} positions rejected)", done.rejected);
 }
 
 /// The colour and scale range of a scatter, every number checked against its range.
@@ -264,7 +282,11 @@ pub fn run_blur(args: &BlurArgs) -> Result<()> {
     io::check_edit_output(&args.output, &args.volume, &[])?;
     let mut volume = load(&args.volume)?;
     let changed = stamp::blur(&mut volume, at, args.radius, args.strength).map_err(|e| e.in_file(&args.volume))?;
-    tell!("blurred {changed} voxels");
+    if args.strength == 0.0 {
+        tell!("warning: --strength 0 blurs nothing; the volume is written unchanged");
+    } else {
+        tell!("blurred {changed} voxels");
+    }
     write(&args.output, &volume)
 }
 

@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 /// The options every mask shares.
 #[derive(Debug, clap::Args)]
 pub struct Shape {
-    /// Side of the cubic mask in voxels, 4 to 512.
+    /// Side of the cubic mask in voxels, 6 to 512.
     #[arg(long, default_value_t = 64)]
     pub size: usize,
     /// Width of the soft band as a share of the size: over 0 and under 0.5.

@@ -160,10 +160,10 @@ pub enum Command {
         /// The PNG to write (the sidecar goes beside it, with the extension .json).
         #[arg(short, long)]
         output: PathBuf,
-        /// Tiles across (default: near square, or from --rows).
+        /// Tiles across, 1 to the volume's slices (default: near square, or from --rows).
         #[arg(long)]
         columns: Option<usize>,
-        /// Tiles down (default: from --columns, or near square).
+        /// Tiles down, 1 to the volume's slices (default: from --columns, or near square).
         #[arg(long)]
         rows: Option<usize>,
         /// Pixels of repeated edge around each tile, 0 to 64 (against bilinear bleeding).

@@ -50,8 +50,14 @@ impl Layout {
         if padding > MAX_PADDING {
             return Err(Error::invalid(format!("--padding {padding} is out of range 0 to {MAX_PADDING}")));
         }
+        for (flag, value) in [("--columns", columns), ("--rows", rows)] {
+            if let Some(n) = value.filter(|n| !(1..=slices).contains(n)) {
+                return Err(Error::invalid(format!(
+                    "{flag} {n} is out of range; allowed: 1 to {slices} (the volume has {slices} slices, one tile each)"
+                )));
+            }
+        }
         let [columns, rows] = match (columns, rows) {
-            (Some(0), _) | (_, Some(0)) => return Err(Error::invalid("--columns and --rows must be at least 1")),
             (Some(c), Some(r)) => [c, r],
             (Some(c), None) => [c, slices.div_ceil(c)],
             (None, Some(r)) => [slices.div_ceil(r), r],
@@ -167,6 +173,8 @@ mod tests {
         let err = Layout::new([4, 3, 5], Some(2), Some(2), 0, false).unwrap_err().to_string();
         assert!(err.contains("4 tiles, fewer than the 5 slices"), "{err}");
         assert!(Layout::new([4, 3, 5], Some(0), None, 0, false).is_err());
+        let err = Layout::new([4, 3, 5], None, Some(6), 0, false).unwrap_err().to_string();
+        assert!(err.contains("--rows 6 is out of range; allowed: 1 to 5"), "{err}");
         assert!(Layout::new([4, 3, 5], None, None, MAX_PADDING + 1, false).is_err());
     }
 

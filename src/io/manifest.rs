@@ -825,15 +825,30 @@ fn step(raw: &RawStep, folder: &Path) -> Result<Step> {
     Ok(Step::Blur { at, radius, strength })
 }
 
-/// `box:X0,Y0,Z0,X1,Y1,Z1` or `depth:FROM,TO`.
+/// `box:X0,Y0,Z0,X1,Y1,Z1` (the first corner nowhere past the second) or `depth:FROM,TO`
+/// (0 <= FROM <= TO <= 1).
 pub fn region(text: &str) -> Result<Region> {
     if let Some(rest) = text.strip_prefix("box:") {
         let v = values::numbers("region box", rest, &[6])?;
         values::positions("region box", rest, &v)?;
+        if let Some(k) = (0..3).find(|&k| v[k] > v[k + 3]) {
+            let axis = ["X", "Y", "Z"][k];
+            return Err(Error::invalid(format!(
+                "region box {rest:?} has its corners reversed: {axis}0 {} is past {axis}1 {}; \
+                 allowed: X0 <= X1, Y0 <= Y1, Z0 <= Z1",
+                v[k],
+                v[k + 3]
+            )));
+        }
         return Ok(Region::Box(Vec3::new(v[0], v[1], v[2]), Vec3::new(v[3], v[4], v[5])));
     }
     if let Some(rest) = text.strip_prefix("depth:") {
         let v = values::numbers("region depth", rest, &[2])?;
+        if !(0.0 <= v[0] && v[0] <= v[1] && v[1] <= 1.0) {
+            return Err(Error::invalid(format!(
+                "region depth {rest:?} is out of range; allowed: 0 <= FROM <= TO <= 1"
+            )));
+        }
         return Ok(Region::Depth(v[0], v[1]));
     }
     Err(Error::invalid(format!("region {text:?} is not box:X0,Y0,Z0,X1,Y1,Z1 or depth:FROM,TO")))
@@ -877,6 +892,10 @@ mod tests {
             (
                 "[[exemplar.steps]]\nscatter = \"s.obj\"\ncolor = \"#000000\"\ncount = 1\nregion = \"box:0,0,0,1e30,1,1\"",
                 "line 11: step 1: region box",
+            ),
+            (
+                "[[exemplar.steps]]\nscatter = \"s.obj\"\ncolor = \"#000000\"\ncount = 1\nregion = \"box:0,5,0,1,1,1\"",
+                "line 11: step 1: region box \"0,5,0,1,1,1\" has its corners reversed: Y0 5 is past Y1 1",
             ),
         ];
         for (body, expected) in cases {

@@ -227,6 +227,9 @@ fn swept(spec: &SweepSpec, dims: Option<[usize; 3]>, seed: u64) -> Result<Volume
         skin,
         displacement,
     };
+    if let (Some(skin), Some((SkinSource::Image(path), ..))) = (&params.skin, &spec.skin) {
+        sweep::check_skin(&image, skin).map_err(|e| e.in_file(path))?;
+    }
     sweep::sweep(&image, &params, seed).map_err(|e| e.in_file(&spec.image))
 }
 
@@ -272,8 +275,17 @@ fn apply(step: &Step, volume: &mut Volume, progress: &dyn Progress) -> Result<()
             let region =
                 region.unwrap_or(Region::Box(glam::Vec3::ZERO, glam::Vec3::new(d[0] as f32, d[1] as f32, d[2] as f32)));
             let params = Scatter { count: *count, region, scale: *scale, colour: *colour, attempts: 200 };
+            stamp::check_region_fits(volume, region)?;
             let done = stamp::scatter(volume, &shape, &params, *seed).map_err(|e| e.in_file(mesh))?;
-            if done.placed.len() < *count {
+            if done.too_small > 0 {
+                progress.warn(&format!(
+                    "{} of {count} seeds from {} were smaller than a voxel and changed nothing; a larger scale \
+                     places them",
+                    done.too_small,
+                    mesh.display()
+                ));
+            }
+            if done.placed.len() + done.too_small < *count {
                 progress.warn(&format!(
                     "placed {} of {count} seeds from {}: no room for the rest",
                     done.placed.len(),

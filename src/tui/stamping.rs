@@ -148,7 +148,11 @@ pub fn scatter(model: &mut Model) {
             s.steps.push(StampStep::Scatter { count: SCATTER_COUNT, scale: params.scale, seed });
             s.next_seed += 1;
             v.volume = Some(Arc::new(next));
-            format!("scattered {} seeds (seed {seed})", done.placed.len())
+            let small = match done.too_small {
+                0 => String::new(),
+                n => format!("; {n} smaller than a voxel changed nothing (+ grows the seed)"),
+            };
+            format!("scattered {} seeds (seed {seed}){small}", done.placed.len())
         }
         Err(e) => format!("not scattered: {e}"),
     };

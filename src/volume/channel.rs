@@ -95,6 +95,13 @@ impl Channel {
     }
 }
 
+/// The grey value of an R, G, B colour, for a volume or image with one colour channel:
+/// luminance with the Rec. 709 weights 0.2126, 0.7152, 0.0722, the weights the fill's
+/// pictures and the web viewer use for grey.
+pub fn luminance([r, g, b]: [f32; 3]) -> f32 {
+    0.2126 * r + 0.7152 * g + 0.0722 * b
+}
+
 /// `R,G,B` for a list of channels.
 pub fn join(list: &[Channel]) -> String {
     list.iter().map(Channel::name).collect::<Vec<_>>().join(",")

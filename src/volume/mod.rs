@@ -17,7 +17,7 @@ mod sample;
 mod slice;
 mod stats;
 
-pub use channel::{Channel, join as channel_names};
+pub use channel::{Channel, join as channel_names, luminance};
 pub use image2d::Image2d;
 pub use pyramid::{downsample, upsample, upsample_on_samples};
 pub use sample::Edge;

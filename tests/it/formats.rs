@@ -287,6 +287,23 @@ fn a_flipbook_and_its_sidecar_name_the_layout() {
     assert!(stderr(&few).contains("fewer than the 8 slices"));
 }
 
+/// Rows or columns beyond the slices (one tile each) would only add empty tiles: a usage
+/// error naming the value and the range; as many as the slices is fine.
+#[test]
+fn flipbook_rows_or_columns_beyond_the_slices_are_refused() {
+    use crate::support::{assert_usage, at, solidtex, stderr};
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write_volume(&d.join("v.exr"), &random_volume([6, 4, 8], Channel::rgb(), 3)).unwrap();
+    let flipbook = |flag: &str, n: &str| solidtex(&["flipbook", &at(d, "v.exr"), "-o", &at(d, "fb.png"), flag, n]);
+    assert_usage(&flipbook("--rows", "9"), &["--rows 9 is out of range", "allowed: 1 to 8", "8 slices"]);
+    assert_usage(&flipbook("--columns", "9"), &["--columns 9 is out of range", "allowed: 1 to 8"]);
+    assert_usage(&flipbook("--rows", "0"), &["--rows 0 is out of range", "allowed: 1 to 8"]);
+    assert!(!d.join("fb.png").exists());
+    let run = flipbook("--rows", "8");
+    assert!(run.status.success(), "{}", stderr(&run));
+}
+
 /// `.vol` keeps no channel names: converting a volume whose channels would read back as
 /// others (R,G,B,Depth as R,G,B,A) warns, naming both; one that reads back the same
 /// does not.

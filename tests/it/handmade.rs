@@ -280,3 +280,131 @@ fn a_sweep_image_that_does_not_fit_the_asked_size_is_refused() {
     }
     assert!(!dir.path().join("lib/c.exr").exists());
 }
+
+/// A kiwi cross-section and a seed mesh in `dir`.
+fn section_and_seed(dir: &std::path::Path) -> (String, String) {
+    let (section, seed) = (at(dir, "kiwi.png"), at(dir, "seed.obj"));
+    assert!(solidtex(&["draw", "kiwi", "--size", "32x24", "-o", &section]).status.success());
+    assert!(solidtex(&["draw", "seed", "-o", &seed]).status.success());
+    (section, seed)
+}
+
+/// A grey image of `w` x `h` pixels, all `value`, written to `dir/name`.
+fn grey_image(dir: &std::path::Path, name: &str, (w, h): (usize, usize), value: f32) -> String {
+    let image = solidtex::volume::Image2d::from_data(w, h, Channel::grey(), vec![value; w * h]).unwrap();
+    solidtex::io::write_image(&dir.join(name), &image).unwrap();
+    at(dir, name)
+}
+
+fn read(path: &str) -> Volume {
+    read_volume(std::path::Path::new(path), 1 << 30).unwrap()
+}
+
+/// Seeds drawn smaller than a voxel change nothing: they are not counted as placed, and the
+/// run says how many there were and that a larger --scale places them.
+#[test]
+fn seeds_smaller_than_a_voxel_are_not_counted_as_placed() {
+    let dir = tempfile::tempdir().unwrap();
+    let (section, seed) = section_and_seed(dir.path());
+    let (vol, out) = (at(dir.path(), "v.exr"), at(dir.path(), "out.exr"));
+    assert!(solidtex(&["sweep", &section, "--length", "20", "-o", &vol]).status.success());
+    let run = solidtex(&["scatter", &vol, &seed, "--count", "5", "--scale", "0.001", "--color", "0,0,0", "-o", &out]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let err = stderr(&run);
+    assert!(err.contains("placed 0 seeds"), "{err}");
+    assert!(err.contains("5 of 5 seeds were smaller than a voxel") && err.contains("larger --scale"), "{err}");
+    assert!(!err.contains("no room"), "{err}");
+    assert_eq!(read(&out).data(), read(&vol).data(), "no voxel changed");
+}
+
+/// A grey volume (one channel) takes the Rec. 709 luminance of a skin or stamp colour,
+/// not its red: pure red is 0.2126, pure green 0.7152.
+#[test]
+fn a_grey_volume_takes_the_luminance_of_a_colour() {
+    let dir = tempfile::tempdir().unwrap();
+    let (_, seed) = section_and_seed(dir.path());
+    let section = grey_image(dir.path(), "grey.png", (32, 24), 0.5);
+    let (swept, stamped) = (at(dir.path(), "swept.exr"), at(dir.path(), "stamped.exr"));
+    let run = solidtex(&["sweep", &section, "--length", "8", "--depth-axis", "z", "--skin", "#ff0000", "-o", &swept]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let v = read(&swept);
+    assert_eq!(v.channels(), [Channel::R, Channel::Depth]);
+    assert!((v.get(4, 10, 0, 0) - 0.2126).abs() < 1e-4, "skin: {}", v.get(4, 10, 0, 0));
+    let run =
+        solidtex(&["stamp", &swept, &seed, "--at", "4,16,12", "--scale", "4", "--color", "#00ff00", "-o", &stamped]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let centre = read(&stamped).get(4, 16, 12, 0);
+    assert!((centre - 0.7152).abs() < 1e-4, "stamp: {centre}");
+}
+
+/// A grey skin image over a colour cross-section is refused naming the skin image.
+#[test]
+fn a_grey_skin_image_is_named_as_the_problem() {
+    let dir = tempfile::tempdir().unwrap();
+    let (section, _) = section_and_seed(dir.path());
+    let skin = grey_image(dir.path(), "skin.png", (8, 8), 0.3);
+    let out = at(dir.path(), "out.exr");
+    let run = solidtex(&["sweep", &section, "--length", "8", "--depth-axis", "z", "--skin", &skin, "-o", &out]);
+    assert_fails(&run, &["skin.png", "skin image has 1 channel", "R, G and B"]);
+    assert!(!stderr(&run).contains("kiwi.png"), "{}", stderr(&run));
+}
+
+/// A depth band in a volume without Depth names the volume, not the seed mesh, and says
+/// what makes a Depth channel.
+#[test]
+fn a_depth_band_in_a_volume_without_depth_names_the_volume() {
+    let dir = tempfile::tempdir().unwrap();
+    let (section, seed) = section_and_seed(dir.path());
+    let (vol, out) = (at(dir.path(), "flat.exr"), at(dir.path(), "out.exr"));
+    assert!(solidtex(&["sweep", &section, "--length", "8", "-o", &vol]).status.success());
+    let run = solidtex(&[
+        "scatter",
+        &vol,
+        &seed,
+        "--count",
+        "3",
+        "--region",
+        "depth:0.2,0.4",
+        "--color",
+        "0,0,0",
+        "-o",
+        &out,
+    ]);
+    assert_fails(&run, &["flat.exr", "has no Depth channel", "R,G,B", "--depth-axis"]);
+    assert!(!stderr(&run).contains("seed.obj"), "{}", stderr(&run));
+    assert!(!std::path::Path::new(&out).exists());
+}
+
+/// A blur of strength 0 says it changes nothing, and writes the volume as it was.
+#[test]
+fn a_blur_of_strength_0_says_it_changes_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let (section, _) = section_and_seed(dir.path());
+    let (vol, out) = (at(dir.path(), "v.exr"), at(dir.path(), "out.exr"));
+    assert!(solidtex(&["sweep", &section, "--length", "20", "-o", &vol]).status.success());
+    let run = solidtex(&["blur", &vol, "--at", "10,10,10", "--radius", "3", "--strength", "0", "-o", &out]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let err = stderr(&run);
+    assert!(err.contains("warning: --strength 0 blurs nothing") && !err.contains("blurred"), "{err}");
+    assert_eq!(read(&out).data(), read(&vol).data());
+}
+
+/// A scatter box with a corner past the other, or a depth band upside down, is a usage
+/// error naming the value.
+#[test]
+fn a_reversed_scatter_region_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let (section, seed) = section_and_seed(dir.path());
+    let (vol, out) = (at(dir.path(), "v.exr"), at(dir.path(), "out.exr"));
+    assert!(solidtex(&["sweep", &section, "--length", "20", "-o", &vol]).status.success());
+    let scatter = |region: &str| {
+        solidtex(&["scatter", &vol, &seed, "--count", "3", "--region", region, "--color", "0,0,0", "-o", &out])
+    };
+    assert_usage(
+        &scatter("box:10,0,0,2,20,20"),
+        &["--region box \"10,0,0,2,20,20\"", "corners reversed", "X0 10 is past X1 2", "X0 <= X1"],
+    );
+    assert_usage(&scatter("box:0,0,9,20,20,3"), &["Z0 9 is past Z1 3"]);
+    assert_usage(&scatter("depth:0.8,0.2"), &["--region depth \"0.8,0.2\"", "0 <= FROM <= TO <= 1"]);
+    assert!(!std::path::Path::new(&out).exists());
+}

@@ -114,7 +114,7 @@ fn mask_bad_input_is_refused() {
         let arg = format!("--falloff={f}");
         assert_usage(&solidtex(&["mask", "splotch", &arg, "-o", &out]), &["over 0 and under 0.5"]);
     }
-    assert_usage(&solidtex(&["mask", "splotch", "--size", "2", "-o", &out]), &["size 2", "4 to 512"]);
+    assert_usage(&solidtex(&["mask", "splotch", "--size", "2", "-o", &out]), &["size 2", "6 to 512"]);
     let preset = dir.path().join("p.toml");
     std::fs::write(&preset, "kind = \"cloud\"\n").unwrap();
     assert_fails(
@@ -122,4 +122,30 @@ fn mask_bad_input_is_refused() {
         &["p.toml", "cloud", "splotch, layered, mesh"],
     );
     assert_eq!(listing(dir.path()), ["p.toml"]);
+}
+
+/// The least mask size makes masks that are opaque somewhere, for every layer; smaller
+/// sizes are usage errors naming the range; a fall-off that leaves no opaque voxel at all
+/// is refused rather than written.
+#[test]
+fn the_least_mask_size_is_opaque_and_smaller_sizes_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let (splotch, layers) = (at(dir.path(), "s.exr"), at(dir.path(), "layers"));
+    let run = solidtex(&["mask", "splotch", "--size", "6", "-o", &splotch]);
+    assert!(run.status.success() && !stderr(&run).contains("opaque 0.0 %"), "{}", stderr(&run));
+    let run = solidtex(&["mask", "layered", "--size", "6", "-o", &layers]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    for file in [splotch, format!("{layers}/outer.exr"), format!("{layers}/middle.exr"), format!("{layers}/inner.exr")]
+    {
+        let mask = read_volume(Path::new(&file), 1 << 30).unwrap();
+        assert!(mask.data().iter().any(|a| *a >= 0.999), "{file} is opaque nowhere");
+    }
+    for size in ["4", "5"] {
+        let out = at(dir.path(), &format!("m{size}.exr"));
+        assert_usage(&solidtex(&["mask", "splotch", "--size", size, "-o", &out]), &["--size", size, "6 to 512"]);
+    }
+    let wide = at(dir.path(), "wide.exr");
+    let run = solidtex(&["mask", "splotch", "--size", "64", "--falloff", "0.45", "-o", &wide]);
+    assert_fails(&run, &["opaque nowhere", "fall-off 0.45", "smaller fall-off"]);
+    assert!(!Path::new(&wide).exists());
 }

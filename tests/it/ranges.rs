@@ -78,7 +78,7 @@ fn out_of_range_numbers_of_other_commands_are_usage_errors_before_any_file_is_re
         (vec!["synth", &missing, "--size", "100000", "-o", &out], "--size \"100000\" is out of range"),
         (vec!["blur", &missing, "--at", "1,1,1", "--radius", "inf", "-o", &out], "--radius inf is out of range"),
         (vec!["stamp", &missing, &missing, "--at", "1,1,1", "--scale", "0", "--color", "0,0,0", "-o", &out], "--scale"),
-        (vec!["mask", "splotch", "--size", "100000", "-o", &out], "--size 100000 is out of range; allowed: 4 to 512"),
+        (vec!["mask", "splotch", "--size", "100000", "-o", &out], "--size 100000 is out of range; allowed: 6 to 512"),
         (vec!["bake", &missing, "--res", "100000", "-o", &out], "--res 100000 is out of range; allowed: 2 to 512"),
         (
             vec!["make", "marble", "--size", "0", "-o", &out],
