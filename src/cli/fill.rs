@@ -304,21 +304,7 @@ pub fn run_fill(args: &FillArgs) -> Result<()> {
         p.angle_p95,
         p.forced
     );
-    let [x, y, z] = distance.at;
-    tell!(
-        "  tets within {:.2} tet edges of the surface (tets to mesh {:.3}, mesh to tets {:.3}, creases included; \
-         farthest at {x:.4}, {y:.4}, {z:.4}); the model's shape is the surface itself",
-        distance.in_edges(),
-        distance.from_tets,
-        distance.from_surface
-    );
-    if distance.in_edges() > STRAY_EDGES {
-        tell!(
-            "  over half a tet edge: a part or a gap there is thinner than the lattice, and takes its texture \
-             from the nearest tets, stretched; `solidtex cut {} --plane {x:.4},{y:.4},{z:.4},0,0,1` shows it",
-            args.output.display()
-        );
-    }
+    tell_distance(&distance, fill::cover_margin(&spec) > 0.0, &args.output);
     if refined > 0 {
         tell!("  {refined} of the tets from refining near the depth axis, so its core is round");
     }
@@ -359,6 +345,43 @@ pub fn run_fill(args: &FillArgs) -> Result<()> {
 /// How far (in mean tet edges) the tet mesh's boundary may stray from the surface before
 /// `fill` says where to look.
 const STRAY_EDGES: f32 = 0.5;
+
+/// How far the tets' boundary lies from the surface, and a warning with the cut that shows
+/// where the surface strays more than [`STRAY_EDGES`] from what the tets hold. Tets that
+/// `cover` the solid reach past the surface on purpose (a margin carrying the texture up to
+/// it): only surface points outside every tet count for them.
+fn tell_distance(distance: &mesher::SurfaceDistance, cover: bool, output: &Path) {
+    let edges = |d: f32| d / distance.mean_edge.max(f32::MIN_POSITIVE);
+    let (stray, [x, y, z]) = if cover {
+        tell!(
+            "  the tets hold the surface but for points up to {:.2} tet edges out (mesh to tets {:.3}, creases \
+             included), and reach past it by up to {:.2} (a margin carrying the texture); the model's shape is the \
+             surface itself",
+            distance.outside_edges(),
+            distance.outside,
+            edges(distance.from_tets)
+        );
+        (distance.outside_edges(), distance.outside_at)
+    } else {
+        let [x, y, z] = distance.at;
+        tell!(
+            "  tets within {:.2} tet edges of the surface (tets to mesh {:.3}, mesh to tets {:.3}, creases \
+             included; farthest at {x:.4}, {y:.4}, {z:.4}); the model's shape is the surface itself",
+            distance.in_edges(),
+            distance.from_tets,
+            distance.from_surface
+        );
+        (distance.in_edges(), distance.at)
+    };
+    if stray > STRAY_EDGES {
+        tell!(
+            "  over half a tet edge at {x:.4}, {y:.4}, {z:.4}: a part or a gap there is thinner than the lattice, \
+             and takes its texture from the nearest tets, stretched; `solidtex cut {} --plane \
+             {x:.4},{y:.4},{z:.4},0,0,1` shows it",
+            output.display()
+        );
+    }
+}
 
 /// Warn when the tet mesh lost part of the volume (a layer or limb thinner than the lattice
 /// spacing), with the tet count that keeps it.

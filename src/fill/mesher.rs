@@ -291,12 +291,23 @@ pub struct SurfaceDistance {
     pub mean_edge: f32,
     /// Where the farther of the two lies (a point of the boundary or of the surface).
     pub at: [f32; 3],
+    /// The largest distance from a point of the surface outside every tet to the tet
+    /// mesh's boundary (0 when the tets hold the whole surface): where a model whose tets
+    /// only carry its texture takes the nearest tet's texture, stretched.
+    pub outside: f32,
+    /// Where that point lies.
+    pub outside_at: [f32; 3],
 }
 
 impl SurfaceDistance {
     /// The two-sided (Hausdorff) distance in mean tet edges.
     pub fn in_edges(&self) -> f32 {
         self.from_tets.max(self.from_surface) / self.mean_edge.max(f32::MIN_POSITIVE)
+    }
+
+    /// [`SurfaceDistance::outside`] in mean tet edges.
+    pub fn outside_edges(&self) -> f32 {
+        self.outside / self.mean_edge.max(f32::MIN_POSITIVE)
     }
 }
 
@@ -326,9 +337,12 @@ fn surface_distance_here(mesh: &Mesh, tets: &TetMesh) -> Result<SurfaceDistance>
         on_surface.extend((0..=steps).map(|i| a.lerp(b, i as f32 / steps as f32)));
     }
     let (from_tets, on_tets) = farthest(triangle_samples(&boundary), &to_mesh);
+    let grid = crate::fill::tets::TetGrid::new(tets)?;
+    let outside: Vec<Vec3> = on_surface.par_iter().copied().filter(|p| grid.locate(tets, *p).is_none()).collect();
     let (from_surface, on_mesh) = farthest(on_surface, &to_tets);
+    let (outside, outside_at) = farthest(outside, &to_tets);
     let at = if from_tets >= from_surface { on_tets } else { on_mesh }.to_array();
-    Ok(SurfaceDistance { from_tets, from_surface, mean_edge, at })
+    Ok(SurfaceDistance { from_tets, from_surface, mean_edge, at, outside, outside_at: outside_at.to_array() })
 }
 
 /// The boundary faces of `tets` as a mesh on its vertex list.
@@ -583,6 +597,18 @@ mod tests {
     use crate::fill::tets::NONE;
     use glam::Vec3;
     use std::f32::consts::PI;
+
+    /// Tets reaching past the surface hold all of it (nothing outside, however far they
+    /// reach); a surface past the tets lies outside them by its overhang.
+    #[test]
+    fn only_surface_points_outside_the_tets_count_as_outside() {
+        let tets = crate::fill::tets::cube_lattice([5, 5, 5], 0.2);
+        let inner = surface_distance(&cube(Vec3::splat(0.2), 0.6), &tets).unwrap();
+        assert!(inner.from_tets > 0.19 && inner.outside == 0.0, "{inner:?}");
+        let outer = surface_distance(&cube(Vec3::splat(-0.1), 1.2), &tets).unwrap();
+        assert!((outer.outside - 0.1 * 3f32.sqrt()).abs() < 1e-3, "{outer:?}");
+        assert!(outer.outside_at.iter().all(|c| (c + 0.1).abs() < 1e-4 || (c - 1.1).abs() < 1e-4), "{outer:?}");
+    }
 
     /// An outward-facing cube from `lo` to `lo + size`.
     fn cube(lo: Vec3, size: f32) -> Mesh {
