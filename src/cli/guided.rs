@@ -560,7 +560,8 @@ fn report(
         started.elapsed().as_secs_f64() - ready
     );
     tell!(
-        "voxels synthesized: {voxels} of the {full} {whole} ({:.1} %), {corrections} corrections",
+        "voxels synthesized: {voxels} of the {full} {whole} over all its pyramid levels ({:.1} %), {corrections} \
+         corrections",
         100.0 * voxels as f64 / full.max(1) as f64
     );
 }

@@ -576,7 +576,8 @@ fn check(mesh: &Mesh, target_tets: usize) -> Result<f64> {
     let open = mesh.boundary_edges();
     if open > 0 {
         return Err(Error::invalid(format!(
-            "the mesh is not closed: {open} boundary edge(s); fill needs a closed surface"
+            "the mesh is not closed: {open} boundary edge(s) (edges of one triangle only); a solid is made only \
+             from a closed surface"
         )));
     }
     let (lo, hi) = mesh.bounds();
@@ -585,7 +586,7 @@ fn check(mesh: &Mesh, target_tets: usize) -> Result<f64> {
     if volume <= 1e-6 * diagonal.powi(3) {
         return Err(Error::invalid(format!(
             "the mesh encloses almost no volume ({volume:.3e} for a bounding box diagonal of {diagonal:.3e}); \
-             fill needs a closed surface around a solid, not a flat or degenerate one"
+             a solid is made only from a closed surface around it, not a flat or degenerate one"
         )));
     }
     Ok(volume)
