@@ -315,7 +315,7 @@ fn densities(
     ((lo, hi), scratch): ((f32, f32), (&mut Cut, &mut Cut)),
     rho: &mut Vec<f32>,
 ) {
-    let luma = |p: &[f32; 4]| 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2];
+    let luma = |p: &[f32; 4]| crate::volume::luminance([p[0], p[1], p[2]]);
     let scaled = |r: f32| ((r - lo) / (hi - lo)).clamp(0.0, 1.0);
     rho.clear();
     match density {

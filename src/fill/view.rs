@@ -461,7 +461,7 @@ pub fn shard_share(picture: &Rgb8, surface: &Mesh, camera: (f32, f32), crease: f
     let (near_edge, near_outside) = (grow(&edge, size, 2), grow(&outside, size, 3));
     let luma = |i: usize| {
         let p = &picture.data[i * 3..i * 3 + 3];
-        0.2126 * p[0] as f32 + 0.7152 * p[1] as f32 + 0.0722 * p[2] as f32
+        crate::volume::luminance([p[0] as f32, p[1] as f32, p[2] as f32])
     };
     let counted = |i: usize| !near_edge[i] && !near_outside[i];
     let (mut steps, mut total) = (0usize, 0usize);
