@@ -490,13 +490,15 @@ fn write_report(output: &Path, ledger: &Ledger, rows: &[Row]) -> Result<()> {
          <h1>Exemplar library</h1><table><tr><th>exemplar<th>size<th>declared<th>classified<th>build<th>sheet\n",
     );
     for row in rows {
-        fn recorded(r: &Record, when: String) -> (String, String, String, String, String, &[String]) {
+        fn recorded(r: &Record, when: String) -> (String, String, String, String, String, Vec<String>) {
             let [x, y, z] = r.dims;
             let size = format!("{x}x{y}x{z}");
             let declared = r.declared.clone().unwrap_or("-".into());
-            (r.name.clone(), size, declared, r.classified.clone(), when, &r.warnings)
+            let mut warnings = r.warnings.clone();
+            warnings.extend(type_disagrees(r));
+            (r.name.clone(), size, declared, r.classified.clone(), when, warnings)
         }
-        let none = |name: &str, why: String| (name.to_string(), "-".into(), "-".into(), "-".into(), why, &[][..]);
+        let none = |name: &str, why: String| (name.to_string(), "-".into(), "-".into(), "-".into(), why, Vec::new());
         let (name, size, declared, classified, build, warnings) = match row {
             Row::Now(Outcome::Built(r)) => recorded(r, format!("{:.2} s", r.seconds)),
             Row::Now(Outcome::Cached(r)) => recorded(r, "cached".into()),
@@ -522,7 +524,7 @@ fn write_report(output: &Path, ledger: &Ledger, rows: &[Row]) -> Result<()> {
         );
         let escaped = |t: &str| t.replace('&', "&amp;").replace('<', "&lt;");
         let mut cell = escaped(&build);
-        for warning in warnings {
+        for warning in &warnings {
             cell += &format!("<br><span class=warning>warning: {}</span>", escaped(warning));
         }
         html += &format!(
@@ -536,6 +538,18 @@ fn write_report(output: &Path, ledger: &Ledger, rows: &[Row]) -> Result<()> {
     io::write_bytes(&output.join(REPORTS[0]), md.as_bytes())?;
     io::write_bytes(&output.join(REPORTS[1]), html.as_bytes())?;
     ledger.record(&REPORTS.map(String::from))
+}
+
+/// A warning when the classifier reads another texture type than the one declared: fill
+/// and guided go by the declared type, so the designer should know they disagree.
+fn type_disagrees(r: &Record) -> Option<String> {
+    let declared = r.declared.as_deref()?;
+    (r.classified != "-" && r.classified != declared).then(|| {
+        format!(
+            "declared type {declared}, classified {}: fill and guided use the declared type (docs/types-and-masks.md)",
+            r.classified
+        )
+    })
 }
 
 /// A report row's 3D view: opened in place (the page loads only then) or in a tab of its own.

@@ -481,3 +481,26 @@ fn a_failed_entry_shows_its_kept_earlier_build_in_the_report() {
     let row = md.lines().find(|l| l.starts_with("| c |")).unwrap_or_default();
     assert!(row.contains("failed") && !row.contains("c.sheet.png"), "{md}");
 }
+
+/// A declared type the classifier does not read is flagged in the report (fill and guided go
+/// by the declared one); an entry whose types agree gets no such warning.
+#[test]
+fn the_report_flags_a_declared_type_the_classifier_disagrees_with() {
+    let dir = tempfile::tempdir().unwrap();
+    let manifest = dir.path().join("lib.toml");
+    std::fs::write(
+        &manifest,
+        "[[exemplar]]\nname = \"m\"\nrecipe = \"procedural:marble\"\nsize = 16\ntype = \"2-b\"\n\
+         [[exemplar]]\nname = \"n\"\nrecipe = \"procedural:marble\"\nsize = 16\n",
+    )
+    .unwrap();
+    let run = solidtex(&["build", &manifest.to_string_lossy(), "-o", &at(dir.path(), "out")]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let report = std::fs::read_to_string(dir.path().join("out/report.md")).unwrap();
+    let row = |name: &str| report.lines().find(|l| l.starts_with(&format!("| {name} | "))).unwrap().to_string();
+    let (m, n) = (row("m"), row("n"));
+    assert!(m.contains("| 2-b | 0 |") && m.contains("warning: declared type 2-b, classified 0"), "{report}");
+    assert!(n.contains("| 0 | 0 |") && !n.contains("declared type"), "{report}");
+    let html = std::fs::read_to_string(dir.path().join("out/report.html")).unwrap();
+    assert!(html.contains("declared type 2-b, classified 0: fill and guided use the declared type"), "{html}");
+}
