@@ -60,7 +60,11 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         }
         timed(args, &format!("fill/tetmesh/{name}/5k"), || {
             // as a fill meshes: covering the solid
-            let tets = mesher::tetrahedralize_covering(mesh, 5000, crate::fill::cover_margin(&case.spec))?;
+            let tets = mesher::tetrahedralize_covering(
+                mesh,
+                5000,
+                crate::fill::cover_margin(&case.spec, fill::uses_depth(case.kind)),
+            )?;
             Ok(format!("{} tets, min dihedral {:.1} deg", tets.tets.len(), tets.min_dihedral_degrees()))
         })?;
         let mut model = None;
@@ -194,7 +198,7 @@ impl Case {
     /// Meshes `mesh` into about `tets` tets and fills it.
     fn fill_with(&self, mesh: &Mesh, tets: usize) -> Result<(LstModel, fill::FillReport)> {
         let spec = FillSpec { tets, ..self.spec.clone() };
-        let (tets, _) = fill::tetrahedralize(mesh, &spec)?;
+        let (tets, _) = fill::tetrahedralize(mesh, &spec, fill::uses_depth(self.kind))?;
         let job = Job {
             surface: mesh,
             spec: &self.spec,

@@ -251,13 +251,6 @@ pub fn run_fill(args: &FillArgs) -> Result<()> {
     spec.seed = args.seed.unwrap_or(spec.seed);
     let surface = io::mesh_file::read_mesh(&args.mesh)?.canonical();
     let started = Instant::now();
-    let (tets, refined) = fill::tetrahedralize(&surface, &spec).map_err(|e| e.in_file(&args.mesh))?;
-    let meshed = started.elapsed().as_secs_f64();
-    warn_if_far(&args.mesh, tets.tets.len(), spec.tets);
-    let held = mesher::volume_check(&surface, &tets, spec.tets, fill::cover_margin(&spec))
-        .map_err(|e| e.in_file(&args.mesh))?;
-    warn_if_lost(&args.mesh, &held);
-    let distance = mesher::surface_distance(&surface, &tets).map_err(|e| e.in_file(&args.mesh))?;
     if !spec.regions.is_empty() {
         tell!(
             "note: the spec's [[region]] entries choose exemplars for `solidtex guided`; the lapped fill uses \
@@ -271,6 +264,16 @@ pub fn run_fill(args: &FillArgs) -> Result<()> {
         library::fill::build_first(&spec, missing, &super::build::Lines::new(0))?;
     }
     let resolved = library::fill::resolve(&spec, &args.output).map_err(|e| e.in_file(&args.spec))?;
+    // a type that leaves [depth] unused meshes as a spec without it
+    let depth = fill::uses_depth(resolved.kind);
+    let mesh_started = Instant::now();
+    let (tets, refined) = fill::tetrahedralize(&surface, &spec, depth).map_err(|e| e.in_file(&args.mesh))?;
+    let meshed = mesh_started.elapsed().as_secs_f64();
+    warn_if_far(&args.mesh, tets.tets.len(), spec.tets);
+    let held = mesher::volume_check(&surface, &tets, spec.tets, fill::cover_margin(&spec, depth))
+        .map_err(|e| e.in_file(&args.mesh))?;
+    warn_if_lost(&args.mesh, &held);
+    let distance = mesher::surface_distance(&surface, &tets).map_err(|e| e.in_file(&args.mesh))?;
     let job = Job {
         surface: &surface,
         spec: &spec,
@@ -304,7 +307,7 @@ pub fn run_fill(args: &FillArgs) -> Result<()> {
         p.angle_p95,
         p.forced
     );
-    tell_distance(&distance, fill::cover_margin(&spec) > 0.0, &args.output);
+    tell_distance(&distance, fill::cover_margin(&spec, depth) > 0.0, &args.output);
     if refined > 0 {
         tell!("  {refined} of the tets from refining near the depth axis, so its core is round");
     }

@@ -65,7 +65,8 @@ fn guide(mesh: &Path, spec: &Path, tets: Option<usize>) -> Result<Guide> {
     let mut fill = fill_spec::read_fill_spec(spec)?;
     fill.tets = tets.unwrap_or(fill.tets);
     let surface = mesh_file::read_mesh(mesh)?.canonical();
-    let (tet_mesh, _) = crate::fill::tetrahedralize(&surface, &fill).map_err(|e| e.in_file(mesh))?;
+    // guided synthesis reads the depth for any exemplar (a layered section follows it)
+    let (tet_mesh, _) = crate::fill::tetrahedralize(&surface, &fill, true).map_err(|e| e.in_file(mesh))?;
     let constraints = crate::fill::spec::constraints(&fill, &surface, 1.0).map_err(|e| e.in_file(spec))?;
     let started = Instant::now();
     let frames = sketched_frames(&constraints.directions, &constraints.depth).map_err(|e| e.in_file(spec))?;

@@ -66,7 +66,7 @@ pub struct Field {
 pub fn build(mesh: &TetMesh, kind: TextureType, constraints: &Constraints, surface: Option<&Mesh>) -> Result<Field> {
     check_required(kind, constraints)?;
     let tets = mesh.tets.len();
-    let uses_depth = matches!(kind, TextureType::T1b | TextureType::T2a | TextureType::T2b);
+    let uses_depth = super::uses_depth(kind);
     let rbf = if uses_depth { Some(Rbf::fit(&constraints.depth)?) } else { None };
     let raw: Option<Vec<f32>> = rbf.as_ref().map(|f| mesh.vertices.par_iter().map(|v| f.value(*v)).collect());
     // the pinning's solve runs on one core at a time: the gradients use the other

@@ -123,15 +123,22 @@ fn fill_here(job: &Job, mesh: TetMesh, progress: &dyn Progress) -> Result<(LstMo
     Ok((model, report))
 }
 
+/// Whether a fill of `kind` reads the spec's depth (its layers vary with depth, or its
+/// directions follow the depth's gradient); the other types leave `[depth]` unused.
+pub fn uses_depth(kind: TextureType) -> bool {
+    matches!(kind, TextureType::T1b | TextureType::T2a | TextureType::T2b)
+}
+
 /// The tet mesh a fill of `surface` by `spec` uses: the lattice mesh covering the solid (see
 /// [`mesher::tetrahedralize_covering`]: the model takes its shape from `surface`), refined near the
-/// spec's depth axes; when the refinement takes the count more than 15 % past `spec.tets`,
-/// the lattice is made again, coarser by the share the refinement added. Also how many
-/// tets the refinement added.
-pub fn tetrahedralize(surface: &Mesh, spec: &FillSpec) -> Result<(TetMesh, usize)> {
-    let margin = cover_margin(spec);
+/// spec's depth axes when `depth` (the fill reads the spec's depth: [`uses_depth`]); when the
+/// refinement takes the count more than 15 % past `spec.tets`, the lattice is made again,
+/// coarser by the share the refinement added. Also how many tets the refinement added.
+pub fn tetrahedralize(surface: &Mesh, spec: &FillSpec, depth: bool) -> Result<(TetMesh, usize)> {
+    let margin = cover_margin(spec, depth);
+    let axes: &[Vec<Vec3>] = if depth { &spec.depth.axes } else { &[] };
     let mut tets = mesher::tetrahedralize_covering(surface, spec.tets, margin)?;
-    let added = refine_axes(&mut tets, &spec.depth.axes);
+    let added = refine_axes(&mut tets, axes);
     let total = tets.tets.len() as f64;
     if added == 0 || total <= spec.tets as f64 * (1.0 + COUNT_TOLERANCE) {
         return Ok((tets, added));
@@ -140,7 +147,7 @@ pub fn tetrahedralize(surface: &Mesh, spec: &FillSpec) -> Result<(TetMesh, usize
     let lattice = (total - added as f64).max(1.0);
     let target = (spec.tets as f64 * lattice / total).max(*mesher::TARGET_TETS.start() as f64);
     let mut again = mesher::tetrahedralize_covering(surface, target.round() as usize, margin)?;
-    let added = refine_axes(&mut again, &spec.depth.axes);
+    let added = refine_axes(&mut again, axes);
     Ok((again, added))
 }
 
@@ -149,9 +156,10 @@ pub fn tetrahedralize(surface: &Mesh, spec: &FillSpec) -> Result<(TetMesh, usize
 /// its boundary vertices are held at the surface's depth, which must lie on the surface.
 const COVER_MARGIN: f32 = 0.3;
 
-/// How far [`tetrahedralize`] moves the tets' boundary out for `spec`, in lattice spacings.
-pub fn cover_margin(spec: &FillSpec) -> f32 {
-    if spec.depth.given() { 0.0 } else { COVER_MARGIN }
+/// How far [`tetrahedralize`] moves the tets' boundary out for `spec`, in lattice spacings
+/// (`depth`: the fill reads the spec's depth).
+pub fn cover_margin(spec: &FillSpec, depth: bool) -> f32 {
+    if depth && spec.depth.given() { 0.0 } else { COVER_MARGIN }
 }
 
 /// How far past the tet count asked for the refinement may take it (15 %) before the

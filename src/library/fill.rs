@@ -172,7 +172,7 @@ pub fn preview_with(spec: &FillSpec, shape: &str, progress: &dyn crate::progress
     let surface = crate::mesh::shapes::named(shape)
         .ok_or_else(|| Error::invalid(format!("no drawn shape named {shape}")))?
         .canonical();
-    let (tets, _) = fill::tetrahedralize(&surface, spec)?;
+    let (tets, _) = fill::tetrahedralize(&surface, spec, fill::uses_depth(probe.kind))?;
     let job = Job {
         surface: &surface,
         spec,

@@ -1229,3 +1229,26 @@ fn a_model_written_up_a_folder_finds_its_volume_and_masks() {
     let shown = image::open(renders.join("k.png")).unwrap().to_rgba8().pixels().filter(|p| p.0[3] > 0).count();
     assert!(shown > 64 * 64 / 4, "the cut shows the fruit: {shown} pixels");
 }
+
+/// A type that leaves `[depth]` unused meshes as if the spec had none: no tets spent
+/// refining near the depth axis, the same mesh as without it, and the spec warned about.
+#[test]
+fn a_type_without_depth_spends_no_tets_on_the_depth_axis() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let mesh = draw(d, "fruit");
+    let plain = spec(d, "plain.toml", "exemplar = \"marble\"\ntets = 3000\n");
+    let with_depth =
+        spec(d, "depth.toml", "exemplar = \"marble\"\ntets = 3000\n[depth]\naxis = [[[-0.8, 0, 0], [0.8, 0, 0]]]\n");
+    let tets = |spec: &str, name: &str| {
+        let (out, json) = (at(d, &format!("{name}.lst")), at(d, &format!("{name}.json")));
+        let run = solidtex(&["fill", &mesh, "--spec", spec, "-o", &out, "--json", &json]);
+        assert!(run.status.success(), "{}", stderr(&run));
+        let stats: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+        (stderr(&run), stats["refined_tets"].as_u64().unwrap(), stats["fill"]["tets"].as_u64().unwrap())
+    };
+    let (said, refined, count) = tets(&with_depth, "d");
+    assert!(said.contains("[depth] is not used by type 0") && !said.contains("refining near"), "{said}");
+    assert_eq!(refined, 0, "{said}");
+    assert_eq!(count, tets(&plain, "p").2, "the same tets as a spec without [depth]");
+}
