@@ -227,6 +227,10 @@ pub struct GuidedArgs {
     /// cuts are kept first.
     #[arg(long, default_value_t = 256, requires = "cache")]
     pub cache_mb: usize,
+    /// Where the solid cube of plain exemplars is kept when `cache` is not given: a guided
+    /// model's own folder, so that its commands synthesize the cube once.
+    #[arg(skip)]
+    pub cube_folder: Option<PathBuf>,
     /// Override the spec's target tet count (100 to 200000).
     #[arg(long)]
     pub tets: Option<usize>,
@@ -477,6 +481,7 @@ fn args_of(model: io::guided_model::GuidedModel, size: usize, output: &Path) -> 
         size,
         cache: None,
         cache_mb: 256,
+        cube_folder: None,
         tets: model.tets,
         seed: model.seed,
         output: output.to_path_buf(),
@@ -507,7 +512,8 @@ fn model_args(path: &Path, size: usize, output: &Path) -> Result<GuidedArgs> {
             "gives neither exemplar nor solid, and its spec has no [[region]]; a guided model takes one of them",
         ));
     }
-    let args = args_of(model, size, output);
+    let mut args = args_of(model, size, output);
+    args.cube_folder = Some(model_cube_folder(path));
     recipe_checked(&args, &|field| format!("{field} =")).map_err(|e| e.in_file(path))?;
     Ok(args)
 }
@@ -988,27 +994,55 @@ fn solid_exemplar(
     Ok((prepared, options, slice))
 }
 
+/// The folder beside a guided model (`model`) where its commands keep the solid cube.
+fn model_cube_folder(model: &Path) -> PathBuf {
+    model.parent().unwrap_or(Path::new("")).join(MODEL_CACHE)
+}
+
+/// The name of the folder beside a guided model that keeps its solid cube.
+pub const MODEL_CACHE: &str = ".solidtex-cache";
+
 /// The solid cube of plain exemplars: synthesized, or read from the cache folder (and
-/// kept there when it was not, or was damaged).
+/// kept there when it was not, or was damaged). Without `--cache`, a guided model's
+/// commands keep it beside the model; a folder there that cannot be written only costs
+/// the next command the cube's time again (a warning says so).
 fn cube_volume(args: &GuidedArgs, images: &[Image2d; 3]) -> Result<crate::volume::Volume> {
-    let Some(folder) = &args.cache else {
+    let Some(folder) = args.cache.as_ref().or(args.cube_folder.as_ref()) else {
         return cube::synthesize(images, args.seed);
     };
     let key = cube::key(images, args.seed);
     let path = guided_cache::cube_path(folder, key);
     let channels = images[0].channel_count();
-    let stale = match guided_cache::read_cube(&path, key, cube::SIDE, channels, cube::colour_range(images))? {
-        Cached::Good(colours) => {
+    let read = guided_cache::read_cube(&path, key, cube::SIDE, channels, cube::colour_range(images));
+    let stale = match read {
+        Ok(Cached::Good(colours)) => {
             return crate::volume::Volume::from_data([cube::SIDE; 3], images[0].channels().to_vec(), colours);
         }
-        Cached::Stale(why) => Some(why),
-        Cached::Missing => None,
+        Ok(Cached::Stale(why)) => Some(why),
+        Ok(Cached::Missing) => None,
+        Err(e) if args.cache.is_none() => return cube_not_kept(images, args.seed, e),
+        Err(e) => return Err(e),
     };
     let volume = cube::synthesize(images, args.seed)?;
-    std::fs::create_dir_all(folder).map_err(|e| Error::io(folder, e))?;
-    guided_cache::write_cube(&path, key, cube::SIDE, channels, volume.data())?;
-    warn_rebuilt(&path, stale);
+    let kept = std::fs::create_dir_all(folder)
+        .map_err(|e| Error::io(folder, e))
+        .and_then(|_| guided_cache::write_cube(&path, key, cube::SIDE, channels, volume.data()));
+    match kept {
+        Ok(()) if args.cache.is_none() && stale.is_none() => {
+            tell!("kept the solid cube in {} for the next commands on this model", path.display())
+        }
+        Ok(()) => warn_rebuilt(&path, stale),
+        Err(e) if args.cache.is_none() => tell!("warning: the solid cube was not kept ({e})"),
+        Err(e) => return Err(e),
+    }
     Ok(volume)
+}
+
+/// The cube synthesized when the one beside a guided model cannot be read as solidtex's
+/// (`why`), which is then left as it is.
+fn cube_not_kept(images: &[Image2d; 3], seed: u64, why: Error) -> Result<crate::volume::Volume> {
+    tell!("warning: the solid cube was not kept ({why})");
+    cube::synthesize(images, seed)
 }
 
 /// Megabytes the cache may hold in memory.

@@ -189,6 +189,43 @@ fn a_guided_cut_is_synthesized_on_demand_and_cached() {
     crate::support::assert_usage(&run, &["--cache-mb 8", "16 to 65536"]);
 }
 
+/// A guided model of a plain photo keeps its solid cube beside it: the first command makes
+/// it and says where it kept it, the next reads it (nothing said, the same picture, as
+/// `guided --cut` gives without any cache); a file of the user's at the cube's name is left
+/// as it was and the cube is made again, with a warning.
+#[test]
+fn a_guided_model_keeps_its_solid_cube_for_the_next_command() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (fruit, spec) = crate::fill::kiwi_fruit(d);
+    let ex = gravel();
+    let (model, direct) = (at(d, "fruit.guided"), at(d, "direct.png"));
+    let base = ["guided", &fruit, "--spec", &spec, "--exemplar", &ex, "--max-exemplar", "64", "--res", "48"];
+    assert!(solidtex(&[&base[..], &["-o", &model]].concat()).status.success());
+    let run = solidtex(&[&base[..], &["--cut", "0,0,0,0,0,1", "--size", "48", "-o", &direct]].concat());
+    assert!(run.status.success(), "{}", stderr(&run));
+    let cut = |out: &str| solidtex(&["cut", &model, "--plane", "0,0,0,0,0,1", "--size", "48", "-o", out]);
+    let (first, second, third) = (at(d, "first.png"), at(d, "second.png"), at(d, "third.png"));
+    let run = cut(&first);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let names = crate::support::listing(&d.join(".solidtex-cache"));
+    assert_eq!(names.len(), 1, "{names:?}");
+    let cube = d.join(".solidtex-cache").join(&names[0]);
+    let said = format!("kept the solid cube in {}", cube.display());
+    assert!(stderr(&run).contains(&said), "{}", stderr(&run));
+    let run = cut(&second);
+    assert!(run.status.success() && !stderr(&run).contains("solid cube"), "{}", stderr(&run));
+    for png in [&first, &second] {
+        assert_eq!(std::fs::read(png).unwrap(), std::fs::read(&direct).unwrap(), "the kept cube changes nothing");
+    }
+    std::fs::write(&cube, b"my notes").unwrap();
+    let run = cut(&third);
+    assert!(run.status.success(), "{}", stderr(&run));
+    assert!(stderr(&run).contains("warning: the solid cube was not kept"), "{}", stderr(&run));
+    assert_eq!(std::fs::read(&cube).unwrap(), b"my notes");
+    assert_eq!(std::fs::read(&third).unwrap(), std::fs::read(&direct).unwrap());
+}
+
 /// A photo's guided cut is as sharp as the photo: the sharpness line `guided` prints for
 /// a cut (gradient and autocorrelation-length ratios against the exemplar) is within the
 /// yardstick's targets through the solid cube (and the line figures are said not to apply
