@@ -9,7 +9,11 @@
 //!   exemplar's. Blur lowers it, noise raises it; 1 is right.
 //! - **autocorrelation-length ratio**: the lag at which the normalized autocorrelation first
 //!   falls to 1/e (averaged over the image's two directions) of the cuts over the
-//!   exemplar's. Blobs larger than the exemplar's features raise it, noise lowers it.
+//!   exemplar's. Blobs larger than the exemplar's features raise it, noise lowers it. Both
+//!   are measured in windows of one size, the smaller of cut and exemplar along each side
+//!   (the mean over windows at half a window's stride): the estimator below shortens
+//!   lengths that are a good part of the image's side, so a 64-pixel cut of a 128-pixel
+//!   photo's long layers would read shorter than the photo even if it were a crop of it.
 //! - **gradient-histogram distance**: L1 distance (0 = equal, 2 = disjoint) between the
 //!   histograms of gradient magnitude, 32 bins over [0, 4 x the exemplar's mean]: it tells
 //!   whether the edges have the exemplar's mix of soft and hard.
@@ -38,11 +42,12 @@ pub struct AxisSharpness {
     pub axis: String,
     /// Mean gradient magnitude of the cuts over the exemplar's.
     pub gradient_ratio: f64,
-    /// 1/e autocorrelation length of the cuts over the exemplar's.
+    /// 1/e autocorrelation length of the cuts over the exemplar's (both in windows of one
+    /// size: the smaller of cut and exemplar along each side).
     pub length_ratio: f64,
     /// L1 distance between the gradient-magnitude histograms.
     pub gradient_histogram_distance: f64,
-    /// The exemplar's 1/e autocorrelation length in pixels.
+    /// The exemplar's 1/e autocorrelation length in pixels, in those windows.
     pub exemplar_length: f64,
 }
 
@@ -84,7 +89,8 @@ pub fn compare(images: &[Image2d], exemplar: &Image2d, picks: &[usize]) -> Resul
     let ex = scale.grey(exemplar, &identity);
     let ex_gradient = gradients(&ex);
     let ex_mean = mean(&ex_gradient.values);
-    let ex_length = length(&ex);
+    let window = images.iter().fold((ex.width, ex.height), |(w, h), c| (w.min(c.width()), h.min(c.height())));
+    let ex_length = windowed_length(&ex, window);
     let top = SPAN * if ex_mean > 0.0 { ex_mean } else { 1.0 };
     let mut cut_means = Vec::new();
     let mut cut_lengths = Vec::new();
@@ -93,7 +99,7 @@ pub fn compare(images: &[Image2d], exemplar: &Image2d, picks: &[usize]) -> Resul
         let cut = scale.grey(image, picks);
         let g = gradients(&cut);
         cut_means.push(mean(&g.values));
-        cut_lengths.push(length(&cut));
+        cut_lengths.push(windowed_length(&cut, window));
         add_histogram(&mut histogram, &g.values, top);
     }
     let mut ex_histogram = [0.0; BINS];
@@ -198,6 +204,28 @@ fn gradients(image: &Grey) -> Grey {
         }
     }
     Grey { width: w.saturating_sub(2), height: h.saturating_sub(2), values }
+}
+
+/// The mean [`length`] over the windows of `(width, height)` pixels that step through
+/// `image` by half a window (the last window of a row or column flush with its end).
+fn windowed_length(image: &Grey, (width, height): (usize, usize)) -> f64 {
+    let starts = |size: usize, window: usize| -> Vec<usize> {
+        let last = size - window;
+        let step = (window / 2).max(1);
+        let mut out: Vec<usize> = (0..last).step_by(step).collect();
+        out.push(last);
+        out
+    };
+    let (xs, ys) = (starts(image.width, width), starts(image.height, height));
+    let lengths: Vec<f64> = ys
+        .iter()
+        .flat_map(|&y| xs.iter().map(move |&x| (x, y)))
+        .map(|(x, y)| {
+            let values = (y..y + height).flat_map(|r| image.values[r * image.width + x..][..width].iter().copied());
+            length(&Grey { width, height, values: values.collect() })
+        })
+        .collect();
+    mean(&lengths)
 }
 
 /// The 1/e autocorrelation length in pixels, averaged over the two directions; a flat
@@ -333,6 +361,31 @@ mod tests {
             "{}",
             recoloured.summary()
         );
+    }
+
+    /// Crops of an exemplar are the exemplar: their length ratio is 1 however long its
+    /// features run against the crop's side.
+    #[test]
+    fn a_crop_of_the_exemplar_has_its_length() {
+        let side = 128;
+        let wave = |x: usize, y: usize| {
+            let (x, y) = (x as f32, y as f32);
+            (x / 9.0 + 1.3 * (y / 23.0).sin()).sin() + 0.5 * (y / 13.0 + 0.7).sin()
+        };
+        let data = (0..side * side).map(|i| wave(i % side, i / side)).collect();
+        let exemplar = Image2d::from_data(side, side, Channel::grey(), data).unwrap();
+        let crops: Vec<Image2d> = [(0, 0), (40, 16), (80, 80)]
+            .iter()
+            .map(|&(x0, y0)| {
+                let data = (0..48 * 48).map(|i| wave(x0 + i % 48, y0 + i / 48)).collect();
+                Image2d::from_data(48, 48, Channel::grey(), data).unwrap()
+            })
+            .collect();
+        let s = compare(&crops, &exemplar, &[0]).unwrap();
+        assert!((0.9..=1.1).contains(&s.length_ratio), "{s:?}");
+        // and an exemplar smaller than the cuts is met in windows of its own size
+        let s = compare(std::slice::from_ref(&exemplar), &crops[0], &[0]).unwrap();
+        assert!((0.9..=1.1).contains(&s.length_ratio), "{s:?}");
     }
 
     #[test]
