@@ -403,8 +403,8 @@ fn synthesize(args: &GuidedArgs, action: Action) -> Result<Option<Filled>> {
     Ok(kept)
 }
 
-/// The whole solid `action` asked for: written to the output (`Solid`), or kept as a
-/// filled model (`Keep`).
+/// The whole solid `action` asked for: written to the output with its place in model
+/// space (`Solid`: [`solid::baked`]), or kept as a filled model (`Keep`).
 fn deliver(
     args: &GuidedArgs,
     action: Action,
@@ -414,7 +414,7 @@ fn deliver(
 ) -> Result<Option<Filled>> {
     match action {
         Action::Keep => Ok(Some(filled(g, domain, volume))),
-        _ => super::write_volume(&args.output, &volume).map(|_| None),
+        _ => super::write_volume(&args.output, &solid::baked(volume, domain)).map(|_| None),
     }
 }
 

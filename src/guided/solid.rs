@@ -10,7 +10,7 @@ use crate::mesh::Mesh;
 use crate::progress::Progress;
 use crate::synth::coords::{self as synth, Kept, Setup, Synthesized, Voxel};
 use crate::synth::region::{Mask, Sparse};
-use crate::volume::{Channel, Image2d, Volume};
+use crate::volume::{Channel, Image2d, ModelGrid, Volume};
 use glam::Vec3;
 
 /// Finest-level resolutions `guided` accepts (voxels along the grid's longest side).
@@ -434,6 +434,13 @@ pub fn cut_image(
         }
     }
     Image2d::from_data(view.width, view.height, with_alpha(setup), data)
+}
+
+/// The whole solid as a bake writes it: with its place in model space (`domain`'s voxel
+/// (0, 0, 0) centre and side).
+pub fn baked(volume: Volume, domain: &Domain) -> Volume {
+    let origin = domain.centre([0, 0, 0]).to_array();
+    volume.with_model_grid(Some(ModelGrid { origin, voxel: domain.voxel }))
 }
 
 /// The whole solid: every voxel's colour, then `alpha` (the model's coverage per voxel).
