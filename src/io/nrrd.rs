@@ -359,7 +359,8 @@ mod tests {
         let mut bytes = header(&placed).into_bytes();
         bytes.extend([0f32, 1f32].iter().flat_map(|v| v.to_le_bytes()));
         assert_eq!(parse(&bytes, u64::MAX).unwrap(), placed);
-        for directions in ["(0,0.25,0) (0.25,0,0) (0,0,0.25)", "(0.25,0,0) (0,0.5,0) (0,0,0.25)", "(1,0) (0,1) (0,0,1)"] {
+        let odd = ["(0,0.25,0) (0.25,0,0) (0,0,0.25)", "(0.25,0,0) (0,0.5,0) (0,0,0.25)", "(1,0) (0,1) (0,0,1)"];
+        for directions in odd {
             let text = format!(
                 "NRRD0004\ntype: uchar\ndimension: 3\nsizes: 2 1 1\nencoding: raw\nspace dimension: 3\n\
                  space directions: {directions}\nspace origin: (0,0,0)\n\n"

@@ -361,12 +361,11 @@ fn a_guided_bake_is_empty_outside_the_model_and_its_cut_shows_the_cut_background
     let volume = solidtex::io::read_volume(std::path::Path::new(&baked), 1 << 30).unwrap();
     let (mut outside, mut textured) = (0, 0);
     for voxel in volume.data().chunks_exact(volume.channel_count()) {
-        match voxel.last() {
-            Some(&a) if a == 0.0 => {
-                assert!(voxel.iter().all(|v| *v == 0.0), "a voxel outside the fruit holds {voxel:?}");
-                outside += 1;
-            }
-            _ => textured += usize::from(voxel[0] > 0.0),
+        if voxel.last() == Some(&0.0) {
+            assert!(voxel.iter().all(|v| *v == 0.0), "a voxel outside the fruit holds {voxel:?}");
+            outside += 1;
+        } else {
+            textured += usize::from(voxel[0] > 0.0);
         }
     }
     assert!(outside > 1000 && textured > 1000, "{outside} voxels outside, {textured} textured inside");
