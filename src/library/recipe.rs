@@ -34,11 +34,7 @@ pub fn make_with(entry: &Entry, progress: &dyn Progress) -> Result<Volume> {
         Source::Load(path) => io::read_volume(path, io::budget_from_env()?).map_err(|e| lines.error("volume", e))?,
     };
     for (k, step) in entry.steps.iter().enumerate() {
-        apply(step, &mut volume, progress).map_err(|e| match step {
-            Step::Stamp { .. } => lines.error(&format!("steps[{k}].stamp"), e),
-            Step::Scatter { .. } => lines.error(&format!("steps[{k}].scatter"), e),
-            Step::Blur { .. } => e,
-        })?;
+        apply(step, &mut volume, progress, (lines, k))?;
     }
     if entry.texture_type.is_some() {
         volume.meta.texture_type = entry.texture_type;
@@ -271,14 +267,15 @@ pub fn read_seed(path: &Path, progress: &dyn Progress) -> Result<crate::mesh::Me
     Ok(mesh.oriented())
 }
 
-fn apply(step: &Step, volume: &mut Volume, progress: &dyn Progress) -> Result<()> {
+/// Apply step `k` of an entry written at `lines`.
+fn apply(step: &Step, volume: &mut Volume, progress: &dyn Progress, (lines, k): (&Lines, usize)) -> Result<()> {
     match step {
         Step::Stamp { mesh, placement, colour } => {
-            let seed = read_seed(mesh, progress)?;
+            let seed = read_seed(mesh, progress).map_err(|e| lines.error(&format!("steps[{k}].stamp"), e))?;
             stamp::stamp(volume, &seed, placement, *colour).map_err(|e| e.in_file(mesh))?;
         }
         Step::Scatter { mesh, count, region, scale, colour, seed } => {
-            let shape = read_seed(mesh, progress)?;
+            let shape = read_seed(mesh, progress).map_err(|e| lines.error(&format!("steps[{k}].scatter"), e))?;
             let d = volume.dims();
             let region =
                 region.unwrap_or(Region::Box(glam::Vec3::ZERO, glam::Vec3::new(d[0] as f32, d[1] as f32, d[2] as f32)));
