@@ -32,7 +32,12 @@ pub fn convert(input: &Path, output: &Path, dds_format: Option<&str>) -> Result<
     io::check_output(output, &[input])?;
     let volume = load(input)?;
     match format {
-        Some(format) => io::dds::write(output, &volume, format)?,
+        Some(format) => {
+            io::dds::write(output, &volume, format)?;
+            if let Some(note) = io::model_grid_lost(output, &volume) {
+                tell!("warning: {note}");
+            }
+        }
         None => super::write_volume(output, &volume)?,
     }
     tell!("wrote {}", output.display());

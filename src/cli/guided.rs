@@ -407,8 +407,8 @@ fn synthesize(args: &GuidedArgs, action: Action) -> Result<Option<Filled>> {
     Ok(kept)
 }
 
-/// The whole solid `action` asked for: written to the output (`Solid`), or kept as a
-/// filled model (`Keep`).
+/// The whole solid `action` asked for: written to the output as a bake (`Solid`:
+/// [`solid::baked`]), or kept as a filled model (`Keep`: its colour read up to the surface).
 fn deliver(
     args: &GuidedArgs,
     action: Action,
@@ -418,7 +418,7 @@ fn deliver(
 ) -> Result<Option<Filled>> {
     match action {
         Action::Keep => Ok(Some(filled(g, domain, volume))),
-        _ => super::write_volume(&args.output, &volume).map(|_| None),
+        _ => super::write_volume(&args.output, &solid::baked(volume, domain)).map(|_| None),
     }
 }
 
@@ -667,8 +667,9 @@ fn write_blend(
     let outcome = match action {
         Action::Cut(point, normal) => {
             let view = View::framing(g.surface.bounds(), point, normal, args.size)?;
-            solid::cut_blend(parts, weight, domain, &g.surface, &view, &bar)
-                .and_then(|(picture, counts)| io::write_image(&args.output, &picture).map(|_| counts))
+            solid::cut_blend(parts, weight, domain, &g.surface, &view, &bar).and_then(|(picture, counts)| {
+                io::write_rgb8(&args.output, &solid::cut_picture(&picture)).map(|_| counts)
+            })
         }
         Action::View(view) => solid::view_blend(parts, weight, domain, &g.surface, view, &bar)
             .and_then(|(picture, counts)| io::write_rgb8(&args.output, &picture).map(|_| counts)),
@@ -1148,11 +1149,11 @@ fn write_cut(
     let kept: Vec<Option<&Sparse<synth::Voxel>>> =
         cached.as_ref().map_or(Vec::new(), |(_, levels)| levels.iter().map(Some).collect());
     let (picture, out) = solid::cut(setup, domain, &g.surface, &view, &kept, bar)?;
-    io::write_image(&args.output, &picture)?;
+    io::write_rgb8(&args.output, &solid::cut_picture(&picture))?;
     let alpha = picture.channel_count() - 1;
     let shown = picture.data().chunks_exact(alpha + 1).any(|p| p[alpha] > 0.5);
     if !shown {
-        tell!("warning: the cut misses the model; the picture is transparent");
+        tell!("warning: the cut misses the model; the picture shows only the background");
     }
     if let (Some(folder), Some((file, levels))) = (&args.cache, &cached)
         && (out.voxels > 0 || coarse_made)

@@ -1,7 +1,7 @@
 //! `solidtex info`: what a volume file holds.
 
 use crate::io;
-use crate::volume::{ChannelStats, Volume};
+use crate::volume::{ChannelStats, ModelGrid, Volume};
 use serde::Serialize;
 use std::path::Path;
 
@@ -12,7 +12,27 @@ struct Report<'a> {
     channels: Vec<&'a str>,
     texture_type: Option<String>,
     provenance: Vec<(String, String)>,
+    /// Where the volume sits in model space (a bake's grid), when recorded.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    model_grid: Option<Placed>,
     stats: Vec<ChannelStats>,
+}
+
+/// A volume's place in model space: voxel (0, 0, 0)'s centre, the voxel side and the box
+/// the voxels cover.
+#[derive(Serialize)]
+struct Placed {
+    origin: [f32; 3],
+    voxel: f32,
+    box_min: [f32; 3],
+    box_max: [f32; 3],
+}
+
+impl Placed {
+    fn of(grid: ModelGrid, dims: [usize; 3]) -> Placed {
+        let (box_min, box_max) = grid.box_of(dims);
+        Placed { origin: grid.origin, voxel: grid.voxel, box_min, box_max }
+    }
 }
 
 /// Print the report of `file`, as text or JSON.
@@ -35,6 +55,7 @@ fn report<'a>(file: &Path, volume: &'a Volume) -> Report<'a> {
         channels: volume.channels().iter().map(|c| c.name()).collect(),
         texture_type: volume.meta.texture_type.map(|t| t.to_string()),
         provenance: volume.meta.provenance.clone(),
+        model_grid: volume.model_grid.map(|g| Placed::of(g, volume.dims())),
         stats: volume.channel_stats(16),
     }
 }
@@ -44,6 +65,13 @@ fn text(r: &Report) -> String {
     let mut out = format!("{}\n  dims      {x} x {y} x {z} ({} voxels)\n", r.file, x * y * z);
     out += &format!("  channels  {}\n", r.channels.join(", "));
     out += &format!("  type      {}\n", r.texture_type.as_deref().unwrap_or("not set"));
+    if let Some(p) = &r.model_grid {
+        let [x, y, z] = p.origin;
+        out += &format!("  origin    {x} {y} {z} (model-space centre of voxel 0 0 0)\n");
+        out += &format!("  voxel     {} (side, model units)\n", p.voxel);
+        let ([a, b, c], [d, e, f]) = (p.box_min, p.box_max);
+        out += &format!("  box       {a} {b} {c} to {d} {e} {f} (the voxels' cells, model units)\n");
+    }
     let width = r.provenance.iter().map(|(k, _)| k.len()).max().unwrap_or(0).max(9);
     for (k, v) in &r.provenance {
         out += &format!("  {k:<width$} {v}\n");

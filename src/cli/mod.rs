@@ -14,10 +14,12 @@ macro_rules! tell {
 }
 
 /// Write a volume in the format its path names, warning when the format drops its
-/// channel names ([`crate::io::channels_lost`]).
+/// channel names ([`crate::io::channels_lost`]) or its place in model space
+/// ([`crate::io::model_grid_lost`]).
 fn write_volume(path: &std::path::Path, volume: &crate::volume::Volume) -> crate::error::Result<()> {
     crate::io::write_volume(path, volume)?;
-    if let Some(note) = crate::io::channels_lost(path, volume) {
+    let notes = [crate::io::channels_lost(path, volume), crate::io::model_grid_lost(path, volume)];
+    for note in notes.into_iter().flatten() {
         tell!("warning: {note}");
     }
     Ok(())

@@ -17,7 +17,7 @@ use super::tets::TetMesh;
 use crate::error::{Error, Result};
 use crate::mesh::{Mesh, Slices};
 use crate::render::{Rgb8, to_u8};
-use crate::volume::{Channel, Volume};
+use crate::volume::{Channel, ModelGrid, Volume};
 use glam::{Affine3A, Vec3};
 use rayon::prelude::*;
 
@@ -606,7 +606,9 @@ pub fn bake_grid(models: &[(&LstModel, &Textures)], res: usize) -> (Vec3, f32) {
 }
 
 /// Samples models into a volume of `res` voxels along the longest side of their box: R, G,
-/// B, then the `carried` channels, then A (1 inside); a stack of axis-aligned cuts.
+/// B, then the `carried` channels, then A (1 inside; every channel 0 outside); a stack of
+/// axis-aligned cuts. The volume records its place in model space (voxel (0, 0, 0)'s
+/// centre at the box's low corner plus half a voxel).
 pub fn bake(models: &[(&LstModel, &Textures)], carried: &[Carried], res: usize, budget: u64) -> Result<Volume> {
     if !(2..=1024).contains(&res) {
         return Err(Error::invalid(format!("bake resolution {res} is out of range; allowed 2 to 1024")));
@@ -657,7 +659,8 @@ pub fn bake(models: &[(&LstModel, &Textures)], carried: &[Carried], res: usize, 
             voxel[3 + extra.len()] = p[3];
         }
     });
-    Volume::from_data(dims, channels, data)
+    let grid = ModelGrid { origin: (lo + Vec3::splat(step / 2.0)).to_array(), voxel: step };
+    Ok(Volume::from_data(dims, channels, data)?.with_model_grid(Some(grid)))
 }
 
 #[cfg(test)]

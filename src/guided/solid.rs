@@ -4,13 +4,14 @@
 use super::field::{FrameField, FrameGrid, ScalarGrid};
 use crate::error::{Error, Result};
 use crate::fill::render::View;
-use crate::fill::render::inside_surface;
+use crate::fill::render::{BACKGROUND, inside_surface};
 use crate::fill::tets::TetMesh;
 use crate::mesh::Mesh;
 use crate::progress::Progress;
+use crate::render::{ColourMap, Rgb8};
 use crate::synth::coords::{self as synth, Kept, Setup, Synthesized, Voxel};
 use crate::synth::region::{Mask, Sparse};
-use crate::volume::{Channel, Image2d, Volume};
+use crate::volume::{Channel, Image2d, ModelGrid, Volume};
 use glam::Vec3;
 
 /// Finest-level resolutions `guided` accepts (voxels along the grid's longest side).
@@ -434,6 +435,36 @@ pub fn cut_image(
         }
     }
     Image2d::from_data(view.width, view.height, with_alpha(setup), data)
+}
+
+/// A cut's picture as `solidtex cut` shows a lapped fill's: each pixel inside the model
+/// (alpha, the last channel, above 0) in its colour (R, G, B, or the first channel as
+/// grey), every other pixel the cut's background.
+pub fn cut_picture(picture: &Image2d) -> Rgb8 {
+    let map = ColourMap::for_channels(picture.channels());
+    let alpha = picture.channel_count() - 1;
+    let mut out = Rgb8::new(picture.width(), picture.height(), BACKGROUND);
+    for y in 0..picture.height() {
+        for x in 0..picture.width() {
+            let p = picture.pixel(x, y);
+            if p[alpha] > 0.0 {
+                out.put(x, y, map.colour(p));
+            }
+        }
+    }
+    out
+}
+
+/// The whole solid as a bake writes it: every channel 0 in voxels the model does not
+/// cover (alpha, the last channel, 0), as a lapped fill's bake leaves them, and its place
+/// in model space (`domain`'s voxel (0, 0, 0) centre and side).
+pub fn baked(mut volume: Volume, domain: &Domain) -> Volume {
+    let n = volume.channel_count();
+    for voxel in volume.data_mut().chunks_exact_mut(n).filter(|v| v[n - 1] == 0.0) {
+        voxel.fill(0.0);
+    }
+    let origin = domain.centre([0, 0, 0]).to_array();
+    volume.with_model_grid(Some(ModelGrid { origin, voxel: domain.voxel }))
 }
 
 /// The whole solid: every voxel's colour, then `alpha` (the model's coverage per voxel).

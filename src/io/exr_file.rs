@@ -101,7 +101,7 @@ pub fn read(path: &Path, budget: u64) -> Result<Volume> {
         )));
     }
     let volume = atlas::from_atlas(dims, channels, w, h, &data).map_err(|e| e.in_file(path))?;
-    Ok(volume.with_meta(described.meta))
+    Ok(volume.with_meta(described.meta).with_model_grid(described.model_grid))
 }
 
 /// The size a solidtex volume's description names, read from an EXR's header alone;

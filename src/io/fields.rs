@@ -1,9 +1,10 @@
 //! The volume description shared by the text-based headers (PNG tEXt, NRRD keys):
-//! `dims`, `channels`, `type` and `provenance.<key>` as text fields.
+//! `dims`, `channels`, `type`, `origin` and `voxel` (where a baked volume sits in model
+//! space) and `provenance.<key>` as text fields.
 
 use crate::error::{Error, Result};
 use crate::texture_type::TextureType;
-use crate::volume::{Channel, Meta, Volume};
+use crate::volume::{Channel, Meta, ModelGrid, Volume};
 
 /// What a header says about a volume.
 #[derive(Debug, Clone, PartialEq)]
@@ -14,6 +15,8 @@ pub struct Described {
     pub channels: Option<Vec<Channel>>,
     /// Type and provenance.
     pub meta: Meta,
+    /// Where the volume sits in model space, if given.
+    pub model_grid: Option<ModelGrid>,
 }
 
 /// The fields describing `volume`, in a fixed order.
@@ -26,6 +29,10 @@ pub fn fields(volume: &Volume) -> Vec<(String, String)> {
     if let Some(t) = volume.meta.texture_type {
         out.push(("type".to_string(), t.to_string()));
     }
+    if let Some(g) = volume.model_grid {
+        out.push(("origin".to_string(), format!("{} {} {}", g.origin[0], g.origin[1], g.origin[2])));
+        out.push(("voxel".to_string(), g.voxel.to_string()));
+    }
     for (k, v) in &volume.meta.provenance {
         out.push((format!("provenance.{k}"), v.clone()));
     }
@@ -34,12 +41,15 @@ pub fn fields(volume: &Volume) -> Vec<(String, String)> {
 
 /// Read fields back; unknown keys are ignored, bad values are errors naming the field.
 pub fn parse(fields: &[(String, String)]) -> Result<Described> {
-    let mut out = Described { dims: None, channels: None, meta: Meta::default() };
+    let mut out = Described { dims: None, channels: None, meta: Meta::default(), model_grid: None };
+    let (mut origin, mut voxel) = (None, None);
     for (key, value) in fields {
         match key.as_str() {
             "dims" => out.dims = Some(parse_dims(value)?),
             "channels" => out.channels = Some(Channel::parse_list(value)?),
             "type" => out.meta.texture_type = Some(value.parse::<TextureType>()?),
+            "origin" => origin = Some(parse_point("origin", value)?),
+            "voxel" => voxel = Some(parse_voxel("voxel", value)?),
             other => {
                 if let Some(k) = other.strip_prefix("provenance.") {
                     out.meta.set(k, value.clone());
@@ -47,7 +57,34 @@ pub fn parse(fields: &[(String, String)]) -> Result<Described> {
             }
         }
     }
+    out.model_grid = match (origin, voxel) {
+        (Some(origin), Some(voxel)) => Some(ModelGrid { origin, voxel }),
+        (None, None) => None,
+        _ => {
+            return Err(Error::invalid(
+                "the description gives only one of origin and voxel; a place in model space needs both",
+            ));
+        }
+    };
     Ok(out)
+}
+
+/// Three finite numbers, `-0.5 0 1.25`, as a model point (`field` names it in errors).
+pub fn parse_point(field: &str, text: &str) -> Result<[f32; 3]> {
+    let numbers: Option<Vec<f32>> =
+        text.split_whitespace().map(|t| t.parse::<f32>().ok().filter(|v| v.is_finite())).collect();
+    match numbers.as_deref() {
+        Some(&[x, y, z]) => Ok([x, y, z]),
+        _ => Err(Error::invalid(format!("{field} {text:?} is not three finite numbers such as \"-0.5 0 1.25\""))),
+    }
+}
+
+/// A voxel's side: a finite number above 0 (`field` names it in errors).
+pub fn parse_voxel(field: &str, text: &str) -> Result<f32> {
+    match text.trim().parse::<f32>() {
+        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+        _ => Err(Error::invalid(format!("{field} {text:?} is not a voxel side: a finite number above 0"))),
+    }
 }
 
 /// `64 64 32` or `64x64x32` as dims.

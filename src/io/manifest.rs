@@ -220,6 +220,65 @@ pub struct Entry {
     pub mask_falloff: f32,
     /// Extra formats: any of [`EXPORTS`].
     pub exports: Vec<String>,
+    /// Where the entry is written in its manifest.
+    pub lines: Lines,
+}
+
+/// Where an entry is written in its manifest, for the errors about its input files that
+/// only its build finds (a file missing or of the wrong kind, a size that does not fit):
+/// the manifest (when read from a file), the line of the entry's `[[exemplar]]` header and
+/// the line of each field it gives (a step's as `steps[k].field`).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Lines {
+    /// The manifest file, when the entry was read from one.
+    pub manifest: Option<PathBuf>,
+    /// The line (from 1) of the entry's header.
+    pub header: usize,
+    /// The line (from 1) of each field given.
+    pub fields: Vec<(String, usize)>,
+}
+
+impl Lines {
+    /// `error` about the value of `field` (`image`, `steps[0].stamp`), said after the
+    /// manifest, the field's line (the header's when the field is not written) and name.
+    pub fn error(&self, field: &str, error: Error) -> Error {
+        if matches!(error, Error::Cancelled) {
+            return error;
+        }
+        let line = self.fields.iter().find(|(f, _)| f == field).map_or(self.header, |(_, at)| *at);
+        let named = match field.strip_prefix("steps[").and_then(|r| r.split_once("].")) {
+            Some((k, f)) => format!("step {}, field {f:?}", k.parse::<usize>().map_or(0, |k| k + 1)),
+            None => format!("field {field:?}"),
+        };
+        let message = format!("line {line}, {named}: {error}");
+        match &self.manifest {
+            Some(manifest) => Error::file(manifest, message),
+            None => Error::invalid(message),
+        }
+    }
+}
+
+/// Where entry `i` of manifest `text` (parsed as `document`) is written, without the
+/// manifest's name.
+fn entry_lines(text: &str, document: Option<&toml_edit::Document<&str>>, i: usize) -> Lines {
+    let table = document.and_then(|d| d.as_item().get("exemplar")?.get(i)?.as_table_like());
+    let mut fields = Vec::new();
+    let mut put = |key: String, item: &toml_edit::Item| {
+        if let Some(span) = item.span() {
+            fields.push((key, line_at(text, span.start)));
+        }
+    };
+    for (key, item) in table.into_iter().flat_map(|t| t.iter()) {
+        match item.as_array_of_tables().filter(|_| key == "steps") {
+            Some(steps) => {
+                for (k, step) in steps.iter().enumerate() {
+                    step.iter().for_each(|(f, value)| put(format!("steps[{k}].{f}"), value));
+                }
+            }
+            None => put(key.to_string(), item),
+        }
+    }
+    Lines { manifest: None, header: entry_line(text, i), fields }
 }
 
 /// A validated manifest: what `solidtex build` will make.
@@ -240,7 +299,11 @@ pub const MAX_COUNT: usize = crate::stamp::MAX_COUNT;
 pub fn read_plan(path: &Path) -> Result<Plan> {
     let text = super::read_text(path, "manifest")?;
     let folder = path.parent().unwrap_or(Path::new("."));
-    plan_of(&text, folder, has_toml_name(path)).map_err(|e| e.in_file(path))
+    let mut plan = plan_of(&text, folder, has_toml_name(path)).map_err(|e| e.in_file(path))?;
+    for entry in &mut plan.entries {
+        entry.lines.manifest = Some(path.to_path_buf());
+    }
+    Ok(plan)
 }
 
 /// Validate manifest text; `folder` resolves relative paths.
@@ -272,10 +335,12 @@ pub(crate) fn has_toml_name(path: &Path) -> bool {
 /// [`parse_plan`]; `quote` allows a syntax error to show the line it is on.
 fn plan_of(text: &str, folder: &Path, quote: bool) -> Result<Plan> {
     let raw: RawManifest = toml::from_str(text).map_err(|e| syntax_error(text, &e, "manifest", quote))?;
+    let document = toml_edit::Document::parse(text).ok();
     let mut entries: Vec<Entry> = Vec::new();
     for (i, e) in raw.exemplar.into_iter().enumerate() {
         let name = e.name.clone();
-        let entry = validate(e, folder).map_err(|err| Error::invalid(entry_error(text, i, &name, &err)))?;
+        let mut entry = validate(e, folder).map_err(|err| Error::invalid(entry_error(text, i, &name, &err)))?;
+        entry.lines = entry_lines(text, document.as_ref(), i);
         if entries.iter().any(|x| x.name == entry.name) {
             let line = entry_line(text, i);
             return Err(Error::invalid(format!(
@@ -298,6 +363,7 @@ pub fn parse_plan_lenient(text: &str, folder: &Path) -> (Vec<Entry>, Vec<String>
         Ok(raw) => raw,
         Err(e) => return (Vec::new(), vec![syntax_error(text, &e, "manifest", true).to_string()]),
     };
+    let document = toml_edit::Document::parse(text).ok();
     let (mut entries, mut errors): (Vec<Entry>, Vec<String>) = (Vec::new(), Vec::new());
     for (i, e) in raw.exemplar.into_iter().enumerate() {
         let name = e.name.clone();
@@ -305,7 +371,7 @@ pub fn parse_plan_lenient(text: &str, folder: &Path) -> (Vec<Entry>, Vec<String>
         match validate(e, folder) {
             Ok(entry) if entries.iter().any(|x| x.name == entry.name) => errors
                 .push(format!("line {line}: entry {}: name = {name:?} is used twice; names must be unique", i + 1)),
-            Ok(entry) => entries.push(entry),
+            Ok(entry) => entries.push(Entry { lines: entry_lines(text, document.as_ref(), i), ..entry }),
             Err(err) => errors.push(entry_error(text, i, &name, &err)),
         }
     }
@@ -683,6 +749,7 @@ fn validate(raw: RawExemplar, folder: &Path) -> Result<Entry> {
         masks,
         mask_falloff,
         exports: raw.exports,
+        lines: Lines::default(),
     })
 }
 

@@ -260,6 +260,19 @@ pub fn channels_lost(path: &Path, volume: &Volume) -> Option<String> {
     })
 }
 
+/// A warning when the format of `path` cannot hold where `volume` sits in model space
+/// (a bake's origin and voxel side): Kopf's `.vol` and DDS have no place for it.
+pub fn model_grid_lost(path: &Path, volume: &Volume) -> Option<String> {
+    let lost = matches!(Format::of(path).ok()?, Format::Vol | Format::Dds);
+    (lost && volume.model_grid.is_some()).then(|| {
+        format!(
+            "{}: this format keeps no place in model space, so the volume's origin and voxel side are not recorded \
+             (write .exr, .nrrd, .vdb or .png to keep them)",
+            path.display()
+        )
+    })
+}
+
 /// Write a volume in the format its path names (atomically).
 pub fn write_volume(path: &Path, volume: &Volume) -> Result<()> {
     match Format::of(path)? {

@@ -3,13 +3,18 @@
 //! Written as one attached file: a text header, a blank line, then raw little-endian
 //! f32 samples. A 1-channel volume is 3D (`sizes: X Y Z`); with more channels the
 //! first axis holds the channels (`sizes: C X Y Z`, kind `RGB-color`, `RGBA-color`
-//! or `vector`). Roles, type and provenance ride in `solidtex_*:=` key/value lines.
+//! or `vector`). Roles, type and provenance ride in `solidtex_*:=` key/value lines. A
+//! volume placed in model space (a bake) has it in NRRD's own fields: `space dimension: 3`,
+//! `space directions` (one vector a voxel step along x, y, z; `none` for the channel
+//! axis) and `space origin` (the centre of the first voxel), which 3D Slicer, ParaView
+//! and ITK read; reading takes them back when they describe an axis-aligned grid of
+//! cubic voxels.
 //! Reading accepts raw encoding of float, double, uchar, ushort (normalised to
 //! [0, 1] for the integer types), in either endianness.
 
 use super::fields;
 use crate::error::{Error, Result};
-use crate::volume::{Channel, Volume};
+use crate::volume::{Channel, ModelGrid, Volume};
 use std::path::Path;
 
 /// Write `volume` as NRRD (atomically).
@@ -37,14 +42,51 @@ fn header(volume: &Volume) -> String {
         }
     };
     let mut text = format!(
-        "NRRD0004\n# written by solidtex {}\ntype: float\ndimension: {dimension}\nsizes: {sizes}\nkinds: {kinds}\nendian: little\nencoding: raw\n",
+        "NRRD0004\n# written by solidtex {}\ntype: float\ndimension: {dimension}\nsizes: {sizes}\nkinds: {kinds}\n",
         env!("CARGO_PKG_VERSION")
     );
-    for (k, v) in fields::fields(volume) {
+    if let Some(grid) = volume.model_grid {
+        text.push_str(&space_fields(grid, n > 1));
+    }
+    text.push_str("endian: little\nencoding: raw\n");
+    // the place in model space is in the space fields above
+    let described = fields::fields(volume).into_iter().filter(|(k, _)| k != "origin" && k != "voxel");
+    for (k, v) in described {
         text.push_str(&format!("solidtex_{k}:={}\n", v.replace('\n', " ")));
     }
     text.push('\n');
     text
+}
+
+/// `space dimension`, `space directions` (after `none` for a channel axis) and `space
+/// origin` of `grid`.
+fn space_fields(grid: ModelGrid, channel_axis: bool) -> String {
+    let s = grid.voxel;
+    let [x, y, z] = grid.origin;
+    let none = if channel_axis { "none " } else { "" };
+    format!("space dimension: 3\nspace directions: {none}({s},0,0) (0,{s},0) (0,0,{s})\nspace origin: ({x},{y},{z})\n")
+}
+
+/// The place in space of a header's `space directions` and `space origin`, when they
+/// describe a grid solidtex keeps: axes along the space's, the same positive step on each.
+/// Any other (rotated, uneven, another dimension) reads as no place; the samples are kept.
+fn model_grid(header: &Header) -> Option<ModelGrid> {
+    let origin = vector(header.space_origin.as_deref()?)?;
+    let directions = header.space_directions.as_deref()?;
+    let steps: Vec<[f32; 3]> =
+        directions.split_whitespace().filter(|d| *d != "none").map(vector).collect::<Option<_>>()?;
+    let voxel = steps.first()?[0];
+    let aligned = steps.len() == 3
+        && steps.iter().enumerate().all(|(a, v)| (0..3).all(|b| v[b] == if a == b { voxel } else { 0.0 }));
+    (aligned && voxel > 0.0).then_some(ModelGrid { origin, voxel })
+}
+
+/// A NRRD vector of three finite numbers, `(1,0,-2.5)`.
+fn vector(text: &str) -> Option<[f32; 3]> {
+    let inner = text.trim().strip_prefix('(')?.strip_suffix(')')?;
+    let numbers: Vec<f32> =
+        inner.split(',').map(|t| t.trim().parse::<f32>().ok().filter(|v| v.is_finite())).collect::<Option<_>>()?;
+    numbers.try_into().ok()
 }
 
 /// Read a NRRD file with attached raw data.
@@ -58,6 +100,8 @@ struct Header {
     sample: Sample,
     big_endian: bool,
     extra: Vec<(String, String)>,
+    space_directions: Option<String>,
+    space_origin: Option<String>,
 }
 
 #[derive(Clone, Copy)]
@@ -121,7 +165,8 @@ fn parse(bytes: &[u8], budget: u64) -> Result<Volume> {
         }
         named => named.unwrap_or(channels),
     };
-    Ok(Volume::from_data(dims, channels, data)?.with_meta(described.meta))
+    let grid = model_grid(&header);
+    Ok(Volume::from_data(dims, channels, data)?.with_meta(described.meta).with_model_grid(grid))
 }
 
 /// (end of header text, start of data) at the first empty line.
@@ -135,7 +180,14 @@ fn find_blank_line(bytes: &[u8]) -> Option<(usize, usize)> {
 }
 
 fn parse_header(text: &str) -> Result<Header> {
-    let mut header = Header { sizes: Vec::new(), sample: Sample::F32, big_endian: false, extra: Vec::new() };
+    let mut header = Header {
+        sizes: Vec::new(),
+        sample: Sample::F32,
+        big_endian: false,
+        extra: Vec::new(),
+        space_directions: None,
+        space_origin: None,
+    };
     let mut dimension = None;
     let mut seen: Vec<String> = Vec::new();
     for line in text.lines().skip(1).map(str::trim).filter(|l| !l.starts_with('#') && !l.is_empty()) {
@@ -154,6 +206,8 @@ fn parse_header(text: &str) -> Result<Header> {
             "dimension" => dimension = value.parse::<usize>().ok(),
             "sizes" => header.sizes = parse_sizes(value)?,
             "endian" => header.big_endian = value == "big",
+            "space directions" => header.space_directions = Some(value.to_string()),
+            "space origin" => header.space_origin = Some(value.to_string()),
             "encoding" if value != "raw" => {
                 return Err(Error::invalid(format!("NRRD encoding {value:?} is not supported; allowed: raw")));
             }
@@ -294,6 +348,28 @@ mod tests {
         assert!(parse(dim, u64::MAX).unwrap_err().to_string().contains("dimension 2 does not match the 3 sizes"));
         let none = b"NRRD0004\ntype: float\nencoding: raw\n\n";
         assert!(parse(none, u64::MAX).unwrap_err().to_string().contains("no dimension field"));
+    }
+
+    /// A placed volume's space fields read back as its place; a grid another tool rotated,
+    /// stretched or wrote oddly reads without one, its samples kept.
+    #[test]
+    fn space_fields_give_the_place_of_an_axis_aligned_grid_only() {
+        let grid = ModelGrid { origin: [-1.0, 0.5, 2.0], voxel: 0.25 };
+        let placed = Volume::from_data([2, 1, 1], Channel::grey(), vec![0.0, 1.0]).unwrap().with_model_grid(Some(grid));
+        let mut bytes = header(&placed).into_bytes();
+        bytes.extend([0f32, 1f32].iter().flat_map(|v| v.to_le_bytes()));
+        assert_eq!(parse(&bytes, u64::MAX).unwrap(), placed);
+        let odd = ["(0,0.25,0) (0.25,0,0) (0,0,0.25)", "(0.25,0,0) (0,0.5,0) (0,0,0.25)", "(1,0) (0,1) (0,0,1)"];
+        for directions in odd {
+            let text = format!(
+                "NRRD0004\ntype: uchar\ndimension: 3\nsizes: 2 1 1\nencoding: raw\nspace dimension: 3\n\
+                 space directions: {directions}\nspace origin: (0,0,0)\n\n"
+            );
+            let mut bytes = text.into_bytes();
+            bytes.extend([0u8, 255]);
+            let read = parse(&bytes, u64::MAX).unwrap();
+            assert_eq!((read.model_grid, read.data()), (None, &[0.0, 1.0][..]), "{directions}");
+        }
     }
 
     /// A header that contradicts itself or its data is refused: a field given twice, a

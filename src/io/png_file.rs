@@ -177,7 +177,7 @@ pub fn read_atlas(path: &Path, budget: u64) -> Result<Volume> {
     let channels = channels_for(described.channels, png.channels, path)?;
     crate::volume::check_size(dims, channels.len(), budget).map_err(|e| e.in_file(path))?;
     let v = atlas::from_atlas(dims, channels, png.width, png.height, &png.samples).map_err(|e| e.in_file(path))?;
-    Ok(v.with_meta(described.meta))
+    Ok(v.with_meta(described.meta).with_model_grid(described.model_grid))
 }
 
 fn channels_for(named: Option<Vec<Channel>>, stored: usize, path: &Path) -> Result<Vec<Channel>> {
@@ -215,7 +215,7 @@ pub fn read_stack(path: &Path, budget: u64) -> Result<Volume> {
         }
         data.extend_from_slice(&slice.samples);
     }
-    Ok(Volume::from_data(dims, channels, data)?.with_meta(described.meta))
+    Ok(Volume::from_data(dims, channels, data)?.with_meta(described.meta).with_model_grid(described.model_grid))
 }
 
 fn first_samples(first: &Decoded) -> Decoded {

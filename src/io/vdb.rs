@@ -5,9 +5,12 @@
 //! where the volume has no alpha), a vec3s grid `color` (R, G, B; a grey volume's one
 //! channel three times), and every other channel (Depth, Displacement, named ones) as a
 //! float grid of its name. Every voxel of the box is active; the background is 0. The
-//! transform is a uniform scale of `1 / longest side` (the volume spans one unit along
-//! its longest side, index (0, 0, 0) at the origin). The volume's description (dims,
-//! channels, type, provenance) rides in file metadata as `solidtex.<field>` strings.
+//! transform of a volume placed in model space (a bake) is a uniform scale of its voxel
+//! side and a translation to its voxel (0, 0, 0)'s centre, so it lands on its model;
+//! otherwise a uniform scale of `1 / longest side` (the volume spans one unit along its
+//! longest side, index (0, 0, 0) at the origin). The volume's description (dims,
+//! channels, type, origin and voxel, provenance) rides in file metadata as
+//! `solidtex.<field>` strings.
 //!
 //! Read: files this module writes, and other uncompressed files of float and vec3s grids
 //! without active tiles (zlib or blosc compression, half floats and other grid types are
@@ -106,7 +109,7 @@ pub fn to_bytes(volume: &Volume, uuid: &str) -> Vec<u8> {
     let grids = grids(volume);
     out.extend_from_slice(&(grids.len() as i32).to_le_bytes());
     for grid in &grids {
-        put_grid(&mut out, grid, volume.dims());
+        put_grid(&mut out, grid, volume);
     }
     out
 }
@@ -141,7 +144,8 @@ fn put_meta(out: &mut Vec<u8>, mut entries: Vec<(String, Value)>) {
 }
 
 /// One grid: descriptor, its three offsets, flags, metadata, transform, topology, buffers.
-fn put_grid(out: &mut Vec<u8>, grid: &Grid, dims: [usize; 3]) {
+fn put_grid(out: &mut Vec<u8>, grid: &Grid, volume: &Volume) {
+    let dims = volume.dims();
     put_string(out, &grid.name);
     put_string(out, if grid.components == 3 { VEC3_TREE } else { FLOAT_TREE });
     put_string(out, "");
@@ -165,7 +169,7 @@ fn put_grid(out: &mut Vec<u8>, grid: &Grid, dims: [usize; 3]) {
         meta.push(("vector_type".to_string(), Value::Text("invariant".into())));
     }
     put_meta(out, meta);
-    put_transform(out, 1.0 / *dims.iter().max().expect("three dims") as f64);
+    put_transform(out, index_to_model(volume));
     let leaves = put_topology(out, grid, dims);
     let block_pos = out.len();
     for origin in &leaves {
@@ -177,12 +181,25 @@ fn put_grid(out: &mut Vec<u8>, grid: &Grid, dims: [usize; 3]) {
     }
 }
 
-/// `UniformScaleTranslateMap` with scale `s` and no translation: translation, scale,
+/// The scale and translation from index space (a voxel's centre at its index) to the
+/// world: the volume's place in model space when it has one, else `1 / longest side` and
+/// no translation.
+fn index_to_model(volume: &Volume) -> (f64, [f64; 3]) {
+    match volume.model_grid {
+        Some(g) => (f64::from(g.voxel), g.origin.map(f64::from)),
+        None => (1.0 / *volume.dims().iter().max().expect("three dims") as f64, [0.0; 3]),
+    }
+}
+
+/// `UniformScaleTranslateMap` with scale `s` and translation `t`: translation, scale,
 /// voxel size, 1/s, (1/s)², 1/(2s), each three doubles.
-fn put_transform(out: &mut Vec<u8>, s: f64) {
+fn put_transform(out: &mut Vec<u8>, (s, t): (f64, [f64; 3])) {
     put_string(out, "UniformScaleTranslateMap");
+    for v in t {
+        out.extend_from_slice(&v.to_le_bytes());
+    }
     let inverse = 1.0 / s;
-    for v in [0.0, s, s.abs(), inverse, inverse * inverse, inverse / 2.0] {
+    for v in [s, s.abs(), inverse, inverse * inverse, inverse / 2.0] {
         for _ in 0..3 {
             out.extend_from_slice(&v.to_le_bytes());
         }
@@ -661,6 +678,7 @@ fn assemble(grids: &[ReadGrid], described: &[(String, String)], budget: u64) -> 
         }
     }
     volume.meta = description.meta;
+    volume.model_grid = description.model_grid;
     Ok(volume)
 }
 

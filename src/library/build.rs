@@ -95,7 +95,10 @@ pub fn select(request: &Request) -> Result<Vec<Entry>> {
         let mut chosen = Vec::new();
         for name in &request.only {
             match valid.iter().find(|e| &e.name == name) {
-                Some(entry) => chosen.push(entry.clone()),
+                Some(entry) => {
+                    let lines = manifest::Lines { manifest: Some(request.manifest.clone()), ..entry.lines.clone() };
+                    chosen.push(manifest::Entry { lines, ..entry.clone() });
+                }
                 None => return Err(unknown_or_broken(&text, folder, name, &valid, &request.manifest)),
             }
         }

@@ -95,8 +95,8 @@ pub fn key(entry: &Entry, folder: &Path) -> Result<Key> {
     hasher.update(env!("CARGO_PKG_VERSION").as_bytes());
     hasher.update(recipe.as_bytes());
     let mut inputs = Vec::new();
-    for input in input_files(entry) {
-        let bytes = io::atomic::read_bytes(&input)?;
+    for (field, input) in input_files(entry) {
+        let bytes = io::atomic::read_bytes(&input).map_err(|e| entry.lines.error(&field, e))?;
         hasher.update(&bytes);
         inputs.push(Written { path: shown(&input, folder), bytes: bytes.len() as u64, hash: short_hash(&bytes) });
     }
@@ -193,27 +193,31 @@ pub fn written(output: &Path, entry: &Entry) -> Result<Vec<Written>> {
         .collect()
 }
 
-/// The files an entry reads.
-pub fn input_files(entry: &Entry) -> Vec<PathBuf> {
-    let mut files = Vec::new();
+/// The files an entry reads, each with the manifest field that names it.
+pub fn input_files(entry: &Entry) -> Vec<(String, PathBuf)> {
+    let mut files: Vec<(String, PathBuf)> = Vec::new();
+    let mut put = |field: &str, path: &PathBuf| files.push((field.to_string(), path.clone()));
     match &entry.source {
         Source::Sweep(spec) => {
-            files.push(spec.image.clone());
+            put("image", &spec.image);
             if let Some((SkinSource::Image(p), _, _)) = &spec.skin {
-                files.push(p.clone());
+                put("skin", p);
             }
-            files.extend(spec.displacement.iter().cloned());
+            spec.displacement.iter().for_each(|p| put("displacement", p));
         }
         Source::Synth(spec) => {
-            files.push(spec.image.clone());
-            files.extend([&spec.ey, &spec.ez, &spec.depth].into_iter().flatten().cloned());
+            put("image", &spec.image);
+            for (field, path) in [("ey", &spec.ey), ("ez", &spec.ez), ("depth_image", &spec.depth)] {
+                path.iter().for_each(|p| put(field, p));
+            }
         }
-        Source::Load(path) => files.push(path.clone()),
+        Source::Load(path) => put("volume", path),
         Source::Procedural(_) => {}
     }
-    for step in &entry.steps {
+    for (k, step) in entry.steps.iter().enumerate() {
         match step {
-            Step::Stamp { mesh, .. } | Step::Scatter { mesh, .. } => files.push(mesh.clone()),
+            Step::Stamp { mesh, .. } => put(&format!("steps[{k}].stamp"), mesh),
+            Step::Scatter { mesh, .. } => put(&format!("steps[{k}].scatter"), mesh),
             Step::Blur { .. } => {}
         }
     }

@@ -4,7 +4,7 @@
 use super::files;
 use crate::error::{Error, Result};
 use crate::io;
-use crate::io::manifest::{Entry, MaskKind, SkinSource, Source, Step, SweepSpec, SynthSpec};
+use crate::io::manifest::{Entry, Lines, MaskKind, SkinSource, Source, Step, SweepSpec, SynthSpec};
 use crate::progress::Progress;
 use crate::stamp::{self, Region, Scatter};
 use crate::sweep::{self, Skin, SkinLook, Sweep};
@@ -20,19 +20,21 @@ pub fn make(entry: &Entry) -> Result<Volume> {
 /// [`make`], reporting a synthesis' progress (per pyramid level) to `progress`, which may
 /// also cancel it.
 pub fn make_with(entry: &Entry, progress: &dyn Progress) -> Result<Volume> {
+    let lines = &entry.lines;
     let mut volume = match &entry.source {
         Source::Procedural(recipe) => {
             let dims = entry.dims.ok_or_else(|| Error::invalid("size is missing"))?;
             procedural::generate(*recipe, dims, entry.seed)?
         }
-        Source::Sweep(spec) => swept(spec, entry.dims, entry.seed)?,
+        Source::Sweep(spec) => swept(spec, entry.dims, entry.seed, lines)?,
         Source::Synth(spec) => {
-            synthesized(spec, entry.dims.ok_or_else(|| Error::invalid("size is missing"))?, entry.seed, progress)?
+            let size = entry.dims.ok_or_else(|| Error::invalid("size is missing"))?;
+            synthesized(spec, size, entry.seed, progress, lines)?
         }
-        Source::Load(path) => io::read_volume(path, io::budget_from_env()?)?,
+        Source::Load(path) => io::read_volume(path, io::budget_from_env()?).map_err(|e| lines.error("volume", e))?,
     };
-    for step in &entry.steps {
-        apply(step, &mut volume, progress)?;
+    for (k, step) in entry.steps.iter().enumerate() {
+        apply(step, &mut volume, progress, (lines, k))?;
     }
     if entry.texture_type.is_some() {
         volume.meta.texture_type = entry.texture_type;
@@ -53,6 +55,7 @@ pub fn preview(manifest: &Path, name: &str, text: &str) -> Result<(Volume, Vec<S
     let folder = manifest.parent().unwrap_or(Path::new("."));
     // Mistakes in other entries do not stop this one's preview.
     let mut entry = crate::io::manifest::parse_entry(text, folder, name)?;
+    entry.lines.manifest = Some(manifest.to_path_buf());
     let cap = match &mut entry.source {
         _ if !entry.steps.is_empty() => 0,
         Source::Sweep(spec) => {
@@ -83,14 +86,14 @@ impl Progress for Warnings {
     }
 }
 
-fn synthesized(spec: &SynthSpec, size: [usize; 3], seed: u64, none: &dyn Progress) -> Result<Volume> {
-    let read = |p: &Path| io::read_image_fit(p, spec.max_exemplar);
-    let ex = read(&spec.image)?;
+fn synthesized(spec: &SynthSpec, size: [usize; 3], seed: u64, none: &dyn Progress, lines: &Lines) -> Result<Volume> {
+    let read_as = |field: &str, p: &Path| io::read_image_fit(p, spec.max_exemplar).map_err(|e| lines.error(field, e));
+    let ex = read_as("image", &spec.image)?;
     // layers come out crisp from the coordinate core (docs/synthesis.md)
     let core = if spec.layered { synth::Core::Coordinates } else { synth::Core::Blend };
     let params = synth::SynthParams { core, size, levels: spec.levels, ..synth::SynthParams::default() };
     let volume = if spec.layered {
-        let depth = spec.depth.as_deref().map(read).transpose()?;
+        let depth = spec.depth.as_deref().map(|p| read_as("depth_image", p)).transpose()?;
         if let (None, Some(warning)) = (&depth, synth::layering_warning(&ex)) {
             none.warn(&format!(
                 "{}: {warning}. Turn the image so its rows are the layers, or give each pixel's depth (depth_image = \"...\")",
@@ -99,8 +102,8 @@ fn synthesized(spec: &SynthSpec, size: [usize; 3], seed: u64, none: &dyn Progres
         }
         synth::synthesize_layered(&ex, depth.as_ref(), &params, &synth::LayeredParams::default(), seed, none)
     } else {
-        let ey = spec.ey.as_deref().map(read).transpose()?;
-        let ez = spec.ez.as_deref().map(read).transpose()?;
+        let ey = spec.ey.as_deref().map(|p| read_as("ey", p)).transpose()?;
+        let ez = spec.ez.as_deref().map(|p| read_as("ez", p)).transpose()?;
         if let (None, None, Some(warning)) = (&ey, &ez, synth::directional_warning(&ex)) {
             none.warn(&format!(
                 "{}: {warning}. Give the other cross-sections (ey = \"...\", ez = \"...\"), or recipe = \"synth-layered\" if \
@@ -176,13 +179,13 @@ fn depth_axis(entry: &Entry) -> crate::volume::Axis {
     }
 }
 
-fn swept(spec: &SweepSpec, dims: Option<[usize; 3]>, seed: u64) -> Result<Volume> {
-    let image = io::read_image(&spec.image)?;
+fn swept(spec: &SweepSpec, dims: Option<[usize; 3]>, seed: u64, lines: &Lines) -> Result<Volume> {
+    let image = io::read_image(&spec.image).map_err(|e| lines.error("image", e))?;
     let (a, b) = spec.axis.plane_axes();
     if let Some(d) = dims {
         let along = d[spec.axis.index()];
         if (d[a], d[b], along) != (image.width(), image.height(), spec.length) {
-            return Err(Error::file(
+            return Err(lines.error("size", Error::file(
                 &spec.image,
                 format!(
                     "the sweep image is {}x{} pixels, which with length {} along {} makes {:?}, not the size {d:?} asked for",
@@ -192,7 +195,7 @@ fn swept(spec: &SweepSpec, dims: Option<[usize; 3]>, seed: u64) -> Result<Volume
                     spec.axis,
                     planned(image.width(), image.height(), spec)
                 ),
-            ));
+            )));
         }
     }
     let skin = match &spec.skin {
@@ -200,24 +203,25 @@ fn swept(spec: &SweepSpec, dims: Option<[usize; 3]>, seed: u64) -> Result<Volume
         Some((look, width, noise)) => {
             let look = match look {
                 SkinSource::Colour(c) => SkinLook::Colour(*c),
-                SkinSource::Image(p) => SkinLook::Image(io::read_image(p)?),
+                SkinSource::Image(p) => SkinLook::Image(io::read_image(p).map_err(|e| lines.error("skin", e))?),
             };
             Some(Skin { look, width: *width, width_noise: *noise })
         }
     };
-    let displacement = spec.displacement.as_deref().map(io::read_image).transpose()?;
+    let relief = |p: &Path| io::read_image(p).map_err(|e| lines.error("displacement", e));
+    let displacement = spec.displacement.as_deref().map(relief).transpose()?;
     if let (Some(relief), Some(path)) = (&displacement, &spec.displacement)
         && (relief.width(), relief.height()) != (image.width(), image.height())
     {
-        return Err(Error::invalid(format!(
+        let message = format!(
             "the displacement image is {}x{} but the cross-section {} is {}x{}; they must be the same size",
             relief.width(),
             relief.height(),
             spec.image.display(),
             image.width(),
             image.height()
-        ))
-        .in_file(path));
+        );
+        return Err(lines.error("displacement", Error::file(path, message)));
     }
     let params = Sweep {
         length: spec.length,
@@ -263,14 +267,15 @@ pub fn read_seed(path: &Path, progress: &dyn Progress) -> Result<crate::mesh::Me
     Ok(mesh.oriented())
 }
 
-fn apply(step: &Step, volume: &mut Volume, progress: &dyn Progress) -> Result<()> {
+/// Apply step `k` of an entry written at `lines`.
+fn apply(step: &Step, volume: &mut Volume, progress: &dyn Progress, (lines, k): (&Lines, usize)) -> Result<()> {
     match step {
         Step::Stamp { mesh, placement, colour } => {
-            let seed = read_seed(mesh, progress)?;
+            let seed = read_seed(mesh, progress).map_err(|e| lines.error(&format!("steps[{k}].stamp"), e))?;
             stamp::stamp(volume, &seed, placement, *colour).map_err(|e| e.in_file(mesh))?;
         }
         Step::Scatter { mesh, count, region, scale, colour, seed } => {
-            let shape = read_seed(mesh, progress)?;
+            let shape = read_seed(mesh, progress).map_err(|e| lines.error(&format!("steps[{k}].scatter"), e))?;
             let d = volume.dims();
             let region =
                 region.unwrap_or(Region::Box(glam::Vec3::ZERO, glam::Vec3::new(d[0] as f32, d[1] as f32, d[2] as f32)));

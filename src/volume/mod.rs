@@ -55,6 +55,27 @@ impl Meta {
     }
 }
 
+/// Where a volume sits in a model's space, axes along the model's: the model point at the
+/// centre of voxel (0, 0, 0), and one voxel's side. Voxel (i, j, k) is centred at
+/// `origin + (i, j, k) * voxel`; its cell reaches half a voxel either side.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct ModelGrid {
+    /// The model point at the centre of voxel (0, 0, 0).
+    pub origin: [f32; 3],
+    /// One voxel's side in model units (above 0).
+    pub voxel: f32,
+}
+
+impl ModelGrid {
+    /// The model-space box the voxels' cells cover: its lowest and highest corners.
+    pub fn box_of(&self, dims: [usize; 3]) -> ([f32; 3], [f32; 3]) {
+        let half = self.voxel / 2.0;
+        let lo = self.origin.map(|o| o - half);
+        let hi = [0, 1, 2].map(|a| self.origin[a] + (dims[a] as f32 - 0.5) * self.voxel);
+        (lo, hi)
+    }
+}
+
 /// A 3D grid of interleaved f32 samples, x fastest.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Volume {
@@ -63,6 +84,10 @@ pub struct Volume {
     data: Vec<f32>,
     /// Texture type and provenance; carried through every file format that can hold them.
     pub meta: Meta,
+    /// Where the volume sits in model space (a bake's grid), when that is known. Kept by
+    /// the formats that can hold it; a volume made anew from this one (resampled, cropped)
+    /// starts without it.
+    pub model_grid: Option<ModelGrid>,
 }
 
 /// The most channels a volume may have.
@@ -99,7 +124,7 @@ impl Volume {
     pub fn with_budget(dims: [usize; 3], channels: Vec<Channel>, budget_bytes: u64) -> Result<Volume> {
         Channel::check_list(&channels)?;
         let len = check_size(dims, channels.len(), budget_bytes)?;
-        Ok(Volume { dims, channels, data: vec![0.0; len], meta: Meta::default() })
+        Ok(Volume { dims, channels, data: vec![0.0; len], meta: Meta::default(), model_grid: None })
     }
 
     /// Wrap existing samples; `data.len()` must equal voxels x channels.
@@ -116,7 +141,7 @@ impl Volume {
                 channels.len()
             )));
         }
-        Ok(Volume { dims, channels, data, meta: Meta::default() })
+        Ok(Volume { dims, channels, data, meta: Meta::default(), model_grid: None })
     }
 
     /// Build a volume by calling `f(x, y, z, out)` for every voxel, in storage order.
@@ -170,6 +195,12 @@ impl Volume {
     /// The same volume with `meta` attached.
     pub fn with_meta(mut self, meta: Meta) -> Volume {
         self.meta = meta;
+        self
+    }
+
+    /// The same volume placed in model space by `grid`.
+    pub fn with_model_grid(mut self, grid: Option<ModelGrid>) -> Volume {
+        self.model_grid = grid;
         self
     }
 

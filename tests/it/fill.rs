@@ -328,6 +328,78 @@ fn a_pipe_of_genus_one_fills_and_its_hole_stays_empty() {
     assert_eq!(v.get(16, 16 - 11, z / 2, 3), 1.0);
 }
 
+/// A bake records where it sits over its model: voxel (0, 0, 0)'s centre and the voxel
+/// side, in the EXR's description (as `info` shows it, text and JSON), in NRRD's own space
+/// fields (origin: the first voxel's centre; one direction vector per axis); every voxel
+/// inside the model is centred inside the mesh's box, and the voxels' cells start at its
+/// corner. A format with no room for it says so.
+#[test]
+fn a_bake_records_where_it_sits_over_its_model() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let model = filled(d, "block", "marble", "exemplar = \"marble\"\nscale = 1.0\ntets = 2000\nseed = 1\n");
+    let (lo, hi) = solidtex::io::mesh_file::read_mesh(&d.join("block.obj")).unwrap().bounds();
+    let (lo, hi) = (lo.to_array(), hi.to_array());
+    let exr = at(d, "baked.exr");
+    let run = solidtex(&["bake", &model, "--res", "16", "-o", &exr]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let placed = |file: &str| {
+        let run = solidtex(&["info", file, "--json"]);
+        let json: serde_json::Value = serde_json::from_slice(&run.stdout).unwrap();
+        json["model_grid"].clone()
+    };
+    let grid = placed(&exr);
+    let number = |v: &serde_json::Value| v.as_f64().unwrap_or_else(|| panic!("no number in {grid}")) as f32;
+    let (voxel, origin, from, to) = (
+        number(&grid["voxel"]),
+        [0, 1, 2].map(|a| number(&grid["origin"][a])),
+        [0, 1, 2].map(|a| number(&grid["box_min"][a])),
+        [0, 1, 2].map(|a| number(&grid["box_max"][a])),
+    );
+    let longest = (0..3).map(|a| hi[a] - lo[a]).fold(0.0, f32::max);
+    assert!((voxel - longest / 16.0).abs() < 1e-6, "voxel {voxel} for a longest side {longest}");
+    for a in 0..3 {
+        assert!((origin[a] - (lo[a] + voxel / 2.0)).abs() < 1e-5, "origin {origin:?}, box from {lo:?}");
+        assert!((from[a] - lo[a]).abs() < 1e-5 && to[a] >= hi[a] - 1e-5 && to[a] < hi[a] + voxel, "{grid}");
+    }
+    let v = solidtex::io::read_volume(Path::new(&exr), u64::MAX).unwrap();
+    let [x, y, z] = v.dims();
+    for k in 0..z {
+        for j in 0..y {
+            for i in 0..x {
+                let centre: [f32; 3] = std::array::from_fn(|a| origin[a] + [i, j, k][a] as f32 * voxel);
+                let within = (0..3).all(|a| centre[a] > lo[a] && centre[a] < hi[a]);
+                assert!(v.get(i, j, k, 3) == 0.0 || within, "voxel ({i}, {j}, {k}) is inside at {centre:?}");
+            }
+        }
+    }
+    let info = solidtex(&["info", &exr]);
+    let text = String::from_utf8_lossy(&info.stdout);
+    let [ox, oy, oz] = origin;
+    assert!(text.contains(&format!("origin    {ox} {oy} {oz} (model-space centre of voxel 0 0 0)")), "{text}");
+    assert!(text.contains(&format!("voxel     {voxel} (side, model units)")), "{text}");
+
+    let nrrd = at(d, "baked.nrrd");
+    let run = solidtex(&["bake", &model, "--res", "16", "-o", &nrrd]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let bytes = std::fs::read(&nrrd).unwrap();
+    let end = bytes.windows(2).position(|w| w == b"\n\n").unwrap();
+    let header = String::from_utf8_lossy(&bytes[..end]).into_owned();
+    for line in [
+        "space dimension: 3".to_string(),
+        format!("space directions: none ({voxel},0,0) (0,{voxel},0) (0,0,{voxel})"),
+        format!("space origin: ({ox},{oy},{oz})"),
+    ] {
+        assert!(header.lines().any(|l| l == line), "{line:?} not in {header}");
+    }
+    assert_eq!(placed(&nrrd), grid, "the NRRD reads back in the same place");
+
+    let dds = at(d, "baked.dds");
+    let run = solidtex(&["bake", &model, "--res", "16", "-o", &dds]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    assert!(stderr(&run).contains("keeps no place in model space"), "{}", stderr(&run));
+}
+
 #[test]
 fn two_models_cut_together_and_the_surface_view_draws_the_model() {
     let dir = tempfile::tempdir().unwrap();

@@ -2,6 +2,14 @@
 
 use crate::support::{at, solidtex, stderr};
 
+/// The background of a cut's picture outside the model, `solidtex cut`'s and `guided --cut`'s.
+const BACKGROUND: [u8; 3] = [24, 24, 28];
+
+/// Whether a cut's pixel shows the model (anything but the background).
+fn shown(p: &image::Rgba<u8>) -> bool {
+    p.0[..3] != BACKGROUND
+}
+
 /// `solidtex field` draws the kiwi spec's field on the cut through the fruit's axis: inside,
 /// the frames' x axis follows the stroke along the fruit (red: x in model space), outside
 /// is black; a spec without strokes is refused by name.
@@ -83,8 +91,8 @@ fn gravel() -> String {
     concat!(env!("CARGO_MANIFEST_DIR"), "/exemplars/gravel_photo.png").to_string()
 }
 
-/// `solidtex guided --cut` writes the cut through the fruit: transparent outside, opaque
-/// inside, textured (not flat); it reports the voxels it synthesized, far fewer than a
+/// `solidtex guided --cut` writes the cut through the fruit: the background of `solidtex
+/// cut` outside, textured (not flat) inside; it reports the voxels it synthesized, far fewer than a
 /// whole solid; with `--cache` a second cut is the same picture, a file at the cache's
 /// name that solidtex did not write there stops the run and stays as it was, and a cache
 /// file of its own that was damaged is rebuilt with a warning.
@@ -110,10 +118,10 @@ fn a_guided_cut_is_synthesized_on_demand_and_cached() {
     let line = err.lines().find(|l| l.starts_with("voxels synthesized:")).expect("the voxel report");
     let numbers: Vec<f64> = line.split(' ').filter_map(|w| w.parse().ok()).collect();
     assert!(numbers[0] < 0.6 * numbers[1], "{line}");
-    let img = image::open(&plain).unwrap().to_rgba8();
-    assert_eq!(img.get_pixel(0, 0).0[3], 0, "outside the fruit is transparent");
-    let inside: Vec<[u8; 4]> = (24..40).map(|x| img.get_pixel(x, 32).0).collect();
-    assert!(inside.iter().all(|p| p[3] == 255), "inside is opaque");
+    let img = image::open(&plain).unwrap().to_rgb8();
+    assert_eq!(img.get_pixel(0, 0).0, BACKGROUND, "outside the fruit is the cut's background");
+    let inside: Vec<[u8; 3]> = (24..40).map(|x| img.get_pixel(x, 32).0).collect();
+    assert!(inside.iter().all(|p| *p != BACKGROUND), "inside is the texture");
     let (lo, hi) = inside.iter().fold((255, 0), |(lo, hi), p| (lo.min(p[1]), hi.max(p[1])));
     assert!(hi - lo > 20, "the cut is textured: green {lo}..{hi}");
 
@@ -276,8 +284,8 @@ fn a_solid_exemplar_is_read_along_the_field() {
     let byte = |v: f32| (v.clamp(0.0, 1.0) * 255.0).round() as u8;
     let colours: std::collections::HashSet<[u8; 3]> =
         volume.data().chunks_exact(volume.channel_count()).map(|p| [byte(p[0]), byte(p[1]), byte(p[2])]).collect();
-    let img = image::open(&out).unwrap().to_rgba8();
-    let inside: Vec<[u8; 3]> = img.pixels().filter(|p| p.0[3] == 255).map(|p| [p.0[0], p.0[1], p.0[2]]).collect();
+    let img = image::open(&out).unwrap().to_rgb8();
+    let inside: Vec<[u8; 3]> = img.pixels().map(|p| p.0).filter(|p| *p != BACKGROUND).collect();
     assert!(inside.len() > 500, "{} pixels inside", inside.len());
     let foreign = inside.iter().filter(|c| !colours.contains(*c)).count();
     assert_eq!(foreign, 0, "{foreign} of {} pixels show a colour the volume lacks", inside.len());
@@ -313,10 +321,10 @@ fn a_built_cross_section_is_followed_in_layers_inside_the_surfaces_outline() {
     assert!(run.status.success(), "{}", stderr(&run));
     let img = image::open(&out).unwrap().to_rgba8();
     // the log's radius is 0.5 of the cut's 1.04 units: a disc of 61.5 px radius
-    let (inside, radius) = (img.pixels().filter(|p| p.0[3] == 255).count() as f64, 0.5 * 128.0 / 1.04);
+    let (inside, radius) = (img.pixels().filter(|p| shown(p)).count() as f64, 0.5 * 128.0 / 1.04);
     let disc = std::f64::consts::PI * radius * radius;
     assert!((inside / disc - 1.0).abs() < 0.02, "{inside} pixels inside, a disc holds {disc:.0}");
-    let reds: Vec<u8> = img.pixels().filter(|p| p.0[3] == 255).map(|p| p.0[0]).collect();
+    let reds: Vec<u8> = img.pixels().filter(|p| shown(p)).map(|p| p.0[0]).collect();
     let (lo, hi) = (reds.iter().min().unwrap(), reds.iter().max().unwrap());
     assert!(hi - lo > 40, "rings and heartwood: red {lo} to {hi}");
     // the bark, the section's outermost 3 % of depth (two voxels at this resolution),
@@ -327,7 +335,7 @@ fn a_built_cross_section_is_followed_in_layers_inside_the_surfaces_outline() {
         img.enumerate_pixels()
             .filter(|(x, y, p)| {
                 let r = (*x as f64 - 63.5).hypot(*y as f64 - 63.5) / radius;
-                p.0[3] == 255 && r > lo && r <= hi
+                shown(p) && r > lo && r <= hi
             })
             .map(|(_, _, p)| luminance(p))
             .collect()
@@ -370,6 +378,47 @@ fn a_whole_guided_solid_carries_the_model_as_alpha() {
     let run = solidtex(&["guided", &fruit, "--spec", &bare, "--exemplar", &ex, "-o", &at(d, "bare.exr")]);
     crate::support::assert_fails(&run, &["bare.toml", "direction stroke"]);
     assert!(!d.join("bare.exr").exists());
+}
+
+/// A guided solid is written as a lapped fill's bake is: every channel 0 outside the model
+/// (alpha 0), the texture inside, and its place in model space recorded (its grid's box
+/// holds the fruit's). A guided cut leaves `solidtex cut`'s background outside the fruit,
+/// not black or transparent.
+#[test]
+fn a_guided_bake_is_empty_outside_the_model_and_its_cut_shows_the_cut_background() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (fruit, spec) = crate::fill::kiwi_fruit(d);
+    let ex = gravel();
+    let (model, baked) = (at(d, "fruit.guided"), at(d, "baked.exr"));
+    let base = ["guided", &fruit, "--spec", &spec, "--exemplar", &ex, "--max-exemplar", "64", "--res", "24"];
+    assert!(solidtex(&[&base[..], &["-o", &model]].concat()).status.success());
+    let run = solidtex(&["bake", &model, "-o", &baked]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let volume = solidtex::io::read_volume(std::path::Path::new(&baked), 1 << 30).unwrap();
+    let (mut outside, mut textured) = (0, 0);
+    for voxel in volume.data().chunks_exact(volume.channel_count()) {
+        if voxel.last() == Some(&0.0) {
+            assert!(voxel.iter().all(|v| *v == 0.0), "a voxel outside the fruit holds {voxel:?}");
+            outside += 1;
+        } else {
+            textured += usize::from(voxel[0] > 0.0);
+        }
+    }
+    assert!(outside > 1000 && textured > 1000, "{outside} voxels outside, {textured} textured inside");
+    let info: serde_json::Value = serde_json::from_slice(&solidtex(&["info", &baked, "--json"]).stdout).unwrap();
+    let corner = |key: &str, a: usize| info["model_grid"][key][a].as_f64().map(|v| v as f32);
+    let (lo, hi) = solidtex::io::mesh_file::read_mesh(std::path::Path::new(&fruit)).unwrap().bounds();
+    let holds = (0..3)
+        .all(|a| corner("box_min", a).is_some_and(|v| v < lo[a]) && corner("box_max", a).is_some_and(|v| v > hi[a]));
+    assert!(holds, "the bake's box {} holds the fruit's, {lo} to {hi}", info["model_grid"]);
+
+    let cut = at(d, "cut.png");
+    let run = solidtex(&["cut", &model, "--plane", "0,0,0,0,0,1", "--size", "48", "-o", &cut]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let img = image::open(&cut).unwrap().to_rgba8();
+    assert_eq!(img.get_pixel(0, 0).0, [24, 24, 28, 255], "outside the fruit");
+    assert!(shown(img.get_pixel(24, 24)), "the fruit's centre shows its texture");
 }
 
 /// `--mask` adds a feature mask to the exemplar: matched (the cut changes), not shown (the
@@ -501,7 +550,7 @@ fn regions_give_the_log_one_exemplar_outside_and_another_inside() {
             .enumerate_pixels()
             .filter(|(x, y, p)| {
                 let r = (*x as f64 - 63.5).hypot(*y as f64 - 63.5) / radius;
-                p.0[3] == 255 && r > lo && r <= hi
+                shown(p) && r > lo && r <= hi
             })
             .map(|(_, _, p)| p.0[0] > p.0[2])
             .collect();
@@ -567,7 +616,7 @@ fn a_scale_field_halves_the_texture_where_it_asks_for_half() {
     let run = solidtex(&[&args[..], &["--size", "128", "-o", &out]].concat());
     assert!(run.status.success(), "{}", stderr(&run));
     let img = image::open(&out).unwrap().to_rgba8();
-    let rows: Vec<u32> = (0..img.height()).filter(|&y| img.get_pixel(64, y).0[3] == 255).collect();
+    let rows: Vec<u32> = (0..img.height()).filter(|&y| shown(img.get_pixel(64, y))).collect();
     let crop = |from: f32, to: f32| {
         let (x0, x1) = ((from * 128.0) as u32, (to * 128.0) as u32);
         let data: Vec<f32> = rows

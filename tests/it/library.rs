@@ -160,7 +160,7 @@ fn each_invalid_manifest_gets_its_own_clear_message() {
         ("unknown-step.toml", vec!["unknown field `smudge`", "line"]),
         ("wrong-type.toml", vec!["entry 1 (a)", "type", "\"3-a\"", "allowed: 0, 1-a"]),
         ("size-out-of-range.toml", vec!["size = [4096, 4096, 4096]", "1..=512"]),
-        ("missing-input.toml", vec!["no-such-image.png", "FAILED a"]),
+        ("missing-input.toml", vec!["FAILED a: ", "line 5, field \"image\": ", "no-such-image.png"]),
         ("duplicate-id.toml", vec!["line 6: entry 2: name = \"a\" is used twice"]),
         ("bad-size.toml", vec!["size = [8, 8]", "one number or three"]),
         ("wrong-value-type.toml", vec!["size", "line 5"]),
@@ -172,13 +172,60 @@ fn each_invalid_manifest_gets_its_own_clear_message() {
         let run = solidtex(&["build", &folder.join(file).to_string_lossy(), "-o", &out]);
         assert_eq!(run.status.code(), Some(1), "{file}");
         let err = stderr(&run);
-        if file != "missing-input.toml" {
-            assert!(err.contains(file), "the message names the manifest {file}: {err}");
-        }
+        assert!(err.contains(file), "the message names the manifest {file}: {err}");
         for n in needles {
             assert!(err.contains(n), "{file}: {n:?} not in {err}");
         }
     }
+}
+
+/// An entry's input files are found wanting only when it is built: a misspelt image, a
+/// mesh given where an image goes, an image whose sweep does not make the size asked for,
+/// a missing seed mesh of a step. Each failure names the manifest, the line of the field
+/// that names the file (or states the size), the field, and the file.
+#[test]
+fn an_input_file_error_names_the_manifest_line_and_field() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    assert!(solidtex(&["draw", "carrot", "--size", "16x16", "-o", &at(d, "section.png")]).status.success());
+    assert!(solidtex(&["draw", "seed", "-o", &at(d, "seed.obj")]).status.success());
+    let sweep = "recipe = \"sweep\"\nlength = 8\naxis = \"x\"\n";
+    let text = format!(
+        "# input files that fail only at build time\n\
+         [[exemplar]]\nname = \"typo\"\n{sweep}image = \"sectoin.png\"\n\n\
+         [[exemplar]]\nname = \"mesh\"\n{sweep}image = \"seed.obj\"\n\n\
+         [[exemplar]]\nname = \"sized\"\n{sweep}size = [8, 16, 9]\nimage = \"section.png\"\n\n\
+         [[exemplar]]\nname = \"stamped\"\nrecipe = \"procedural:marble\"\nsize = 8\n\
+         [[exemplar.steps]]\nblur = \"4,4,4\"\nradius = 2\nstrength = 0.5\n\
+         [[exemplar.steps]]\nstamp = \"sede.obj\"\nat = \"4,4,4\"\ncolor = \"#000000\"\n"
+    );
+    let manifest = d.join("lib.toml");
+    std::fs::write(&manifest, &text).unwrap();
+    let line = |needle: &str| text.lines().position(|l| l.starts_with(needle)).unwrap() + 1;
+    let run = solidtex(&["build", &manifest.to_string_lossy(), "-o", &at(d, "out")]);
+    assert_eq!(run.status.code(), Some(1), "{}", stderr(&run));
+    let err = stderr(&run);
+    let failed = |name: &str| {
+        let prefix = format!("FAILED {name}: ");
+        err.lines()
+            .find_map(|l| l.strip_prefix(&prefix))
+            .unwrap_or_else(|| panic!("no {prefix:?} in {err}"))
+            .to_string()
+    };
+    let starts = |name: &str, field: &str, at: usize| {
+        let said = failed(name);
+        let want = format!("{}: line {at}, {field}: ", manifest.display());
+        assert!(said.starts_with(&want), "{name}: {said:?} does not start with {want:?}");
+        said
+    };
+    let typo = starts("typo", "field \"image\"", line("image = \"sectoin.png\""));
+    assert!(typo.contains("sectoin.png") && typo.contains("No such file"), "{typo}");
+    let mesh = starts("mesh", "field \"image\"", line("image = \"seed.obj\""));
+    assert!(mesh.contains("seed.obj") && mesh.contains("cannot decode image"), "{mesh}");
+    let sized = starts("sized", "field \"size\"", line("size = [8, 16, 9]"));
+    assert!(sized.contains("section.png") && sized.contains("not the size [8, 16, 9]"), "{sized}");
+    let stamped = starts("stamped", "step 2, field \"stamp\"", line("stamp = \"sede.obj\""));
+    assert!(stamped.contains("sede.obj"), "{stamped}");
 }
 
 #[test]
