@@ -1014,7 +1014,8 @@ fn cube_volume(args: &GuidedArgs, images: &[Image2d; 3]) -> Result<crate::volume
     let key = cube::key(images, args.seed);
     let path = guided_cache::cube_path(folder, key);
     let channels = images[0].channel_count();
-    let read = guided_cache::read_cube(&path, key, cube::SIDE, channels, cube::colour_range(images));
+    let hint = if args.cache.is_some() { guided_cache::CACHE_HINT } else { "move it away to keep the cube there" };
+    let read = guided_cache::read_cube(&path, key, (cube::SIDE, channels), cube::colour_range(images), hint);
     let stale = match read {
         Ok(Cached::Good(colours)) => {
             return crate::volume::Volume::from_data([cube::SIDE; 3], images[0].channels().to_vec(), colours);

@@ -171,11 +171,14 @@ fn le_u64(bytes: &[u8], at: usize) -> u64 {
 
 /// The error for a file at a cache's name that is not `what` solidtex wrote there (an empty
 /// file said as such): it is left as it is.
-fn not_ours(path: &Path, what: &str) -> Error {
+fn not_ours(path: &Path, what: &str, hint: &str) -> Error {
     let empty = std::fs::metadata(path).is_ok_and(|m| m.len() == 0);
     let is = if empty { format!("is empty, not {what}") } else { format!("is not {what}") };
-    Error::file(path, format!("{is}; solidtex does not overwrite it (move it away or give another --cache folder)"))
+    Error::file(path, format!("{is}; solidtex does not overwrite it ({hint})"))
 }
+
+/// What to do about a file in a `--cache` folder that is not solidtex's.
+pub const CACHE_HINT: &str = "move it away or give another --cache folder";
 
 /// The cube file of `key` in `folder`.
 pub fn cube_path(folder: &Path, key: u64) -> PathBuf {
@@ -183,14 +186,21 @@ pub fn cube_path(folder: &Path, key: u64) -> PathBuf {
 }
 
 /// The cube's colours cached under `key` (`side`³ voxels of `channels`, each colour
-/// within `range`), or an error naming the file when it is not solidtex's cube of `key`.
-pub fn read_cube(path: &Path, key: u64, side: usize, channels: usize, range: (f32, f32)) -> Result<Cached<Vec<f32>>> {
+/// within `range`), or an error naming the file when it is not solidtex's cube of `key`
+/// (`hint`: what the user can do about it).
+pub fn read_cube(
+    path: &Path,
+    key: u64,
+    (side, channels): (usize, usize),
+    range: (f32, f32),
+    hint: &str,
+) -> Result<Cached<Vec<f32>>> {
     let ours = |h: &[u8]| {
         let fits = le_u64(h, 23) == key && le_u32(h, 31) == side && le_u32(h, 35) == channels;
         owner(h, CUBE_MAGIC, OLD_CUBE_MAGICS).filter(|_| fits)
     };
     let found = read_checked(path, CUBE_HEADER, Size::Body(4 * side * side * side * channels), ours)?
-        .ok_or_else(|| not_ours(path, "the solid cube of these exemplars"))?;
+        .ok_or_else(|| not_ours(path, "the solid cube of these exemplars", hint))?;
     Ok(found.and_then(|bytes| colours_within(&bytes[CUBE_HEADER + CHECKSUM..], range)))
 }
 
@@ -248,7 +258,7 @@ pub fn read(
         owner(h, MAGIC, OLD_MAGICS).filter(|_| fits)
     };
     let found = read_checked(path, HEADER, Size::AtMost(most), ours)?
-        .ok_or_else(|| not_ours(path, "the guided-synthesis cache of these inputs"))?;
+        .ok_or_else(|| not_ours(path, "the guided-synthesis cache of these inputs", CACHE_HINT))?;
     Ok(found.and_then(|bytes| match bricks(&bytes[HEADER + CHECKSUM..], dims, slots, &voxel) {
         Ok(levels) => Cached::Good(levels),
         Err(why) => damaged(why),
@@ -350,18 +360,20 @@ mod tests {
     fn a_cube_reads_back_and_a_foreign_file_is_refused() {
         let dir = tempfile::tempdir().unwrap();
         let path = cube_path(dir.path(), 7);
-        assert_eq!(read_cube(&path, 7, 2, 3, RANGE).unwrap(), Cached::Missing);
+        assert_eq!(read_cube(&path, 7, (2, 3), RANGE, CACHE_HINT).unwrap(), Cached::Missing);
         let colours: Vec<f32> = (0..24).map(|i| i as f32 / 24.0).collect();
         write_cube(&path, 7, 2, 3, &colours).unwrap();
-        assert_eq!(read_cube(&path, 7, 2, 3, RANGE).unwrap(), Cached::Good(colours));
+        assert_eq!(read_cube(&path, 7, (2, 3), RANGE, CACHE_HINT).unwrap(), Cached::Good(colours));
         for (key, side, channels) in [(8, 2, 3), (7, 3, 3), (7, 2, 1)] {
-            let err = read_cube(&path, key, side, channels, RANGE).unwrap_err().to_string();
+            let err = read_cube(&path, key, (side, channels), RANGE, CACHE_HINT).unwrap_err().to_string();
             assert!(err.contains("guided-cube-") && err.contains("does not overwrite"), "{err}");
         }
         std::fs::write(&path, b"my notes").unwrap();
-        assert!(read_cube(&path, 7, 2, 3, RANGE).unwrap_err().to_string().contains("is not the solid cube"));
+        assert!(
+            read_cube(&path, 7, (2, 3), RANGE, CACHE_HINT).unwrap_err().to_string().contains("is not the solid cube")
+        );
         std::fs::write(&path, b"").unwrap();
-        let err = read_cube(&path, 7, 2, 3, RANGE).unwrap_err().to_string();
+        let err = read_cube(&path, 7, (2, 3), RANGE, CACHE_HINT).unwrap_err().to_string();
         assert!(err.contains("is empty, not the solid cube") && err.contains("does not overwrite"), "{err}");
         assert_eq!(std::fs::read(&path).unwrap(), b"", "left as it was");
     }
@@ -387,23 +399,23 @@ mod tests {
             [(zeros, "checksum"), (huge, "checksum"), (flipped, "checksum"), (good[..60].to_vec(), "bytes")]
         {
             std::fs::write(&path, bytes).unwrap();
-            let found = stale_why(read_cube(&path, 7, 2, 3, RANGE).unwrap());
+            let found = stale_why(read_cube(&path, 7, (2, 3), RANGE, CACHE_HINT).unwrap());
             assert!(found.starts_with("damaged (") && found.contains(why), "{found}");
         }
         for bad in [-1e30, f32::NAN, 2.5] {
             let mut wild = colours.clone();
             wild[5] = bad;
             write_cube(&path, 7, 2, 3, &wild).unwrap();
-            let found = stale_why(read_cube(&path, 7, 2, 3, RANGE).unwrap());
+            let found = stale_why(read_cube(&path, 7, (2, 3), RANGE, CACHE_HINT).unwrap());
             assert!(found.contains("value 5") && found.contains("outside -1 to 2"), "{found}");
         }
         let mut old = good.clone();
         old[..OLD_CUBE_MAGICS[0].len()].copy_from_slice(OLD_CUBE_MAGICS[0]);
         old.drain(CUBE_HEADER..body);
         std::fs::write(&path, old).unwrap();
-        assert!(stale_why(read_cube(&path, 7, 2, 3, RANGE).unwrap()).contains("older solidtex"));
+        assert!(stale_why(read_cube(&path, 7, (2, 3), RANGE, CACHE_HINT).unwrap()).contains("older solidtex"));
         write_cube(&path, 7, 2, 3, &colours).unwrap();
-        assert_eq!(read_cube(&path, 7, 2, 3, RANGE).unwrap(), Cached::Good(colours));
+        assert_eq!(read_cube(&path, 7, (2, 3), RANGE, CACHE_HINT).unwrap(), Cached::Good(colours));
     }
 
     /// Bricks of two levels read back as written, the plane each voxel shows with them;

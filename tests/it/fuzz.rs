@@ -119,7 +119,7 @@ fn read_mesh(path: &Path) -> solidtex::Result<()> {
 const CUBE: (u64, usize, usize) = (7, 3, 3);
 
 fn read_guided_cube(path: &Path) -> solidtex::Result<()> {
-    io::guided_cache::read_cube(path, CUBE.0, CUBE.1, CUBE.2, (0.0, 1.0)).map(drop)
+    io::guided_cache::read_cube(path, CUBE.0, (CUBE.1, CUBE.2), (0.0, 1.0), io::guided_cache::CACHE_HINT).map(drop)
 }
 
 /// A guided-synthesis cube as `guided --cache` keeps it.

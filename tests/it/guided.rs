@@ -230,6 +230,7 @@ fn a_guided_model_keeps_its_solid_cube_for_the_next_command() {
     let run = cut(&third);
     assert!(run.status.success(), "{}", stderr(&run));
     assert!(stderr(&run).contains("warning: the solid cube was not kept"), "{}", stderr(&run));
+    assert!(stderr(&run).contains("move it away") && !stderr(&run).contains("--cache"), "{}", stderr(&run));
     assert_eq!(std::fs::read(&cube).unwrap(), b"my notes");
     assert_eq!(std::fs::read(&third).unwrap(), std::fs::read(&direct).unwrap());
 }
