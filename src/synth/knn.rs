@@ -1,6 +1,14 @@
 //! A k-nearest-neighbour kd-tree over points of any (runtime) dimension: exact, or among
 //! the first points a search weighs within a budget. An exact search breaks ties by the
 //! lower point index, so its answers never depend on build order.
+//!
+//! Points equal bit for bit are kept once, with the indices of their copies: an exemplar's
+//! flat areas give thousands of equal neighbourhoods, and a search in one of them would
+//! otherwise weigh every copy to settle the tie (tens of times the time of a textured
+//! exemplar). A point with copies weighs as many points as it has against a budget, so
+//! the answers are those of the tree over every copy.
+
+use std::collections::HashMap;
 
 /// A kd-tree over `count` points of `dims` f32 values each.
 #[derive(Debug, Clone)]
@@ -9,6 +17,10 @@ pub struct KdTree {
     points: Vec<f32>,
     order: Vec<u32>,
     nodes: Vec<Node>,
+    /// Per distinct point (in first-seen order), where its copies start in `copies`.
+    starts: Vec<u32>,
+    /// The indices of every distinct point's copies, each list ascending.
+    copies: Vec<u32>,
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -25,8 +37,9 @@ pub type Hit = (f32, u32);
 impl KdTree {
     /// Build over row-major `points` (length a multiple of `dims`).
     pub fn build(points: Vec<f32>, dims: usize) -> KdTree {
-        let count = points.len() / dims.max(1);
-        let mut tree = KdTree { dims, points, order: (0..count as u32).collect(), nodes: Vec::new() };
+        let (points, starts, copies) = distinct(points, dims);
+        let count = starts.len() - 1;
+        let mut tree = KdTree { dims, points, order: (0..count as u32).collect(), nodes: Vec::new(), starts, copies };
         tree.split(0, count);
         // Store the points in leaf order, so a leaf's points are read one after another.
         let leaf_order = tree.order.iter().flat_map(|&i| tree.point(i).iter().copied()).collect();
@@ -105,9 +118,13 @@ impl KdTree {
             Node::Leaf { start, end } => {
                 for at in start..end {
                     let d = squared(self.point(at), search.query);
-                    insert(search.best, search.k, (d, self.order[at as usize]));
+                    let copies = self.copies_of(self.order[at as usize]);
+                    // equal distances: the lower indices come first, the rest cannot get in
+                    for &index in copies.iter().take(search.k) {
+                        insert(search.best, search.k, (d, index));
+                    }
+                    search.left = search.left.saturating_sub(copies.len());
                 }
-                search.left = search.left.saturating_sub((end - start) as usize);
             }
             Node::Split { axis, value, left, right } => {
                 let axis = axis as usize;
@@ -125,6 +142,47 @@ impl KdTree {
             }
         }
     }
+}
+
+impl KdTree {
+    /// The indices of distinct point `u`'s copies, ascending.
+    fn copies_of(&self, u: u32) -> &[u32] {
+        &self.copies[self.starts[u as usize] as usize..self.starts[u as usize + 1] as usize]
+    }
+}
+
+/// The distinct points of row-major `points` in first-seen order, where each one's copies
+/// start (one more entry than points, the last the end), and the copies' indices.
+fn distinct(points: Vec<f32>, dims: usize) -> (Vec<f32>, Vec<u32>, Vec<u32>) {
+    let count = points.len() / dims.max(1);
+    if dims == 0 {
+        return (points, (0..=count as u32).collect(), (0..count as u32).collect());
+    }
+    let mut first: HashMap<Vec<u32>, u32> = HashMap::with_capacity(count);
+    let mut of_point = Vec::with_capacity(count);
+    let mut unique = Vec::with_capacity(points.len());
+    for p in points.chunks_exact(dims) {
+        let next = first.len() as u32;
+        let u = *first.entry(p.iter().map(|v| v.to_bits()).collect()).or_insert(next);
+        if u == next {
+            unique.extend_from_slice(p);
+        }
+        of_point.push(u);
+    }
+    let mut starts = vec![0u32; first.len() + 1];
+    for &u in &of_point {
+        starts[u as usize + 1] += 1;
+    }
+    for u in 0..first.len() {
+        starts[u + 1] += starts[u];
+    }
+    let mut next = starts.clone();
+    let mut copies = vec![0u32; count];
+    for (i, &u) in of_point.iter().enumerate() {
+        copies[next[u as usize] as usize] = i as u32;
+        next[u as usize] += 1;
+    }
+    (unique, starts, copies)
 }
 
 /// One search's state: the query, how many it wants, the best so far, the offsets of the
@@ -192,6 +250,29 @@ mod tests {
             all.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
             assert_eq!(got, all[..4].to_vec());
         }
+    }
+
+    /// Points with many copies give the answers of a brute-force search (lower indices
+    /// first among equal distances), and a search weighs each copy against its budget.
+    #[test]
+    fn copies_of_a_point_answer_as_every_copy_would() {
+        let dims = 3;
+        let point = |i: usize| -> [f32; 3] {
+            match i % 5 {
+                0 | 1 | 2 => [0.5, 0.5, 0.5],
+                3 => [0.25, 0.5, 0.75],
+                _ => [(i % 7) as f32 / 7.0, (i % 11) as f32 / 11.0, 0.1],
+            }
+        };
+        let points: Vec<f32> = (0..600).flat_map(point).collect();
+        let tree = KdTree::build(points.clone(), dims);
+        for query in [[0.5, 0.5, 0.5], [0.3, 0.5, 0.7], [0.0, 0.0, 0.1], [0.9, 0.2, 0.4]] {
+            let mut all: Vec<Hit> = (0..600).map(|i| (squared(&point(i), &query), i as u32)).collect();
+            all.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+            assert_eq!(tree.nearest(&query, 5), all[..5].to_vec(), "{query:?}");
+        }
+        // a budget of one point still answers, from the first leaf's first point
+        assert_eq!(tree.nearest_within(&[0.5, 0.5, 0.5], 4, 1).len(), 4);
     }
 
     /// Within a budget of eight leaves, a search over 4,000 uniform points in 6 dimensions
