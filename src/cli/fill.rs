@@ -494,7 +494,7 @@ pub(super) struct Loaded {
 impl Loaded {
     /// The files the model reads besides itself: its sources' volumes and mask files.
     fn sources(&self, model: &Path) -> Vec<PathBuf> {
-        let base = model.parent().unwrap_or(Path::new("."));
+        let base = io::model_folder(model);
         let masks = self.model.sources.iter().filter_map(|s| match &s.mask {
             MaskRef::File(file) => Some(base.join(file)),
             _ => None,
@@ -534,14 +534,33 @@ fn guided_model(models: &[PathBuf]) -> Result<Option<&Path>> {
 
 fn load_model(path: &Path) -> Result<Loaded> {
     let model = lst_file::read_lst(path)?;
-    let base = path.parent().unwrap_or(Path::new("."));
-    let masks = model.sources.iter().map(|s| load_mask(&s.mask, base)).collect::<Result<Vec<_>>>()?;
+    let base = io::model_folder(path);
+    let named = model.sources.iter().flat_map(|s| {
+        let mask = match &s.mask {
+            MaskRef::File(file) => Some(("mask", Path::new(file))),
+            _ => None,
+        };
+        mask.into_iter().chain([("volume", Path::new(&s.volume))])
+    });
+    for (field, file) in named {
+        if !base.join(file).is_file() {
+            return Err(Error::file(
+                path,
+                format!(
+                    "its {field} {}: no such file in {} (paths in a model are relative to the model's folder)",
+                    file.display(),
+                    base.display()
+                ),
+            ));
+        }
+    }
+    let masks = model.sources.iter().map(|s| load_mask(&s.mask, &base)).collect::<Result<Vec<_>>>()?;
     with_volumes(model, path, masks)
 }
 
 /// `model` (written to `path`) with its `masks` and its sources' volumes read.
 fn with_volumes(model: LstModel, path: &Path, masks: Vec<Volume>) -> Result<Loaded> {
-    let base = path.parent().unwrap_or(Path::new("."));
+    let base = io::model_folder(path);
     let budget = io::budget_from_env()?;
     let files: Vec<PathBuf> = model.sources.iter().map(|s| base.join(&s.volume)).collect();
     let volumes = files.iter().map(|f| io::read_volume(f, budget)).collect::<Result<Vec<_>>>()?;

@@ -997,7 +997,7 @@ fn solid_exemplar(
 
 /// The folder beside a guided model (`model`) where its commands keep the solid cube.
 fn model_cube_folder(model: &Path) -> PathBuf {
-    model.parent().unwrap_or(Path::new("")).join(MODEL_CACHE)
+    io::model_folder(model).join(MODEL_CACHE)
 }
 
 /// The name of the folder beside a guided model that keeps its solid cube.

@@ -122,7 +122,7 @@ pub fn read(path: &Path) -> Result<GuidedModel> {
     if model.exemplar.is_some() && model.solid.is_some() {
         return Err(Error::file(path, "gives both exemplar and solid; a guided model takes one of them"));
     }
-    let folder = path.parent().unwrap_or(Path::new(""));
+    let folder = super::model_folder(path);
     for p in model.paths_mut() {
         *p = folder.join(&*p);
     }

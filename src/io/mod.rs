@@ -273,6 +273,19 @@ pub fn model_grid_lost(path: &Path, volume: &Volume) -> Option<String> {
     })
 }
 
+/// The folder a model's relative paths start from: the folder of the file itself, or of
+/// the file a link at `model` points to (a model linked elsewhere reads what it was
+/// written beside).
+pub fn model_folder(model: &Path) -> PathBuf {
+    let linked = std::fs::symlink_metadata(model).is_ok_and(|m| m.file_type().is_symlink());
+    let real =
+        if linked { std::fs::canonicalize(model).unwrap_or_else(|_| model.to_path_buf()) } else { model.to_path_buf() };
+    real.parent().map_or_else(
+        || PathBuf::from("."),
+        |p| if p.as_os_str().is_empty() { PathBuf::from(".") } else { p.to_path_buf() },
+    )
+}
+
 /// Write a volume in the format its path names (atomically).
 pub fn write_volume(path: &Path, volume: &Volume) -> Result<()> {
     match Format::of(path)? {

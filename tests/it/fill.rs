@@ -832,6 +832,29 @@ fn a_damaged_model_file_is_named_and_refused() {
     assert!(!d.join("x.png").exists());
 }
 
+/// A model reads its files from beside itself: linked from another folder it still finds
+/// them; copied away from them, the error names the model, the file it misses and where
+/// it looked.
+#[test]
+fn a_model_reads_its_files_from_its_own_folder() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (mesh, spec) = (draw(d, "block"), spec(d, "m.toml", "exemplar = \"marble\"\nscale = 1.0\ntets = 2000\n"));
+    fill(d, &mesh, &spec, "m.lst");
+    let elsewhere = d.join("elsewhere");
+    std::fs::create_dir(&elsewhere).unwrap();
+    std::os::unix::fs::symlink(d.join("m.lst"), elsewhere.join("linked.lst")).unwrap();
+    let (direct, linked) = (at(d, "direct.png"), at(d, "linked.png"));
+    assert!(solidtex(&["cut", &at(d, "m.lst"), "-o", &direct]).status.success());
+    let run = solidtex(&["cut", &elsewhere.join("linked.lst").to_string_lossy(), "-o", &linked]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    assert_eq!(std::fs::read(&direct).unwrap(), std::fs::read(&linked).unwrap());
+    std::fs::copy(d.join("m.lst"), elsewhere.join("copied.lst")).unwrap();
+    let run = solidtex(&["cut", &elsewhere.join("copied.lst").to_string_lossy(), "-o", &at(d, "copied.png")]);
+    assert_fails(&run, &["copied.lst", "no such file in", "relative to the model's folder"]);
+    assert!(!d.join("copied.png").exists());
+}
+
 /// A hollow tube of `segments` sides, axis along y (outer radius 0.3, inner 0.1, length 1),
 /// with one ring of long triangles per wall: a coarse triangulation.
 fn coarse_tube(path: &Path, segments: usize) {
