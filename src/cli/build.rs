@@ -3,7 +3,7 @@
 
 use crate::error::{Error, Result};
 use crate::library::build::{self, Observer, Outcome, Request};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// The arguments of `solidtex build`.
 #[derive(Debug, clap::Args)]
@@ -160,5 +160,17 @@ mod tests {
     fn shards_are_k_of_n() {
         assert_eq!(parse_shard("2/5").unwrap(), (2, 5));
         assert!(parse_shard("5/5").is_err() && parse_shard("x").is_err() && parse_shard("1/0").is_err());
+    }
+}
+
+/// What a command that builds its exemplars first says while another build holds the
+/// built folder.
+pub fn waiting_for(built: &Path) -> impl Fn() + '_ {
+    move || {
+        tell!(
+            "waiting for another solidtex build of {} to finish (up to {} minutes)…",
+            built.display(),
+            crate::library::build::LOCK_WAIT.as_secs() / 60
+        )
     }
 }
