@@ -152,17 +152,6 @@ fn summarize(outcomes: &[Outcome], request: &Request) -> Result<()> {
     }
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn shards_are_k_of_n() {
-        assert_eq!(parse_shard("2/5").unwrap(), (2, 5));
-        assert!(parse_shard("5/5").is_err() && parse_shard("x").is_err() && parse_shard("1/0").is_err());
-    }
-}
-
 /// What a command that builds its exemplars first says while another build holds the
 /// built folder.
 pub fn waiting_for(built: &Path) -> impl Fn() + '_ {
@@ -172,5 +161,16 @@ pub fn waiting_for(built: &Path) -> impl Fn() + '_ {
             built.display(),
             crate::library::build::LOCK_WAIT.as_secs() / 60
         )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn shards_are_k_of_n() {
+        assert_eq!(parse_shard("2/5").unwrap(), (2, 5));
+        assert!(parse_shard("5/5").is_err() && parse_shard("x").is_err() && parse_shard("1/0").is_err());
     }
 }

@@ -261,7 +261,12 @@ pub fn run_fill(args: &FillArgs) -> Result<()> {
     let missing = library::fill::missing(&spec, &library::fill::names(&spec)).map_err(|e| e.in_file(&args.spec))?;
     if !missing.is_empty() {
         tell!("building {} into {} first", missing.join(", "), spec.built.display());
-        library::fill::build_first(&spec, missing, &super::build::Lines::new(0), &super::build::waiting_for(&spec.built))?;
+        library::fill::build_first(
+            &spec,
+            missing,
+            &super::build::Lines::new(0),
+            &super::build::waiting_for(&spec.built),
+        )?;
     }
     let resolved = library::fill::resolve(&spec, &args.output).map_err(|e| e.in_file(&args.spec))?;
     // a type that leaves [depth] unused meshes as a spec without it
@@ -270,9 +275,10 @@ pub fn run_fill(args: &FillArgs) -> Result<()> {
     let (tets, refined) = fill::tetrahedralize(&surface, &spec, depth).map_err(|e| e.in_file(&args.mesh))?;
     let meshed = mesh_started.elapsed().as_secs_f64();
     warn_if_far(&args.mesh, tets.tets.len(), spec.tets);
-    let mesh_at = |count| fill::tetrahedralize(&surface, &fill::spec::FillSpec { tets: count, ..spec.clone() }, depth).map(|m| m.0);
-    let held = mesher::volume_check(&surface, &tets, spec.tets, &mesh_at)
-        .map_err(|e| e.in_file(&args.mesh))?;
+    let mesh_at = |count| {
+        fill::tetrahedralize(&surface, &fill::spec::FillSpec { tets: count, ..spec.clone() }, depth).map(|m| m.0)
+    };
+    let held = mesher::volume_check(&surface, &tets, spec.tets, &mesh_at).map_err(|e| e.in_file(&args.mesh))?;
     warn_if_lost(&args.mesh, &held);
     let distance = mesher::surface_distance(&surface, &tets).map_err(|e| e.in_file(&args.mesh))?;
     let job = Job {

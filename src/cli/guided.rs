@@ -618,7 +618,12 @@ fn by_regions(
     let missing = crate::library::fill::missing(spec, &names).map_err(|e| e.in_file(&args.spec))?;
     if !missing.is_empty() {
         tell!("building {} into {} first", missing.join(", "), spec.built.display());
-        crate::library::fill::build_first(spec, missing, &super::build::Lines::new(0), &super::build::waiting_for(&spec.built))?;
+        crate::library::fill::build_first(
+            spec,
+            missing,
+            &super::build::Lines::new(0),
+            &super::build::waiting_for(&spec.built),
+        )?;
     }
     let depth = solid::depth_over(&g.depth, domain).map_err(|e| e.in_file(&args.spec))?;
     let made = crate::library::guided::region_exemplars(spec, &g.depth, domain).map_err(|e| e.in_file(&args.spec))?;

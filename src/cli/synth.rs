@@ -57,9 +57,7 @@ impl OtherExemplars {
     /// `e` about the exemplars, in the file it is about: the Ey or Ez image when the message
     /// starts with that name (as synthesis names them), else the exemplar `ex`.
     pub fn in_file(&self, e: Error, ex: &Path) -> Error {
-        let names = |name: &str| {
-            matches!(&e, Error::Invalid(m) if m.strip_prefix(name).is_some_and(|rest| rest.starts_with([' ', ':'])))
-        };
+        let names = |name: &str| matches!(&e, Error::Invalid(m) if m.strip_prefix(name).is_some_and(|rest| rest.starts_with([' ', ':'])));
         let path = match (&self.ey, &self.ez) {
             (Some(p), _) if names("Ey") => p.as_path(),
             (_, Some(p)) if names("Ez") => p.as_path(),

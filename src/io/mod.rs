@@ -248,7 +248,8 @@ pub fn check_folder_output(output: &Path, inputs: &[&Path]) -> Result<()> {
 pub fn channels_lost(path: &Path, volume: &Volume) -> Option<String> {
     let format = Format::of(path).ok()?;
     if format == Format::Dds {
-        let left: Vec<Channel> = volume.channels().iter().filter(|c| !stored_channels(path, volume).contains(c)).cloned().collect();
+        let left: Vec<Channel> =
+            volume.channels().iter().filter(|c| !stored_channels(path, volume).contains(c)).cloned().collect();
         return (!left.is_empty()).then(|| {
             format!(
                 "{}: a DDS texture holds R, G, B and A only; {} not stored (write .exr or .nrrd to keep every channel)",
