@@ -3,7 +3,7 @@
 
 use crate::error::{Error, Result};
 use crate::library::build::{self, Observer, Outcome, Request};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// The arguments of `solidtex build`.
 #[derive(Debug, clap::Args)]
@@ -149,6 +149,18 @@ fn summarize(outcomes: &[Outcome], request: &Request) -> Result<()> {
         Ok(())
     } else {
         Err(Error::invalid(format!("{} exemplar(s) failed: {} (see the lines above)", failed.len(), failed.join(", "))))
+    }
+}
+
+/// What a command that builds its exemplars first says while another build holds the
+/// built folder.
+pub fn waiting_for(built: &Path) -> impl Fn() + '_ {
+    move || {
+        tell!(
+            "waiting for another solidtex build of {} to finish (up to {} minutes)…",
+            built.display(),
+            crate::library::build::LOCK_WAIT.as_secs() / 60
+        )
     }
 }
 

@@ -125,9 +125,10 @@ fn parse_plane(text: &str) -> Result<[f32; 6]> {
     let values: Vec<f32> =
         text.split(',').map(|v| v.trim().parse::<f32>()).collect::<std::result::Result<_, _>>().map_err(|_| bad())?;
     let numbers: [f32; 6] = values.try_into().map_err(|_| bad())?;
-    if numbers.iter().any(|v| !v.is_finite() || v.abs() > 1e6) {
+    if numbers.iter().any(|v| !v.is_finite()) {
         return Err(bad());
     }
+    io::values::positions("--plane", text, &numbers).map_err(usage)?;
     if numbers[3..].iter().all(|v| *v == 0.0) {
         return Err(Error::usage(format!("--plane {text:?}: the normal NX,NY,NZ must not be zero")));
     }

@@ -59,6 +59,12 @@ pub fn run(args: &ExportArgs) -> Result<()> {
     };
     checks().map_err(super::commands::usage)?;
     let inputs: Vec<&Path> = args.models.iter().map(PathBuf::as_path).collect();
+    super::guided::not_taken_by(
+        "export",
+        &inputs,
+        " to see it in 3D with `solidtex web solid.exr`; export takes filled models (.lst, from `solidtex fill`) \
+         and skins (.ply)",
+    )?;
     io::guard::file_output(&args.output, &inputs, &["glb"], "a glTF binary")?;
     if let [one] = args.models.as_slice()
         && one.extension().is_some_and(|e| e.eq_ignore_ascii_case("ply"))

@@ -261,7 +261,12 @@ pub fn run_fill(args: &FillArgs) -> Result<()> {
     let missing = library::fill::missing(&spec, &library::fill::names(&spec)).map_err(|e| e.in_file(&args.spec))?;
     if !missing.is_empty() {
         tell!("building {} into {} first", missing.join(", "), spec.built.display());
-        library::fill::build_first(&spec, missing, &super::build::Lines::new(0))?;
+        library::fill::build_first(
+            &spec,
+            missing,
+            &super::build::Lines::new(0),
+            &super::build::waiting_for(&spec.built),
+        )?;
     }
     let resolved = library::fill::resolve(&spec, &args.output).map_err(|e| e.in_file(&args.spec))?;
     // a type that leaves [depth] unused meshes as a spec without it
@@ -270,8 +275,10 @@ pub fn run_fill(args: &FillArgs) -> Result<()> {
     let (tets, refined) = fill::tetrahedralize(&surface, &spec, depth).map_err(|e| e.in_file(&args.mesh))?;
     let meshed = mesh_started.elapsed().as_secs_f64();
     warn_if_far(&args.mesh, tets.tets.len(), spec.tets);
-    let held = mesher::volume_check(&surface, &tets, spec.tets, fill::cover_margin(&spec, depth))
-        .map_err(|e| e.in_file(&args.mesh))?;
+    let mesh_at = |count| {
+        fill::tetrahedralize(&surface, &fill::spec::FillSpec { tets: count, ..spec.clone() }, depth).map(|m| m.0)
+    };
+    let held = mesher::volume_check(&surface, &tets, spec.tets, &mesh_at).map_err(|e| e.in_file(&args.mesh))?;
     warn_if_lost(&args.mesh, &held);
     let distance = mesher::surface_distance(&surface, &tets).map_err(|e| e.in_file(&args.mesh))?;
     let job = Job {
@@ -823,6 +830,7 @@ pub fn run_render(args: &RenderArgs) -> Result<()> {
             budget >> 20
         )));
     }
+    let skin = args.skin.as_deref().map(SkinInput::file).transpose()?;
     let loaded = match guided_model(&args.models)? {
         Some(model) => {
             super::guided::check_picture_of_model(model, &args.output)?;
@@ -853,7 +861,7 @@ pub fn run_render(args: &RenderArgs) -> Result<()> {
         DensityFrom::Alpha => translucent::Density::Channel(&channel),
     };
     io::values::within("--skin-opacity", args.skin_opacity, 0.0, 1.0).map_err(usage)?;
-    let input = args.skin.as_deref().map(|path| SkinInput::read(path, &loaded, None)).transpose()?;
+    let input = skin.map(|file| SkinInput::read(file, &loaded, None)).transpose()?;
     let lookup = input.as_ref().map(SkinInput::lookup);
     let layer = input
         .as_ref()
@@ -932,7 +940,8 @@ pub fn run_bake(args: &BakeArgs) -> Result<()> {
     drop((textures, loaded));
     super::write_volume(&args.output, &volume)?;
     let [x, y, z] = volume.dims();
-    let names: Vec<&str> = volume.channels().iter().map(Channel::name).collect();
+    let stored = io::stored_channels(&args.output, &volume);
+    let names: Vec<&str> = stored.iter().map(Channel::name).collect();
     tell!(
         "wrote {} ({x}x{y}x{z}, {}) in {:.2} s",
         args.output.display(),
@@ -952,8 +961,17 @@ struct SkinInput {
 }
 
 impl SkinInput {
-    fn read(path: &Path, loaded: &[Loaded], displacement: Option<f32>) -> Result<SkinInput> {
-        let coloured = io::mesh_file::read_coloured_ply(path)?;
+    /// The skin file `path`, read before any model is loaded or synthesized, so a missing or
+    /// broken skin stops the command at once.
+    fn file(path: &Path) -> Result<(&Path, io::mesh_file::ColouredMesh)> {
+        Ok((path, io::mesh_file::read_coloured_ply(path)?))
+    }
+
+    fn read(
+        (path, coloured): (&Path, io::mesh_file::ColouredMesh),
+        loaded: &[Loaded],
+        displacement: Option<f32>,
+    ) -> Result<SkinInput> {
         let within = skin_reach(path, &coloured.mesh, &pairs(loaded), displacement)?;
         let depth = channel_textures(loaded, &Channel::Depth).ok();
         Ok(SkinInput { coloured, within, depth })
@@ -1046,6 +1064,7 @@ pub fn run_view(args: &ViewArgs) -> Result<()> {
         }
         _ => {}
     }
+    let skin = args.skin.as_deref().map(SkinInput::file).transpose()?;
     let loaded = load_models(&args.models, &args.output)?;
     let started = Instant::now();
     let shading = if args.flat { Shading::Flat } else { Shading::Smooth { crease: args.crease } };
@@ -1059,7 +1078,7 @@ pub fn run_view(args: &ViewArgs) -> Result<()> {
     };
     let displacement =
         relief.as_ref().map(|(textures, scale)| crate::fill::view::Displacement { textures, scale: *scale });
-    let input = args.skin.as_deref().map(|path| SkinInput::read(path, &loaded, args.displacement)).transpose()?;
+    let input = skin.map(|file| SkinInput::read(file, &loaded, args.displacement)).transpose()?;
     let lookup = input.as_ref().map(SkinInput::lookup);
     let skin = input.as_ref().zip(lookup.as_ref()).map(|(input, lookup)| input.skin(lookup));
     let bar = Bar::new();

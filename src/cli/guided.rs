@@ -618,7 +618,12 @@ fn by_regions(
     let missing = crate::library::fill::missing(spec, &names).map_err(|e| e.in_file(&args.spec))?;
     if !missing.is_empty() {
         tell!("building {} into {} first", missing.join(", "), spec.built.display());
-        crate::library::fill::build_first(spec, missing, &super::build::Lines::new(0))?;
+        crate::library::fill::build_first(
+            spec,
+            missing,
+            &super::build::Lines::new(0),
+            &super::build::waiting_for(&spec.built),
+        )?;
     }
     let depth = solid::depth_over(&g.depth, domain).map_err(|e| e.in_file(&args.spec))?;
     let made = crate::library::guided::region_exemplars(spec, &g.depth, domain).map_err(|e| e.in_file(&args.spec))?;
@@ -939,7 +944,7 @@ fn plane_exemplars(
         Exemplars::prepare([&exemplars[0], &exemplars[1], &exemplars[2]], &options)
             .and_then(|prepared| prepared.refuse_alpha().map(|_| prepared))
     }
-    .map_err(|e| e.in_file(path))?;
+    .map_err(|e| args.others.in_file(e, path))?;
     let [first, ..] = exemplars;
     Ok((prepared, options, first))
 }
@@ -1244,4 +1249,18 @@ fn coverage(surface: &Mesh, domain: &Domain) -> Vec<f32> {
         }
     }
     alpha
+}
+
+/// A usage error when one of `inputs` is a guided model, which `command` does not take:
+/// its colours are synthesized on demand, so it is baked to a volume first.
+pub fn not_taken_by(command: &str, inputs: &[&Path], instead: &str) -> Result<()> {
+    match inputs.iter().find(|p| io::guided_model::is_guided(p)) {
+        None => Ok(()),
+        Some(model) => Err(Error::usage(format!(
+            "{}: `solidtex {command}` does not take guided models (their solid is synthesized on demand); bake it \
+             first (`solidtex bake {} -o solid.exr`){instead}",
+            model.display(),
+            model.display()
+        ))),
+    }
 }

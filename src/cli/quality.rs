@@ -50,6 +50,19 @@ pub fn run(args: &QualityArgs) -> Result<()> {
     let others = shrunk_as_made(&args.others, &volume);
     let ex = others.load(exemplar, "exemplar")?;
     let (ey, ez) = others.load_yz()?;
+    let given = [(exemplar.as_path(), Some(&ex)), (others.ey.as_deref().unwrap_or(exemplar), ey.as_ref())];
+    for (path, image) in given.into_iter().chain([(others.ez.as_deref().unwrap_or(exemplar), ez.as_ref())]) {
+        if let Some(image) = image.filter(|i| i.width() < 3 || i.height() < 3) {
+            return Err(crate::Error::file(
+                path,
+                format!(
+                    "is {}x{} pixels (as loaded); measuring sharpness needs an exemplar of at least 3x3 pixels",
+                    image.width(),
+                    image.height()
+                ),
+            ));
+        }
+    }
     let layered = args.layered || volume.meta.texture_type == Some(crate::TextureType::T1b);
     let ey_ref = ey.as_ref().unwrap_or(&ex);
     let exemplars = if layered {
@@ -303,13 +316,14 @@ pub struct NoiseArgs {
 pub fn noise(args: &NoiseArgs) -> Result<()> {
     args.others.check()?;
     let dims = super::commands::parse_size(&args.size)?;
-    crate::volume::check_size(dims, 4, io::budget_from_env()?).map_err(super::commands::usage)?;
     let mut inputs = vec![args.exemplar.as_path()];
     inputs.extend(args.others.ey.as_deref());
     inputs.extend(args.others.ez.as_deref());
     io::check_output(&args.output, &inputs)?;
     let ex = args.others.load(&args.exemplar, "exemplar")?;
     let (ey, ez) = args.others.load_yz()?;
+    args.others.check_channels((&args.exemplar, &ex), (ey.as_ref(), ez.as_ref()))?;
+    crate::volume::check_size(dims, ex.channel_count(), io::budget_from_env()?).map_err(super::commands::usage)?;
     let ey_ref = ey.as_ref().unwrap_or(&ex);
     let exemplars = [Some(&ex), Some(ey_ref), Some(ez.as_ref().unwrap_or(ey_ref))];
     let mut volume =

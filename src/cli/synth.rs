@@ -25,7 +25,7 @@ pub struct OtherExemplars {
 }
 
 /// The provenance key of the `--max-exemplar` a volume was synthesized with.
-pub const MAX_EXEMPLAR_KEY: &str = "max_exemplar";
+pub const MAX_EXEMPLAR_KEY: &str = crate::volume::MAX_EXEMPLAR_KEY;
 
 /// The longer side past which an exemplar read at its own size gets a note about
 /// `--max-exemplar`.
@@ -52,6 +52,45 @@ impl OtherExemplars {
         let ey = self.ey.as_deref().map(|p| self.load(p, "Ey exemplar")).transpose()?;
         let ez = self.ez.as_deref().map(|p| self.load(p, "Ez exemplar")).transpose()?;
         Ok((ey, ez))
+    }
+
+    /// `e` about the exemplars, in the file it is about: the Ey or Ez image when the message
+    /// starts with that name (as synthesis names them), else the exemplar `ex`.
+    pub fn in_file(&self, e: Error, ex: &Path) -> Error {
+        let names = |name: &str| matches!(&e, Error::Invalid(m) if m.strip_prefix(name).is_some_and(|rest| rest.starts_with([' ', ':'])));
+        let path = match (&self.ey, &self.ez) {
+            (Some(p), _) if names("Ey") => p.as_path(),
+            (_, Some(p)) if names("Ez") => p.as_path(),
+            _ => ex,
+        };
+        e.in_file(path)
+    }
+
+    /// Ey and Ez (as loaded) have the channels of the exemplar `ex` read from `path`; the
+    /// error names the image that differs.
+    pub fn check_channels(
+        &self,
+        (path, ex): (&Path, &Image2d),
+        (ey, ez): (Option<&Image2d>, Option<&Image2d>),
+    ) -> Result<()> {
+        for (file, image) in [(&self.ey, ey), (&self.ez, ez)] {
+            if let (Some(file), Some(image)) = (file, image)
+                && image.channel_count() != ex.channel_count()
+            {
+                return Err(Error::file(
+                    file,
+                    format!(
+                        "has {} channel(s) ({}) but the exemplar {} has {} ({}); all exemplars need the same channels",
+                        image.channel_count(),
+                        crate::volume::channel_names(image.channels()),
+                        path.display(),
+                        ex.channel_count(),
+                        crate::volume::channel_names(ex.channels())
+                    ),
+                ));
+            }
+        }
+        Ok(())
     }
 }
 
@@ -280,7 +319,7 @@ pub fn run(args: &SynthArgs) -> Result<()> {
             warn_if_directional(&ex, &args.exemplar);
         }
         let exemplars = Exemplars { x: &ex, y: ey.as_ref(), z: ez.as_ref() };
-        synth::synthesize(exemplars, &params, args.seed, &bar).map_err(|e| e.in_file(&args.exemplar))?
+        synth::synthesize(exemplars, &params, args.seed, &bar).map_err(|e| args.others.in_file(e, &args.exemplar))?
     };
     bar.bar.finish_and_clear();
     let mut volume = volume;

@@ -46,6 +46,7 @@ pub fn run(args: &WebArgs) -> Result<()> {
     io::values::within("--res", args.res, 16, MAX_SIDE).map_err(super::commands::usage)?;
     io::values::within("--max-mb", args.max_mb, 1, 64).map_err(super::commands::usage)?;
     let inputs: Vec<&Path> = args.inputs.iter().map(PathBuf::as_path).collect();
+    super::guided::not_taken_by("web", &inputs, " and open the volume: `solidtex web solid.exr -o page.html`")?;
     io::guard::file_output(&args.output, &inputs, &["html", "htm"], "an HTML page")?;
     let title = args.title.clone().unwrap_or_else(|| names(&inputs).join(", "));
     let started = Instant::now();

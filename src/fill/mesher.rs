@@ -222,7 +222,7 @@ pub struct VolumeCheck {
     /// The share of the solid's volume inside the tets.
     pub share: f64,
     /// When the share is below [`HELD_VOLUME`]: the smallest target tet count (the target
-    /// doubled up to 4 times, within [`TARGET_TETS`]) whose [`tetrahedralize_covering`]
+    /// doubled up to 4 times, within [`TARGET_TETS`]) whose meshing (as the caller meshes)
     /// holds that share, if any.
     pub holding: Option<usize>,
     /// The largest target tried for `holding` (the given one when none was needed).
@@ -230,10 +230,15 @@ pub struct VolumeCheck {
 }
 
 /// How much of the solid `mesh` encloses the tets `tets` (made from it for
-/// `target_tets` by [`tetrahedralize_covering`] with `margin`) hold, and where parts are
-/// lost, a target tet count that keeps them (meshing the same way, so the advice
-/// reproduces).
-pub fn volume_check(mesh: &Mesh, tets: &TetMesh, target_tets: usize, margin: f32) -> Result<VolumeCheck> {
+/// `target_tets` by `mesh_at`) hold, and where parts are lost, a target tet count that
+/// keeps them: `mesh_at` must mesh as the caller does (a fill's refinement may re-mesh
+/// at a lower target), so that the advice reproduces.
+pub fn volume_check(
+    mesh: &Mesh,
+    tets: &TetMesh,
+    target_tets: usize,
+    mesh_at: &dyn Fn(usize) -> Result<TetMesh>,
+) -> Result<VolumeCheck> {
     check(mesh, target_tets)?;
     let share = held(mesh, tets);
     let mut tried = target_tets;
@@ -242,7 +247,7 @@ pub fn volume_check(mesh: &Mesh, tets: &TetMesh, target_tets: usize, margin: f32
     }
     for count in (1..=4).map(|k| target_tets << k).take_while(|n| TARGET_TETS.contains(n)) {
         tried = count;
-        let Ok(finer) = tetrahedralize_covering(mesh, count, margin) else { break };
+        let Ok(finer) = mesh_at(count) else { break };
         if held(mesh, &finer) >= HELD_VOLUME {
             return Ok(VolumeCheck { share, holding: Some(count), tried });
         }
@@ -567,18 +572,31 @@ fn area(mesh: &Mesh) -> f64 {
     corners.map(|[a, b, c]| (b - a).cross(c - a).length() / 2.0).sum()
 }
 
+/// Why a mesh with `open` boundary edges and `non_manifold` edges is no closed surface.
+fn not_closed(open: usize, non_manifold: usize) -> String {
+    let mut parts = Vec::new();
+    if open > 0 {
+        parts.push(format!("{open} boundary edge(s) (edges of one triangle only)"));
+    }
+    if non_manifold > 0 {
+        parts.push(format!(
+            "{non_manifold} edge(s) shared by more than two triangles (non-manifold: faces touching along an edge, \
+             or a face given twice)"
+        ));
+    }
+    let what = if non_manifold > 0 { "not a closed manifold surface" } else { "not closed" };
+    format!("the mesh is {what}: {}; a solid is made only from a closed surface", parts.join(" and "))
+}
+
 /// Checks the preconditions; the enclosed volume.
 fn check(mesh: &Mesh, target_tets: usize) -> Result<f64> {
     if !TARGET_TETS.contains(&target_tets) {
         let (lo, hi) = (TARGET_TETS.start(), TARGET_TETS.end());
         return Err(Error::invalid(format!("target_tets is {target_tets}; allowed are {lo}..={hi}")));
     }
-    let open = mesh.boundary_edges();
-    if open > 0 {
-        return Err(Error::invalid(format!(
-            "the mesh is not closed: {open} boundary edge(s) (edges of one triangle only); a solid is made only \
-             from a closed surface"
-        )));
+    let (open, non_manifold) = mesh.unpaired_edges();
+    if open + non_manifold > 0 {
+        return Err(Error::invalid(not_closed(open, non_manifold)));
     }
     let (lo, hi) = mesh.bounds();
     let diagonal = f64::from((hi - lo).length());
@@ -771,6 +789,12 @@ mod tests {
         open.triangles.pop();
         let err = tetrahedralize(&open, 1000).unwrap_err().to_string();
         assert!(err.contains("not closed: 3 boundary edge(s)"), "{err}");
+        // a face given twice: its three edges each belong to three triangles, none is open
+        let mut twice = sphere(Vec3::ZERO, 1.0, 2);
+        twice.triangles.push(twice.triangles[0]);
+        let err = tetrahedralize(&twice, 1000).unwrap_err().to_string();
+        assert!(err.contains("3 edge(s) shared by more than two triangles (non-manifold"), "{err}");
+        assert!(!err.contains("boundary edge"), "{err}");
         // A tetrahedron squashed flat: closed, but enclosing nothing.
         let corners = vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::new(0.3, 0.3, 0.0)];
         let flat = Mesh::new(corners, vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]).unwrap();

@@ -246,7 +246,19 @@ pub fn check_folder_output(output: &Path, inputs: &[&Path]) -> Result<()> {
 /// `.vol` holds none, so its channels read back by position (grey, grey and alpha, RGB,
 /// RGBA, extras); `None` when the names come back as they are.
 pub fn channels_lost(path: &Path, volume: &Volume) -> Option<String> {
-    if Format::of(path).ok()? != Format::Vol {
+    let format = Format::of(path).ok()?;
+    if format == Format::Dds {
+        let left: Vec<Channel> =
+            volume.channels().iter().filter(|c| !stored_channels(path, volume).contains(c)).cloned().collect();
+        return (!left.is_empty()).then(|| {
+            format!(
+                "{}: a DDS texture holds R, G, B and A only; {} not stored (write .exr or .nrrd to keep every channel)",
+                path.display(),
+                crate::volume::channel_names(&left)
+            )
+        });
+    }
+    if format != Format::Vol {
         return None;
     }
     let back = nrrd::default_channels(volume.channel_count());
@@ -258,6 +270,15 @@ pub fn channels_lost(path: &Path, volume: &Volume) -> Option<String> {
             crate::volume::channel_names(&back)
         )
     })
+}
+
+/// The channels the file `path` holds when `volume` is written there: a DDS texture's
+/// R, G, B and A, every other format's the volume's own.
+pub fn stored_channels(path: &Path, volume: &Volume) -> Vec<Channel> {
+    match Format::of(path) {
+        Ok(Format::Dds) => Channel::rgba(),
+        _ => volume.channels().to_vec(),
+    }
 }
 
 /// A warning when the format of `path` cannot hold where `volume` sits in model space
@@ -317,9 +338,12 @@ pub fn relative_to(path: &Path, base: &Path) -> PathBuf {
 }
 
 /// How a file in the folder `base` names `path`: both resolved (through links where they
-/// exist), then [`relative_to`], with `/` between the parts.
+/// exist), then [`relative_to`], with `/` between the parts. Only on Windows is `\\` a
+/// separator; elsewhere it is part of a name and kept.
 pub fn written_relative(path: &Path, base: &Path) -> String {
-    relative_to(&resolved(path), &resolved(base)).to_string_lossy().replace('\\', "/")
+    let relative = relative_to(&resolved(path), &resolved(base));
+    let text = relative.to_string_lossy();
+    if cfg!(windows) { text.replace('\\', "/") } else { text.into_owned() }
 }
 
 /// `path` made absolute, its `.` and `..` taken away and its links followed as far as it
@@ -476,6 +500,15 @@ mod tests {
         assert_eq!(rel("/w/data/a.png", "/w/lib"), PathBuf::from("../data/a.png"));
         assert_eq!(rel("/w/lib/a.png", "/w/lib"), PathBuf::from("a.png"));
         assert_eq!(rel("lib/a.png", "/w"), PathBuf::from("lib/a.png"), "no shared root: as given");
+    }
+
+    /// On Unix a backslash is part of a file name, not a separator, and is kept.
+    #[cfg(unix)]
+    #[test]
+    fn a_backslash_in_a_name_is_kept_on_unix() {
+        let dir = tempfile::tempdir().unwrap();
+        let root = dir.path().canonicalize().unwrap();
+        assert_eq!(written_relative(&root.join("sub/we\"ird \\ name.png"), &root), "sub/we\"ird \\ name.png");
     }
 
     /// A folder given with `..`, through a link or not there yet names a file as the

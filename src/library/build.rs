@@ -12,7 +12,7 @@ use crate::io::manifest::{self, Entry, Source};
 use crate::progress::Progress;
 use rayon::prelude::*;
 use std::path::{Path, PathBuf};
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 /// What to build, and where.
 #[derive(Debug, Clone)]
@@ -131,9 +131,35 @@ pub fn manifest_folder(manifest: &Path) -> &Path {
 /// build lock; one entry's failure (or panic) never takes the others down. Writes the
 /// report and returns one outcome per entry, in order.
 pub fn build(request: &Request, entries: &[Entry], observer: &dyn Observer) -> Result<Vec<Outcome>> {
+    not_the_current_folder(&request.output)?;
+    let lock = lock_output(&request.output)?;
+    build_holding(request, entries, observer, lock)
+}
+
+/// How long [`build_when_free`] waits for another build of the same folder.
+pub const LOCK_WAIT: Duration = Duration::from_secs(600);
+
+/// [`build`], but when another build holds the folder's lock, wait up to `wait` for it
+/// (calling `waiting` once, when the wait starts) instead of stopping: for a command that
+/// needs the exemplars built, not a build of its own.
+pub fn build_when_free(
+    request: &Request,
+    entries: &[Entry],
+    observer: &dyn Observer,
+    (wait, waiting): (Duration, &dyn Fn()),
+) -> Result<Vec<Outcome>> {
+    not_the_current_folder(&request.output)?;
+    let lock = lock_waiting(&request.output, wait, waiting)?;
+    build_holding(request, entries, observer, lock)
+}
+
+fn build_holding(
+    request: &Request,
+    entries: &[Entry],
+    observer: &dyn Observer,
+    _lock: std::fs::File,
+) -> Result<Vec<Outcome>> {
     let output = request.output.as_path();
-    not_the_current_folder(output)?;
-    let _lock = lock_output(output)?;
     remove_stale_temporaries(output);
     let ledger = open_ledger(output)?;
     ledger.claim(&REPORTS.map(String::from))?;
@@ -390,6 +416,44 @@ fn not_the_current_folder(output: &Path) -> Result<()> {
 /// the returned file closes): a second build on the same folder stops with a clear message
 /// instead of removing the first one's temporaries.
 fn lock_output(output: &Path) -> Result<std::fs::File> {
+    try_lock_output(output)?.ok_or_else(|| {
+        Error::file(
+            output,
+            "another solidtex build is writing into this folder (it holds .cache/build.lock); \
+             wait for it to finish or build into another folder with -o",
+        )
+    })
+}
+
+/// Hold the build lock on `output`, waiting up to `wait` while another build holds it
+/// (polling twice a second); `waiting` is called once when the wait starts.
+fn lock_waiting(output: &Path, wait: Duration, waiting: &dyn Fn()) -> Result<std::fs::File> {
+    let started = Instant::now();
+    let mut told = false;
+    loop {
+        if let Some(file) = try_lock_output(output)? {
+            return Ok(file);
+        }
+        if started.elapsed() >= wait {
+            return Err(Error::file(
+                output,
+                format!(
+                    "another solidtex build has been writing into this folder for over {} s (it holds \
+                     .cache/build.lock); run this again once it has finished",
+                    wait.as_secs()
+                ),
+            ));
+        }
+        if !told {
+            waiting();
+            told = true;
+        }
+        std::thread::sleep(Duration::from_millis(500).min(wait));
+    }
+}
+
+/// The build lock on `output`, or `None` while another build holds it.
+fn try_lock_output(output: &Path) -> Result<Option<std::fs::File>> {
     let cache = output.join(files::CACHE);
     std::fs::create_dir_all(output).map_err(|e| Error::io(output, e))?;
     check_cache_folder(&cache)?;
@@ -402,12 +466,8 @@ fn lock_output(output: &Path) -> Result<std::fs::File> {
         .open(&path)
         .map_err(|e| Error::io(&path, e))?;
     match file.try_lock() {
-        Ok(()) => Ok(file),
-        Err(std::fs::TryLockError::WouldBlock) => Err(Error::file(
-            output,
-            "another solidtex build is writing into this folder (it holds .cache/build.lock); \
-             wait for it to finish or build into another folder with -o",
-        )),
+        Ok(()) => Ok(Some(file)),
+        Err(std::fs::TryLockError::WouldBlock) => Ok(None),
         Err(std::fs::TryLockError::Error(e)) => Err(Error::io(&path, e)),
     }
 }
@@ -583,6 +643,25 @@ mod tests {
         assert_eq!(groups.iter().map(Vec::len).collect::<Vec<_>>(), [2, 2, 1]);
         assert_eq!(batches(&entries, 1).len(), 5, "an entry over the budget still builds, alone");
         assert_eq!(batches(&entries, u64::MAX).len(), 1);
+    }
+
+    #[test]
+    fn a_wait_for_the_lock_takes_it_once_free_and_times_out_with_a_clear_error() {
+        let dir = tempfile::tempdir().unwrap();
+        let held = lock_output(dir.path()).unwrap();
+        let calls = std::sync::atomic::AtomicUsize::new(0);
+        let waiting = || {
+            calls.fetch_add(1, Ordering::SeqCst);
+        };
+        let err = lock_waiting(dir.path(), Duration::from_millis(300), &waiting).unwrap_err().to_string();
+        assert!(err.contains("run this again once it has finished") && !err.contains("-o"), "{err}");
+        assert_eq!(calls.load(Ordering::SeqCst), 1, "told once");
+        let freed = std::thread::spawn(move || {
+            std::thread::sleep(Duration::from_millis(300));
+            drop(held);
+        });
+        assert!(lock_waiting(dir.path(), Duration::from_secs(20), &waiting).is_ok());
+        freed.join().unwrap();
     }
 
     #[test]

@@ -60,12 +60,14 @@ fn check_names(spec: &FillSpec, plan: &manifest::Plan, names: &[String]) -> Resu
     Ok(())
 }
 
-/// Build (cached) the exemplars `names` of the spec's library.
-pub fn build_first(spec: &FillSpec, names: Vec<String>, observer: &dyn Observer) -> Result<()> {
+/// Build (cached) the exemplars `names` of the spec's library. While another build holds
+/// the built folder, wait for it (up to [`build::LOCK_WAIT`]; `waiting` is called when the
+/// wait starts): it may be building the same exemplars.
+pub fn build_first(spec: &FillSpec, names: Vec<String>, observer: &dyn Observer, waiting: &dyn Fn()) -> Result<()> {
     let request =
         Request { manifest: spec.library.clone(), output: spec.built.clone(), force: false, only: names, shard: None };
     let entries = build::select(&request)?;
-    let outcomes = build::build(&request, &entries, observer)?;
+    let outcomes = build::build_when_free(&request, &entries, observer, (build::LOCK_WAIT, waiting))?;
     match outcomes.iter().find(|o| !matches!(o, Outcome::Built(_) | Outcome::Cached(_))) {
         Some(Outcome::Failed(name, why)) => Err(Error::invalid(format!("building exemplar '{name}' failed: {why}"))),
         Some(_) => Err(Error::Cancelled),

@@ -113,7 +113,12 @@ fn synthesized(spec: &SynthSpec, size: [usize; 3], seed: u64, none: &dyn Progres
         }
         synth::synthesize(synth::Exemplars { x: &ex, y: ey.as_ref(), z: ez.as_ref() }, &params, seed, none)
     };
-    volume.map_err(|e| e.in_file(&spec.image))
+    let mut volume = volume.map_err(|e| e.in_file(&spec.image))?;
+    if let Some(side) = spec.max_exemplar {
+        // `quality` shrinks the photos alike when it is not told otherwise
+        volume.meta.set(crate::volume::MAX_EXEMPLAR_KEY, side.to_string());
+    }
+    Ok(volume)
 }
 
 /// The at-a-glance quality of a synthesized entry's volume against its photos (read again,

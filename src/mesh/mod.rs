@@ -95,10 +95,18 @@ impl Mesh {
     /// How many undirected edges are not shared by exactly two triangles: 0 for a closed
     /// mesh; open borders (one triangle) and non-manifold edges (three or more) count.
     pub fn boundary_edges(&self) -> usize {
+        let (open, non_manifold) = self.unpaired_edges();
+        open + non_manifold
+    }
+
+    /// How many undirected edges belong to one triangle only (open borders) and how many
+    /// to more than two (non-manifold: faces touching along an edge, a duplicated face).
+    pub fn unpaired_edges(&self) -> (usize, usize) {
         let mut edges: Vec<u64> =
             self.triangles.iter().flat_map(|&[a, b, c]| [edge_key(a, b), edge_key(b, c), edge_key(c, a)]).collect();
         edges.sort_unstable();
-        edges.chunk_by(|x, y| x == y).filter(|run| run.len() != 2).count()
+        let runs = edges.chunk_by(|x, y| x == y).map(<[u64]>::len);
+        runs.fold((0, 0), |(open, more), n| (open + usize::from(n == 1), more + usize::from(n > 2)))
     }
 
     /// How many degenerate triangles [`Mesh::new`] dropped.
@@ -368,6 +376,8 @@ mod tests {
             Mesh::new(vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z, -Vec3::Y], vec![[0, 1, 2], [0, 1, 3], [0, 1, 4]])
                 .unwrap();
         assert_eq!(fin.boundary_edges(), 7);
+        assert_eq!(fin.unpaired_edges(), (6, 1));
+        assert_eq!(cube.unpaired_edges(), (3, 0));
     }
 
     #[test]

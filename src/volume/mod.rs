@@ -30,6 +30,10 @@ use crate::texture_type::TextureType;
 /// The default voxel budget: 4 GiB of samples.
 pub const DEFAULT_BUDGET_BYTES: u64 = 4 << 30;
 
+/// The provenance key of the longest exemplar side a volume was synthesized with
+/// (`--max-exemplar`, a manifest's `max_exemplar`): `quality` shrinks the exemplars alike.
+pub const MAX_EXEMPLAR_KEY: &str = "max_exemplar";
+
 /// What a volume is, beyond its samples: its texture type and where it came from.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
 pub struct Meta {

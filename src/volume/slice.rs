@@ -74,9 +74,10 @@ pub struct Plane {
 
 impl Plane {
     /// A plane through `centre` with unit normal `normal`, one voxel per pixel,
-    /// covering `size` x `size` pixels centred on `centre`. Its image axes are those of the
-    /// axis slice across the axis nearest the normal, turned into the plane, so a normal
-    /// along an axis gives that axis' slice.
+    /// covering `size` x `size` pixels around `centre`, which pixel (size / 2, size / 2)
+    /// samples: so a plane through voxel positions samples voxel positions in the plane
+    /// too. Its image axes are those of the axis slice across the axis nearest the normal,
+    /// turned into the plane, so a normal along an axis gives that axis' slice.
     pub fn through(centre: Vec3, normal: Vec3, size: usize) -> Result<Plane> {
         let n = normal
             .try_normalize()
@@ -86,7 +87,7 @@ impl Plane {
         let unit = |k: usize| Vec3::AXES[k];
         let u = (unit(pa) - n * n.dot(unit(pa))).normalize();
         let v = (unit(sa) - n * n.dot(unit(sa)) - u * u.dot(unit(sa))).normalize();
-        let half = (size as f32 - 1.0) / 2.0;
+        let half = (size / 2) as f32;
         Ok(Plane { origin: centre - half * (u + v), u, v })
     }
 }
@@ -213,5 +214,16 @@ mod tests {
             let s = v.plane_slice(&plane, 5, 5, Edge::Clamp).unwrap();
             assert_eq!(s, v.slice(axis, 2).unwrap(), "{axis}");
         }
+    }
+
+    /// On an even side too, a plane through a voxel's position samples voxel positions,
+    /// not the points between them.
+    #[test]
+    fn an_axis_plane_of_an_even_side_samples_voxels() {
+        let v =
+            Volume::from_fn([6; 3], Channel::rgb(), |x, y, z, o| o.copy_from_slice(&[x as f32, y as f32, z as f32]))
+                .unwrap();
+        let plane = Plane::through(Vec3::splat(3.0), Vec3::Z, 6).unwrap();
+        assert_eq!(v.plane_slice(&plane, 6, 6, Edge::Wrap).unwrap(), v.slice(Axis::Z, 3).unwrap());
     }
 }

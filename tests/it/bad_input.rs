@@ -309,3 +309,56 @@ fn a_photo_too_large_to_prepare_names_max_exemplar() {
         solidtex_env(&["synth", &photo.to_string_lossy(), "--size", "8", "--max-exemplar", "64", "-o", &out], &budget);
     assert!(small.status.success(), "{}", stderr(&small));
 }
+
+/// A problem with an --ey or --ez image names that image, not the exemplar.
+#[test]
+fn errors_about_the_other_exemplars_name_their_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let photo = concat!(env!("CARGO_MANIFEST_DIR"), "/exemplars/gravel_photo.png");
+    let (thin, colour) = (at(d, "w1.png"), at(d, "rgb.png"));
+    image::GrayImage::from_pixel(1, 64, image::Luma([90])).save(&thin).unwrap();
+    image::RgbImage::from_pixel(64, 64, image::Rgb([90, 60, 30])).save(&colour).unwrap();
+    let starts = |run: &std::process::Output, file: &str| {
+        let err = stderr(run);
+        assert!(err.contains(&format!("error: {file}: ")), "{err}");
+    };
+    let run = solidtex(&["synth", photo, "--ez", &thin, "--max-exemplar", "64", "--size", "16", "-o", &at(d, "s.exr")]);
+    assert_fails(&run, &["Ez is 1x64 pixels"]);
+    starts(&run, &thin);
+    let run = solidtex(&["noise", photo, "--ez", &colour, "--size", "16", "-o", &at(d, "n.exr")]);
+    assert_fails(&run, &["3 channel(s)", "the same channels"]);
+    starts(&run, &colour);
+    let vol = at(d, "v.exr");
+    assert!(solidtex(&["make", "marble", "--size", "16", "-o", &vol]).status.success());
+    let run = solidtex(&["quality", &vol, "--exemplar", &thin]);
+    assert_fails(&run, &["at least 3x3 pixels"]);
+    starts(&run, &thin);
+    assert!(!d.join("s.exr").exists() && !d.join("n.exr").exists());
+}
+
+/// `guided` names the --ez image whose size or channels do not fit, too.
+#[test]
+fn guided_names_the_other_exemplar_at_fault() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let photo = concat!(env!("CARGO_MANIFEST_DIR"), "/exemplars/gravel_photo.png");
+    let (fruit, spec) = crate::fill::kiwi_fruit(d);
+    let thin = at(d, "w1.png");
+    image::GrayImage::from_pixel(1, 64, image::Luma([90])).save(&thin).unwrap();
+    let args = ["guided", &fruit, "--spec", &spec, "--exemplar", photo, "--ez", &thin, "--res", "32"];
+    let run = solidtex(&[&args[..], &["--cut", "0,0,0,1,0,0", "-o", &at(d, "g.png")]].concat());
+    assert_fails(&run, &["Ez is 1x64 pixels"]);
+    assert!(stderr(&run).contains(&format!("error: {thin}: ")), "{}", stderr(&run));
+}
+
+/// The voxel budget of `noise` counts the channels the volume will have: the exemplar's.
+#[test]
+fn the_noise_budget_counts_the_exemplars_channels() {
+    let dir = tempfile::tempdir().unwrap();
+    let photo = concat!(env!("CARGO_MANIFEST_DIR"), "/exemplars/gravel_photo.png");
+    let args = ["noise", photo, "--size", "128", "-o", &at(dir.path(), "n.exr")];
+    // the photo fits (2.4 MB to decode), its 128³ grey volume (8.4 MB) does not
+    let run = solidtex_env(&args, &[("SOLIDTEX_MAX_BYTES", "4000000")]);
+    assert_fails(&run, &["128x128x128 volume with 1 channel(s)"]);
+}

@@ -234,3 +234,23 @@ fn a_closed_error_stream_keeps_the_exit_code() {
     assert!(std::path::Path::new(&out).exists());
     assert_eq!(run(&["info", &at(dir.path(), "missing.exr")]), Some(1), "the error line is dropped, the code kept");
 }
+
+/// A plane through voxel positions samples voxels, in the plane as along its normal: the
+/// cut through z = 32 is the axis slice at index 32, pixel for pixel. A point out of range
+/// is named as such.
+#[test]
+fn a_plane_through_a_voxel_slice_is_that_slice() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let vol = at(d, "m.exr");
+    assert!(solidtex(&["make", "marble", "--size", "64", "-o", &vol]).status.success());
+    let (axis, plane) = (at(d, "axis.png"), at(d, "plane.png"));
+    assert!(solidtex(&["slice", &vol, "--axis", "z", "--index", "32", "-o", &axis]).status.success());
+    let run = solidtex(&["slice", &vol, "--plane", "32,32,32,0,0,1", "-o", &plane]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let (a, p) = (image::open(&axis).unwrap().to_rgb8(), image::open(&plane).unwrap().to_rgb8());
+    assert_eq!(a.dimensions(), p.dimensions());
+    assert!(a == p, "the plane through z = 32 differs from the axis slice");
+    let run = solidtex(&["slice", &vol, "--plane", "1e7,0,0,1,0,0", "-o", &at(d, "far.png")]);
+    crate::support::assert_usage(&run, &["--plane", "out of range", "1000000"]);
+}

@@ -1347,3 +1347,85 @@ fn a_type_without_depth_spends_no_tets_on_the_depth_axis() {
     assert_eq!(refined, 0, "{said}");
     assert_eq!(count, tets(&plain, "p").2, "the same tets as a spec without [depth]");
 }
+
+/// A fill whose exemplars another build is writing waits for that build (it holds the
+/// folder's lock), says so, and then fills with what was built.
+#[test]
+fn a_fill_waits_for_another_build_of_its_exemplars_then_fills() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let mesh = draw(d, "fruit");
+    let spec = spec(d, "marble.toml", "exemplar = \"marble\"\n");
+    std::fs::create_dir_all(d.join("built/.cache")).unwrap();
+    let lock = std::fs::File::create(d.join("built/.cache/build.lock")).unwrap();
+    lock.lock().unwrap();
+    let child = std::process::Command::new(env!("CARGO_BIN_EXE_solidtex"))
+        .args(["fill", &mesh, "--spec", &spec, "-o", &at(d, "m.lst")])
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_secs(2));
+    drop(lock);
+    let out = child.wait_with_output().unwrap();
+    let err = stderr(&out);
+    assert!(out.status.success(), "{err}");
+    assert!(err.contains("waiting for another solidtex build of") && err.contains("built"), "{err}");
+    assert!(d.join("built/marble.exr").is_file() && d.join("m.lst").is_file(), "{err}");
+}
+
+/// Where the fill refines near a depth axis (and so re-meshes at a lower target), the
+/// tet count the thin-parts warning names is one that keeps the parts.
+#[test]
+fn the_thin_parts_advice_names_a_count_that_keeps_them_when_the_fill_refines() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let mesh = draw(d, "fruit");
+    let body = "exemplar = \"kiwi\"\nseed = 1\n[depth]\naxis = [[[-0.8, 0, 0], [0.8, 0, 0]]]\ntaper = 0.5\n\
+                [[direction]]\npoints = [[-0.8, 0, 0], [0.8, 0, 0]]\n";
+    let spec = spec(d, "kiwi.toml", body);
+    let warned = |tets: &str| {
+        let run = solidtex(&["fill", &mesh, "--spec", &spec, "--tets", tets, "-o", &at(d, "k.lst")]);
+        stderr(&run)
+    };
+    let said = warned("500");
+    let advice = said.split("--tets ").nth(1).unwrap_or_else(|| panic!("no advice in {said}"));
+    let count = advice.split(' ').next().unwrap();
+    let again = warned(count);
+    assert!(!again.contains("% of the mesh's volume"), "--tets {count} was advised but loses parts: {again}");
+}
+
+/// A mesh whose edges are shared by more than two triangles is named non-manifold, apart
+/// from open edges.
+#[test]
+fn a_non_manifold_mesh_is_told_apart_from_an_open_one() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // two unit cubes that share the edge from (1, 1, 0) to (1, 1, 1) (vertices 3 and 7)
+    let obj = "v 0 0 0\nv 0 1 0\nv 1 1 0\nv 1 0 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\nv 1 2 0\nv 2 2 0\nv 2 1 0\n\
+               v 2 1 1\nv 2 2 1\nv 1 2 1\nf 1 2 3\nf 1 3 4\nf 5 6 7\nf 5 7 8\nf 1 4 6\nf 1 6 5\nf 2 8 7\nf 2 7 3\n\
+               f 1 5 8\nf 1 8 2\nf 4 3 7\nf 4 7 6\nf 3 9 10\nf 3 10 11\nf 7 12 13\nf 7 13 14\nf 3 11 12\nf 3 12 7\n\
+               f 9 14 13\nf 9 13 10\nf 3 7 14\nf 3 14 9\nf 11 10 13\nf 11 13 12\n";
+    let mesh = at(d, "touching.obj");
+    std::fs::write(&mesh, obj).unwrap();
+    let spec = spec(d, "marble.toml", "exemplar = \"marble\"\ntets = 1000\n");
+    let run = solidtex(&["fill", &mesh, "--spec", &spec, "-o", &at(d, "t.lst")]);
+    assert_fails(&run, &["touching.obj", "1 edge(s) shared by more than two triangles (non-manifold"]);
+    assert!(!stderr(&run).contains("boundary edge"), "{}", stderr(&run));
+    assert!(!d.join("t.lst").exists());
+}
+
+/// A bake into DDS says the channels the texture holds (R, G, B, A), and warns that the
+/// others are not stored.
+#[test]
+fn a_dds_bake_names_the_channels_it_holds() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (mesh, spec) = kiwi_fruit(d);
+    fill(d, &mesh, &spec, "k.lst");
+    let run = solidtex(&["bake", &at(d, "k.lst"), "--res", "32", "-o", &at(d, "b.dds")]);
+    let said = stderr(&run);
+    assert!(run.status.success(), "{said}");
+    let wrote = said.lines().find(|l| l.starts_with("wrote")).unwrap_or_else(|| panic!("{said}"));
+    assert!(wrote.contains(", R, G, B, A)") && !wrote.contains("Depth"), "{wrote}");
+    assert!(said.contains("Depth not stored"), "{said}");
+}

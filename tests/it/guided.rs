@@ -781,3 +781,45 @@ fn a_guided_model_never_writes_over_its_inputs() {
     crate::support::assert_usage(&run, &[".toml"]);
     assert_eq!(std::fs::read(&spec).unwrap(), spec_before);
 }
+
+/// A guided model written with an exemplar whose name holds a backslash (part of a name on
+/// Unix) names it as it is, so the model reads back.
+#[cfg(unix)]
+#[test]
+fn a_guided_model_keeps_a_backslash_in_a_file_name() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (fruit, spec) = crate::fill::kiwi_fruit(d);
+    let odd = at(d, "we\"ird \\ name.png");
+    std::fs::copy(gravel(), &odd).unwrap();
+    let model = at(d, "w.guided");
+    let base = ["guided", &fruit, "--spec", &spec, "--exemplar", &odd, "--max-exemplar", "64", "--res", "24"];
+    let run = solidtex(&[&base[..], &["-o", &model]].concat());
+    assert!(run.status.success(), "{}", stderr(&run));
+    let run = solidtex(&["cut", &model, "--size", "32", "-o", &at(d, "w.png")]);
+    assert!(run.status.success(), "{}", stderr(&run));
+}
+
+/// A skin that cannot be read stops `render` of a guided model before anything of the
+/// model is read or synthesized; `web` and `export` refuse a guided model and say to bake
+/// it first.
+#[test]
+fn a_guided_model_is_checked_before_synthesis_and_refused_where_not_taken() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (fruit, spec) = crate::fill::kiwi_fruit(d);
+    let ex = at(d, "gravel.png");
+    std::fs::copy(gravel(), &ex).unwrap();
+    let model = at(d, "g.guided");
+    let base = ["guided", &fruit, "--spec", &spec, "--exemplar", &ex, "--max-exemplar", "64", "--res", "24"];
+    assert!(solidtex(&[&base[..], &["-o", &model]].concat()).status.success());
+    // with its exemplar gone the model cannot be synthesized: the missing skin is named first
+    std::fs::remove_file(&ex).unwrap();
+    let run = solidtex(&["render", &model, "--skin", &at(d, "missing.ply"), "-o", &at(d, "r.png")]);
+    crate::support::assert_fails(&run, &["missing.ply"]);
+    for (command, out) in [("web", "w.html"), ("export", "w.glb")] {
+        let run = solidtex(&[command, &model, "-o", &at(d, out)]);
+        crate::support::assert_usage(&run, &["g.guided", "does not take guided models", "solidtex bake"]);
+        assert!(!d.join(out).exists());
+    }
+}

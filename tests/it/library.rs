@@ -551,3 +551,26 @@ fn the_report_flags_a_declared_type_the_classifier_disagrees_with() {
     let html = std::fs::read_to_string(dir.path().join("out/report.html")).unwrap();
     assert!(html.contains("declared type 2-b, classified 0: fill and guided use the declared type"), "{html}");
 }
+
+/// A synthesized entry records its max_exemplar as `synth --max-exemplar` does, so
+/// `quality` measures the built volume against the photo shrunk alike without being told.
+#[test]
+fn a_built_synthesis_records_its_max_exemplar_for_quality() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let photo = concat!(env!("CARGO_MANIFEST_DIR"), "/exemplars/gravel_photo.png");
+    let manifest = at(d, "lib.toml");
+    let entry = format!(
+        "[[exemplar]]\nname = \"g\"\nrecipe = \"synth\"\nimage = {photo:?}\nmax_exemplar = 64\nsize = 16\nseed = 1\n"
+    );
+    std::fs::write(&manifest, entry).unwrap();
+    let out = at(d, "out");
+    let run = solidtex(&["build", &manifest, "-o", &out]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let built = at(d, "out/g.exr");
+    let info = solidtex(&["info", &built]);
+    assert!(String::from_utf8_lossy(&info.stdout).contains("max_exemplar"), "{info:?}");
+    let run = solidtex(&["quality", &built, "--exemplar", photo]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    assert!(stderr(&run).contains("shrunk to 64 px"), "{}", stderr(&run));
+}
