@@ -133,7 +133,15 @@ pub fn manifest_folder(manifest: &Path) -> &Path {
 pub fn build(request: &Request, entries: &[Entry], observer: &dyn Observer) -> Result<Vec<Outcome>> {
     not_the_current_folder(&request.output)?;
     let lock = lock_output(&request.output)?;
-    build_holding(request, entries, observer, lock)
+    build_holding(request, entries, observer, lock, Reports::Required)
+}
+
+/// Whether a build must write its reports, or (for a command that only needs the
+/// exemplars) may leave them when the folder's report files are not solidtex's.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Reports {
+    Required,
+    IfOurs,
 }
 
 /// How long [`build_when_free`] waits for another build of the same folder.
@@ -150,7 +158,7 @@ pub fn build_when_free(
 ) -> Result<Vec<Outcome>> {
     not_the_current_folder(&request.output)?;
     let lock = lock_waiting(&request.output, wait, waiting)?;
-    build_holding(request, entries, observer, lock)
+    build_holding(request, entries, observer, lock, Reports::IfOurs)
 }
 
 fn build_holding(
@@ -158,11 +166,23 @@ fn build_holding(
     entries: &[Entry],
     observer: &dyn Observer,
     _lock: std::fs::File,
+    reports: Reports,
 ) -> Result<Vec<Outcome>> {
     let output = request.output.as_path();
     remove_stale_temporaries(output);
     let ledger = open_ledger(output)?;
-    ledger.claim(&REPORTS.map(String::from))?;
+    let report = match ledger.claim(&REPORTS.map(String::from)) {
+        Ok(()) => true,
+        Err(_) if reports == Reports::IfOurs => {
+            let folder = output.display().to_string();
+            observer.warn(
+                &folder,
+                "holds a report.md or report.html solidtex did not write: left as it is, no build report written",
+            );
+            false
+        }
+        Err(e) => return Err(e),
+    };
     let folder = manifest_folder(&request.manifest);
     let budget = io::budget_from_env()?;
     let refs: Vec<&Entry> = entries.iter().collect();
@@ -178,7 +198,9 @@ fn build_holding(
             .collect();
         outcomes.extend(done);
     }
-    write_report(output, &ledger, &report_rows(request, &outcomes))?;
+    if report {
+        write_report(output, &ledger, &report_rows(request, &outcomes))?;
+    }
     Ok(outcomes)
 }
 

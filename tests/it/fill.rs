@@ -1373,6 +1373,27 @@ fn a_fill_waits_for_another_build_of_its_exemplars_then_fills() {
     assert!(d.join("built/marble.exr").is_file() && d.join("m.lst").is_file(), "{err}");
 }
 
+/// A fill builds the exemplars it needs into a folder holding the user's own report.md:
+/// it fills, says the report is left as it is, and leaves the file untouched; `build` into
+/// that folder still refuses.
+#[test]
+fn a_fill_builds_beside_a_users_report_and_leaves_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let mesh = draw(d, "block");
+    let spec = spec(d, "marble.toml", "exemplar = \"marble\"\nscale = 1.0\ntets = 2000\n");
+    std::fs::create_dir_all(d.join("built")).unwrap();
+    std::fs::write(d.join("built/report.md"), b"my notes").unwrap();
+    let run = solidtex(&["fill", &mesh, "--spec", &spec, "-o", &at(d, "m.lst")]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    assert!(stderr(&run).contains("report.md or report.html solidtex did not write"), "{}", stderr(&run));
+    assert_eq!(std::fs::read(d.join("built/report.md")).unwrap(), b"my notes");
+    assert!(d.join("built/marble.exr").is_file() && d.join("m.lst").is_file());
+    let run = solidtex(&["build", &library(), "--only", "marble", "-o", &at(d, "built")]);
+    assert_fails(&run, &["report.md", "not written by solidtex"]);
+    assert_eq!(std::fs::read(d.join("built/report.md")).unwrap(), b"my notes");
+}
+
 /// Where the fill refines near a depth axis (and so re-meshes at a lower target), the
 /// tet count the thin-parts warning names is one that keeps the parts.
 #[test]
