@@ -550,16 +550,7 @@ fn load_model(path: &Path) -> Result<Loaded> {
         mask.into_iter().chain([("volume", Path::new(&s.volume))])
     });
     for (field, file) in named {
-        if !base.join(file).is_file() {
-            return Err(Error::file(
-                path,
-                format!(
-                    "its {field} {}: no such file in {} (paths in a model are relative to the model's folder)",
-                    file.display(),
-                    base.display()
-                ),
-            ));
-        }
+        io::model_input(path, field, &base.join(file), &base)?;
     }
     let masks = model.sources.iter().map(|s| load_mask(&s.mask, &base)).collect::<Result<Vec<_>>>()?;
     with_volumes(model, path, masks)

@@ -513,7 +513,7 @@ fn model_args(path: &Path, size: usize, output: &Path) -> Result<GuidedArgs> {
         ));
     }
     let mut args = args_of(model, size, output);
-    args.cube_folder = Some(model_cube_folder(path));
+    args.cube_folder = Some(io::model_folder(path).join(MODEL_CACHE));
     recipe_checked(&args, &|field| format!("{field} =")).map_err(|e| e.in_file(path))?;
     Ok(args)
 }
@@ -1000,11 +1000,6 @@ fn solid_exemplar(
     Ok((prepared, options, slice))
 }
 
-/// The folder beside a guided model (`model`) where its commands keep the solid cube.
-fn model_cube_folder(model: &Path) -> PathBuf {
-    io::model_folder(model).join(MODEL_CACHE)
-}
-
 /// The name of the folder beside a guided model that keeps its solid cube.
 pub const MODEL_CACHE: &str = ".solidtex-cache";
 
@@ -1027,7 +1022,10 @@ fn cube_volume(args: &GuidedArgs, images: &[Image2d; 3]) -> Result<crate::volume
         }
         Ok(Cached::Stale(why)) => Some(why),
         Ok(Cached::Missing) => None,
-        Err(e) if args.cache.is_none() => return cube_not_kept(images, args.seed, e),
+        Err(e) if args.cache.is_none() => {
+            tell_not_kept(&e);
+            return cube::synthesize(images, args.seed);
+        }
         Err(e) => return Err(e),
     };
     let volume = cube::synthesize(images, args.seed)?;
@@ -1039,17 +1037,15 @@ fn cube_volume(args: &GuidedArgs, images: &[Image2d; 3]) -> Result<crate::volume
             tell!("kept the solid cube in {} for the next commands on this model", path.display())
         }
         Ok(()) => warn_rebuilt(&path, stale),
-        Err(e) if args.cache.is_none() => tell!("warning: the solid cube was not kept ({e})"),
+        Err(e) if args.cache.is_none() => tell_not_kept(&e),
         Err(e) => return Err(e),
     }
     Ok(volume)
 }
 
-/// The cube synthesized when the one beside a guided model cannot be read as solidtex's
-/// (`why`), which is then left as it is.
-fn cube_not_kept(images: &[Image2d; 3], seed: u64, why: Error) -> Result<crate::volume::Volume> {
+/// Say that the cube beside a guided model was not kept there, and `why`.
+fn tell_not_kept(why: &Error) {
     tell!("warning: the solid cube was not kept ({why})");
-    cube::synthesize(images, seed)
 }
 
 /// Megabytes the cache may hold in memory.

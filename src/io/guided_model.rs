@@ -127,12 +127,7 @@ pub fn read(path: &Path) -> Result<GuidedModel> {
         *p = folder.join(&*p);
     }
     for (field, file) in model.named_inputs() {
-        if !file.is_file() {
-            return Err(Error::file(
-                path,
-                format!("{field} = {}: no such file (paths are relative to the model's folder)", file.display()),
-            ));
-        }
+        super::model_input(path, field, file, &folder)?;
     }
     Ok(model)
 }

@@ -307,6 +307,22 @@ pub fn model_folder(model: &Path) -> PathBuf {
     )
 }
 
+/// Refuse a file that `model` names in `field` (`file`, already joined to the model's
+/// folder `base`) when it is not there, naming the model, the field and where it looked.
+pub fn model_input(model: &Path, field: &str, file: &Path, base: &Path) -> Result<()> {
+    if file.is_file() {
+        return Ok(());
+    }
+    Err(Error::file(
+        model,
+        format!(
+            "{field} = {}: no such file in {} (paths in a model are relative to the model's folder)",
+            file.strip_prefix(base).unwrap_or(file).display(),
+            base.display()
+        ),
+    ))
+}
+
 /// Write a volume in the format its path names (atomically).
 pub fn write_volume(path: &Path, volume: &Volume) -> Result<()> {
     match Format::of(path)? {
