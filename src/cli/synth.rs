@@ -121,9 +121,9 @@ pub struct SynthArgs {
     /// The synthesis core: `blend` blends matched colours and matches the photo's
     /// histogram and spectrum (Kopf 2007); `coordinates` copies exemplar pixels in coherent
     /// patches, each voxel one pixel (joints and channels stay more connected, labels stay
-    /// labels, layers stay crisp; slower). Default: `coordinates` with --layered, `blend`
-    /// otherwise; --start, --no-anti-sweeping and --depth-weight belong to `blend` and
-    /// select it.
+    /// labels, layers stay crisp; slower). Default: `coordinates` with --layered and for
+    /// label images (each of at most 16 colours), `blend` otherwise; --start,
+    /// --no-anti-sweeping and --depth-weight belong to `blend` and select it.
     #[arg(long, value_parser = ["blend", "coordinates"])]
     pub core: Option<String>,
     /// Output size: N for a cube, or XxYxZ; each side 1 to 512, within the voxel budget.
@@ -221,14 +221,14 @@ fn check_values(args: &SynthArgs) -> Result<[usize; 3]> {
 }
 
 /// The core `args` ask for: named, or by default the coordinate core for a layered solid
-/// (crisp layers: docs/synthesis.md) unless a blend-only option is given.
-fn core_of(args: &SynthArgs) -> synth::Core {
+/// and for label images (docs/synthesis.md) unless a blend-only option is given.
+fn core_of(args: &SynthArgs, images: &[&crate::volume::Image2d]) -> synth::Core {
     let blend_only = args.start.is_some() || args.no_anti_sweeping || args.depth_weight != 1.0;
     match args.core.as_deref() {
         Some("coordinates") => synth::Core::Coordinates,
         Some(_) => synth::Core::Blend,
-        None if args.layered && !blend_only => synth::Core::Coordinates,
-        None => synth::Core::Blend,
+        None if blend_only => synth::Core::Blend,
+        None => synth::Core::for_exemplars(images, args.layered),
     }
 }
 
@@ -251,8 +251,11 @@ pub fn run(args: &SynthArgs) -> Result<()> {
     let inputs: Vec<&Path> = inputs.into_iter().chain([args.start.as_ref()]).flatten().map(PathBuf::as_path).collect();
     io::check_output(&args.output, &inputs)?;
     let budget = io::budget_from_env()?;
+    let ex = args.others.load(&args.exemplar, "exemplar")?;
+    let (ey, ez) = if args.layered { (None, None) } else { args.others.load_yz()? };
+    let images: Vec<&crate::volume::Image2d> = [Some(&ex), ey.as_ref(), ez.as_ref()].into_iter().flatten().collect();
     let params = SynthParams {
-        core: core_of(args),
+        core: core_of(args, &images),
         size,
         levels: args.levels,
         max_iterations: args.iterations,
@@ -268,7 +271,6 @@ pub fn run(args: &SynthArgs) -> Result<()> {
         start: args.start.as_deref().map(|p| io::read_volume(p, budget)).transpose()?,
         ..SynthParams::default()
     };
-    let ex = args.others.load(&args.exemplar, "exemplar")?;
     if args.others.max_exemplar.is_none() && ex.width().max(ex.height()) > LARGE_EXEMPLAR {
         tell!(
             "note: {} is {}x{} pixels; synthesis prepares every pixel's neighbourhood, which takes long at this size: \
@@ -314,7 +316,6 @@ pub fn run(args: &SynthArgs) -> Result<()> {
         synth::synthesize_layered(&ex, depth.as_ref(), &params, &layered, args.seed, &bar)
             .map_err(|e| e.in_file(&args.exemplar))?
     } else {
-        let (ey, ez) = args.others.load_yz()?;
         if ey.is_none() && ez.is_none() {
             warn_if_directional(&ex, &args.exemplar);
         }

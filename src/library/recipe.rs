@@ -89,8 +89,8 @@ impl Progress for Warnings {
 fn synthesized(spec: &SynthSpec, size: [usize; 3], seed: u64, none: &dyn Progress, lines: &Lines) -> Result<Volume> {
     let read_as = |field: &str, p: &Path| io::read_image_fit(p, spec.max_exemplar).map_err(|e| lines.error(field, e));
     let ex = read_as("image", &spec.image)?;
-    // layers come out crisp from the coordinate core (docs/synthesis.md)
-    let core = if spec.layered { synth::Core::Coordinates } else { synth::Core::Blend };
+    // layers come out crisp and labels stay labels in the coordinate core (docs/synthesis.md)
+    let core = synth::Core::for_exemplars(&[&ex], spec.layered);
     let params = synth::SynthParams { core, size, levels: spec.levels, ..synth::SynthParams::default() };
     let volume = if spec.layered {
         let depth = spec.depth.as_deref().map(|p| read_as("depth_image", p)).transpose()?;

@@ -128,7 +128,7 @@ impl Cube {
 /// The tiling volume of [`SIDE`]³ voxels synthesized from `images` (orthogonal to x, y,
 /// z; alpha-free) that becomes the cube.
 pub fn synthesize(images: &[Image2d; 3], seed: u64) -> Result<Volume> {
-    let mut params = crate::synth::SynthParams { size: [SIDE; 3], ..Default::default() };
+    let mut params = crate::synth::SynthParams { core: core_for(images), size: [SIDE; 3], ..Default::default() };
     // as many levels (at most the default's) as a small exemplar holds neighbourhoods at
     let side = images.iter().map(|e| e.width().min(e.height())).min().unwrap_or(0);
     while params.levels > 1 && (side >> (params.levels - 1)) < params.neighbourhood + 2 {
@@ -149,7 +149,15 @@ pub fn colour_range(images: &[Image2d; 3]) -> (f32, f32) {
     (lo - span, hi + span)
 }
 
-/// A key of everything [`synthesize`] depends on: the images, the seed and the cube's side.
+/// The core that synthesizes the cube: the coordinate core for label images, the blend
+/// core for photos.
+fn core_for(images: &[Image2d; 3]) -> crate::synth::Core {
+    crate::synth::Core::for_exemplars(&[&images[0], &images[1], &images[2]], false)
+}
+
+/// A key of everything [`synthesize`] depends on: the images, the seed, the cube's side
+/// and its core (which the images decide; named in the key so that cubes kept from before
+/// label images had their own core are not taken for theirs).
 pub fn key(images: &[Image2d; 3], seed: u64) -> u64 {
     let mut h = crate::noise::mix64(0xc0be_5eed);
     let mut add = |x: u64| h = crate::noise::mix64(h ^ x);
@@ -161,6 +169,9 @@ pub fn key(images: &[Image2d; 3], seed: u64) -> u64 {
     }
     add(SIDE as u64);
     add(seed);
+    if core_for(images) == crate::synth::Core::Coordinates {
+        add(u64::from(b'c'));
+    }
     h
 }
 

@@ -14,6 +14,20 @@ pub enum Core {
     Coordinates,
 }
 
+impl Core {
+    /// The core for `images` when none is asked for: the coordinate core for a layered
+    /// solid (crisp layers) and for label images (every image of at most 16 colours: each
+    /// voxel shows one of them, where blending would make colours the labels do not have),
+    /// the blend core for other photos.
+    pub fn for_exemplars(images: &[&crate::volume::Image2d], layered: bool) -> Core {
+        if layered || (!images.is_empty() && images.iter().all(|image| super::edges::is_labels(image))) {
+            Core::Coordinates
+        } else {
+            Core::Blend
+        }
+    }
+}
+
 impl std::fmt::Display for Core {
     fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
         f.write_str(match self {
@@ -181,5 +195,27 @@ fn within<T: PartialOrd + std::fmt::Display>(name: &str, value: T, (min, max): (
         Ok(())
     } else {
         Err(Error::invalid(format!("synthesis parameter {name} = {value} is out of range; allowed: {min} to {max}")))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::volume::{Channel, Image2d};
+
+    fn image(values: impl Fn(usize) -> f32) -> Image2d {
+        Image2d::from_data(16, 16, Channel::grey(), (0..256).map(values).collect()).unwrap()
+    }
+
+    #[test]
+    fn label_images_and_layers_get_the_coordinate_core() {
+        let labels = image(|i| [0.1, 0.5, 0.9][i % 3]);
+        let photo = image(|i| i as f32 / 255.0);
+        assert_eq!(Core::for_exemplars(&[&labels, &labels, &labels], false), Core::Coordinates);
+        assert_eq!(Core::for_exemplars(&[&labels], false), Core::Coordinates);
+        // one photo among the exemplars: its colours would be blended anyway
+        assert_eq!(Core::for_exemplars(&[&labels, &photo], false), Core::Blend);
+        assert_eq!(Core::for_exemplars(&[&photo], false), Core::Blend);
+        assert_eq!(Core::for_exemplars(&[&photo], true), Core::Coordinates);
     }
 }

@@ -81,18 +81,26 @@ fn the_command_line_takes_a_core_and_refuses_others() {
     let bad = solidtex(&["synth", &p, "--size", "16", "--core", "mean", "-o", &o]);
     assert_usage(&bad, &["--core", "mean"]);
     assert!(crate::support::stderr(&bad).contains("possible values: blend, coordinates"));
-    // by default a layered solid comes from the coordinate core, a homogeneous one (or a
-    // layered one with a blend-only option) from the blend core
-    let core_of = |args: &[&str]| {
-        let base = ["synth", &p, "--size", "8", "--levels", "1", "-o", &o];
+    // by default a layered solid and a label image's solid come from the coordinate core, a
+    // photo's homogeneous solid (or a layered one with a blend-only option) from the blend core
+    let shaded = dir.path().join("shaded.png");
+    let mut photo = crate::support::spots(0.4, 2);
+    photo.data_mut().iter_mut().enumerate().for_each(|(i, v)| *v += (i % 40) as f32 / 400.0);
+    solidtex::io::write_image(&shaded, &photo).unwrap();
+    let shaded = shaded.to_string_lossy().into_owned();
+    let core_of = |image: &str, args: &[&str]| {
+        let base = ["synth", image, "--size", "8", "--levels", "1", "-o", &o];
         let run = solidtex(&[&base[..], args].concat());
         assert!(run.status.success(), "{}", crate::support::stderr(&run));
-        solidtex::io::read_volume(&out, u64::MAX).unwrap().meta.get("core").map(str::to_string)
+        let v = solidtex::io::read_volume(&out, u64::MAX).unwrap();
+        (v.meta.get("core").map(str::to_string), v.data().iter().all(|s| *s == dark || *s == light))
     };
-    assert_eq!(core_of(&["--layered"]).as_deref(), Some("coordinates"));
-    assert_eq!(core_of(&[]).as_deref(), Some("blend"));
-    assert_eq!(core_of(&["--layered", "--no-anti-sweeping"]).as_deref(), Some("blend"));
-    assert_eq!(core_of(&["--layered", "--core", "blend"]).as_deref(), Some("blend"));
+    assert_eq!(core_of(&shaded, &["--layered"]).0.as_deref(), Some("coordinates"));
+    assert_eq!(core_of(&shaded, &[]).0.as_deref(), Some("blend"));
+    assert_eq!(core_of(&p, &[]), (Some("coordinates".to_string()), true), "a label image keeps its labels");
+    assert_eq!(core_of(&p, &["--core", "blend"]).0.as_deref(), Some("blend"));
+    assert_eq!(core_of(&shaded, &["--layered", "--no-anti-sweeping"]).0.as_deref(), Some("blend"));
+    assert_eq!(core_of(&shaded, &["--layered", "--core", "blend"]).0.as_deref(), Some("blend"));
 }
 
 /// Three exemplars with 20, 40 and 60 % white (mean 0.407): without the balance the
