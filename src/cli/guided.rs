@@ -1018,6 +1018,7 @@ fn cube_volume(args: &GuidedArgs, images: &[Image2d; 3]) -> Result<crate::volume
     let read = guided_cache::read_cube(&path, key, (cube::SIDE, channels), cube::colour_range(images), hint);
     let stale = match read {
         Ok(Cached::Good(colours)) => {
+            guided_cache::mark_used(&path);
             return crate::volume::Volume::from_data([cube::SIDE; 3], images[0].channels().to_vec(), colours);
         }
         Ok(Cached::Stale(why)) => Some(why),
@@ -1032,6 +1033,17 @@ fn cube_volume(args: &GuidedArgs, images: &[Image2d; 3]) -> Result<crate::volume
     let kept = std::fs::create_dir_all(folder)
         .map_err(|e| Error::io(folder, e))
         .and_then(|_| guided_cache::write_cube(&path, key, cube::SIDE, channels, volume.data()));
+    if kept.is_ok() {
+        let removed = guided_cache::prune_cubes(folder, &path);
+        if !removed.is_empty() {
+            tell!(
+                "removed {} solid cube(s) of earlier exemplars from {} (it keeps the {} used last)",
+                removed.len(),
+                folder.display(),
+                guided_cache::CUBES_KEPT
+            );
+        }
+    }
     match kept {
         Ok(()) if args.cache.is_none() && stale.is_none() => {
             tell!("kept the solid cube in {} for the next commands on this model", path.display())

@@ -225,6 +225,58 @@ pub fn write_cube(path: &Path, key: u64, side: usize, channels: usize, colours: 
     write_checked(path, &fields, &body)
 }
 
+/// How many solid cubes a folder keeps: each edit of a model's photos makes a new one
+/// (about 1 MB for three colours), so the least recently used go beyond this many.
+pub const CUBES_KEPT: usize = 8;
+
+/// The key a cube file's name gives (`guided-cube-<16 hex digits>.cache`).
+fn cube_key_of(name: &str) -> Option<u64> {
+    let hex = name.strip_prefix("guided-cube-")?.strip_suffix(".cache")?;
+    (hex.len() == 16).then(|| u64::from_str_radix(hex, 16).ok()).flatten()
+}
+
+/// Whether the file at `path` (not followed if a link) is a cube solidtex wrote under `key`:
+/// a regular file whose header is a cube's, of this or an earlier format, holding `key`.
+fn is_our_cube(path: &Path, key: u64) -> bool {
+    if !std::fs::symlink_metadata(path).is_ok_and(|m| m.file_type().is_file()) {
+        return false;
+    }
+    let mut head = [0u8; CUBE_HEADER];
+    let read = std::fs::File::open(path).and_then(|mut f| f.read_exact(&mut head));
+    read.is_ok() && owner(&head, CUBE_MAGIC, OLD_CUBE_MAGICS).is_some() && le_u64(&head, 23) == key
+}
+
+/// Marks the cube at `path` as used now, so that [`prune_cubes`] keeps it longer (where
+/// the file cannot be written to, nothing changes).
+pub fn mark_used(path: &Path) {
+    if let Ok(file) = std::fs::File::options().write(true).open(path) {
+        // a cube that cannot be marked is only pruned sooner
+        let _ = file.set_modified(std::time::SystemTime::now());
+    }
+}
+
+/// Removes the cubes solidtex wrote in `folder` beyond the [`CUBES_KEPT`] most recently
+/// used (by modification time), never `current`: only regular files named as a cube
+/// whose header is a cube's of the key the name gives; anything else there is left as it
+/// is. The files removed.
+pub fn prune_cubes(folder: &Path, current: &Path) -> Vec<PathBuf> {
+    let Ok(entries) = std::fs::read_dir(folder) else { return Vec::new() };
+    let mut cubes: Vec<(std::time::SystemTime, PathBuf)> = entries
+        .flatten()
+        .filter_map(|entry| {
+            let key = cube_key_of(entry.file_name().to_str()?)?;
+            let path = entry.path();
+            let used = std::fs::symlink_metadata(&path).and_then(|m| m.modified()).ok()?;
+            (path != current && is_our_cube(&path, key)).then_some((used, path))
+        })
+        .collect();
+    // newest first; the name decides between equal times, so the choice does not depend on
+    // the order the folder lists its files in
+    cubes.sort_by(|a, b| b.0.cmp(&a.0).then_with(|| a.1.cmp(&b.1)));
+    let stale = cubes.into_iter().skip(CUBES_KEPT.saturating_sub(1)).map(|(_, path)| path);
+    stale.filter(|path| std::fs::remove_file(path).is_ok()).collect()
+}
+
 /// The cache file of `key` in `folder`.
 pub fn path(folder: &Path, key: u64) -> PathBuf {
     folder.join(format!("guided-{key:016x}.cache"))
@@ -351,6 +403,37 @@ mod tests {
             Cached::Stale(why) => why,
             other => panic!("not stale: {other:?}"),
         }
+    }
+
+    /// Past the cubes kept, the least recently used of solidtex's own go; the current one,
+    /// a user's file named as a cube, a cube under another key's name and a link stay.
+    #[test]
+    fn old_cubes_are_pruned_and_nothing_else() {
+        let dir = tempfile::tempdir().unwrap();
+        let at = |key: u64| cube_path(dir.path(), key);
+        let start = std::time::SystemTime::UNIX_EPOCH + std::time::Duration::from_secs(1_700_000_000);
+        for key in 1..=CUBES_KEPT as u64 + 3 {
+            write_cube(&at(key), key, 1, 1, &[0.5]).unwrap();
+            let file = std::fs::File::options().write(true).open(at(key)).unwrap();
+            file.set_modified(start + std::time::Duration::from_secs(key * 60)).unwrap();
+        }
+        // key 1 is the oldest but the one in use; key 2 was read a moment ago
+        mark_used(&at(2));
+        std::fs::write(at(100), b"my notes").unwrap();
+        std::fs::copy(at(4), at(101)).unwrap();
+        let old_time = std::fs::metadata(at(3)).unwrap().modified().unwrap();
+        std::fs::File::options().write(true).open(at(101)).unwrap().set_modified(old_time).unwrap();
+        #[cfg(unix)]
+        std::os::unix::fs::symlink(at(5), at(102)).unwrap();
+        let removed = prune_cubes(dir.path(), &at(1));
+        // ten of ours besides key 1: the seven used last stay with it (2 and 6 to 11)
+        assert_eq!(removed, vec![at(5), at(4), at(3)]);
+        for key in [1, 2, 6, 7, 8, 9, 10, 11, 100, 101] {
+            assert!(at(key).exists(), "{key}");
+        }
+        assert!(std::fs::symlink_metadata(at(102)).is_ok());
+        assert_eq!(std::fs::read(at(100)).unwrap(), b"my notes");
+        assert!(prune_cubes(dir.path(), &at(1)).is_empty(), "nothing more to prune");
     }
 
     /// A cube reads back as written; a missing file is `Missing`; a file with another
