@@ -90,12 +90,16 @@ impl Snapshot {
         for (n, line) in lines.enumerate() {
             let bad = || Error::invalid(format!("snapshot line {}: {line:?} cannot be read", n + 2));
             let (key, rest) = line.split_once(' ').ok_or_else(bad)?;
-            let numbers = |skip: usize| {
-                rest.split_whitespace()
-                    .skip(skip)
-                    .map(|t| t.parse::<f64>().map_err(|_| bad()))
-                    .collect::<Result<Vec<f64>>>()
+            // a NaN would compare as no difference at all: every value must be a number
+            let number = |t: &str| match t.parse::<f64>() {
+                Ok(v) if v.is_finite() => Ok(v),
+                Ok(_) => Err(Error::invalid(format!(
+                    "snapshot line {}: {t:?} is not a finite number (a snapshot holds numbers only)",
+                    n + 2
+                ))),
+                Err(_) => Err(bad()),
             };
+            let numbers = |skip: usize| rest.split_whitespace().skip(skip).map(number).collect::<Result<Vec<f64>>>();
             match key {
                 "dims" => {
                     snap.dims =
@@ -275,6 +279,13 @@ mod tests {
             let short = &text[..text.find(cut_before).unwrap()];
             let err = Snapshot::parse(short).unwrap_err().to_string();
             assert!(err.contains(want), "cut before {cut_before:?}: {err}");
+        }
+        for (field, value) in [("stat R", "NaN"), ("thumb G", "nan"), ("stat B", "inf")] {
+            let start = text.find(field).unwrap() + field.len() + 1;
+            let end = start + text[start..].find(' ').unwrap();
+            let damaged = format!("{}{value}{}", &text[..start], &text[end..]);
+            let err = Snapshot::parse(&damaged).unwrap_err().to_string();
+            assert!(err.contains(&format!("\"{value}\" is not a finite number")), "{err}");
         }
         let thumb_cut = &text[..text.len() - 8];
         assert!(Snapshot::parse(thumb_cut).unwrap_err().to_string().contains("thumb line 3 has 63 values"));

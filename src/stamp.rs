@@ -317,6 +317,17 @@ pub fn check_region(region: Region) -> Result<()> {
 
 /// Whether `volume` has what `region` reads: a depth band needs a Depth channel.
 pub fn check_region_fits(volume: &Volume, region: Region) -> Result<()> {
+    let d = volume.dims();
+    if let Region::Box(lo, hi) = region {
+        let top = Vec3::new(d[0] as f32, d[1] as f32, d[2] as f32);
+        if !(lo.cmplt(top).all() && hi.cmpgt(Vec3::ZERO).all()) {
+            return Err(Error::invalid(format!(
+                "the box ({}, {}, {}) to ({}, {}, {}) lies wholly outside the {}x{}x{} volume; seeds are placed \
+                 inside it (voxel coordinates 0 to the size)",
+                lo.x, lo.y, lo.z, hi.x, hi.y, hi.z, d[0], d[1], d[2]
+            )));
+        }
+    }
     if matches!(region, Region::Depth(..)) && volume.channel_index(&Channel::Depth).is_none() {
         let names = crate::volume::channel_names(volume.channels());
         return Err(Error::invalid(format!(

@@ -228,6 +228,15 @@ pub fn run_scatter(args: &ScatterArgs) -> Result<()> {
     let done =
         stamp::scatter(&mut volume, &mesh, &params, args.seed).map_err(|e| about(e, &args.mesh, &args.volume))?;
     tell_scattered(&done, args.count);
+    if done.placed.is_empty() {
+        let fix = if done.too_small > 0 { "a larger --scale" } else { "a smaller --scale or a larger region" };
+        return Err(Error::invalid(format!(
+            "placed none of the {} seeds, so {} would be {} unchanged: nothing written ({fix} places them)",
+            args.count,
+            args.output.display(),
+            args.volume.display()
+        )));
+    }
     write(&args.output, &volume)
 }
 

@@ -511,7 +511,14 @@ pub fn pixel_size(models: &[&LstModel], camera: (f32, f32), size: usize) -> f32 
 pub fn camera(yaw: f32, pitch: f32) -> (Vec3, Vec3, Vec3) {
     let (yaw, pitch) = (yaw.to_radians(), pitch.to_radians());
     let forward = -Vec3::new(yaw.sin() * pitch.cos(), pitch.sin(), yaw.cos() * pitch.cos());
-    let right = forward.cross(Vec3::Y).normalize_or(Vec3::X);
+    // looking straight up or down, the cross product with y vanishes (and its sign follows
+    // the rounding of cos 90°, which turned the picture half round): take the yaw's own
+    // right, the limit from any pitch short of it
+    let right = if pitch.cos() > 1e-4 {
+        forward.cross(Vec3::Y).normalize_or(Vec3::X)
+    } else {
+        Vec3::new(yaw.cos(), 0.0, -yaw.sin())
+    };
     (forward, right, right.cross(forward))
 }
 
@@ -867,6 +874,19 @@ fn row_span(s: [Vec2; 3], area: f32, y: f32) -> Option<(f32, f32)> {
 mod tests {
     use super::*;
     use crate::fill::model::{MaskRef, Source};
+
+    /// Looking straight down or up turns the picture no more than looking almost so.
+    #[test]
+    fn the_camera_turns_smoothly_to_straight_up_and_down() {
+        for yaw in [0.0, 30.0, 135.0, -100.0] {
+            for (near, at) in [(89.9, 90.0), (-89.9, -90.0)] {
+                let (a, b) = (camera(yaw, near), camera(yaw, at));
+                for (u, v) in [(a.0, b.0), (a.1, b.1), (a.2, b.2)] {
+                    assert!(u.dot(v) > 0.999, "yaw {yaw}, pitch {near} against {at}: {u} and {v}");
+                }
+            }
+        }
+    }
     use crate::fill::paste::Patch;
     use crate::volume::{Channel, Volume};
 

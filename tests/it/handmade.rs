@@ -285,7 +285,8 @@ fn read(path: &str) -> Volume {
 }
 
 /// Seeds drawn smaller than a voxel change nothing: they are not counted as placed, and the
-/// run says how many there were and that a larger --scale places them.
+/// run says how many there were and that a larger --scale places them; with none placed
+/// it fails and writes nothing (the output would be the input unchanged).
 #[test]
 fn seeds_smaller_than_a_voxel_are_not_counted_as_placed() {
     let dir = tempfile::tempdir().unwrap();
@@ -293,12 +294,30 @@ fn seeds_smaller_than_a_voxel_are_not_counted_as_placed() {
     let (vol, out) = (at(dir.path(), "v.exr"), at(dir.path(), "out.exr"));
     assert!(solidtex(&["sweep", &section, "--length", "20", "-o", &vol]).status.success());
     let run = solidtex(&["scatter", &vol, &seed, "--count", "5", "--scale", "0.001", "--color", "0,0,0", "-o", &out]);
-    assert!(run.status.success(), "{}", stderr(&run));
     let err = stderr(&run);
-    assert!(err.contains("placed 0 seeds"), "{err}");
-    assert!(err.contains("5 of 5 seeds were smaller than a voxel") && err.contains("larger --scale"), "{err}");
+    assert_fails(&run, &["placed none of the 5 seeds", "nothing written", "a larger --scale places them"]);
+    assert!(err.contains("5 of 5 seeds were smaller than a voxel"), "{err}");
     assert!(!err.contains("no room"), "{err}");
-    assert_eq!(read(&out).data(), read(&vol).data(), "no voxel changed");
+    assert!(!std::path::Path::new(&out).exists());
+}
+
+/// A scatter box wholly outside the volume is an error naming the box and the volume's
+/// size, and seeds too large for any room fail the run: nothing is written either way.
+#[test]
+fn a_scatter_that_can_place_nothing_writes_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let (section, seed) = section_and_seed(dir.path());
+    let (vol, out) = (at(dir.path(), "v.exr"), at(dir.path(), "out.exr"));
+    assert!(solidtex(&["sweep", &section, "--length", "20", "-o", &vol]).status.success());
+    let scatter = |extra: &[&str]| {
+        let base = ["scatter", &vol, &seed, "--count", "5", "--color", "0,0,0", "-o", &out];
+        solidtex(&[&base[..], extra].concat())
+    };
+    let run = scatter(&["--region", "box:100,100,100,200,200,200"]);
+    assert_fails(&run, &["v.exr", "the box (100, 100, 100) to (200, 200, 200) lies wholly outside the", "volume"]);
+    let run = scatter(&["--scale", "200..300"]);
+    assert_fails(&run, &["placed none of the 5 seeds", "a smaller --scale or a larger region"]);
+    assert!(!std::path::Path::new(&out).exists());
 }
 
 /// A grey volume (one channel) takes the Rec. 709 luminance of a skin or stamp colour,

@@ -135,7 +135,8 @@ fn the_least_mask_size_is_opaque_and_smaller_sizes_are_refused() {
     assert!(run.status.success() && !stderr(&run).contains("opaque 0.0 %"), "{}", stderr(&run));
     let run = solidtex(&["mask", "layered", "--size", "6", "-o", &layers]);
     assert!(run.status.success(), "{}", stderr(&run));
-    for file in [splotch, format!("{layers}/outer.exr"), format!("{layers}/middle.exr"), format!("{layers}/inner.exr")]
+    for file in
+        [splotch.clone(), format!("{layers}/outer.exr"), format!("{layers}/middle.exr"), format!("{layers}/inner.exr")]
     {
         let mask = read_volume(Path::new(&file), 1 << 30).unwrap();
         assert!(mask.data().iter().any(|a| *a >= 0.999), "{file} is opaque nowhere");
@@ -148,4 +149,10 @@ fn the_least_mask_size_is_opaque_and_smaller_sizes_are_refused() {
     let run = solidtex(&["mask", "splotch", "--size", "64", "--falloff", "0.45", "-o", &wide]);
     assert_fails(&run, &["opaque nowhere", "fall-off 0.45", "smaller fall-off"]);
     assert!(!Path::new(&wide).exists());
+    // a handful of opaque voxels is written, with a warning that its patches cover thinly
+    let run = solidtex(&["mask", "splotch", "--size", "64", "--falloff", "0.4", "-o", &wide]);
+    assert!(run.status.success() && Path::new(&wide).exists(), "{}", stderr(&run));
+    assert!(stderr(&run).contains("wide.exr is opaque in under 1 %") && stderr(&run).contains("smaller --falloff"));
+    let run = solidtex(&["mask", "splotch", "--size", "6", "-o", &splotch]);
+    assert!(!stderr(&run).contains("warning"), "{}", stderr(&run));
 }
