@@ -100,6 +100,13 @@ pub struct Report {
 /// For a layered volume pass the exemplar for x and y and `layered = true`.
 pub fn assess(volume: &Volume, exemplars: [Option<&Image2d>; 3], layered: bool) -> Result<Report> {
     let first = exemplars.iter().flatten().next().ok_or_else(|| Error::invalid("no exemplar to measure against"))?;
+    if let Some(other) = exemplars.iter().flatten().find(|e| e.channels() != first.channels()) {
+        return Err(Error::invalid(format!(
+            "the exemplars have channels {} and {}; all exemplars need the same channels",
+            crate::volume::channel_names(first.channels()),
+            crate::volume::channel_names(other.channels())
+        )));
+    }
     let picks = channel_positions(volume, first.channels())?;
     let mut axes = Vec::new();
     let mut sharpness = Vec::new();

@@ -50,6 +50,7 @@ pub fn run(args: &QualityArgs) -> Result<()> {
     let others = shrunk_as_made(&args.others, &volume);
     let ex = others.load(exemplar, "exemplar")?;
     let (ey, ez) = others.load_yz()?;
+    others.check_channels((exemplar, &ex), (ey.as_ref(), ez.as_ref()))?;
     let given = [(exemplar.as_path(), Some(&ex)), (others.ey.as_deref().unwrap_or(exemplar), ey.as_ref())];
     for (path, image) in given.into_iter().chain([(others.ez.as_deref().unwrap_or(exemplar), ez.as_ref())]) {
         if let Some(image) = image.filter(|i| i.width() < 3 || i.height() < 3) {

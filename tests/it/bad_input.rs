@@ -362,3 +362,18 @@ fn the_noise_budget_counts_the_exemplars_channels() {
     let run = solidtex_env(&args, &[("SOLIDTEX_MAX_BYTES", "4000000")]);
     assert_fails(&run, &["128x128x128 volume with 1 channel(s)"]);
 }
+
+/// `quality` refuses an --ey image whose channels differ from the exemplar's, naming it
+/// and both counts (as `synth` and `noise` do), instead of measuring.
+#[test]
+fn quality_refuses_other_exemplars_with_other_channels() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (grey, colour, vol) = (at(d, "grey.png"), at(d, "rgb.png"), at(d, "v.exr"));
+    image::GrayImage::from_pixel(64, 64, image::Luma([90])).save(&grey).unwrap();
+    image::RgbImage::from_pixel(64, 64, image::Rgb([90, 60, 30])).save(&colour).unwrap();
+    assert!(solidtex(&["make", "marble", "--size", "16", "-o", &vol]).status.success());
+    let run = solidtex(&["quality", &vol, "--exemplar", &colour, "--ey", &grey, "--check"]);
+    assert_fails(&run, &["has 1 channel(s)", &colour, "has 3", "the same channels"]);
+    assert!(stderr(&run).contains(&format!("error: {grey}: ")), "{}", stderr(&run));
+}
