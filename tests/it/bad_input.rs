@@ -377,3 +377,28 @@ fn quality_refuses_other_exemplars_with_other_channels() {
     assert_fails(&run, &["has 1 channel(s)", &colour, "has 3", "the same channels"]);
     assert!(stderr(&run).contains(&format!("error: {grey}: ")), "{}", stderr(&run));
 }
+
+/// `quality` measures a volume on cuts of at least 8x8 voxels: a volume with no such cut
+/// is refused, naming it, its size and the size needed, with no figures printed; a volume
+/// with some (1x64x64: the cut across x) is measured there, saying which axes are not.
+#[test]
+fn quality_measures_only_the_cuts_large_enough() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let photo = concat!(env!("CARGO_MANIFEST_DIR"), "/exemplars/gravel_photo.png");
+    let (dot, sheet) = (at(d, "dot.exr"), at(d, "sheet.exr"));
+    assert!(solidtex(&["make", "marble", "--size", "1", "-o", &dot]).status.success());
+    assert!(solidtex(&["make", "marble", "--size", "1x64x64", "-o", &sheet]).status.success());
+    let run = solidtex(&["quality", &dot, "--exemplar", photo, "--check"]);
+    assert_fails(&run, &[&dot, "1x1x1", "8x8"]);
+    assert!(run.stdout.is_empty(), "{}", String::from_utf8_lossy(&run.stdout));
+    let run = solidtex(&["quality", &sheet, "--exemplar", photo, "--json"]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let report: serde_json::Value = serde_json::from_slice(&run.stdout).unwrap();
+    let axes = |key: &str| report[key].as_array().unwrap().iter().map(|a| a["axis"].clone()).collect::<Vec<_>>();
+    assert_eq!(axes("axes"), ["x"]);
+    assert_eq!(axes("sharpness"), ["x"]);
+    assert_eq!(axes("lines"), ["x"]);
+    let err = stderr(&run);
+    assert!(err.contains("1x64x64") && err.contains("y and z") && err.contains("not measured"), "{err}");
+}
