@@ -402,3 +402,23 @@ fn quality_measures_only_the_cuts_large_enough() {
     let err = stderr(&run);
     assert!(err.contains("1x64x64") && err.contains("y and z") && err.contains("not measured"), "{err}");
 }
+
+/// `guided --planes` names the --ez image whose size or channels do not fit, as the
+/// solid-cube path does.
+#[test]
+fn guided_on_planes_names_the_other_exemplar_at_fault() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let photo = concat!(env!("CARGO_MANIFEST_DIR"), "/exemplars/gravel_photo.png");
+    let (fruit, spec) = crate::fill::kiwi_fruit(d);
+    let (thin, colour) = (at(d, "w1.png"), at(d, "rgb.png"));
+    image::GrayImage::from_pixel(1, 64, image::Luma([90])).save(&thin).unwrap();
+    image::RgbImage::from_pixel(64, 64, image::Rgb([90, 60, 30])).save(&colour).unwrap();
+    for (ez, says) in [(&thin, "is 1x64 pixels"), (&colour, "channels R,G,B")] {
+        let args = ["guided", &fruit, "--spec", &spec, "--exemplar", photo, "--ez", ez, "--planes", "--res", "32"];
+        let run = solidtex(&[&args[..], &["--cut", "0,0,0,1,0,0", "-o", &at(d, "g.png")]].concat());
+        assert_fails(&run, &[says]);
+        assert!(stderr(&run).contains(&format!("error: {ez}: ")), "{}", stderr(&run));
+    }
+    assert!(!d.join("g.png").exists());
+}
