@@ -342,6 +342,10 @@ fn check_output_of(action: Action, output: &Path, args: &GuidedArgs, model: Opti
         fill.regions.iter().map(|r| crate::library::files::volume(&fill.built, &r.exemplar)).collect();
     let inputs: Vec<&Path> =
         inputs(args).into_iter().chain(model).chain(regions.iter().map(PathBuf::as_path)).collect();
+    let kept = [(&args.cache, "the solid cube and bricks of --cache"), (&args.cube_folder, "the model's solid cube")];
+    for (folder, what) in kept.into_iter().filter(|_| !matches!(action, Action::Keep)) {
+        folder.as_deref().map(|f| io::guard::outside_folder(output, f, what)).transpose()?;
+    }
     match action {
         Action::Cut(..) | Action::View(_) => io::guard::png_output(output, &inputs),
         Action::Solid => io::check_output(output, &inputs),
