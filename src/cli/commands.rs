@@ -149,7 +149,7 @@ pub fn sheet(file: &Path, output: &Path, title: Option<String>) -> Result<()> {
 pub fn make(recipe: &str, size: &str, seed: u64, output: &Path) -> Result<()> {
     let recipe: Recipe = recipe.parse().map_err(usage)?;
     let dims = parse_size(size)?;
-    crate::volume::check_size(dims, 4, io::budget_from_env()?).map_err(usage)?;
+    crate::volume::check_size(dims, recipe.channels().len(), io::budget_from_env()?).map_err(usage)?;
     io::check_output(output, &[])?;
     let bar = super::fill::Bar::new();
     let volume = procedural::generate_with(recipe, dims, seed, &bar);

@@ -683,7 +683,7 @@ fn write_blend(
         Action::View(view) => solid::view_blend(parts, weight, domain, &g.surface, view, &bar)
             .and_then(|(picture, counts)| io::write_rgb8(&args.output, &picture).map(|_| counts)),
         Action::Solid | Action::Keep | Action::Model => {
-            crate::volume::check_size(domain.dims, 4, io::budget_from_env()?).and_then(|_| {
+            crate::volume::check_size(domain.dims, solid::RGBA.len(), io::budget_from_env()?).and_then(|_| {
                 let alpha = coverage(&g.surface, domain);
                 let (volume, counts) = solid::solid_blend(parts, weight, &alpha, &bar)?;
                 kept = deliver(args, action, g, domain, volume)?;

@@ -422,3 +422,17 @@ fn guided_on_planes_names_the_other_exemplar_at_fault() {
     }
     assert!(!d.join("g.png").exists());
 }
+
+/// The voxel budget of `make` counts the channels the recipe makes: three for marble,
+/// four for strata (colours and Depth).
+#[test]
+fn the_make_budget_counts_the_recipes_channels() {
+    let dir = tempfile::tempdir().unwrap();
+    let budget = [("SOLIDTEX_MAX_BYTES", "100000")];
+    for (recipe, says) in [("marble", "64x64x64 volume with 3 channel(s)"), ("strata", "with 4 channel(s)")] {
+        let out = at(dir.path(), "m.exr");
+        let run = solidtex_env(&["make", recipe, "--size", "64", "-o", &out], &budget);
+        assert_fails(&run, &[says]);
+        assert!(!Path::new(&out).exists());
+    }
+}
