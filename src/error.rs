@@ -27,6 +27,15 @@ pub enum Error {
     /// A parameter or value is outside what is allowed.
     #[error("{0}")]
     Invalid(String),
+    /// One of the exemplars of a synthesis is unfit: `which` is 0 for the exemplar (Ex),
+    /// 1 for Ey, 2 for Ez, so that a caller who knows their files names the one at fault.
+    #[error("{message}")]
+    Exemplar {
+        /// 0, 1 or 2: the exemplar orthogonal to x, y or z.
+        which: usize,
+        /// What is wrong with it.
+        message: String,
+    },
     /// A command-line option or argument is malformed or out of its range (exit code 2).
     #[error("{0}")]
     Usage(String),
@@ -69,6 +78,11 @@ impl Error {
         Error::Invalid(message.into())
     }
 
+    /// An [`Error::Exemplar`] about exemplar `which` (0: Ex, 1: Ey, 2: Ez).
+    pub fn exemplar(which: usize, message: impl Into<String>) -> Self {
+        Error::Exemplar { which, message: message.into() }
+    }
+
     /// An [`Error::Usage`]: a command-line value the user must correct.
     pub fn usage(message: impl Into<String>) -> Self {
         Error::Usage(message.into())
@@ -97,7 +111,7 @@ impl Error {
     /// Prefix the error with the file it came from, when it has none yet.
     pub fn in_file(self, path: impl Into<PathBuf>) -> Self {
         match self {
-            Error::Invalid(message) => Error::file(path, message),
+            Error::Invalid(message) | Error::Exemplar { message, .. } => Error::file(path, message),
             budget @ Error::Budget { .. } => Error::file(path, budget.to_string()),
             other => other,
         }

@@ -24,6 +24,10 @@ use serde::Serialize;
 
 /// Neighbourhood side of the measurements.
 pub const N: usize = 8;
+/// The smallest cut, in voxels each way, the per-axis figures are measured on: the slice
+/// energy's N x N neighbourhood (on a smaller cut it wraps onto itself), which also holds
+/// the line measures' 5x5 element and the gradients' 3x3 stencil.
+pub const SMALLEST_CUT: usize = N;
 /// Robust exponent of Kopf's energy.
 pub const R: f64 = 0.8;
 /// Histogram bins.
@@ -94,19 +98,53 @@ pub struct Report {
     /// How coherently the volume copies its exemplars, as the coordinate core recorded it
     /// in the volume's provenance ([`crate::synth::patches`]); `None` for other volumes.
     pub patches: Option<crate::synth::patches::Patches>,
+    /// The axes given an exemplar whose cuts are smaller than [`SMALLEST_CUT`]: their slice
+    /// energy, sharpness and line figures are not measured.
+    pub not_measured: Vec<String>,
+}
+
+/// Whether the cuts across `axis` of a volume of `dims` are large enough to measure
+/// (at least [`SMALLEST_CUT`] voxels each way).
+pub fn measurable(dims: [usize; 3], axis: Axis) -> bool {
+    let (a, b) = axis.plane_axes();
+    dims[a] >= SMALLEST_CUT && dims[b] >= SMALLEST_CUT
 }
 
 /// Measure `volume` against its exemplars: one per axis (`None`: not measured).
 /// For a layered volume pass the exemplar for x and y and `layered = true`.
 pub fn assess(volume: &Volume, exemplars: [Option<&Image2d>; 3], layered: bool) -> Result<Report> {
     let first = exemplars.iter().flatten().next().ok_or_else(|| Error::invalid("no exemplar to measure against"))?;
+    if let Some(other) = exemplars.iter().flatten().find(|e| e.channels() != first.channels()) {
+        return Err(Error::invalid(format!(
+            "the exemplars have channels {} and {}; all exemplars need the same channels",
+            crate::volume::channel_names(first.channels()),
+            crate::volume::channel_names(other.channels())
+        )));
+    }
     let picks = channel_positions(volume, first.channels())?;
+    let given: Vec<Axis> = Axis::ALL.into_iter().filter(|a| exemplars[a.index()].is_some()).collect();
+    let dims = volume.dims();
+    if !given.iter().any(|&a| measurable(dims, a)) {
+        let [x, y, z] = dims;
+        let names: Vec<String> = given.iter().map(Axis::to_string).collect();
+        return Err(Error::invalid(format!(
+            "the volume is {x}x{y}x{z} voxels: no cut across {} is at least {s}x{s} voxels, the smallest the \
+             figures are measured on; measure a volume with two sides of at least {s}",
+            listed(&names, "or"),
+            s = SMALLEST_CUT
+        )));
+    }
     let mut axes = Vec::new();
     let mut sharpness = Vec::new();
     let mut lines = Vec::new();
+    let mut not_measured = Vec::new();
     let mut best = [Vec::new(), Vec::new(), Vec::new()];
     for axis in Axis::ALL {
         let Some(image) = exemplars[axis.index()] else { continue };
+        if !measurable(dims, axis) {
+            not_measured.push(axis.to_string());
+            continue;
+        }
         sharpness.push(crate::sharpness::measure(volume, image, &picks, axis)?);
         lines.push(crate::lines::measure(volume, image, &picks, axis)?);
         let measure = Measure::new(image, volume, &picks, layered)?;
@@ -129,7 +167,16 @@ pub fn assess(volume: &Volume, exemplars: [Option<&Image2d>; 3], layered: bool) 
     let histograms = histogram_distances(volume, first, &picks);
     let layered = layered.then(|| layered_quality(volume, &best)).transpose()?;
     let patches = crate::synth::patches::Patches::of_meta(&volume.meta);
-    Ok(Report { axes, sharpness, lines, histograms, layered, patches })
+    Ok(Report { axes, sharpness, lines, histograms, layered, patches, not_measured })
+}
+
+/// `x`, `x or y`, `x, y or z` (with `and`: `x and y`).
+pub fn listed(names: &[String], word: &str) -> String {
+    match names {
+        [] => String::new(),
+        [one] => one.clone(),
+        [rest @ .., last] => format!("{} {word} {last}", rest.join(", ")),
+    }
 }
 
 /// The figures a designer reads at a glance (the cheap part of [`assess`]): per axis the

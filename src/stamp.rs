@@ -297,13 +297,8 @@ pub fn check_region(region: Region) -> Result<()> {
                     "scatter region box {a}..{b} is out of range; allowed: each coordinate -{limit} to {limit}"
                 )));
             }
-            if let Some(k) = (0..3).find(|&k| a[k] > b[k]) {
-                let axis = ["x", "y", "z"][k];
-                return Err(Error::invalid(format!(
-                    "scatter region box {a}..{b} has its corners reversed: {axis} {} is past {}; \
-                     allowed: X0,Y0,Z0 each at most X1,Y1,Z1",
-                    a[k], b[k]
-                )));
+            if let Some(why) = reversed_corners(a, b) {
+                return Err(Error::invalid(format!("scatter region box {a}..{b} {why}")));
             }
         }
         Region::Depth(lo, hi) => {
@@ -313,6 +308,19 @@ pub fn check_region(region: Region) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// What is wrong with a box from corner `a` to corner `b` whose corners are reversed (the
+/// first axis on which `a` lies past `b`), in the words of a manifest's `box:X0,Y0,Z0,X1,Y1,Z1`;
+/// `None` for a box in order.
+pub fn reversed_corners(a: Vec3, b: Vec3) -> Option<String> {
+    (0..3).find(|&k| a[k] > b[k]).map(|k| {
+        let axis = ["X", "Y", "Z"][k];
+        format!(
+            "has its corners reversed: {axis}0 {} is past {axis}1 {}; allowed: X0 <= X1, Y0 <= Y1, Z0 <= Z1",
+            a[k], b[k]
+        )
+    })
 }
 
 /// Whether `volume` has what `region` reads: a depth band needs a Depth channel.

@@ -149,7 +149,20 @@ pub fn sheet(file: &Path, output: &Path, title: Option<String>) -> Result<()> {
 pub fn make(recipe: &str, size: &str, seed: u64, output: &Path) -> Result<()> {
     let recipe: Recipe = recipe.parse().map_err(usage)?;
     let dims = parse_size(size)?;
-    crate::volume::check_size(dims, 4, io::budget_from_env()?).map_err(usage)?;
+    let (channels, budget) = (recipe.channels().len(), io::budget_from_env()?);
+    let samples = crate::volume::check_size(dims, channels, budget).map_err(usage)?;
+    // a writer holds a copy of the samples in its file's layout (an EXR its atlas) beside
+    // the volume: both must fit, or the allocation aborts past the budget's reserve
+    let bytes = samples as u128 * 4;
+    if bytes * 2 > u128::from(budget) {
+        let [x, y, z] = dims;
+        return Err(Error::invalid(format!(
+            "a {x}x{y}x{z} volume with {channels} channel(s) needs {bytes} bytes, and writing it a copy as large: {} \
+             bytes in all, over the voxel budget of {budget} bytes (raise it with SOLIDTEX_MAX_BYTES or choose \
+             smaller dims)",
+            bytes * 2
+        )));
+    }
     io::check_output(output, &[])?;
     let bar = super::fill::Bar::new();
     let volume = procedural::generate_with(recipe, dims, seed, &bar);

@@ -342,6 +342,10 @@ fn check_output_of(action: Action, output: &Path, args: &GuidedArgs, model: Opti
         fill.regions.iter().map(|r| crate::library::files::volume(&fill.built, &r.exemplar)).collect();
     let inputs: Vec<&Path> =
         inputs(args).into_iter().chain(model).chain(regions.iter().map(PathBuf::as_path)).collect();
+    let kept = [(&args.cache, "the solid cube and bricks of --cache"), (&args.cube_folder, "the model's solid cube")];
+    for (folder, what) in kept.into_iter().filter(|_| !matches!(action, Action::Keep)) {
+        folder.as_deref().map(|f| io::guard::outside_folder(output, f, what)).transpose()?;
+    }
     match action {
         Action::Cut(..) | Action::View(_) => io::guard::png_output(output, &inputs),
         Action::Solid => io::check_output(output, &inputs),
@@ -679,7 +683,7 @@ fn write_blend(
         Action::View(view) => solid::view_blend(parts, weight, domain, &g.surface, view, &bar)
             .and_then(|(picture, counts)| io::write_rgb8(&args.output, &picture).map(|_| counts)),
         Action::Solid | Action::Keep | Action::Model => {
-            crate::volume::check_size(domain.dims, 4, io::budget_from_env()?).and_then(|_| {
+            crate::volume::check_size(domain.dims, solid::RGBA.len(), io::budget_from_env()?).and_then(|_| {
                 let alpha = coverage(&g.surface, domain);
                 let (volume, counts) = solid::solid_blend(parts, weight, &alpha, &bar)?;
                 kept = deliver(args, action, g, domain, volume)?;

@@ -50,6 +50,7 @@ pub fn run(args: &QualityArgs) -> Result<()> {
     let others = shrunk_as_made(&args.others, &volume);
     let ex = others.load(exemplar, "exemplar")?;
     let (ey, ez) = others.load_yz()?;
+    others.check_channels((exemplar, &ex), (ey.as_ref(), ez.as_ref()))?;
     let given = [(exemplar.as_path(), Some(&ex)), (others.ey.as_deref().unwrap_or(exemplar), ey.as_ref())];
     for (path, image) in given.into_iter().chain([(others.ez.as_deref().unwrap_or(exemplar), ez.as_ref())]) {
         if let Some(image) = image.filter(|i| i.width() < 3 || i.height() < 3) {
@@ -71,6 +72,17 @@ pub fn run(args: &QualityArgs) -> Result<()> {
         [Some(&ex), Some(ey_ref), Some(ez.as_ref().unwrap_or(ey_ref))]
     };
     let report = quality::assess(&volume, exemplars, layered).map_err(|e| e.in_file(&args.volume))?;
+    if !report.not_measured.is_empty() {
+        let [x, y, z] = volume.dims();
+        tell!(
+            "note: {} is {x}x{y}x{z} voxels: the cuts across {} are smaller than {s}x{s} voxels, so their slice \
+             energy, sharpness and line figures are not measured{}",
+            args.volume.display(),
+            quality::listed(&report.not_measured, "and"),
+            if args.check { " nor checked" } else { "" },
+            s = quality::SMALLEST_CUT
+        );
+    }
     if args.json {
         say!("{}", serde_json::to_string_pretty(&report).expect("a report always serializes"));
     } else {

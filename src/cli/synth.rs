@@ -54,13 +54,13 @@ impl OtherExemplars {
         Ok((ey, ez))
     }
 
-    /// `e` about the exemplars, in the file it is about: the Ey or Ez image when the message
-    /// starts with that name (as synthesis names them), else the exemplar `ex`.
+    /// `e` about the exemplars, in the file it is about: the image an [`Error::Exemplar`]
+    /// names (Ey standing in for a missing Ez, the exemplar `ex` for a missing Ey), else `ex`.
     pub fn in_file(&self, e: Error, ex: &Path) -> Error {
-        let names = |name: &str| matches!(&e, Error::Invalid(m) if m.strip_prefix(name).is_some_and(|rest| rest.starts_with([' ', ':'])));
-        let path = match (&self.ey, &self.ez) {
-            (Some(p), _) if names("Ey") => p.as_path(),
-            (_, Some(p)) if names("Ez") => p.as_path(),
+        let ey = self.ey.as_deref().unwrap_or(ex);
+        let path = match &e {
+            Error::Exemplar { which: 1, .. } => ey,
+            Error::Exemplar { which: 2, .. } => self.ez.as_deref().unwrap_or(ey),
             _ => ex,
         };
         e.in_file(path)

@@ -270,7 +270,8 @@ pub fn view_blend(
     Ok((picture, counts))
 }
 
-const RGBA: [Channel; 4] = [Channel::R, Channel::G, Channel::B, Channel::A];
+/// The channels of a blended solid ([`solid_blend`]): colours and the model's coverage.
+pub const RGBA: [Channel; 4] = [Channel::R, Channel::G, Channel::B, Channel::A];
 
 /// Each part's synthesis over the voxels of `request` it weighs in, and the runs' voxels
 /// and corrections summed.

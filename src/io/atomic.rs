@@ -357,8 +357,8 @@ pub fn write_folder(path: &Path, body: impl FnOnce(&Path) -> Result<()>) -> Resu
     let old = writable_folder(path)?;
     remove_stale_temporaries(folder_of(path), Some(&name_of(path)));
     let temp = temporary_folder(path)?;
-    body(temp.path())?;
-    write_list(temp.path()).map_err(|e| e.in_file(path))?;
+    body(temp.path()).map_err(|e| named_in(e, temp.path(), path))?;
+    write_list(temp.path()).map_err(|e| named_in(e, temp.path(), path).in_file(path))?;
     let temp = temp.keep();
     let placed = match &old {
         None => fs::rename(&temp, path).map_err(|e| Error::io(path, e)),
@@ -372,6 +372,21 @@ pub fn write_folder(path: &Path, body: impl FnOnce(&Path) -> Result<()>) -> Resu
         // `temp` now holds the previous folder.
         (Ok(()), Some(names)) => remove_listed(&temp, &names, path),
         (Ok(()), None) => Ok(()),
+    }
+}
+
+/// `e` naming, instead of a file in the temporary folder `temp`, that file in `path`: the
+/// folder the user named, which the temporary one becomes.
+fn named_in(e: Error, temp: &Path, path: &Path) -> Error {
+    let moved = |file: PathBuf| match file.strip_prefix(temp) {
+        Ok(rest) if rest.as_os_str().is_empty() => path.to_path_buf(),
+        Ok(rest) => path.join(rest),
+        Err(_) => file,
+    };
+    match e {
+        Error::Io { path: file, source } => Error::Io { path: moved(file), source },
+        Error::File { path: file, message } => Error::File { path: moved(file), message },
+        other => other,
     }
 }
 

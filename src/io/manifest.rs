@@ -898,16 +898,11 @@ pub fn region(text: &str) -> Result<Region> {
     if let Some(rest) = text.strip_prefix("box:") {
         let v = values::numbers("region box", rest, &[6])?;
         values::positions("region box", rest, &v)?;
-        if let Some(k) = (0..3).find(|&k| v[k] > v[k + 3]) {
-            let axis = ["X", "Y", "Z"][k];
-            return Err(Error::invalid(format!(
-                "region box {rest:?} has its corners reversed: {axis}0 {} is past {axis}1 {}; \
-                 allowed: X0 <= X1, Y0 <= Y1, Z0 <= Z1",
-                v[k],
-                v[k + 3]
-            )));
+        let (a, b) = (Vec3::new(v[0], v[1], v[2]), Vec3::new(v[3], v[4], v[5]));
+        if let Some(why) = crate::stamp::reversed_corners(a, b) {
+            return Err(Error::invalid(format!("region box {rest:?} {why}")));
         }
-        return Ok(Region::Box(Vec3::new(v[0], v[1], v[2]), Vec3::new(v[3], v[4], v[5])));
+        return Ok(Region::Box(a, b));
     }
     if let Some(rest) = text.strip_prefix("depth:") {
         let v = values::numbers("region depth", rest, &[2])?;

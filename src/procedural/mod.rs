@@ -35,6 +35,15 @@ pub enum Recipe {
 }
 
 impl Recipe {
+    /// The channels the recipe's volume has: R, G, B (strata: and Depth).
+    pub fn channels(self) -> Vec<Channel> {
+        let mut channels = Channel::rgb();
+        if self == Recipe::Strata {
+            channels.push(Channel::Depth);
+        }
+        channels
+    }
+
     /// All recipes.
     pub const ALL: [Recipe; 8] = [
         Recipe::Marble,
@@ -101,13 +110,12 @@ pub fn generate_with(recipe: Recipe, dims: [usize; 3], seed: u64, progress: &dyn
     let volume = match recipe {
         Recipe::Marble => Volume::from_fn_par_with(
             dims,
-            Channel::rgb(),
+            recipe.channels(),
             |x, y, z, o| o.copy_from_slice(&marble(seed, unit(x, y, z, size))),
             progress,
         )?,
         Recipe::Strata => {
-            let mut channels = Channel::rgb();
-            channels.push(Channel::Depth);
+            let channels = recipe.channels();
             let paint = |x, y, z, o: &mut [f32]| {
                 o[..3].copy_from_slice(&strata(seed, unit(x, y, z, size)));
                 o[3] = if dims[2] > 1 { z as f32 / (dims[2] - 1) as f32 } else { 0.0 };
@@ -116,7 +124,7 @@ pub fn generate_with(recipe: Recipe, dims: [usize; 3], seed: u64, progress: &dyn
         }
         Recipe::Wood => Volume::from_fn_par_with(
             dims,
-            Channel::rgb(),
+            recipe.channels(),
             |x, y, z, o| o.copy_from_slice(&wood(seed, unit(x, y, z, size), size)),
             progress,
         )?,
@@ -127,15 +135,15 @@ pub fn generate_with(recipe: Recipe, dims: [usize; 3], seed: u64, progress: &dyn
                 _ => chocolate,
             };
             let fill = |x, y, z, o: &mut [f32]| o.copy_from_slice(&paint(seed, unit(x, y, z, size)));
-            Volume::from_fn_par_with(dims, Channel::rgb(), fill, progress)?
+            Volume::from_fn_par_with(dims, recipe.channels(), fill, progress)?
         }
         Recipe::Foam => {
             let foam = truths::Foam::new(dims, seed);
-            Volume::from_fn_par_with(dims, Channel::rgb(), |x, y, z, o| o.fill(foam.label(x, y, z)), progress)?
+            Volume::from_fn_par_with(dims, recipe.channels(), |x, y, z, o| o.fill(foam.label(x, y, z)), progress)?
         }
         Recipe::Channels => {
             let channels = truths::Channels::new(dims, seed);
-            Volume::from_fn_par_with(dims, Channel::rgb(), |x, y, z, o| o.fill(channels.label(x, y, z)), progress)?
+            Volume::from_fn_par_with(dims, recipe.channels(), |x, y, z, o| o.fill(channels.label(x, y, z)), progress)?
         }
     };
     let mut meta = Meta { texture_type: Some(recipe.texture_type()), provenance: Vec::new() };

@@ -260,12 +260,15 @@ impl Exemplars {
         let mut planes: Vec<Arc<Vec<Prepared>>> = Vec::new();
         for (a, image) in images.iter().enumerate() {
             if image.channels() != channels {
-                return Err(Error::invalid(format!(
-                    "{} has channels {}, the first {}; all exemplars need the same channels",
-                    names[a],
-                    crate::volume::channel_names(image.channels()),
-                    crate::volume::channel_names(channels)
-                )));
+                return Err(Error::exemplar(
+                    a,
+                    format!(
+                        "{} has channels {}, the first {}; all exemplars need the same channels",
+                        names[a],
+                        crate::volume::channel_names(image.channels()),
+                        crate::volume::channel_names(channels)
+                    ),
+                ));
             }
             if let Some(b) = (0..a).find(|&b| std::ptr::eq(images[b], *image)) {
                 planes.push(planes[b].clone());
@@ -274,16 +277,19 @@ impl Exemplars {
             let shrink = |s: usize| (1..options.levels).fold(s, |s, _| s.div_ceil(2));
             let (w, h) = (shrink(image.width()), shrink(image.height()));
             if w < smallest || h < smallest {
-                return Err(Error::invalid(format!(
-                    "{} is {}x{} pixels; at {} levels its coarsest level is {w}x{h}, smaller than the {m}x{m} a \
+                return Err(Error::exemplar(
+                    a,
+                    format!(
+                        "{} is {}x{} pixels; at {} levels its coarsest level is {w}x{h}, smaller than the {m}x{m} a \
                      {n}x{n} neighbourhood needs; use fewer levels or a larger exemplar",
-                    names[a],
-                    image.width(),
-                    image.height(),
-                    options.levels,
-                    m = smallest,
-                    n = smallest - 2
-                )));
+                        names[a],
+                        image.width(),
+                        image.height(),
+                        options.levels,
+                        m = smallest,
+                        n = smallest - 2
+                    ),
+                ));
             }
             let (coarse, finest) = (weights(image, options.coarse_depth_share), weights(image, DEPTH_SHARE));
             let pyramid = crate::synth::image_pyramid(image, options.levels)?;

@@ -197,12 +197,14 @@ pub fn check_start(params: &SynthParams, channels: &[Channel], layered: bool) ->
     }
 }
 
-/// Channel counts agree, samples are finite, and the coarsest level holds a neighbourhood.
+/// Channel counts agree, samples are finite, and the coarsest level holds a neighbourhood;
+/// a problem with one image is an [`Error::Exemplar`] naming which (its place in `images`).
 fn check_exemplars(images: &[&Image2d], names: &[&str], params: &SynthParams) -> Result<()> {
     params.check(images[0].channel_count() + 1)?;
-    for (image, name) in images.iter().zip(names) {
+    for (which, (image, name)) in images.iter().zip(names).enumerate() {
+        let fault = |message: String| Error::exemplar(which, message);
         if image.channel_count() != images[0].channel_count() {
-            return Err(Error::invalid(format!(
+            return Err(fault(format!(
                 "{name} has {} channel(s) ({}), {} has {} ({}); all exemplars need the same channels",
                 image.channel_count(),
                 crate::volume::channel_names(image.channels()),
@@ -212,14 +214,14 @@ fn check_exemplars(images: &[&Image2d], names: &[&str], params: &SynthParams) ->
             )));
         }
         if let Some([x, y, c]) = image.first_non_finite() {
-            return Err(Error::invalid(format!("{name}: pixel ({x}, {y}) channel {c} is not finite")));
+            return Err(fault(format!("{name}: pixel ({x}, {y}) channel {c} is not finite")));
         }
         // every pixel's neighbourhood as a vector (f32), with a channel of features or depth
         let vectors = image.width() as u128
             * image.height() as u128
             * (params.neighbourhood * params.neighbourhood * (image.channel_count() + 1) * 4) as u128;
         if vectors > params.budget_bytes as u128 {
-            return Err(Error::invalid(format!(
+            return Err(fault(format!(
                 "{name} is {}x{} pixels: preparing it for synthesis takes about {:.1} GB (every pixel's {n}x{n} \
                  neighbourhood), over the memory budget of {:.1} GB; shrink it with --max-exemplar (128 or 256 for \
                  a photo) or raise SOLIDTEX_MAX_BYTES",
@@ -234,7 +236,7 @@ fn check_exemplars(images: &[&Image2d], names: &[&str], params: &SynthParams) ->
         let (w, h) = (shrink(image.width()), shrink(image.height()));
         let need = params.neighbourhood + 2;
         if w < need || h < need {
-            return Err(Error::invalid(format!(
+            return Err(fault(format!(
                 "{name} is {}x{} pixels; at {} levels its coarsest level is {w}x{h}, smaller than the {need}x{need} \
                  that a {n}x{n} neighbourhood needs; use fewer levels or a larger exemplar",
                 image.width(),

@@ -362,3 +362,77 @@ fn the_noise_budget_counts_the_exemplars_channels() {
     let run = solidtex_env(&args, &[("SOLIDTEX_MAX_BYTES", "4000000")]);
     assert_fails(&run, &["128x128x128 volume with 1 channel(s)"]);
 }
+
+/// `quality` refuses an --ey image whose channels differ from the exemplar's, naming it
+/// and both counts (as `synth` and `noise` do), instead of measuring.
+#[test]
+fn quality_refuses_other_exemplars_with_other_channels() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (grey, colour, vol) = (at(d, "grey.png"), at(d, "rgb.png"), at(d, "v.exr"));
+    image::GrayImage::from_pixel(64, 64, image::Luma([90])).save(&grey).unwrap();
+    image::RgbImage::from_pixel(64, 64, image::Rgb([90, 60, 30])).save(&colour).unwrap();
+    assert!(solidtex(&["make", "marble", "--size", "16", "-o", &vol]).status.success());
+    let run = solidtex(&["quality", &vol, "--exemplar", &colour, "--ey", &grey, "--check"]);
+    assert_fails(&run, &["has 1 channel(s)", &colour, "has 3", "the same channels"]);
+    assert!(stderr(&run).contains(&format!("error: {grey}: ")), "{}", stderr(&run));
+}
+
+/// `quality` measures a volume on cuts of at least 8x8 voxels: a volume with no such cut
+/// is refused, naming it, its size and the size needed, with no figures printed; a volume
+/// with some (1x64x64: the cut across x) is measured there, saying which axes are not.
+#[test]
+fn quality_measures_only_the_cuts_large_enough() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let photo = concat!(env!("CARGO_MANIFEST_DIR"), "/exemplars/gravel_photo.png");
+    let (dot, sheet) = (at(d, "dot.exr"), at(d, "sheet.exr"));
+    assert!(solidtex(&["make", "marble", "--size", "1", "-o", &dot]).status.success());
+    assert!(solidtex(&["make", "marble", "--size", "1x64x64", "-o", &sheet]).status.success());
+    let run = solidtex(&["quality", &dot, "--exemplar", photo, "--check"]);
+    assert_fails(&run, &[&dot, "1x1x1", "8x8"]);
+    assert!(run.stdout.is_empty(), "{}", String::from_utf8_lossy(&run.stdout));
+    let run = solidtex(&["quality", &sheet, "--exemplar", photo, "--json"]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let report: serde_json::Value = serde_json::from_slice(&run.stdout).unwrap();
+    let axes = |key: &str| report[key].as_array().unwrap().iter().map(|a| a["axis"].clone()).collect::<Vec<_>>();
+    assert_eq!(axes("axes"), ["x"]);
+    assert_eq!(axes("sharpness"), ["x"]);
+    assert_eq!(axes("lines"), ["x"]);
+    let err = stderr(&run);
+    assert!(err.contains("1x64x64") && err.contains("y and z") && err.contains("not measured"), "{err}");
+}
+
+/// `guided --planes` names the --ez image whose size or channels do not fit, as the
+/// solid-cube path does.
+#[test]
+fn guided_on_planes_names_the_other_exemplar_at_fault() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let photo = concat!(env!("CARGO_MANIFEST_DIR"), "/exemplars/gravel_photo.png");
+    let (fruit, spec) = crate::fill::kiwi_fruit(d);
+    let (thin, colour) = (at(d, "w1.png"), at(d, "rgb.png"));
+    image::GrayImage::from_pixel(1, 64, image::Luma([90])).save(&thin).unwrap();
+    image::RgbImage::from_pixel(64, 64, image::Rgb([90, 60, 30])).save(&colour).unwrap();
+    for (ez, says) in [(&thin, "is 1x64 pixels"), (&colour, "channels R,G,B")] {
+        let args = ["guided", &fruit, "--spec", &spec, "--exemplar", photo, "--ez", ez, "--planes", "--res", "32"];
+        let run = solidtex(&[&args[..], &["--cut", "0,0,0,1,0,0", "-o", &at(d, "g.png")]].concat());
+        assert_fails(&run, &[says]);
+        assert!(stderr(&run).contains(&format!("error: {ez}: ")), "{}", stderr(&run));
+    }
+    assert!(!d.join("g.png").exists());
+}
+
+/// The voxel budget of `make` counts the channels the recipe makes: three for marble,
+/// four for strata (colours and Depth).
+#[test]
+fn the_make_budget_counts_the_recipes_channels() {
+    let dir = tempfile::tempdir().unwrap();
+    let budget = [("SOLIDTEX_MAX_BYTES", "100000")];
+    for (recipe, says) in [("marble", "64x64x64 volume with 3 channel(s)"), ("strata", "with 4 channel(s)")] {
+        let out = at(dir.path(), "m.exr");
+        let run = solidtex_env(&["make", recipe, "--size", "64", "-o", &out], &budget);
+        assert_fails(&run, &[says]);
+        assert!(!Path::new(&out).exists());
+    }
+}

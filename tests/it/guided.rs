@@ -823,3 +823,31 @@ fn a_guided_model_is_checked_before_synthesis_and_refused_where_not_taken() {
         assert!(!d.join(out).exists());
     }
 }
+
+/// An output that is or lies in the folder where a guided model's solid cube is kept
+/// (beside the model, or `--cache`) is refused before any synthesis: nothing is written
+/// there, not even the cube.
+#[test]
+fn an_output_in_the_cube_folder_is_refused_before_synthesis() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (fruit, spec) = crate::fill::kiwi_fruit(d);
+    let ex = gravel();
+    let model = at(d, "fruit.guided");
+    let base = ["guided", &fruit, "--spec", &spec, "--exemplar", &ex, "--max-exemplar", "64", "--res", "24"];
+    assert!(solidtex(&[&base[..], &["-o", &model]].concat()).status.success());
+    let cache = d.join(".solidtex-cache");
+    if cache.exists() {
+        std::fs::remove_dir_all(&cache).unwrap();
+    }
+    let output = at(d, ".solidtex-cache");
+    let run = solidtex(&["bake", &model, "-o", &output]);
+    crate::support::assert_fails(&run, &[&output, "solid cube"]);
+    assert!(!stderr(&run).contains("kept the solid cube"), "{}", stderr(&run));
+    assert!(!cache.exists(), "{}", stderr(&run));
+    let (mine, cut) = (at(d, "mine"), at(d, "mine/cut.png"));
+    std::fs::create_dir(&mine).unwrap();
+    let run = solidtex(&[&base[..], &["--cache", &mine, "--cut", "0,0,0,1,0,0", "-o", &cut]].concat());
+    crate::support::assert_fails(&run, &[&cut, "is inside", "solid cube"]);
+    assert!(crate::support::listing(&d.join("mine")).is_empty(), "{}", stderr(&run));
+}

@@ -411,3 +411,12 @@ fn a_reversed_scatter_region_is_refused() {
     assert_usage(&scatter("depth:0.8,0.2"), &["--region depth \"0.8,0.2\"", "0 <= FROM <= TO <= 1"]);
     assert!(!std::path::Path::new(&out).exists());
 }
+
+/// A scatter region given to the library directly is checked as one in a manifest or on
+/// the command line is: a reversed box names the axis and both corners' values alike.
+#[test]
+fn a_reversed_region_box_reads_alike_wherever_it_is_given() {
+    let err = solidtex::stamp::check_region(Region::Box(Vec3::new(0.0, 5.0, 0.0), Vec3::ONE)).unwrap_err();
+    let text = err.to_string();
+    assert!(text.contains("corners reversed: Y0 5 is past Y1 1") && text.contains("Y0 <= Y1"), "{text}");
+}

@@ -403,3 +403,27 @@ fn a_file_name_never_becomes_a_folder() {
         listing(&d.join("lay.exr"))
     );
 }
+
+/// A folder output whose writing fails (a full disk) names the file in the user's folder,
+/// not the temporary folder solidtex fills first, and leaves nothing behind.
+#[test]
+fn a_failed_folder_write_names_the_users_output() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("stack");
+    let full = || std::io::Error::from_raw_os_error(28);
+    let err = solidtex::io::atomic::write_folder(&out, |temp| {
+        std::fs::write(temp.join("z0000.png"), b"one").unwrap();
+        Err(solidtex::Error::io(temp.join("z0001.png"), full()))
+    })
+    .unwrap_err()
+    .to_string();
+    let named = out.join("z0001.png").to_string_lossy().into_owned();
+    assert!(err.starts_with(&format!("{named}: ")) && !err.contains(".stack.solidtex-"), "{err}");
+    let err = solidtex::io::atomic::write_folder(&out, |temp| {
+        Err(solidtex::Error::file(temp.join("z0002.png"), "cannot write PNG: no space"))
+    })
+    .unwrap_err()
+    .to_string();
+    assert!(err.starts_with(&format!("{}: ", out.join("z0002.png").display())), "{err}");
+    assert_eq!(listing(dir.path()), Vec::<String>::new());
+}
