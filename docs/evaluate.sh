@@ -4,7 +4,8 @@
 # Usage: [SYNTH_FLAGS=...] bash docs/evaluate.sh [IMAGES_DIR] [OUT_DIR]
 #   IMAGES_DIR  default ../shared/data/images (not part of the project); every *.png in it
 #   OUT_DIR     default out/eval; volumes and contact sheets go there
-#   SYNTH_FLAGS given to every synth run, e.g. "--core coordinates"
+#   SYNTH_FLAGS given to every synth run, e.g. "--core coordinates" (the truths' slices are
+#               label images, which take the coordinate core unless "--core blend" is given)
 # Photos whose name holds "strata" or "layered" are synthesized with --layered.
 # One line per photo and per control; `check` counts the figures `quality --check` finds
 # outside their bands (docs/synthesis.md, "Checking a volume"); a coordinate-core volume adds

@@ -17,6 +17,9 @@ pub struct BenchArgs {
     /// Only workloads whose name contains this text (e.g. `fill`, `synth`, `/128`).
     #[arg(long)]
     pub only: Option<String>,
+    /// List the workloads' names, one per line, and run none.
+    #[arg(long)]
+    pub list: bool,
     /// Also time filling the closed meshes of this folder that it knows (the bunny, sphere,
     /// stepped cylinder and pipe of ../shared/data/meshes).
     #[arg(long)]
@@ -43,19 +46,31 @@ const WORKLOADS: [Workload; 6] = [
     Workload { name: "synth-coords/128cube/128px-rgb", size: [128; 3], layered: false, core: Core::Coordinates },
 ];
 
+/// Every workload's name, in the order they run.
+fn workload_names(args: &BenchArgs) -> Result<Vec<String>> {
+    let mut names: Vec<String> =
+        HAND_MADE.iter().chain(WORKLOADS.iter().map(|w| &w.name)).map(|n| n.to_string()).collect();
+    names.extend(super::bench_fill::names());
+    names.extend(super::bench_surface::names(args)?);
+    names.extend(super::bench_guided::names());
+    Ok(names)
+}
+
 /// Run `solidtex bench`.
 pub fn run(args: &BenchArgs) -> Result<()> {
     crate::io::values::within("--runs", args.runs, 1, 100).map_err(super::commands::usage)?;
+    if args.list {
+        workload_names(args)?.iter().for_each(|name| say!("{name}"));
+        return Ok(());
+    }
     if let Some(only) = &args.only {
-        let mut names: Vec<String> =
-            HAND_MADE.iter().chain(WORKLOADS.iter().map(|w| &w.name)).map(|n| n.to_string()).collect();
-        names.extend(super::bench_fill::names());
-        names.extend(super::bench_surface::names(args)?);
-        names.extend(super::bench_guided::names());
+        let names = workload_names(args)?;
         if !names.iter().any(|n| n.contains(only.as_str())) {
+            let mut groups: Vec<&str> = names.iter().map(|n| n.split('/').next().unwrap_or(n)).collect();
+            groups.dedup();
             return Err(Error::usage(format!(
-                "--only {only:?} matches no workload; the workloads: {}",
-                names.join(", ")
+                "--only {only:?} matches no workload; their names start {} (`solidtex bench --list` lists them all)",
+                groups.join(", ")
             )));
         }
     }

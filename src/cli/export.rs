@@ -66,10 +66,17 @@ pub fn run(args: &ExportArgs) -> Result<()> {
          and skins (.ply)",
     )?;
     io::guard::file_output(&args.output, &inputs, &["glb"], "a glTF binary")?;
+    let is_skin = |p: &PathBuf| p.extension().is_some_and(|e| e.eq_ignore_ascii_case("ply"));
     if let [one] = args.models.as_slice()
-        && one.extension().is_some_and(|e| e.eq_ignore_ascii_case("ply"))
+        && is_skin(one)
     {
         return export_skin(args, one);
+    }
+    if let Some(skin) = args.models.iter().find(|p| is_skin(p)) {
+        return Err(Error::usage(format!(
+            "{}: a skin (.ply) is exported alone, as it is; filled models (.lst) go together in another export",
+            skin.display()
+        )));
     }
     let loaded = load_models(&args.models, &args.output)?;
     if let Some(scale) = args.displacement {
@@ -94,6 +101,10 @@ pub fn run(args: &ExportArgs) -> Result<()> {
     let parts: Vec<gltf::Part> =
         names.iter().zip(&meshes).map(|(name, mesh)| gltf::Part { name: name.clone(), mesh }).collect();
     let extras = provenance(args, &loaded, &meshes, options);
+    if let Some(side) = options.atlas.filter(|side| *side >= 2048) {
+        // PNG-encoding a large atlas takes seconds after the bar has finished
+        tell!("encoding {} {side}x{side} atlas(es) as PNG and writing {}…", meshes.len(), args.output.display());
+    }
     gltf::write_glb(&args.output, &parts, extras)?;
     let triangles: usize = meshes.iter().map(|m| m.triangles.len()).sum();
     let vertices: usize = meshes.iter().map(|m| m.positions.len()).sum();

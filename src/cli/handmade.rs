@@ -165,7 +165,7 @@ fn stamp_values(args: &StampArgs) -> Result<(Placement, [f32; 3])> {
 /// An error of stamping `mesh` into the volume read from `volume`, naming both files.
 fn about(error: Error, mesh: &Path, volume: &Path) -> Error {
     match error {
-        Error::Invalid(message) => Error::file(mesh, format!("{message} read from {}", volume.display())),
+        Error::Invalid(message) => Error::file(mesh, format!("{message} (stamping into {})", volume.display())),
         other => other,
     }
 }
@@ -379,7 +379,10 @@ fn draw_cake(args: &DrawArgs) -> Result<()> {
 
 /// `WxH` with each side 2 to 4096 pixels.
 fn draw_size(text: &str) -> Result<(usize, usize)> {
-    let bad = || Error::invalid(format!("--size {text:?} is out of range; allowed: WxH, each side 2 to 4096 pixels"));
+    let bad = || {
+        let what = if text.contains('x') { "is out of range" } else { "is not WxH (two sides, e.g. 64x64)" };
+        Error::invalid(format!("--size {text:?} {what}; allowed: WxH, each side 2 to 4096 pixels"))
+    };
     let parts: Vec<usize> =
         text.split('x').map(|p| p.trim().parse::<usize>()).collect::<Result<_, _>>().map_err(|_| bad())?;
     match parts.as_slice() {
@@ -411,9 +414,17 @@ pub fn run_draw(args: &DrawArgs) -> Result<()> {
         tell!("wrote {} ({} triangles)", args.output.display(), mesh.triangles.len());
         return Ok(());
     }
+    if !crate::sections::NAMES.contains(&args.what.as_str()) {
+        let meshes = ["seed", "bubble"].into_iter().chain(crate::mesh::shapes::NAMES).chain(["cake"]);
+        return Err(Error::usage(format!(
+            "unknown drawing {:?}; allowed: {} (images), or {} (meshes)",
+            args.what,
+            crate::sections::NAMES.join(", "),
+            meshes.collect::<Vec<_>>().join(", ")
+        )));
+    }
     let (w, h) = draw_size(&args.size).map_err(usage)?;
-    let image = crate::sections::draw(&args.what, w, h, args.seed)
-        .map_err(|e| Error::usage(format!("{e}, or seed, fruit, pipe, log, block, vase")))?;
+    let image = crate::sections::draw(&args.what, w, h, args.seed).map_err(usage)?;
     io::guard::png_output(&args.output, &[])?;
     io::write_image(&args.output, &image)?;
     tell!("wrote {} ({w}x{h})", args.output.display());

@@ -189,7 +189,9 @@ fn build_preset(path: &Path) -> Result<()> {
         "mesh" => {
             let mesh = folder.join(p.mesh.as_deref().ok_or_else(|| Error::file(path, "mesh = \"FILE\" is missing"))?);
             beside_preset(&file, &[path, &mesh])?;
-            let shape = io::mesh_file::read_mesh(&mesh)?.oriented();
+            let shape = io::mesh_file::read_mesh(&mesh)
+                .map_err(|e| Error::file(path, format!("mesh = {:?}: {e}", p.mesh.as_deref().unwrap_or_default())))?
+                .oriented();
             write_one(&file, io::guard::seal_volume(mask::from_mesh(&shape, p.size, p.falloff).map_err(fail)?))
         }
         other => Err(Error::file(path, format!("kind = {other:?} is unknown; allowed: splotch, layered, mesh"))),

@@ -17,6 +17,11 @@ macro_rules! tell {
 /// channel names ([`crate::io::channels_lost`]) or its place in model space
 /// ([`crate::io::model_grid_lost`]).
 fn write_volume(path: &std::path::Path, volume: &crate::volume::Volume) -> crate::error::Result<()> {
+    // a large volume takes seconds to encode: say so rather than sit silent
+    let megabytes = volume.data().len() * 4 / (1 << 20);
+    if megabytes >= LARGE_WRITE_MB {
+        tell!("writing {} ({megabytes} MB of samples)…", path.display());
+    }
     crate::io::write_volume(path, volume)?;
     let notes = [crate::io::channels_lost(path, volume), crate::io::model_grid_lost(path, volume)];
     for note in notes.into_iter().flatten() {
@@ -24,6 +29,10 @@ fn write_volume(path: &std::path::Path, volume: &crate::volume::Volume) -> crate
     }
     Ok(())
 }
+
+/// Volumes of at least this many megabytes of samples are announced before they are
+/// written (a 256³ RGB volume, 192 MB, takes over ten seconds as EXR).
+const LARGE_WRITE_MB: usize = 64;
 
 mod bench;
 mod bench_fill;

@@ -353,6 +353,7 @@ pub fn write_bytes(path: &Path, bytes: &[u8]) -> Result<()> {
 /// Fill the folder `path` as a whole: `body` writes into a new sibling folder, which then
 /// takes the place of `path`. Refused unless [`writable_folder`] allows `path`.
 pub fn write_folder(path: &Path, body: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
+    let path = &without_trailing_slash(path);
     check_folder(path)?;
     let old = writable_folder(path)?;
     remove_stale_temporaries(folder_of(path), Some(&name_of(path)));
@@ -375,6 +376,12 @@ pub fn write_folder(path: &Path, body: impl FnOnce(&Path) -> Result<()>) -> Resu
     }
 }
 
+/// `path` without a trailing `/`: `link/` names the link itself, as `link` does, where the
+/// file system would follow it to its folder.
+fn without_trailing_slash(path: &Path) -> PathBuf {
+    path.components().collect()
+}
+
 /// `e` naming, instead of a file in the temporary folder `temp`, that file in `path`: the
 /// folder the user named, which the temporary one becomes.
 fn named_in(e: Error, temp: &Path, path: &Path) -> Error {
@@ -394,6 +401,7 @@ fn named_in(e: Error, temp: &Path, path: &Path) -> Error {
 /// solidtex may replace it: a real folder (not a link), not the current folder or one above
 /// it, and holding nothing but the files its [`FOLDER_LIST`] names.
 pub fn writable_folder(path: &Path) -> Result<Option<Vec<String>>> {
+    let path = &without_trailing_slash(path);
     let meta = match fs::symlink_metadata(path) {
         Ok(meta) => meta,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),

@@ -84,11 +84,16 @@ pub fn coordinates(
     let levels = images.len();
     let subsets = subsets(points, below + levels);
     let mut coords: Vec<[i32; 2]> = Vec::new();
+    // each level's share of the work: its points (the finest holds most of them)
+    let work: Vec<f32> = (0..levels).map(|level| subsets[below + level].len() as f32).collect();
+    let total = work.iter().sum::<f32>().max(1.0);
+    let mut done = 0.0;
     for level in (0..levels).rev() {
         if progress.cancelled() {
             return Err(Error::Cancelled);
         }
-        progress.update(&format!("level {}/{levels}", levels - level), (levels - 1 - level) as f32 / levels as f32);
+        let stage = format!("level {}/{levels}", levels - level);
+        progress.update(&stage, done / total);
         let image = &images[level];
         let options = PrepareOptions { n: ANALYSIS, variance: 0.95, max_dims: 16, k: COHERENCE };
         let prepared = Prepared::new(image, &vec![1.0; image.channel_count()], options);
@@ -107,9 +112,11 @@ pub fn coordinates(
             .map(|i| [(i % image.width()) as i32, (i / image.width()) as i32])
             .collect();
         let wanted = shares(&prepared, &pixels);
-        for _ in 0..passes {
+        for pass in 0..passes {
             graph.pass(&prepared, &mut coords, &wanted);
+            progress.update(&stage, (done + work[level] * (pass + 1) as f32 / passes as f32) / total);
         }
+        done += work[level];
     }
     for at in (0..below).rev() {
         coords = finer(

@@ -247,12 +247,18 @@ fn synth_refuses_bad_exemplars_and_sizes_and_writes_nothing() {
     assert_eq!(listing(dir.path()), ["depth.png", "grey.png", "nan.exr", "small.png", "start.exr"]);
 }
 
-/// `bench --only` with a text no workload name contains is an error that lists the names,
-/// not a silent run of nothing.
+/// `bench --only` with a text no workload name contains is an error that names the groups
+/// in full and where the whole list is, not a silent run of nothing; `--list` lists every
+/// name, one per line.
 #[test]
 fn bench_refuses_an_only_that_matches_nothing() {
     let run = solidtex(&["bench", "--runs", "1", "--only", "no-such-workload"]);
-    assert_usage(&run, &["--only \"no-such-workload\" matches no workload", "synth/64cube/128px-rgb"]);
+    assert_usage(&run, &["--only \"no-such-workload\" matches no workload", "synth-coords, ", "bench --list"]);
+    assert!(!crate::support::stderr(&run).contains("left out"), "{}", crate::support::stderr(&run));
+    let list = solidtex(&["bench", "--list"]);
+    let out = String::from_utf8_lossy(&list.stdout);
+    assert!(list.status.success() && out.lines().any(|l| l == "synth/64cube/128px-rgb"), "{out}");
+    assert!(out.lines().any(|l| l == "fill/large/fruit-2b/50k") && out.lines().count() > 20, "{out}");
 }
 
 /// A file name holding a NUL byte (possible in a manifest's TOML string, never on a command

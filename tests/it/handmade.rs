@@ -420,3 +420,25 @@ fn a_reversed_region_box_reads_alike_wherever_it_is_given() {
     let text = err.to_string();
     assert!(text.contains("corners reversed: Y0 5 is past Y1 1") && text.contains("Y0 <= Y1"), "{text}");
 }
+
+/// `draw` names every drawing it knows when given another, and says a size is not `WxH`
+/// rather than out of range; a stamp's error names both files without running them on.
+#[test]
+fn draw_and_stamp_say_what_is_wrong() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = at(dir.path(), "x.png");
+    let run = solidtex(&["draw", "nothing", "-o", &out]);
+    assert_usage(&run, &["unknown drawing \"nothing\"", "kiwi", "bark-skin", "seed, bubble, fruit", "vase, cake"]);
+    assert_usage(&solidtex(&["draw", "kiwi", "--size", "64", "-o", &out]), &["--size \"64\" is not WxH", "64x64"]);
+    assert_usage(&solidtex(&["draw", "kiwi", "--size", "1x64", "-o", &out]), &["--size \"1x64\" is out of range"]);
+    assert!(!std::path::Path::new(&out).exists());
+    let (section, _) = section_and_seed(dir.path());
+    let vol = at(dir.path(), "v.exr");
+    assert!(solidtex(&["sweep", &section, "--length", "20", "-o", &vol]).status.success());
+    let flat = at(dir.path(), "flat.obj");
+    std::fs::write(&flat, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    let run = solidtex(&["stamp", &vol, &flat, "--at", "5,5,5", "--color", "0,0,0", "-o", &at(dir.path(), "s.exr")]);
+    let err = stderr(&run);
+    assert!(!run.status.success() && err.contains("flat.obj") && err.contains("(stamping into "), "{err}");
+    assert!(!err.contains("surface read from"), "{err}");
+}

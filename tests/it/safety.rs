@@ -76,6 +76,10 @@ fn a_folder_holding_the_input_or_a_link_is_refused() {
     assert_fails(&solidtex(&["convert", &stack, &stack]), &["holds the input"]);
     std::os::unix::fs::symlink(dir.path().join("s"), dir.path().join("link")).unwrap();
     assert_fails(&solidtex(&["convert", &v, &at(dir.path(), "link")]), &["link", "symbolic link"]);
+    // `link/` names the link too (the file system would follow it), and nothing is left behind
+    let before = listing(dir.path());
+    assert_fails(&solidtex(&["convert", &v, &format!("{}/", at(dir.path(), "link"))]), &["link", "symbolic link"]);
+    assert_eq!(listing(dir.path()), before, "no temporary folder is left");
 }
 
 #[test]
