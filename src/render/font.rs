@@ -1,9 +1,11 @@
-//! A 5x7 bitmap font for labels on pictures (upper case, digits, a few signs).
+//! A 5x7 bitmap font for labels on pictures (upper case, digits, a few signs; accented
+//! letters drawn plain, other characters as `?`).
 
-/// The glyph rows (5 bits each, most significant bit on the left) for `c`.
+/// The glyph rows (5 bits each, most significant bit on the left) for `c`: an accented
+/// Latin letter as its base letter, a character the font lacks as `?` (white space blank).
 pub fn glyph(c: char) -> [u8; 7] {
     let g = |rows: [&str; 7]| rows.map(|r| u8::from_str_radix(r, 2).unwrap_or(0));
-    match c.to_ascii_uppercase() {
+    match base_letter(c).to_ascii_uppercase() {
         'A' => g(["01110", "10001", "10001", "11111", "10001", "10001", "10001"]),
         'B' => g(["11110", "10001", "10001", "11110", "10001", "10001", "11110"]),
         'C' => g(["01110", "10001", "10000", "10000", "10000", "10001", "01110"]),
@@ -50,8 +52,33 @@ pub fn glyph(c: char) -> [u8; 7] {
         ')' => g(["01000", "00100", "00010", "00010", "00010", "00100", "01000"]),
         '_' => g(["00000", "00000", "00000", "00000", "00000", "00000", "11111"]),
         '%' => g(["11000", "11001", "00010", "00100", "01000", "10011", "00011"]),
-        _ => [0; 7],
+        '+' => g(["00000", "00100", "00100", "11111", "00100", "00100", "00000"]),
+        '!' => g(["00100", "00100", "00100", "00100", "00100", "00000", "00100"]),
+        '\'' => g(["00100", "00100", "01000", "00000", "00000", "00000", "00000"]),
+        '#' => g(["01010", "01010", "11111", "01010", "11111", "01010", "01010"]),
+        c if c.is_whitespace() => [0; 7],
+        _ => g(["01110", "10001", "00001", "00010", "00100", "00000", "00100"]),
     }
+}
+
+/// The base letter of an accented Latin letter (`ü` -> `u`), else `c` itself.
+fn base_letter(c: char) -> char {
+    const FOLDS: [(&str, char); 12] = [
+        ("àáâãäåāăą", 'a'),
+        ("çćĉċč", 'c'),
+        ("ďđ", 'd'),
+        ("èéêëēĕėęě", 'e'),
+        ("ìíîïĩīĭįı", 'i'),
+        ("ñńņňŉ", 'n'),
+        ("òóôõöøōŏő", 'o'),
+        ("ŕŗř", 'r'),
+        ("śŝşšß", 's'),
+        ("ùúûüũūŭůűų", 'u'),
+        ("ýÿŷ", 'y'),
+        ("źżž", 'z'),
+    ];
+    let lower = c.to_lowercase().next().unwrap_or(c);
+    FOLDS.iter().find(|(from, _)| from.contains(lower)).map_or(c, |(_, to)| *to)
 }
 
 #[cfg(test)]
@@ -59,8 +86,18 @@ mod tests {
     use super::glyph;
 
     #[test]
+    fn accented_letters_draw_as_their_base_and_unknown_ones_as_a_question_mark() {
+        assert_eq!(glyph('ü'), glyph('U'));
+        assert_eq!(glyph('É'), glyph('E'));
+        assert_eq!(glyph('日'), glyph('?'));
+        assert_ne!(glyph('?'), [0; 7]);
+        assert_eq!(glyph(' '), [0; 7]);
+        assert_eq!(glyph('k'), glyph('K'));
+    }
+
+    #[test]
     fn letters_have_ink_and_space_has_none() {
-        for c in "ABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789=:-.,/()_%".chars() {
+        for c in "ABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789=:-.,/()_%+!'#?".chars() {
             assert!(glyph(c).iter().any(|r| *r != 0), "{c} is blank");
             assert!(glyph(c).iter().all(|r| *r < 32), "{c} is wider than 5");
         }
