@@ -36,6 +36,13 @@ pub fn numbers(option: &str, text: &str, ns: &[usize]) -> Result<Vec<f32>> {
     let values: std::result::Result<Vec<f32>, _> = text.split(',').map(|s| s.trim().parse::<f32>()).collect();
     match values {
         Ok(v) if ns.contains(&v.len()) && v.iter().all(|x| x.is_finite()) => Ok(v),
+        Ok(v) if ns.contains(&v.len()) => {
+            let (i, _) = v.iter().enumerate().find(|(_, x)| !x.is_finite()).expect("a value that is not finite");
+            let given = text.split(',').nth(i).unwrap_or_default().trim();
+            Err(Error::invalid(format!(
+                "{option} {text:?}: {given} is not a finite number (too large, or not a number)"
+            )))
+        }
         _ => Err(Error::invalid(format!(
             "{option} {text:?} is not {} comma-separated numbers",
             ns.iter().map(|n| n.to_string()).collect::<Vec<_>>().join(" or ")
@@ -130,6 +137,8 @@ mod tests {
         assert!(colour("--color", "1,2,3").unwrap_err().to_string().contains("0..1"));
         assert!(scale("--scale", "1,0,1", 0.5, 4.0).unwrap_err().to_string().contains("each scale 0.5 to 4"));
         assert!(range("--scale", "3..1", 1.0, 4.0).unwrap_err().to_string().contains("range"));
+        let huge = point("--at", "1e308,0,0").unwrap_err().to_string();
+        assert!(huge.contains("1e308 is not a finite number"), "{huge}");
     }
 
     #[test]
