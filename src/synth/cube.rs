@@ -156,8 +156,8 @@ fn core_for(images: &[Image2d; 3]) -> crate::synth::Core {
 }
 
 /// A key of everything [`synthesize`] depends on: the images, the seed, the cube's side
-/// and its core (which the images decide; named in the key so that cubes kept from before
-/// label images had their own core are not taken for theirs).
+/// and its core (which the images decide; named in the key for label images, so that a
+/// cube the blend core made of the same images is never read as theirs).
 pub fn key(images: &[Image2d; 3], seed: u64) -> u64 {
     let mut h = crate::noise::mix64(0xc0be_5eed);
     let mut add = |x: u64| h = crate::noise::mix64(h ^ x);
