@@ -245,7 +245,7 @@ impl Exemplars {
     /// a neighbourhood and the images must have the same channels, none of them alpha (the
     /// synthesized solid's alpha is the model's coverage).
     pub fn prepare(images: [&Image2d; 3], options: &Options) -> Result<Exemplars> {
-        let names = ["the exemplar (plane x)", "the y exemplar", "the z exemplar"];
+        let names = ["Ex", "Ey", "Ez"];
         let channels = images[0].channels();
         if channels.len() > MAX_CHANNELS {
             return Err(Error::invalid(format!(
