@@ -60,9 +60,7 @@ pub fn stamp(volume: &mut Volume, mesh: &Mesh, placement: &Placement, colour: [f
         let d = volume.dims();
         let placed = mesh.transformed(placement.matrix());
         let (lo, hi) = placed.bounds();
-        let top = glam::Vec3::new(d[0] as f32, d[1] as f32, d[2] as f32);
-        let overlaps = lo.cmplt(top).all() && hi.cmpgt(glam::Vec3::ZERO).all();
-        let why = if !overlaps {
+        let why = if !meets_volume(lo, hi, d) {
             format!("lies wholly outside the {}x{}x{} volume", d[0], d[1], d[2])
         } else if flat(mesh) {
             "encloses no volume (a flat or open mesh); a seed must be a closed surface".to_string()
@@ -323,18 +321,24 @@ pub fn reversed_corners(a: Vec3, b: Vec3) -> Option<String> {
     })
 }
 
-/// Whether `volume` has what `region` reads: a depth band needs a Depth channel.
+/// Whether the box `lo..hi` (voxel coordinates) reaches into a volume of `dims` voxels.
+fn meets_volume(lo: Vec3, hi: Vec3, dims: [usize; 3]) -> bool {
+    let top = Vec3::new(dims[0] as f32, dims[1] as f32, dims[2] as f32);
+    lo.cmplt(top).all() && hi.cmpgt(Vec3::ZERO).all()
+}
+
+/// Whether `volume` has what `region` reads: a box must reach into it, a depth band needs
+/// a Depth channel.
 pub fn check_region_fits(volume: &Volume, region: Region) -> Result<()> {
     let d = volume.dims();
-    if let Region::Box(lo, hi) = region {
-        let top = Vec3::new(d[0] as f32, d[1] as f32, d[2] as f32);
-        if !(lo.cmplt(top).all() && hi.cmpgt(Vec3::ZERO).all()) {
-            return Err(Error::invalid(format!(
-                "the box ({}, {}, {}) to ({}, {}, {}) lies wholly outside the {}x{}x{} volume; seeds are placed \
-                 inside it (voxel coordinates 0 to the size)",
-                lo.x, lo.y, lo.z, hi.x, hi.y, hi.z, d[0], d[1], d[2]
-            )));
-        }
+    if let Region::Box(lo, hi) = region
+        && !meets_volume(lo, hi, d)
+    {
+        return Err(Error::invalid(format!(
+            "the box ({}, {}, {}) to ({}, {}, {}) lies wholly outside the {}x{}x{} volume; seeds are placed inside \
+             it (voxel coordinates 0 to the size)",
+            lo.x, lo.y, lo.z, hi.x, hi.y, hi.z, d[0], d[1], d[2]
+        )));
     }
     if matches!(region, Region::Depth(..)) && volume.channel_index(&Channel::Depth).is_none() {
         let names = crate::volume::channel_names(volume.channels());

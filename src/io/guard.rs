@@ -46,7 +46,7 @@ pub fn not_an_input(output: &Path, inputs: &[&Path]) -> Result<()> {
 /// Refuse an `output` that is the folder `kept`, where solidtex keeps `what`, or lies
 /// inside it: the user's files and solidtex's own would mix there. Neither need exist yet.
 pub fn outside_folder(output: &Path, kept: &Path, what: &str) -> Result<()> {
-    let (Some(out), Some(folder)) = (resolved(output), resolved(kept)) else { return Ok(()) };
+    let (out, folder) = (super::resolved(output), super::resolved(kept));
     if !out.starts_with(&folder) {
         return Ok(());
     }
@@ -58,27 +58,6 @@ pub fn outside_folder(output: &Path, kept: &Path, what: &str) -> Result<()> {
             kept.display()
         ),
     ))
-}
-
-/// `path` made absolute, the part of it that exists resolved (links, `..`) and the rest
-/// taken as written: where it is or would be, for comparing places that need not exist.
-fn resolved(path: &Path) -> Option<std::path::PathBuf> {
-    use std::path::Component;
-    let absolute = std::path::absolute(path).ok()?;
-    let parts: Vec<Component> = absolute.components().collect();
-    let (existing, mut place) = (0..=parts.len())
-        .rev()
-        .find_map(|n| atomic::canonical(&parts[..n].iter().collect::<std::path::PathBuf>()).map(|p| (n, p)))?;
-    for part in &parts[existing..] {
-        match part {
-            Component::ParentDir => {
-                place.pop();
-            }
-            Component::Normal(name) => place.push(name),
-            _ => {}
-        }
-    }
-    Some(place)
 }
 
 /// Refuse an output whose extension is none of `allowed` (lower case, no dot); `what` names

@@ -365,7 +365,7 @@ pub fn written_relative(path: &Path, base: &Path) -> String {
 /// `path` made absolute, its `.` and `..` taken away and its links followed as far as it
 /// exists (a `..` after a link leaves the link's target, as the system reads it); the part
 /// that does not exist yet follows as written.
-fn resolved(path: &Path) -> PathBuf {
+pub(crate) fn resolved(path: &Path) -> PathBuf {
     use std::path::Component;
     // the folder of a bare file name is the empty path: the current folder
     let path = if path.as_os_str().is_empty() { Path::new(".") } else { path };
