@@ -74,7 +74,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         },
     )?;
     if wanted(args, CACHED) {
-        let coarse = solid::coarse_levels(&setup, &NoProgress)?;
+        let coarse = solid::coarse_levels(&setup, &solid::interior_plan(&setup, &domain, &fruit), &NoProgress)?;
         let kept: Vec<_> = coarse.iter().map(Some).collect();
         timed_then(
             args,

@@ -9,7 +9,7 @@ use crate::fill::tets::TetMesh;
 use crate::guided::field::{FrameField, sketched_frames, solve, streamlines};
 use crate::guided::regions::Regions;
 use crate::guided::solid::{self, Domain};
-use crate::io::guided_cache::{self, Cached};
+use crate::io::guided_cache::{self, Bricks, Cached};
 use crate::io::{self, fill_spec, mesh_file};
 use crate::mesh::{Mesh, closest_on_segment};
 use crate::synth::coords::{self as synth, Exemplars, Options, Setup, Synthesized};
@@ -1067,24 +1067,48 @@ fn tell_not_kept(why: &Error) {
 /// Megabytes the cache may hold in memory.
 const CACHE_MB: std::ops::RangeInclusive<usize> = 16..=65536;
 
-/// Compute the coarse levels ([`synth::Options::coarse_levels`]) over the whole grid into `levels`
-/// (the cache's, coarsest first) unless the cache holds them already or they would take
-/// more than a quarter of its `most` bricks: later cuts then compute only the levels above
-/// them. Whether it computed them.
+/// Compute the coarse levels ([`synth::Options::coarse_levels`]) over the model
+/// ([`solid::interior_plan`]) into `levels` (the cache's, coarsest first) unless the cache
+/// holds them already or they would take more than a quarter of its `most` bricks: later
+/// cuts then compute only the levels above them. Whether it computed them.
 fn whole_coarse_levels(
     setup: &Setup,
-    levels: &mut Vec<Sparse<synth::Voxel>>,
+    (domain, surface): (&Domain, &Mesh),
+    cached: &mut Bricks,
     most: usize,
     bar: &super::fill::Bar,
 ) -> Result<bool> {
-    let dims = setup.level_dims();
-    let Some(below) = setup.options.coarse_levels().checked_sub(1) else { return Ok(false) };
-    let bricks: usize = dims[..=below].iter().map(|d| d.iter().map(|n| n.div_ceil(BRICK)).product::<usize>()).sum();
-    if levels.get(below).is_some_and(|l| l.mask().is_full()) || 4 * bricks > most {
+    if cached.whole {
         return Ok(false);
     }
-    let finer: Vec<Sparse<synth::Voxel>> = levels.drain(..).skip(below + 1).collect();
-    *levels = solid::coarse_levels(setup, bar)?.into_iter().chain(finer).collect();
+    let plan = solid::interior_plan(setup, domain, surface);
+    let finals: Vec<&Mask> = plan.iter().filter_map(|versions| versions.last()).collect();
+    let bricks: usize = finals.iter().map(|m| m.bricks().count()).sum();
+    if plan.is_empty() {
+        return Ok(false);
+    }
+    let brick_mb = |n: usize| (n * BRICK.pow(3) * std::mem::size_of::<synth::Voxel>()).div_ceil(1 << 20);
+    if 4 * bricks > most {
+        tell!(
+            "the levels below the finest take about {} MB, more than a quarter of --cache-mb {}: each cut computes \
+             them around its plane; with --cache-mb {} the cache keeps them over the whole model (a longer first \
+             cut, then cuts of any plane compute only the finer levels)",
+            brick_mb(bricks),
+            brick_mb(most),
+            brick_mb(4 * bricks).next_multiple_of(256)
+        );
+        return Ok(false);
+    }
+    let voxels: usize = finals.iter().map(|m| m.count()).sum();
+    let grid: usize = setup.level_dims()[..plan.len()].iter().map(|d| d.iter().product::<usize>()).sum();
+    tell!(
+        "computing the levels below the finest over the model for the cache: {voxels} voxels, {:.0} % of their \
+         grids; later cuts compute only the levels above them",
+        100.0 * voxels as f64 / grid as f64
+    );
+    let finer: Vec<Sparse<synth::Voxel>> = cached.levels.drain(..).skip(plan.len()).collect();
+    cached.levels = solid::coarse_levels(setup, &plan, bar)?.into_iter().chain(finer).collect();
+    cached.whole = true;
     Ok(true)
 }
 
@@ -1096,43 +1120,47 @@ struct Kept {
 
 /// The bricks earlier cuts kept in the cache folder, one store per level (none when there
 /// is no cache yet), and where they are; a damaged file is said and dropped.
-fn kept_bricks(folder: &Path, setup: &Setup, most: usize) -> Result<(Kept, Vec<Sparse<synth::Voxel>>)> {
+fn kept_bricks(folder: &Path, setup: &Setup, most: usize) -> Result<(Kept, Bricks)> {
     let key = synth::fingerprint(setup);
     let path = guided_cache::path(folder, key);
     let dims = setup.level_dims();
     let slots: Vec<[usize; 3]> = (0..dims.len()).map(|l| setup.exemplars.slot_counts(l)).collect();
     let voxel = |level, slot, shown| setup.restored(level, slot, shown);
     match guided_cache::read(&path, key, &dims, &slots, guided_cache::file_bytes(most), voxel)? {
-        Cached::Good(levels) => Ok((Kept { path, key }, levels)),
+        Cached::Good(bricks) => Ok((Kept { path, key }, bricks)),
         Cached::Stale(why) => {
             warn_rebuilt(&path, Some(why));
-            Ok((Kept { path, key }, Vec::new()))
+            Ok((Kept { path, key }, Bricks { levels: Vec::new(), whole: false }))
         }
-        Cached::Missing => Ok((Kept { path, key }, Vec::new())),
+        Cached::Missing => Ok((Kept { path, key }, Bricks { levels: Vec::new(), whole: false })),
     }
 }
 
 /// Keep what the cut computed (`made`, coarsest first) over what the cache held (`kept`),
-/// at most `most` bricks, coarser levels first.
+/// at most `most` bricks, coarser levels first. A level that only magnifies is not kept: a
+/// cut computes it again in about the time reading it would take.
 fn keep_bricks(
     folder: &Path,
     file: &Kept,
+    setup: &Setup,
     made: &Synthesized,
-    kept: &[Sparse<synth::Voxel>],
+    kept: &Bricks,
     most: usize,
 ) -> Result<()> {
     let mut left = most;
     let mut levels = Vec::new();
     for (level, new) in made.levels().enumerate() {
-        let merged = match kept.get(level) {
+        let none = Sparse::from_bricks(new.dims, []);
+        let merged = match kept.levels.get(level) {
+            _ if setup.options.magnifies(level) => none,
             Some(old) => new.over(old, left),
-            None => new.over(&Sparse::from_bricks(new.dims, []), left),
+            None => new.over(&none, left),
         };
         left -= merged.brick_count();
         levels.push(merged);
     }
     std::fs::create_dir_all(folder).map_err(|e| Error::io(folder, e))?;
-    guided_cache::write(&file.path, file.key, &levels)
+    guided_cache::write(&file.path, file.key, &levels, kept.whole)
 }
 
 /// Tell that a cache file solidtex wrote, found unusable (`stale`: what was wrong), was
@@ -1161,11 +1189,11 @@ fn write_cut(
     let most = (args.cache_mb << 20) / (BRICK.pow(3) * std::mem::size_of::<synth::Voxel>());
     let mut cached = args.cache.as_deref().map(|folder| kept_bricks(folder, setup, most)).transpose()?;
     let coarse_made = match cached.as_mut() {
-        Some((_, levels)) => whole_coarse_levels(setup, levels, most, bar)?,
+        Some((_, levels)) => whole_coarse_levels(setup, (domain, &g.surface), levels, most, bar)?,
         None => false,
     };
     let kept: Vec<Option<&Sparse<synth::Voxel>>> =
-        cached.as_ref().map_or(Vec::new(), |(_, levels)| levels.iter().map(Some).collect());
+        cached.as_ref().map_or(Vec::new(), |(_, bricks)| bricks.levels.iter().map(Some).collect());
     let (picture, out) = solid::cut(setup, domain, &g.surface, &view, &kept, bar)?;
     io::write_rgb8(&args.output, &solid::cut_picture(&picture))?;
     let alpha = picture.channel_count() - 1;
@@ -1174,9 +1202,9 @@ fn write_cut(
         tell!("warning: the cut misses the model; the picture shows only the background");
     }
     if let (Some(folder), Some((file, levels))) = (&args.cache, &cached)
-        && (out.voxels > 0 || coarse_made)
+        && (coarse_made || out.levels().enumerate().any(|(l, m)| !setup.options.magnifies(l) && m.brick_count() > 0))
     {
-        keep_bricks(folder, file, &out, levels, most)?;
+        keep_bricks(folder, file, setup, &out, levels, most)?;
     }
     let scale = view.right.length() / domain.voxel;
     if shown && (0.8..=1.25).contains(&scale) {

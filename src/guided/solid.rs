@@ -7,12 +7,13 @@ use crate::fill::render::View;
 use crate::fill::render::{BACKGROUND, inside_surface};
 use crate::fill::tets::TetMesh;
 use crate::mesh::Mesh;
+use crate::mesh::voxelize::Slices;
 use crate::progress::Progress;
 use crate::render::{ColourMap, Rgb8};
 use crate::synth::coords::{self as synth, Kept, Setup, Synthesized, Voxel};
 use crate::synth::region::{Mask, Sparse};
 use crate::volume::{Channel, Image2d, ModelGrid, Volume};
-use glam::Vec3;
+use glam::{Affine3A, Vec3};
 
 /// Finest-level resolutions `guided` accepts (voxels along the grid's longest side).
 pub const RESOLUTION: std::ops::RangeInclusive<usize> = 16..=1024;
@@ -357,17 +358,37 @@ pub fn scale_steps(scale: &ScalarGrid) -> Result<Vec<f32>> {
     Ok((first..=last).map(|j| j as f32 / SCALE_STEPS_PER_OCTAVE).collect())
 }
 
-/// Every level below the finest that makes corrections ([`synth::Options::coarse_levels`]) computed
-/// over the whole grid, coarsest first (none when there is one level): kept, a cut computes
+/// The masks of the levels below the finest that make corrections
+/// ([`synth::Options::coarse_levels`]) holding every voxel a cut of the model inside
+/// `surface` can need, coarsest first (none when there is one level): the finest of them
+/// over its voxels whose centre lies inside, grown by the reach of the passes above it and
+/// by one voxel for cells the surface enters short of their centre. Outside the model
+/// (the grid's margin, a log's corners) nothing is computed.
+pub fn interior_plan(setup: &Setup, domain: &Domain, surface: &Mesh) -> Vec<Vec<Mask>> {
+    let Some(top) = setup.options.coarse_levels().checked_sub(1) else { return Vec::new() };
+    let dims = setup.level_dims()[top];
+    let side = domain.voxel * (1usize << (setup.options.levels - 1 - top)) as f32;
+    let local =
+        surface.transformed(Affine3A::from_scale(Vec3::splat(1.0 / side)) * Affine3A::from_translation(-domain.origin));
+    let slices = Slices::new(&local, dims);
+    let mut inside = Mask::empty(dims);
+    for k in 0..dims[2] {
+        for (i, _) in slices.inside(k).iter().enumerate().filter(|(_, b)| **b) {
+            inside.insert([i % dims[0], i / dims[0], k]);
+        }
+    }
+    let above = top + 1;
+    let reach = setup.options.passes_at(above) as f32 * setup.options.footprint_at(above);
+    synth::plan_from(setup, top, &inside.grown(1 + (reach / 2.0).ceil() as usize), &[])
+}
+
+/// The levels of `plan` ([`interior_plan`]) computed, coarsest first: kept, a cut computes
 /// only the levels above them.
-pub fn coarse_levels(setup: &Setup, progress: &dyn Progress) -> Result<Vec<Sparse<Voxel>>> {
-    let coarse = setup.options.coarse_levels();
-    if coarse == 0 {
+pub fn coarse_levels(setup: &Setup, plan: &[Vec<Mask>], progress: &dyn Progress) -> Result<Vec<Sparse<Voxel>>> {
+    if plan.is_empty() {
         return Ok(Vec::new());
     }
-    let mut masks = synth::plan(setup, &Mask::full(setup.dims), &[]);
-    masks.truncate(coarse);
-    let out = synth::run(setup, &masks, &[], progress)?;
+    let out = synth::run(setup, plan, &[], progress)?;
     Ok(out.coarser.into_iter().chain([out.values]).collect())
 }
 

@@ -4,7 +4,9 @@
 //!
 //! ```text
 //!  file  DIR/guided-<key as 16 hex digits>.cache
-//!  "solidtex guided cache 4\n"  key u64  levels u32  finest dims 3 x u32   (little-endian)
+//!  "solidtex guided cache 5\n"  key u64  levels u32  finest dims 3 x u32  whole u32
+//!  (little-endian; whole: 1 when the levels below the finest that make corrections hold
+//!  every voxel a cut of the model can need, else 0)
 //!  checksum: blake3 of the header above and the body below, 32 bytes
 //!  per brick: level u32, brick coordinates 3 x u32, 64 bytes of flags (row y + 8 z,
 //!  bit x: the voxels held), then per voxel held, x fastest: its centre slot per plane,
@@ -30,13 +32,18 @@ use super::atomic;
 use crate::error::{Error, Result};
 use crate::synth::coords::{MEAN, Voxel};
 use crate::synth::region::{BRICK, Bits, Sparse};
+use rayon::prelude::*;
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 
-const MAGIC: &[u8] = b"solidtex guided cache 4\n";
-const OLD_MAGICS: &[&[u8]] =
-    &[b"solidtex guided cache 1\n", b"solidtex guided cache 2\n", b"solidtex guided cache 3\n"];
-const HEADER: usize = 24 + 8 + 4 + 12;
+const MAGIC: &[u8] = b"solidtex guided cache 5\n";
+const OLD_MAGICS: &[&[u8]] = &[
+    b"solidtex guided cache 1\n",
+    b"solidtex guided cache 2\n",
+    b"solidtex guided cache 3\n",
+    b"solidtex guided cache 4\n",
+];
+const HEADER: usize = 24 + 8 + 4 + 12 + 4;
 const PER_VOXEL: usize = 13;
 
 const CUBE_MAGIC: &[u8] = b"solidtex guided cube 2\n";
@@ -301,33 +308,45 @@ pub fn read(
     dims: &[[usize; 3]],
     slots: &[[usize; 3]],
     most: u64,
-    voxel: impl Fn(usize, [u32; 3], u8) -> Voxel,
-) -> Result<Cached<Vec<Sparse<Voxel>>>> {
+    voxel: impl Fn(usize, [u32; 3], u8) -> Voxel + Sync,
+) -> Result<Cached<Bricks>> {
     let finest = dims.last().copied().unwrap_or_default();
     let ours = |h: &[u8]| {
         let fits =
             le_u64(h, 24) == key && le_u32(h, 32) == dims.len() && [36, 40, 44].map(|at| le_u32(h, at)) == finest;
-        owner(h, MAGIC, OLD_MAGICS).filter(|_| fits)
+        let flag = h.get(48..52).is_some_and(|_| le_u32(h, 48) <= 1);
+        owner(h, MAGIC, OLD_MAGICS).filter(|o| fits && (flag || *o == Owner::Older))
     };
     let found = read_checked(path, HEADER, Size::AtMost(most), ours)?
         .ok_or_else(|| not_ours(path, "the guided-synthesis cache of these inputs", CACHE_HINT))?;
     Ok(found.and_then(|bytes| match bricks(&bytes[HEADER + CHECKSUM..], dims, slots, &voxel) {
-        Ok(levels) => Cached::Good(levels),
+        Ok(levels) => Cached::Good(Bricks { levels, whole: le_u32(&bytes, 48) == 1 }),
         Err(why) => damaged(why),
     }))
+}
+
+/// What a cache holds: the bricks of each level, coarsest first, and whether its levels
+/// below the finest that make corrections hold every voxel a cut of the model can need.
+#[derive(Debug)]
+pub struct Bricks {
+    /// One store per level.
+    pub levels: Vec<Sparse<Voxel>>,
+    /// Whether the coarse levels are whole over the model.
+    pub whole: bool,
 }
 
 /// A brick read back: its coordinates, flags and values.
 type Brick = ([usize; 3], Bits, Vec<Voxel>);
 
-/// A cache body's bricks, one store per level; what is wrong otherwise.
+/// A cache body's bricks, one store per level; what is wrong otherwise. The bricks' places
+/// are found in one pass over their heads, their voxels decoded in parallel.
 fn bricks(
     mut body: &[u8],
     dims: &[[usize; 3]],
     slots: &[[usize; 3]],
-    voxel: &impl Fn(usize, [u32; 3], u8) -> Voxel,
+    voxel: &(impl Fn(usize, [u32; 3], u8) -> Voxel + Sync),
 ) -> std::result::Result<Vec<Sparse<Voxel>>, String> {
-    let mut found: Vec<Vec<Brick>> = vec![Vec::new(); dims.len()];
+    let mut found: Vec<(usize, [usize; 3], &[u8])> = Vec::new();
     let mut seen = std::collections::HashSet::new();
     while !body.is_empty() {
         if body.len() < BRICK_HEAD {
@@ -335,40 +354,60 @@ fn bricks(
         }
         let level = le_u32(body, 0);
         let brick = [4, 8, 12].map(|at| le_u32(body, at));
-        let bits: Bits = body[16..BRICK_HEAD].try_into().expect("a brick's flags");
         let Some(level_dims) = dims.get(level) else { return Err(format!("a brick of level {level}")) };
         let inside = (0..3).all(|a| brick[a] * BRICK < level_dims[a]);
         if !inside || !seen.insert((level, brick)) {
             return Err(format!("brick {brick:?} of level {level} lies outside the grid or comes twice"));
         }
-        let held: usize = bits.iter().map(|r| r.count_ones() as usize).sum();
+        let held: usize = body[16..BRICK_HEAD].iter().map(|r| r.count_ones() as usize).sum();
         let end = BRICK_HEAD + held * PER_VOXEL;
         if body.len() < end {
             return Err("a brick is cut short".to_string());
         }
-        let mut values = vec![Voxel::default(); BRICK * BRICK * BRICK];
-        let mut at = BRICK_HEAD;
-        for (k, value) in values.iter_mut().enumerate().filter(|(k, _)| bits[k / BRICK] >> (k % BRICK) & 1 == 1) {
-            let slot = [0, 4, 8].map(|o| le_u32(body, at + o) as u32);
-            let shown = body[at + 12];
-            if (0..3).any(|a| slot[a] as usize >= slots[level][a]) {
-                return Err(format!("voxel {k} of brick {brick:?} holds a pixel outside the exemplar"));
-            }
-            if shown > MEAN {
-                return Err(format!("voxel {k} of brick {brick:?} shows plane {shown}, not 0-{MEAN}"));
-            }
-            *value = voxel(level, slot, shown);
-            at += PER_VOXEL;
-        }
-        found[level].push((brick, bits, values));
+        found.push((level, brick, &body[..end]));
         body = &body[end..];
     }
-    Ok(found.into_iter().zip(dims).map(|(bricks, d)| Sparse::from_bricks(*d, bricks)).collect())
+    let decoded: Vec<(usize, Brick)> = found
+        .into_par_iter()
+        .map(|(level, brick, bytes)| Ok((level, decoded(bytes, brick, slots[level], level, voxel)?)))
+        .collect::<std::result::Result<_, String>>()?;
+    let mut levels: Vec<Vec<Brick>> = vec![Vec::new(); dims.len()];
+    for (level, brick) in decoded {
+        levels[level].push(brick);
+    }
+    Ok(levels.into_iter().zip(dims).map(|(bricks, d)| Sparse::from_bricks(*d, bricks)).collect())
+}
+
+/// One brick's entry (`bytes`, its head included) of `level` read back: its place, flags
+/// and voxels, each slot checked against `slots` (the exemplar centre counts per plane).
+fn decoded(
+    bytes: &[u8],
+    brick: [usize; 3],
+    slots: [usize; 3],
+    level: usize,
+    voxel: &impl Fn(usize, [u32; 3], u8) -> Voxel,
+) -> std::result::Result<Brick, String> {
+    let bits: Bits = bytes[16..BRICK_HEAD].try_into().expect("a brick's flags");
+    let mut values = vec![Voxel::default(); BRICK * BRICK * BRICK];
+    let mut at = BRICK_HEAD;
+    for (k, value) in values.iter_mut().enumerate().filter(|(k, _)| bits[k / BRICK] >> (k % BRICK) & 1 == 1) {
+        let slot = [0, 4, 8].map(|o| le_u32(bytes, at + o) as u32);
+        let shown = bytes[at + 12];
+        if (0..3).any(|a| slot[a] as usize >= slots[a]) {
+            return Err(format!("voxel {k} of brick {brick:?} holds a pixel outside the exemplar"));
+        }
+        if shown > MEAN {
+            return Err(format!("voxel {k} of brick {brick:?} shows plane {shown}, not 0-{MEAN}"));
+        }
+        *value = voxel(level, slot, shown);
+        at += PER_VOXEL;
+    }
+    Ok((brick, bits, values))
 }
 
 /// Write every level's bricks (`levels`, coarsest first, the finest of `levels.len()`
-/// levels last) under `key`.
-pub fn write(path: &Path, key: u64, levels: &[Sparse<Voxel>]) -> Result<()> {
+/// levels last) under `key`; `whole` as [`Bricks::whole`].
+pub fn write(path: &Path, key: u64, levels: &[Sparse<Voxel>], whole: bool) -> Result<()> {
     let mut fields = Vec::with_capacity(HEADER);
     fields.extend_from_slice(MAGIC);
     fields.extend_from_slice(&key.to_le_bytes());
@@ -376,6 +415,7 @@ pub fn write(path: &Path, key: u64, levels: &[Sparse<Voxel>]) -> Result<()> {
     for d in levels.last().map_or([0; 3], |l| l.dims) {
         fields.extend_from_slice(&(d as u32).to_le_bytes());
     }
+    fields.extend_from_slice(&u32::from(whole).to_le_bytes());
     let mut body = Vec::new();
     for (level, values) in levels.iter().enumerate() {
         for (brick, bits, voxels) in values.bricks() {
@@ -519,8 +559,10 @@ mod tests {
         let mut fine = Mask::empty(dims[1]);
         [[9, 7, 6], [0, 0, 0], [3, 5, 1]].into_iter().for_each(|v| fine.insert(v));
         let levels = [Sparse::compute(&Mask::full(dims[0]), value), Sparse::compute(&fine, value)];
-        write(&path, 9, &levels).unwrap();
-        let Cached::Good(back) = read(9, &dims, &slots, 1 << 20).unwrap() else { panic!("not good") };
+        write(&path, 9, &levels, true).unwrap();
+        let Cached::Good(Bricks { levels: back, whole: true }) = read(9, &dims, &slots, 1 << 20).unwrap() else {
+            panic!("not good, or not whole")
+        };
         for (level, (b, l)) in back.iter().zip(&levels).enumerate() {
             let every = (0..dims[level].iter().product()).map(|i| crate::synth::region::grid_voxel(dims[level], i));
             for v in every {

@@ -557,11 +557,15 @@ pub type Kept<'a> = [Option<&'a Sparse<Voxel>>];
 /// `masks[level][version]`, version 0 the upsampled (or initialized) one. A level's last
 /// version leaves out what `kept` holds there, and its coarser levels serve only the rest.
 pub fn plan(setup: &Setup, request: &Mask, kept: &Kept) -> Vec<Vec<Mask>> {
+    plan_from(setup, setup.options.levels - 1, request, kept)
+}
+
+/// [`plan`] for a `request` of voxels of level `top`: the masks of levels 0 to `top`.
+pub fn plan_from(setup: &Setup, top: usize, request: &Mask, kept: &Kept) -> Vec<Vec<Mask>> {
     let dims = setup.level_dims();
-    let levels = dims.len();
-    let mut out: Vec<Vec<Mask>> = vec![Vec::new(); levels];
+    let mut out: Vec<Vec<Mask>> = vec![Vec::new(); top + 1];
     let mut last = request.clone();
-    for level in (0..levels).rev() {
+    for level in (0..=top).rev() {
         let (passes, reach) = (setup.options.passes_at(level), setup.options.footprint_at(level));
         let needed = match kept.get(level).copied().flatten() {
             Some(k) => last.without(k.mask()),
@@ -900,6 +904,29 @@ fn rows_of_depth(
     slot
 }
 
+/// A scalar field near a point, as its value there plus its gradient: a correction reads the
+/// model's depth at its 3 x n x n neighbourhood samples, all within a few voxels of the
+/// voxel, where the depth (the field grid's trilinear cells, tens of voxels wide) is near
+/// linear; one value and three central differences instead of a trilinear read per sample.
+struct Linear {
+    value: f32,
+    gradient: Vec3,
+}
+
+impl Linear {
+    /// `grid` at `here` (a level's voxel coordinates, `scale` finest voxels each).
+    fn at(grid: &ScalarGrid, here: Vec3, scale: f32) -> Linear {
+        let read = |p: Vec3| grid.at(p * scale);
+        let gradient = Vec3::from_array([Vec3::X, Vec3::Y, Vec3::Z].map(|e| (read(here + e) - read(here - e)) / 2.0));
+        Linear { value: read(here), gradient }
+    }
+
+    /// The value at `offset` (level voxels) from the point.
+    fn at_offset(&self, offset: Vec3) -> f32 {
+        self.value + self.gradient.dot(offset)
+    }
+}
+
 /// One correction of voxel `v` of `level` from the previous version `before`, candidates
 /// weighed by `balance` if given.
 fn corrected(
@@ -931,7 +958,7 @@ fn corrected(
     };
     let channels = setup.exemplar(0, level).channels;
     let scale = (1usize << (setup.options.levels - 1 - level)) as f32;
-    let depth = setup.exemplars.depth.zip(setup.depth);
+    let depth = setup.exemplars.depth.zip(setup.depth).map(|(d, grid)| (d, Linear::at(grid, here, scale)));
     // neighbours propose the same triples and pixels again and again: each is weighed once
     SCRATCH.with_borrow_mut(|scratch| {
         let Scratch { distances, triples: seen, predicted, vector, queries } = scratch;
@@ -943,8 +970,8 @@ fn corrected(
                 for dx in 0..n {
                     let (voxel, p) = sample(a, dx - h, dy - h);
                     let mut colour = voxel.colour;
-                    if let Some((d, grid)) = depth {
-                        colour[d] = grid.at(p * scale);
+                    if let Some((d, linear)) = &depth {
+                        colour[*d] = linear.at_offset(p - here);
                     }
                     vector.extend(colour[..channels].iter().zip(&ex.weights).map(|(c, k)| c * k));
                 }

@@ -149,7 +149,7 @@ fn guided_brick_seeds(dir: &Path) -> Vec<Files> {
     let mut fine = Mask::empty(dims[1]);
     [[9, 7, 6], [0, 0, 0], [3, 5, 1]].into_iter().for_each(|v| fine.insert(v));
     let levels = [Sparse::compute(&Mask::full(dims[0]), value), Sparse::compute(&fine, value)];
-    vec![written(dir, "bricks.cache", |p| io::guided_cache::write(p, key, &levels))]
+    vec![written(dir, "bricks.cache", |p| io::guided_cache::write(p, key, &levels, true))]
 }
 
 fn read_skin(path: &Path) -> solidtex::Result<()> {

@@ -197,6 +197,41 @@ fn a_guided_cut_is_synthesized_on_demand_and_cached() {
     crate::support::assert_usage(&run, &["--cache-mb 8", "16 to 65536"]);
 }
 
+/// With `--cache` the first cut computes the levels below the finest over the model alone
+/// (not the grid's margin around it) and says so; a cut of another plane then computes only
+/// the finest level: the same picture as without the cache, from fewer voxels. Under too
+/// small a `--cache-mb` the command says which cap would keep them.
+#[test]
+fn a_cache_keeps_the_coarse_levels_over_the_model() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (fruit, spec) = crate::fill::kiwi_fruit(d);
+    let ex = gravel();
+    let folder = at(d, "cache");
+    let cut = |res: &str, plane: &str, out: &str, cache: &[&str]| {
+        let mut args = vec!["guided", &fruit, "--spec", &spec, "--exemplar", &ex, "--max-exemplar", "64"];
+        args.extend(["--res", res, "--cut", plane, "--size", "96", "-o", out]);
+        args.extend(cache);
+        let run = solidtex(&args);
+        assert!(run.status.success(), "{}", stderr(&run));
+        let err = stderr(&run);
+        let line = err.lines().find(|l| l.starts_with("voxels synthesized:")).expect("the voxel report");
+        (err.clone(), line.split(' ').nth(2).and_then(|w| w.parse::<u64>().ok()).expect("a count"))
+    };
+    let (first, _) = cut("96", "0,0,0,0,0,1", &at(d, "a.png"), &["--cache", &folder]);
+    let line = first.lines().find(|l| l.starts_with("computing the levels below the finest")).expect(&first);
+    let share: f64 = line.split(' ').find_map(|w| w.parse().ok().filter(|_| line.contains(&format!("{w} %")))).unwrap();
+    assert!(share < 85.0, "the coarse levels over the model only: {line}");
+    let (again, cached) = cut("96", "0,0,0,1,0,0", &at(d, "b.png"), &["--cache", &folder]);
+    assert!(!again.contains("computing the levels below"), "{again}");
+    let (_, plain) = cut("96", "0,0,0,1,0,0", &at(d, "c.png"), &[]);
+    assert_eq!(std::fs::read(at(d, "b.png")).unwrap(), std::fs::read(at(d, "c.png")).unwrap());
+    assert!(3 * cached < 2 * plain, "another plane from the cache: {cached} voxels, without it {plain}");
+    let small = &["--cache", &at(d, "small"), "--cache-mb", "16"];
+    let (small, _) = cut("256", "0,0,0,1,0,0", &at(d, "e.png"), small);
+    assert!(small.contains("more than a quarter of --cache-mb 16") && small.contains("with --cache-mb 256"), "{small}");
+}
+
 /// A guided model of a plain photo keeps its solid cube beside it: the first command makes
 /// it and says where it kept it, the next reads it (nothing said, the same picture, as
 /// `guided --cut` gives without any cache); a file of the user's at the cube's name is left
