@@ -96,6 +96,10 @@ fn with_negative_numbers(command: clap::Command) -> clap::Command {
                 arg.value_parser(whole::<usize>)
             } else if kind == std::any::TypeId::of::<u64>() {
                 arg.value_parser(whole::<u64>)
+            } else if kind == std::any::TypeId::of::<f32>() {
+                arg.value_parser(finite::<f32>)
+            } else if kind == std::any::TypeId::of::<f64>() {
+                arg.value_parser(finite::<f64>)
             } else {
                 arg
             }
@@ -115,6 +119,18 @@ fn whole<T: std::str::FromStr>(text: &str) -> std::result::Result<T, String> {
         Ok(_) => format!("{text} is not a whole number; give one without a fraction"),
         Err(_) => format!("{text} is not a number; give a whole number"),
     })
+}
+
+/// A finite number, refused with what was wrong (`1e308` overflows an f32 to infinity,
+/// `nan` and `inf` parse but are no value an option takes); the option's own range is
+/// checked after parsing.
+fn finite<T: std::str::FromStr + Into<f64> + Copy>(text: &str) -> std::result::Result<T, String> {
+    match text.trim().parse::<T>() {
+        Ok(v) if v.into().is_finite() => Ok(v),
+        Ok(_) => Err(format!("{text} is not a finite number; give one within the option's range (see --help)")),
+        Err(_) if text.trim().is_empty() => Err("an empty value is not a number".to_string()),
+        Err(_) => Err(format!("{text} is not a number")),
+    }
 }
 
 /// Whether `text` is digits only (a whole number that failed to parse is then too large).

@@ -229,6 +229,21 @@ fn negative_whole_numbers_are_refused_as_values() {
     assert!(!dir.path().join("out.png").exists());
 }
 
+/// A number option given a value past what it holds (`1e308` for an f32), `inf` or `nan`
+/// is refused as a value of that option (exit 2), naming the value, not read as infinity.
+#[test]
+fn numbers_that_are_not_finite_are_refused_as_values() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out.exr").to_string_lossy().into_owned();
+    for value in ["1e308", "inf", "-inf", "nan"] {
+        let run = solidtex(&["mask", "splotch", "--size", "8", &format!("--falloff={value}"), "-o", &out]);
+        assert_usage(&run, &["--falloff", &format!("{value} is not a finite number")]);
+        let run = solidtex(&["export", "model.lst", &format!("--edge={value}"), "-o", &out]);
+        assert_usage(&run, &["--edge", &format!("{value} is not a finite number")]);
+    }
+    assert!(!dir.path().join("out.exr").exists());
+}
+
 /// The options of a stroke cut's 3D view and sweep are refused with a planar cut, by name,
 /// before any work (a planar cut has no camera, extrusion or displacement).
 #[test]
