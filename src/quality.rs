@@ -232,19 +232,24 @@ impl Report {
 }
 
 impl Glance {
-    /// Whether every ratio lies in its target range and the histograms are close.
+    /// Whether every ratio lies in its target range and the histograms are close (never
+    /// for a volume too small to measure any cut of).
     pub fn in_range(&self) -> bool {
         use crate::sharpness::{GRADIENT_RANGE, LENGTH_RANGE, within};
-        self.axes.iter().all(|&(_, g, l)| within(g, GRADIENT_RANGE) && within(l, LENGTH_RANGE))
+        !self.axes.is_empty()
+            && self.axes.iter().all(|&(_, g, l)| within(g, GRADIENT_RANGE) && within(l, LENGTH_RANGE))
             && within(self.histogram, (0.0, HISTOGRAM_TARGET))
     }
 
     /// One word for the list: `ok`, or the first thing wrong (`blurred`, `noisy`, `coarse`
-    /// features larger than the photo's, `fine` smaller, `colours` off).
+    /// features larger than the photo's, `fine` smaller, `colours` off), or `small` when no
+    /// cut is large enough to measure ([`SMALLEST_CUT`]).
     pub fn verdict(&self) -> &'static str {
         let (g, l) = (crate::sharpness::GRADIENT_RANGE, crate::sharpness::LENGTH_RANGE);
         let any = |f: &dyn Fn(&(usize, f64, f64)) -> bool| self.axes.iter().any(f);
-        if any(&|a| a.1 < g.0) {
+        if self.axes.is_empty() {
+            "small"
+        } else if any(&|a| a.1 < g.0) {
             "blurred"
         } else if any(&|a| a.1 > g.1) {
             "noisy"
@@ -261,6 +266,9 @@ impl Glance {
 
     /// One line: `sharp 0.91-1.02  size 0.95-1.10  hist 0.08` (lowest-highest over the axes).
     pub fn summary(&self) -> String {
+        if self.axes.is_empty() {
+            return format!("cuts under {SMALLEST_CUT} voxels, not measured  hist {:.2}", self.histogram);
+        }
         let span = |f: fn(&(usize, f64, f64)) -> f64| {
             let v: Vec<f64> = self.axes.iter().map(f).collect();
             let (lo, hi) = v.iter().fold((f64::MAX, f64::MIN), |(a, b), x| (a.min(*x), b.max(*x)));
@@ -276,7 +284,7 @@ pub fn glance(volume: &Volume, exemplars: [Option<&Image2d>; 3]) -> Result<Glanc
     let picks = channel_positions(volume, first.channels())?;
     let mut axes = Vec::new();
     for axis in Axis::ALL {
-        let Some(image) = exemplars[axis.index()] else { continue };
+        let Some(image) = exemplars[axis.index()].filter(|_| measurable(volume.dims(), axis)) else { continue };
         let s = crate::sharpness::measure(volume, image, &picks, axis)?;
         axes.push((axis.index(), s.gradient_ratio, s.length_ratio));
     }

@@ -361,6 +361,14 @@ mod tests {
             "{}",
             recoloured.summary()
         );
+        // a volume with no cut of 8 x 8 voxels is not judged on figures its cuts cannot give
+        let thin = Volume::from_fn([48, 48, 4], truth.channels().to_vec(), |x, y, z, o| {
+            o.iter_mut().enumerate().for_each(|(c, v)| *v = truth.get(x, y, z, c));
+        })
+        .unwrap();
+        let small = crate::quality::glance(&thin, [Some(&cuts[0]), Some(&cuts[1]), None]).unwrap();
+        assert!(small.axes.is_empty() && !small.in_range() && small.verdict() == "small", "{small:?}");
+        assert!(small.summary().contains("not measured"), "{}", small.summary());
     }
 
     /// Crops of an exemplar are the exemplar: their length ratio is 1 however long its
