@@ -295,6 +295,12 @@ fn checked(args: &GuidedArgs) -> Result<Option<(Vec3, Vec3)>> {
         recipe_checked(args, &|field| format!("--{}", field.replace('_', "-")))?;
         io::values::within("--size", args.size, 8, 4096)?;
         io::values::within("--cache-mb", args.cache_mb, *CACHE_MB.start(), *CACHE_MB.end())?;
+        if let Some(folder) = args.cache.as_deref().filter(|f| !f.exists() && f.symlink_metadata().is_ok()) {
+            return Err(Error::invalid(format!(
+                "--cache {}: is a link to nothing; name a folder for the cache",
+                folder.display()
+            )));
+        }
         if let Some(folder) = args.cache.as_deref().filter(|f| f.exists() && !f.is_dir()) {
             return Err(Error::invalid(format!(
                 "--cache {}: is a file; name a folder for the cache",
@@ -1038,7 +1044,7 @@ fn cube_volume(args: &GuidedArgs, images: &[Image2d; 3]) -> Result<crate::volume
         .map_err(|e| Error::io(folder, e))
         .and_then(|_| guided_cache::write_cube(&path, key, cube::SIDE, channels, volume.data()));
     if kept.is_ok() {
-        let removed = guided_cache::prune_cubes(folder, &path);
+        let removed = guided_cache::prune(folder, &path, &guided_cache::CUBES);
         if !removed.is_empty() {
             tell!(
                 "removed {} solid cube(s) of earlier exemplars from {} (it keeps the {} used last)",
@@ -1091,8 +1097,8 @@ fn whole_coarse_levels(
     if 4 * bricks > most {
         tell!(
             "the levels below the finest take about {} MB, more than a quarter of --cache-mb {}: each cut computes \
-             them around its plane; with --cache-mb {} the cache keeps them over the whole model (a longer first \
-             cut, then cuts of any plane compute only the finer levels)",
+             them around its plane; a cut with --cache-mb {} keeps them over the whole model (it takes longer; later \
+             cuts of any plane then compute only the finer levels)",
             brick_mb(bricks),
             brick_mb(most),
             brick_mb(4 * bricks).next_multiple_of(256)
@@ -1119,20 +1125,49 @@ struct Kept {
 }
 
 /// The bricks earlier cuts kept in the cache folder, one store per level (none when there
-/// is no cache yet), and where they are; a damaged file is said and dropped.
-fn kept_bricks(folder: &Path, setup: &Setup, most: usize) -> Result<(Kept, Bricks)> {
+/// is no cache yet), and where they are; a damaged file is said and dropped. `None` when
+/// the file holds more than `most` bricks allow (kept under a larger `--cache-mb`): it is
+/// left as it is, neither read nor written, and the run says what would read it. A link at
+/// the file's name is refused before any synthesis.
+fn kept_bricks(folder: &Path, setup: &Setup, most: usize) -> Result<Option<(Kept, Bricks)>> {
     let key = synth::fingerprint(setup);
     let path = guided_cache::path(folder, key);
+    match std::fs::symlink_metadata(&path) {
+        Ok(meta) if meta.file_type().is_symlink() => {
+            return Err(Error::usage(format!(
+                "{}: is a link; solidtex writes its cache files there itself and does not write through links: \
+                 remove the link or give another --cache folder",
+                path.display()
+            )));
+        }
+        Ok(meta) if meta.len() > guided_cache::file_bytes(most) => {
+            let brick_bytes = (BRICK.pow(3) * std::mem::size_of::<synth::Voxel>()) as u64;
+            let bricks = meta.len().div_ceil(guided_cache::file_bytes(1) - guided_cache::file_bytes(0));
+            tell!(
+                "warning: {} holds {} MB of bricks, more than --cache-mb {} lets a run read; not used and kept as it \
+                 is (--cache-mb {} or more reads it)",
+                path.display(),
+                meta.len().div_ceil(1 << 20),
+                (most as u64 * brick_bytes).div_ceil(1 << 20),
+                (bricks * brick_bytes).div_ceil(1 << 20) + 1
+            );
+            return Ok(None);
+        }
+        _ => {}
+    }
     let dims = setup.level_dims();
     let slots: Vec<[usize; 3]> = (0..dims.len()).map(|l| setup.exemplars.slot_counts(l)).collect();
     let voxel = |level, slot, shown| setup.restored(level, slot, shown);
     match guided_cache::read(&path, key, &dims, &slots, guided_cache::file_bytes(most), voxel)? {
-        Cached::Good(bricks) => Ok((Kept { path, key }, bricks)),
+        Cached::Good(bricks) => {
+            guided_cache::mark_used(&path);
+            Ok(Some((Kept { path, key }, bricks)))
+        }
         Cached::Stale(why) => {
             warn_rebuilt(&path, Some(why));
-            Ok((Kept { path, key }, Bricks { levels: Vec::new(), whole: false }))
+            Ok(Some((Kept { path, key }, Bricks { levels: Vec::new(), whole: false })))
         }
-        Cached::Missing => Ok((Kept { path, key }, Bricks { levels: Vec::new(), whole: false })),
+        Cached::Missing => Ok(Some((Kept { path, key }, Bricks { levels: Vec::new(), whole: false }))),
     }
 }
 
@@ -1160,7 +1195,17 @@ fn keep_bricks(
         levels.push(merged);
     }
     std::fs::create_dir_all(folder).map_err(|e| Error::io(folder, e))?;
-    guided_cache::write(&file.path, file.key, &levels, kept.whole)
+    guided_cache::write(&file.path, file.key, &levels, kept.whole)?;
+    let removed = guided_cache::prune(folder, &file.path, &guided_cache::BRICK_CACHES);
+    if !removed.is_empty() {
+        tell!(
+            "removed {} cache file(s) of earlier models, exemplars or settings from {} (it keeps the {} used last)",
+            removed.len(),
+            folder.display(),
+            guided_cache::BRICKS_KEPT
+        );
+    }
+    Ok(())
 }
 
 /// Tell that a cache file solidtex wrote, found unusable (`stale`: what was wrong), was
@@ -1187,7 +1232,7 @@ fn write_cut(
 ) -> Result<(usize, usize, usize)> {
     let view = View::framing(g.surface.bounds(), point, normal, args.size)?;
     let most = (args.cache_mb << 20) / (BRICK.pow(3) * std::mem::size_of::<synth::Voxel>());
-    let mut cached = args.cache.as_deref().map(|folder| kept_bricks(folder, setup, most)).transpose()?;
+    let mut cached = args.cache.as_deref().map(|folder| kept_bricks(folder, setup, most)).transpose()?.flatten();
     let coarse_made = match cached.as_mut() {
         Some((_, levels)) => whole_coarse_levels(setup, (domain, &g.surface), levels, most, bar)?,
         None => false,
@@ -1204,7 +1249,11 @@ fn write_cut(
     if let (Some(folder), Some((file, levels))) = (&args.cache, &cached)
         && (coarse_made || out.levels().enumerate().any(|(l, m)| !setup.options.magnifies(l) && m.brick_count() > 0))
     {
-        keep_bricks(folder, file, setup, &out, levels, most)?;
+        // the cut is written: a cache that cannot be updated (a folder without write
+        // permission, a full disk) costs later cuts time, not this one's picture
+        if let Err(e) = keep_bricks(folder, file, setup, &out, levels, most) {
+            tell!("warning: the cache was not updated ({e}); later cuts compute what it would have held");
+        }
     }
     let scale = view.right.length() / domain.voxel;
     if shown && (0.8..=1.25).contains(&scale) {

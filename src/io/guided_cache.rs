@@ -236,51 +236,83 @@ pub fn write_cube(path: &Path, key: u64, side: usize, channels: usize, colours: 
 /// (about 1 MB for three colours), so the least recently used go beyond this many.
 pub const CUBES_KEPT: usize = 8;
 
-/// The key a cube file's name gives (`guided-cube-<16 hex digits>.cache`).
-fn cube_key_of(name: &str) -> Option<u64> {
-    let hex = name.strip_prefix("guided-cube-")?.strip_suffix(".cache")?;
-    (hex.len() == 16).then(|| u64::from_str_radix(hex, 16).ok()).flatten()
+/// How many brick caches a folder keeps: each edit of a model, spec, exemplar or seed makes
+/// a new one, up to `--cache-mb` large (40-46 MB for the log at `--res 1024`).
+pub const BRICKS_KEPT: usize = 4;
+
+/// One kind of file solidtex keeps in a cache folder: its name's prefix (then the key as
+/// 16 hex digits and `.cache`), its header's magics, length and where the key lies.
+pub struct Kind {
+    prefix: &'static str,
+    magic: &'static [u8],
+    old: &'static [&'static [u8]],
+    header: usize,
+    key_at: usize,
+    /// How many a folder keeps.
+    pub kept: usize,
 }
 
-/// Whether the file at `path` (not followed if a link) is a cube solidtex wrote under `key`:
-/// a regular file whose header is a cube's, of this or an earlier format, holding `key`.
-fn is_our_cube(path: &Path, key: u64) -> bool {
-    if !std::fs::symlink_metadata(path).is_ok_and(|m| m.file_type().is_file()) {
-        return false;
+/// Solid cubes.
+pub const CUBES: Kind = Kind {
+    prefix: "guided-cube-",
+    magic: CUBE_MAGIC,
+    old: OLD_CUBE_MAGICS,
+    header: CUBE_HEADER,
+    key_at: 23,
+    kept: CUBES_KEPT,
+};
+/// Brick caches.
+pub const BRICK_CACHES: Kind =
+    Kind { prefix: "guided-", magic: MAGIC, old: OLD_MAGICS, header: 24 + 8, key_at: 24, kept: BRICKS_KEPT };
+
+impl Kind {
+    /// The key a file's name gives.
+    fn key_of(&self, name: &str) -> Option<u64> {
+        let hex = name.strip_prefix(self.prefix)?.strip_suffix(".cache")?;
+        (hex.len() == 16).then(|| u64::from_str_radix(hex, 16).ok()).flatten()
     }
-    let mut head = [0u8; CUBE_HEADER];
-    let read = std::fs::File::open(path).and_then(|mut f| f.read_exact(&mut head));
-    read.is_ok() && owner(&head, CUBE_MAGIC, OLD_CUBE_MAGICS).is_some() && le_u64(&head, 23) == key
+
+    /// Whether the file at `path` (not followed if a link) is one solidtex wrote under
+    /// `key`: a regular file whose header is this kind's, of this or an earlier format,
+    /// holding `key`.
+    fn is_ours(&self, path: &Path, key: u64) -> bool {
+        if !std::fs::symlink_metadata(path).is_ok_and(|m| m.file_type().is_file()) {
+            return false;
+        }
+        let mut head = vec![0u8; self.header];
+        let read = std::fs::File::open(path).and_then(|mut f| f.read_exact(&mut head));
+        read.is_ok() && owner(&head, self.magic, self.old).is_some() && le_u64(&head, self.key_at) == key
+    }
 }
 
-/// Marks the cube at `path` as used now, so that [`prune_cubes`] keeps it longer (where
-/// the file cannot be written to, nothing changes).
+/// Marks the file at `path` as used now, so that [`prune`] keeps it longer (where the
+/// file cannot be written to, nothing changes).
 pub fn mark_used(path: &Path) {
     if let Ok(file) = std::fs::File::options().write(true).open(path) {
-        // a cube that cannot be marked is only pruned sooner
+        // a file that cannot be marked is only pruned sooner
         let _ = file.set_modified(std::time::SystemTime::now());
     }
 }
 
-/// Removes the cubes solidtex wrote in `folder` beyond the [`CUBES_KEPT`] most recently
-/// used (by modification time), never `current`: only regular files named as a cube
-/// whose header is a cube's of the key the name gives; anything else there is left as it
-/// is. The files removed.
-pub fn prune_cubes(folder: &Path, current: &Path) -> Vec<PathBuf> {
+/// Removes the files of `kind` solidtex wrote in `folder` beyond the `kind.kept` most
+/// recently used (by modification time), never `current`: only regular files named as
+/// that kind whose header is that kind's of the key the name gives; anything else there
+/// is left as it is. The files removed.
+pub fn prune(folder: &Path, current: &Path, kind: &Kind) -> Vec<PathBuf> {
     let Ok(entries) = std::fs::read_dir(folder) else { return Vec::new() };
-    let mut cubes: Vec<(std::time::SystemTime, PathBuf)> = entries
+    let mut found: Vec<(std::time::SystemTime, PathBuf)> = entries
         .flatten()
         .filter_map(|entry| {
-            let key = cube_key_of(entry.file_name().to_str()?)?;
+            let key = kind.key_of(entry.file_name().to_str()?)?;
             let path = entry.path();
             let used = std::fs::symlink_metadata(&path).and_then(|m| m.modified()).ok()?;
-            (path != current && is_our_cube(&path, key)).then_some((used, path))
+            (path != current && kind.is_ours(&path, key)).then_some((used, path))
         })
         .collect();
     // newest first; the name decides between equal times, so the choice does not depend on
     // the order the folder lists its files in
-    cubes.sort_by(|a, b| b.0.cmp(&a.0).then_with(|| a.1.cmp(&b.1)));
-    let stale = cubes.into_iter().skip(CUBES_KEPT.saturating_sub(1)).map(|(_, path)| path);
+    found.sort_by(|a, b| b.0.cmp(&a.0).then_with(|| a.1.cmp(&b.1)));
+    let stale = found.into_iter().skip(kind.kept.saturating_sub(1)).map(|(_, path)| path);
     stale.filter(|path| std::fs::remove_file(path).is_ok()).collect()
 }
 
@@ -465,7 +497,7 @@ mod tests {
         std::fs::File::options().write(true).open(at(101)).unwrap().set_modified(old_time).unwrap();
         #[cfg(unix)]
         std::os::unix::fs::symlink(at(5), at(102)).unwrap();
-        let removed = prune_cubes(dir.path(), &at(1));
+        let removed = prune(dir.path(), &at(1), &CUBES);
         // ten of ours besides key 1: the seven used last stay with it (2 and 6 to 11)
         assert_eq!(removed, vec![at(5), at(4), at(3)]);
         for key in [1, 2, 6, 7, 8, 9, 10, 11, 100, 101] {
@@ -473,7 +505,19 @@ mod tests {
         }
         assert!(std::fs::symlink_metadata(at(102)).is_ok());
         assert_eq!(std::fs::read(at(100)).unwrap(), b"my notes");
-        assert!(prune_cubes(dir.path(), &at(1)).is_empty(), "nothing more to prune");
+        assert!(prune(dir.path(), &at(1), &CUBES).is_empty(), "nothing more to prune");
+        // brick caches in the same folder: the three used last stay with the current one,
+        // and pruning them leaves the cubes alone
+        let bricks = |key: u64| path(dir.path(), key);
+        let level = Sparse::compute(&crate::synth::region::Mask::full([2, 2, 2]), |_| Voxel::default());
+        for key in 1..=6u64 {
+            write(&bricks(key), key, std::slice::from_ref(&level), false).unwrap();
+            let file = std::fs::File::options().write(true).open(bricks(key)).unwrap();
+            file.set_modified(start + std::time::Duration::from_secs(key * 60)).unwrap();
+        }
+        assert_eq!(prune(dir.path(), &bricks(1), &BRICK_CACHES), vec![bricks(3), bricks(2)]);
+        assert!([1, 4, 5, 6].iter().all(|&k| bricks(k).exists()));
+        assert!([1, 2, 6, 7, 8, 9, 10, 11].iter().all(|&k| at(k).exists()), "the cubes stay");
     }
 
     /// A cube reads back as written; a missing file is `Missing`; a file with another

@@ -227,9 +227,37 @@ fn a_cache_keeps_the_coarse_levels_over_the_model() {
     let (_, plain) = cut("96", "0,0,0,1,0,0", &at(d, "c.png"), &[]);
     assert_eq!(std::fs::read(at(d, "b.png")).unwrap(), std::fs::read(at(d, "c.png")).unwrap());
     assert!(3 * cached < 2 * plain, "another plane from the cache: {cached} voxels, without it {plain}");
+    // a cache file past what --cache-mb reads is used by no run and left as it is; a link
+    // at the file's name and a --cache that is a link to nothing are refused before any work
+    let file = crate::support::listing(&d.join("cache")).into_iter().find(|n| !n.contains("cube")).unwrap();
+    let file = d.join("cache").join(file);
+    let mut padded = std::fs::read(&file).unwrap();
+    padded.resize(6 << 20, 0);
+    std::fs::write(&file, &padded).unwrap();
+    let (warned, _) = cut("96", "0,0,0,1,0,0", &at(d, "f.png"), &["--cache", &folder, "--cache-mb", "16"]);
+    assert!(warned.contains("more than --cache-mb 16 lets a run read; not used and kept as it is"), "{warned}");
+    assert_eq!(std::fs::read(&file).unwrap(), padded);
+    assert_eq!(std::fs::read(at(d, "f.png")).unwrap(), std::fs::read(at(d, "c.png")).unwrap());
+    #[cfg(unix)]
+    {
+        std::fs::rename(&file, d.join("elsewhere")).unwrap();
+        std::os::unix::fs::symlink(d.join("elsewhere"), &file).unwrap();
+        let args = ["guided", &fruit, "--spec", &spec, "--exemplar", &ex, "--max-exemplar", "64", "--res", "96"];
+        let run = solidtex(&[&args[..], &["--cut", "0,0,0,1,0,0", "--cache", &folder, "-o", &at(d, "g.png")]].concat());
+        crate::support::assert_usage(&run, &["is a link", "another --cache folder"]);
+        assert!(!d.join("g.png").exists());
+        std::os::unix::fs::symlink(d.join("nothing"), d.join("dangling")).unwrap();
+        let run = solidtex(
+            &[&args[..], &["--cut", "0,0,0,1,0,0", "--cache", &at(d, "dangling"), "-o", &at(d, "g.png")]].concat(),
+        );
+        crate::support::assert_usage(&run, &["--cache", "a link to nothing"]);
+    }
     let small = &["--cache", &at(d, "small"), "--cache-mb", "16"];
     let (small, _) = cut("256", "0,0,0,1,0,0", &at(d, "e.png"), small);
-    assert!(small.contains("more than a quarter of --cache-mb 16") && small.contains("with --cache-mb 256"), "{small}");
+    assert!(
+        small.contains("more than a quarter of --cache-mb 16") && small.contains("a cut with --cache-mb 256"),
+        "{small}"
+    );
 }
 
 /// A guided model of a plain photo keeps its solid cube beside it: the first command makes
