@@ -219,12 +219,13 @@ pub struct GuidedArgs {
     /// The cut's picture size in pixels, 8 to 4096.
     #[arg(long, default_value_t = 256, requires = "cut")]
     pub size: usize,
-    /// A folder keeping what cuts of the same inputs computed (every level's bricks), so
-    /// that a later cut reads what it shares with them instead of computing it.
+    /// With --cut: a folder keeping what cuts of the same inputs computed (the levels below
+    /// the finest over the whole model when they fit in a quarter of --cache-mb, and each
+    /// cut's bricks), so that a later cut reads them instead of computing them.
     #[arg(long, requires = "cut")]
     pub cache: Option<PathBuf>,
-    /// Most megabytes the cache holds in memory (16 to 65536); the bricks of the latest
-    /// cuts are kept first.
+    /// Most megabytes the cache holds in memory (16 to 65536); the levels below the finest
+    /// first, then the bricks of the latest cuts.
     #[arg(long, default_value_t = 256, requires = "cache")]
     pub cache_mb: usize,
     /// Where the solid cube of plain exemplars is kept when `cache` is not given: a guided
