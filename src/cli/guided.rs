@@ -1094,7 +1094,7 @@ fn whole_coarse_levels(
     if plan.is_empty() {
         return Ok(false);
     }
-    let brick_mb = |n: usize| (n * BRICK.pow(3) * std::mem::size_of::<synth::Voxel>()).div_ceil(1 << 20);
+    let brick_mb = |n: usize| (n * BRICK.pow(3) * std::mem::size_of::<synth::Held>()).div_ceil(1 << 20);
     if 4 * bricks > most {
         tell!(
             "the levels below the finest take about {} MB, more than a quarter of --cache-mb {}: each cut computes \
@@ -1113,7 +1113,7 @@ fn whole_coarse_levels(
          grids; later cuts compute only the levels above them",
         100.0 * voxels as f64 / grid as f64
     );
-    let finer: Vec<Sparse<synth::Voxel>> = cached.levels.drain(..).skip(plan.len()).collect();
+    let finer: Vec<Sparse<synth::Held>> = cached.levels.drain(..).skip(plan.len()).collect();
     cached.levels = solid::coarse_levels(setup, &plan, bar)?.into_iter().chain(finer).collect();
     cached.whole = true;
     Ok(true)
@@ -1142,7 +1142,7 @@ fn kept_bricks(folder: &Path, setup: &Setup, most: usize) -> Result<Option<(Kept
             )));
         }
         Ok(meta) if meta.len() > guided_cache::file_bytes(most) => {
-            let brick_bytes = (BRICK.pow(3) * std::mem::size_of::<synth::Voxel>()) as u64;
+            let brick_bytes = (BRICK.pow(3) * std::mem::size_of::<synth::Held>()) as u64;
             let bricks = meta.len().div_ceil(guided_cache::file_bytes(1) - guided_cache::file_bytes(0));
             tell!(
                 "warning: {} holds {} MB of bricks, more than --cache-mb {} lets a run read; not used and kept as it \
@@ -1158,8 +1158,7 @@ fn kept_bricks(folder: &Path, setup: &Setup, most: usize) -> Result<Option<(Kept
     }
     let dims = setup.level_dims();
     let slots: Vec<[usize; 3]> = (0..dims.len()).map(|l| setup.exemplars.slot_counts(l)).collect();
-    let voxel = |level, slot, shown| setup.restored(level, slot, shown);
-    match guided_cache::read(&path, key, &dims, &slots, guided_cache::file_bytes(most), voxel)? {
+    match guided_cache::read(&path, key, &dims, &slots, guided_cache::file_bytes(most))? {
         Cached::Good(bricks) => {
             guided_cache::mark_used(&path);
             Ok(Some((Kept { path, key }, bricks)))
@@ -1187,11 +1186,12 @@ fn keep_bricks(
     let mut levels = Vec::new();
     for (level, new) in made.levels().enumerate() {
         let none = Sparse::from_bricks(new.dims, []);
-        let merged = match kept.levels.get(level) {
-            _ if setup.options.magnifies(level) => none,
-            Some(old) => new.over(old, left),
-            None => new.over(&none, left),
-        };
+        if setup.options.magnifies(level) {
+            levels.push(none);
+            continue;
+        }
+        let new = new.map(synth::Held::from);
+        let merged = new.over(kept.levels.get(level).unwrap_or(&none), left);
         left -= merged.brick_count();
         levels.push(merged);
     }
@@ -1232,13 +1232,13 @@ fn write_cut(
     bar: &super::fill::Bar,
 ) -> Result<(usize, usize, usize)> {
     let view = View::framing(g.surface.bounds(), point, normal, args.size)?;
-    let most = (args.cache_mb << 20) / (BRICK.pow(3) * std::mem::size_of::<synth::Voxel>());
+    let most = (args.cache_mb << 20) / (BRICK.pow(3) * std::mem::size_of::<synth::Held>());
     let mut cached = args.cache.as_deref().map(|folder| kept_bricks(folder, setup, most)).transpose()?.flatten();
     let coarse_made = match cached.as_mut() {
         Some((_, levels)) => whole_coarse_levels(setup, (domain, &g.surface), levels, most, bar)?,
         None => false,
     };
-    let kept: Vec<Option<&Sparse<synth::Voxel>>> =
+    let kept: Vec<Option<&Sparse<synth::Held>>> =
         cached.as_ref().map_or(Vec::new(), |(_, bricks)| bricks.levels.iter().map(Some).collect());
     let (picture, out) = solid::cut(setup, domain, &g.surface, &view, &kept, bar)?;
     io::write_rgb8(&args.output, &solid::cut_picture(&picture))?;

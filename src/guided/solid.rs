@@ -10,7 +10,7 @@ use crate::mesh::Mesh;
 use crate::mesh::voxelize::Slices;
 use crate::progress::Progress;
 use crate::render::{ColourMap, Rgb8};
-use crate::synth::coords::{self as synth, Kept, Setup, Synthesized, Voxel};
+use crate::synth::coords::{self as synth, Held, Kept, Setup, Synthesized, Voxel};
 use crate::synth::region::{Mask, Sparse};
 use crate::volume::{Channel, Image2d, ModelGrid, Volume};
 use glam::{Affine3A, Vec3};
@@ -186,7 +186,10 @@ pub fn cut(
         Some(earlier) => {
             let shown = Sparse::compute(&request, |v| match out.values.holds(v) {
                 true => out.values.at(v.map(|c| c as i64)),
-                false => earlier.at(v.map(|c| c as i64)),
+                false => {
+                    let held = earlier.at(v.map(|c| c as i64));
+                    setup.restored(out.finest, held.slot, held.shown)
+                }
             });
             cut_image(setup, &shown, domain, view, &inside)?
         }
@@ -382,14 +385,14 @@ pub fn interior_plan(setup: &Setup, domain: &Domain, surface: &Mesh) -> Vec<Vec<
     synth::plan_from(setup, top, &inside.grown(1 + (reach / 2.0).ceil() as usize), &[])
 }
 
-/// The levels of `plan` ([`interior_plan`]) computed, coarsest first: kept, a cut computes
-/// only the levels above them.
-pub fn coarse_levels(setup: &Setup, plan: &[Vec<Mask>], progress: &dyn Progress) -> Result<Vec<Sparse<Voxel>>> {
+/// The levels of `plan` ([`interior_plan`]) computed, coarsest first, as a cache keeps
+/// them: kept, a cut computes only the levels above them.
+pub fn coarse_levels(setup: &Setup, plan: &[Vec<Mask>], progress: &dyn Progress) -> Result<Vec<Sparse<Held>>> {
     if plan.is_empty() {
         return Ok(Vec::new());
     }
     let out = synth::run(setup, plan, &[], progress)?;
-    Ok(out.coarser.into_iter().chain([out.values]).collect())
+    Ok(out.levels().map(|l| l.map(Held::from)).collect())
 }
 
 /// About how many bytes synthesizing needs (before it starts): every level and version's

@@ -30,7 +30,7 @@
 
 use super::atomic;
 use crate::error::{Error, Result};
-use crate::synth::coords::{MEAN, Voxel};
+use crate::synth::coords::{Held, MEAN};
 use crate::synth::region::{BRICK, Bits, Sparse};
 use rayon::prelude::*;
 use std::io::{Read, Write};
@@ -332,16 +332,8 @@ pub fn file_bytes(bricks: usize) -> u64 {
 /// The bricks cached under `key` for a grid whose levels have `dims` (coarsest first), one
 /// store per level, or an error naming the file when it is not solidtex's cache of `key`.
 /// A file over `most` bytes is stale (made under a larger cap). Every slot is checked
-/// against `slots[level][plane]` (the exemplar centre counts); `voxel` makes a voxel of its
-/// level, slots and shown plane.
-pub fn read(
-    path: &Path,
-    key: u64,
-    dims: &[[usize; 3]],
-    slots: &[[usize; 3]],
-    most: u64,
-    voxel: impl Fn(usize, [u32; 3], u8) -> Voxel + Sync,
-) -> Result<Cached<Bricks>> {
+/// against `slots[level][plane]` (the exemplar centre counts).
+pub fn read(path: &Path, key: u64, dims: &[[usize; 3]], slots: &[[usize; 3]], most: u64) -> Result<Cached<Bricks>> {
     let finest = dims.last().copied().unwrap_or_default();
     let ours = |h: &[u8]| {
         let fits =
@@ -351,7 +343,7 @@ pub fn read(
     };
     let found = read_checked(path, HEADER, Size::AtMost(most), ours)?
         .ok_or_else(|| not_ours(path, "the guided-synthesis cache of these inputs", CACHE_HINT))?;
-    Ok(found.and_then(|bytes| match bricks(&bytes[HEADER + CHECKSUM..], dims, slots, &voxel) {
+    Ok(found.and_then(|bytes| match bricks(&bytes[HEADER + CHECKSUM..], dims, slots) {
         Ok(levels) => Cached::Good(Bricks { levels, whole: le_u32(&bytes, 48) == 1 }),
         Err(why) => damaged(why),
     }))
@@ -362,13 +354,13 @@ pub fn read(
 #[derive(Debug)]
 pub struct Bricks {
     /// One store per level.
-    pub levels: Vec<Sparse<Voxel>>,
+    pub levels: Vec<Sparse<Held>>,
     /// Whether the coarse levels are whole over the model.
     pub whole: bool,
 }
 
 /// A brick read back: its coordinates, flags and values.
-type Brick = ([usize; 3], Bits, Vec<Voxel>);
+type Brick = ([usize; 3], Bits, Vec<Held>);
 
 /// A cache body's bricks, one store per level; what is wrong otherwise. The bricks' places
 /// are found in one pass over their heads, their voxels decoded in parallel.
@@ -376,8 +368,7 @@ fn bricks(
     mut body: &[u8],
     dims: &[[usize; 3]],
     slots: &[[usize; 3]],
-    voxel: &(impl Fn(usize, [u32; 3], u8) -> Voxel + Sync),
-) -> std::result::Result<Vec<Sparse<Voxel>>, String> {
+) -> std::result::Result<Vec<Sparse<Held>>, String> {
     let mut found: Vec<(usize, [usize; 3], &[u8])> = Vec::new();
     let mut seen = std::collections::HashSet::new();
     while !body.is_empty() {
@@ -401,7 +392,7 @@ fn bricks(
     }
     let decoded: Vec<(usize, Brick)> = found
         .into_par_iter()
-        .map(|(level, brick, bytes)| Ok((level, decoded(bytes, brick, slots[level], level, voxel)?)))
+        .map(|(level, brick, bytes)| Ok((level, decoded(bytes, brick, slots[level])?)))
         .collect::<std::result::Result<_, String>>()?;
     let mut levels: Vec<Vec<Brick>> = vec![Vec::new(); dims.len()];
     for (level, brick) in decoded {
@@ -410,17 +401,11 @@ fn bricks(
     Ok(levels.into_iter().zip(dims).map(|(bricks, d)| Sparse::from_bricks(*d, bricks)).collect())
 }
 
-/// One brick's entry (`bytes`, its head included) of `level` read back: its place, flags
+/// One brick's entry (`bytes`, its head included) read back: its place, flags
 /// and voxels, each slot checked against `slots` (the exemplar centre counts per plane).
-fn decoded(
-    bytes: &[u8],
-    brick: [usize; 3],
-    slots: [usize; 3],
-    level: usize,
-    voxel: &impl Fn(usize, [u32; 3], u8) -> Voxel,
-) -> std::result::Result<Brick, String> {
+fn decoded(bytes: &[u8], brick: [usize; 3], slots: [usize; 3]) -> std::result::Result<Brick, String> {
     let bits: Bits = bytes[16..BRICK_HEAD].try_into().expect("a brick's flags");
-    let mut values = vec![Voxel::default(); BRICK * BRICK * BRICK];
+    let mut values = vec![Held::default(); BRICK * BRICK * BRICK];
     let mut at = BRICK_HEAD;
     for (k, value) in values.iter_mut().enumerate().filter(|(k, _)| bits[k / BRICK] >> (k % BRICK) & 1 == 1) {
         let slot = [0, 4, 8].map(|o| le_u32(bytes, at + o) as u32);
@@ -431,7 +416,7 @@ fn decoded(
         if shown > MEAN {
             return Err(format!("voxel {k} of brick {brick:?} shows plane {shown}, not 0-{MEAN}"));
         }
-        *value = voxel(level, slot, shown);
+        *value = Held { slot, shown };
         at += PER_VOXEL;
     }
     Ok((brick, bits, values))
@@ -439,7 +424,7 @@ fn decoded(
 
 /// Write every level's bricks (`levels`, coarsest first, the finest of `levels.len()`
 /// levels last) under `key`; `whole` as [`Bricks::whole`].
-pub fn write(path: &Path, key: u64, levels: &[Sparse<Voxel>], whole: bool) -> Result<()> {
+pub fn write(path: &Path, key: u64, levels: &[Sparse<Held>], whole: bool) -> Result<()> {
     let mut fields = Vec::with_capacity(HEADER);
     fields.extend_from_slice(MAGIC);
     fields.extend_from_slice(&key.to_le_bytes());
@@ -509,7 +494,7 @@ mod tests {
         // brick caches in the same folder: the three used last stay with the current one,
         // and pruning them leaves the cubes alone
         let bricks = |key: u64| path(dir.path(), key);
-        let level = Sparse::compute(&crate::synth::region::Mask::full([2, 2, 2]), |_| Voxel::default());
+        let level = Sparse::compute(&crate::synth::region::Mask::full([2, 2, 2]), |_| Held::default());
         for key in 1..=6u64 {
             write(&bricks(key), key, std::slice::from_ref(&level), false).unwrap();
             let file = std::fs::File::options().write(true).open(bricks(key)).unwrap();
@@ -595,8 +580,8 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let path = path(dir.path(), 9);
         let dims = [[5, 4, 4], [10, 8, 7]];
-        let voxel = |_: usize, slot: [u32; 3], shown: u8| Voxel { slot, shown, ..Voxel::default() };
-        let read = |key, dims: &[[usize; 3]], slots: &[[usize; 3]], most| read(&path, key, dims, slots, most, voxel);
+        let voxel = |_: usize, slot: [u32; 3], shown: u8| Held { slot, shown };
+        let read = |key, dims: &[[usize; 3]], slots: &[[usize; 3]], most| read(&path, key, dims, slots, most);
         let slots = [[40; 3], [40; 3]];
         assert!(matches!(read(9, &dims, &slots, 1 << 20).unwrap(), Cached::Missing));
         let value = |v: [usize; 3]| voxel(0, [v[0] as u32, v[1] as u32 + 4, v[2] as u32 + 8], (v[0] % 4) as u8);

@@ -549,9 +549,25 @@ impl Setup<'_> {
     }
 }
 
+/// A voxel as a cache keeps it: its slots and the plane it shows, 16 bytes (its colour is
+/// the exemplar's, [`Setup::restored`]; a [`Voxel`] with its colours takes 40).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Held {
+    /// Centre slot per plane.
+    pub slot: [u32; 3],
+    /// The plane whose pixel it shows, or [`MEAN`].
+    pub shown: u8,
+}
+
+impl From<Voxel> for Held {
+    fn from(v: Voxel) -> Held {
+        Held { slot: v.slot, shown: v.shown }
+    }
+}
+
 /// Per level, the values an earlier run kept (a cache): a voxel held there is read, not
 /// computed again. A level past the slice's end keeps nothing.
-pub type Kept<'a> = [Option<&'a Sparse<Voxel>>];
+pub type Kept<'a> = [Option<&'a Sparse<Held>>];
 
 /// The voxels each level and version needs for `request` (voxels of the finest level):
 /// `masks[level][version]`, version 0 the upsampled (or initialized) one. A level's last
@@ -612,14 +628,18 @@ impl Synthesized {
 /// A level's values as a finer level reads them: computed in this run, else kept.
 struct Level<'a> {
     made: &'a Sparse<Voxel>,
-    kept: Option<&'a Sparse<Voxel>>,
+    kept: Option<&'a Sparse<Held>>,
 }
 
 impl Level<'_> {
-    fn at(&self, v: [usize; 3]) -> Voxel {
+    /// Voxel `v` of `level` (this level) of `setup`.
+    fn at(&self, setup: &Setup, level: usize, v: [usize; 3]) -> Voxel {
         let v = [0, 1, 2].map(|a| v[a].min(self.made.dims[a] - 1));
         match self.kept {
-            Some(kept) if !self.made.holds(v) => kept.at(v.map(|c| c as i64)),
+            Some(kept) if !self.made.holds(v) => {
+                let held = kept.at(v.map(|c| c as i64));
+                setup.restored(level, held.slot, held.shown)
+            }
             _ => self.made.at(v.map(|c| c as i64)),
         }
     }
@@ -843,7 +863,7 @@ fn initial(setup: &Setup, v: [usize; 3]) -> Voxel {
 /// offset from the parent's place turned into the parent's frame (Zhang et al., Eq. 3).
 fn upsampled(setup: &Setup, level: usize, parents: &Level, v: [usize; 3]) -> Voxel {
     let p = v.map(|c| c / 2);
-    let parent = parents.at(p);
+    let parent = parents.at(setup, level - 1, p);
     let offset = Vec3::from_array([0, 1, 2].map(|a| (v[a] - 2 * p[a]) as f32));
     let local = setup.frame(level - 1, p).transpose() * offset;
     if let Some(cube) = &setup.exemplars.cube {
@@ -1521,14 +1541,16 @@ mod tests {
         let mut coarse_masks = plan(setup, &full_mask, &[]);
         coarse_masks.truncate(1);
         let coarse = run(setup, &coarse_masks, &[], &crate::progress::NoProgress).unwrap().values;
-        let kept = [Some(&coarse)];
+        let held = coarse.map(Held::from);
+        let kept = [Some(&held)];
         let resumed = run(setup, &plan(setup, &request, &kept), &kept, &crate::progress::NoProgress).unwrap();
         assert_eq!(colours(setup, &resumed, &cut), colours(setup, &whole, &cut));
         // what a cut computed, kept (a brick cache): another cut shows the whole solid's
         // colours, a cut beside it reads the coarser voxels they share and computes fewer,
         // the same cut again computes nothing
         let levels: Vec<&Sparse<Voxel>> = alone.levels().collect();
-        let kept: Vec<Option<&Sparse<Voxel>>> = levels.iter().map(|l| Some(*l)).collect();
+        let held: Vec<Sparse<Held>> = levels.iter().map(|l| l.map(Held::from)).collect();
+        let kept: Vec<Option<&Sparse<Held>>> = held.iter().map(Some).collect();
         let merged = |out: &Synthesized, v: [usize; 3]| match out.values.holds(v) {
             true => out.colour(setup, v),
             false => levels[levels.len() - 1].at(v.map(|c| c as i64)).colour[..setup.exemplars.channels()].to_vec(),

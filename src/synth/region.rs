@@ -373,6 +373,12 @@ impl<T: Copy + Default + Send + Sync> Sparse<T> {
         Sparse { dims, mask, values }
     }
 
+    /// The same voxels, each value turned by `f`.
+    pub fn map<U: Copy + Default + Send + Sync>(&self, f: impl Fn(T) -> U + Sync) -> Sparse<U> {
+        use rayon::prelude::*;
+        Sparse { dims: self.dims, mask: self.mask.clone(), values: self.values.par_iter().map(|v| f(*v)).collect() }
+    }
+
     /// This store's values over `older`'s (a store of the same grid) where this one holds
     /// none: this store's bricks first, then `older`'s others, at most `most` bricks.
     pub fn over(&self, older: &Sparse<T>, most: usize) -> Sparse<T> {

@@ -133,18 +133,16 @@ fn guided_cube_seeds(dir: &Path) -> Vec<Files> {
 const BRICKS: (u64, [[usize; 3]; 2]) = (9, [[5, 4, 4], [10, 8, 7]]);
 
 fn read_guided_bricks(path: &Path) -> solidtex::Result<()> {
-    let voxel = |_, slot, shown| solidtex::synth::coords::Voxel { slot, shown, ..Default::default() };
-    io::guided_cache::read(path, BRICKS.0, &BRICKS.1, &[[40; 3]; 2], 1 << 20, voxel).map(drop)
+    io::guided_cache::read(path, BRICKS.0, &BRICKS.1, &[[40; 3]; 2], 1 << 20).map(drop)
 }
 
 /// A guided-synthesis cache of two levels' bricks as `guided --cache` keeps it.
 fn guided_brick_seeds(dir: &Path) -> Vec<Files> {
     use solidtex::synth::region::{Mask, Sparse};
     let (key, dims) = BRICKS;
-    let value = |v: [usize; 3]| solidtex::synth::coords::Voxel {
+    let value = |v: [usize; 3]| solidtex::synth::coords::Held {
         slot: [v[0] as u32, v[1] as u32, v[2] as u32 + 3],
         shown: (v[0] % 4) as u8,
-        ..Default::default()
     };
     let mut fine = Mask::empty(dims[1]);
     [[9, 7, 6], [0, 0, 0], [3, 5, 1]].into_iter().for_each(|v| fine.insert(v));

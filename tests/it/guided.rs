@@ -232,7 +232,7 @@ fn a_cache_keeps_the_coarse_levels_over_the_model() {
     let file = crate::support::listing(&d.join("cache")).into_iter().find(|n| !n.contains("cube")).unwrap();
     let file = d.join("cache").join(file);
     let mut padded = std::fs::read(&file).unwrap();
-    padded.resize(6 << 20, 0);
+    padded.resize(16 << 20, 0);
     std::fs::write(&file, &padded).unwrap();
     let (warned, _) = cut("96", "0,0,0,1,0,0", &at(d, "f.png"), &["--cache", &folder, "--cache-mb", "16"]);
     assert!(warned.contains("more than --cache-mb 16 lets a run read; not used and kept as it is"), "{warned}");
