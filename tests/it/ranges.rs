@@ -74,9 +74,15 @@ fn out_of_range_numbers_of_other_commands_are_usage_errors_before_any_file_is_re
     let (missing, out) = (at(dir.path(), "missing.png"), at(dir.path(), "out.exr"));
     let cases: [(Vec<&str>, &str); 9] = [
         (vec!["synth", &missing, "--levels", "99", "-o", &out], "--levels 99 is out of range; allowed: 1 to 8"),
-        (vec!["synth", &missing, "--pca-variance", "nan", "-o", &out], "--pca-variance NaN is out of range"),
+        (
+            vec!["synth", &missing, "--pca-variance", "nan", "-o", &out],
+            "--pca-variance <PCA_VARIANCE>': nan is not a finite number",
+        ),
         (vec!["synth", &missing, "--size", "100000", "-o", &out], "--size \"100000\" is out of range"),
-        (vec!["blur", &missing, "--at", "1,1,1", "--radius", "inf", "-o", &out], "--radius inf is out of range"),
+        (
+            vec!["blur", &missing, "--at", "1,1,1", "--radius", "inf", "-o", &out],
+            "--radius <RADIUS>': inf is not a finite number",
+        ),
         (vec!["stamp", &missing, &missing, "--at", "1,1,1", "--scale", "0", "--color", "0,0,0", "-o", &out], "--scale"),
         (vec!["mask", "splotch", "--size", "100000", "-o", &out], "--size 100000 is out of range; allowed: 6 to 512"),
         (vec!["bake", &missing, "--res", "100000", "-o", &out], "--res 100000 is out of range; allowed: 2 to 512"),
