@@ -1184,19 +1184,22 @@ fn keep_bricks(
 ) -> Result<()> {
     let mut left = most;
     let mut levels = Vec::new();
+    // the coarse levels stay whole unless the cap leaves some of their bricks out
+    let mut whole = kept.whole;
     for (level, new) in made.levels().enumerate() {
         let none = Sparse::from_bricks(new.dims, []);
         if setup.options.magnifies(level) {
             levels.push(none);
             continue;
         }
-        let new = new.map(synth::Held::from);
-        let merged = new.over(kept.levels.get(level).unwrap_or(&none), left);
+        let old = kept.levels.get(level).unwrap_or(&none);
+        let merged = new.map(synth::Held::from).over(old, left);
+        whole &= level >= setup.options.coarse_levels() || merged.brick_count() >= old.brick_count();
         left -= merged.brick_count();
         levels.push(merged);
     }
     std::fs::create_dir_all(folder).map_err(|e| Error::io(folder, e))?;
-    guided_cache::write(&file.path, file.key, &levels, kept.whole)?;
+    guided_cache::write(&file.path, file.key, &levels, whole)?;
     let removed = guided_cache::prune(folder, &file.path, &guided_cache::BRICK_CACHES);
     if !removed.is_empty() {
         tell!(
