@@ -1074,6 +1074,14 @@ fn tell_not_kept(why: &Error) {
 /// Megabytes the cache may hold in memory.
 const CACHE_MB: std::ops::RangeInclusive<usize> = 16..=65536;
 
+/// Bytes a kept brick takes in memory.
+const BRICK_BYTES: usize = BRICK * BRICK * BRICK * std::mem::size_of::<synth::Held>();
+
+/// Megabytes `bricks` kept bricks take, rounded up.
+fn brick_mb(bricks: usize) -> usize {
+    (bricks * BRICK_BYTES).div_ceil(1 << 20)
+}
+
 /// Compute the coarse levels ([`synth::Options::coarse_levels`]) over the model
 /// ([`solid::interior_plan`]) into `levels` (the cache's, coarsest first) unless the cache
 /// holds them already or they would take more than a quarter of its `most` bricks: later
@@ -1089,12 +1097,11 @@ fn whole_coarse_levels(
         return Ok(false);
     }
     let plan = solid::interior_plan(setup, domain, surface);
-    let finals: Vec<&Mask> = plan.iter().filter_map(|versions| versions.last()).collect();
-    let bricks: usize = finals.iter().map(|m| m.bricks().count()).sum();
     if plan.is_empty() {
         return Ok(false);
     }
-    let brick_mb = |n: usize| (n * BRICK.pow(3) * std::mem::size_of::<synth::Held>()).div_ceil(1 << 20);
+    let finals: Vec<&Mask> = plan.iter().filter_map(|versions| versions.last()).collect();
+    let bricks: usize = finals.iter().map(|m| m.bricks().count()).sum();
     if 4 * bricks > most {
         tell!(
             "the levels below the finest take about {} MB, more than a quarter of --cache-mb {}: each cut computes \
@@ -1142,15 +1149,14 @@ fn kept_bricks(folder: &Path, setup: &Setup, most: usize) -> Result<Option<(Kept
             )));
         }
         Ok(meta) if meta.len() > guided_cache::file_bytes(most) => {
-            let brick_bytes = (BRICK.pow(3) * std::mem::size_of::<synth::Held>()) as u64;
             let bricks = meta.len().div_ceil(guided_cache::file_bytes(1) - guided_cache::file_bytes(0));
             tell!(
                 "warning: {} holds {} MB of bricks, more than --cache-mb {} lets a run read; not used and kept as it \
                  is (--cache-mb {} or more reads it)",
                 path.display(),
                 meta.len().div_ceil(1 << 20),
-                (most as u64 * brick_bytes).div_ceil(1 << 20),
-                (bricks * brick_bytes).div_ceil(1 << 20) + 1
+                brick_mb(most),
+                brick_mb(bricks as usize) + 1
             );
             return Ok(None);
         }
@@ -1235,7 +1241,7 @@ fn write_cut(
     bar: &super::fill::Bar,
 ) -> Result<(usize, usize, usize)> {
     let view = View::framing(g.surface.bounds(), point, normal, args.size)?;
-    let most = (args.cache_mb << 20) / (BRICK.pow(3) * std::mem::size_of::<synth::Held>());
+    let most = (args.cache_mb << 20) / BRICK_BYTES;
     let mut cached = args.cache.as_deref().map(|folder| kept_bricks(folder, setup, most)).transpose()?.flatten();
     let coarse_made = match cached.as_mut() {
         Some((_, levels)) => whole_coarse_levels(setup, (domain, &g.surface), levels, most, bar)?,
