@@ -21,6 +21,9 @@ pub struct KdTree {
     starts: Vec<u32>,
     /// The indices of every distinct point's copies, each list ascending.
     copies: Vec<u32>,
+    /// Per leaf position, its point's lowest index and how many copies it has (most points
+    /// have one: a search reads these side by side with the points, without `copies`).
+    firsts: Vec<(u32, u32)>,
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -39,11 +42,13 @@ impl KdTree {
     pub fn build(points: Vec<f32>, dims: usize) -> KdTree {
         let (points, starts, copies) = distinct(points, dims);
         let count = starts.len() - 1;
-        let mut tree = KdTree { dims, points, order: (0..count as u32).collect(), nodes: Vec::new(), starts, copies };
+        let order = (0..count as u32).collect();
+        let mut tree = KdTree { dims, points, order, nodes: Vec::new(), starts, copies, firsts: Vec::new() };
         tree.split(0, count);
         // Store the points in leaf order, so a leaf's points are read one after another.
         let leaf_order = tree.order.iter().flat_map(|&i| tree.point(i).iter().copied()).collect();
         tree.points = leaf_order;
+        tree.firsts = tree.order.iter().map(|&u| (tree.copies_of(u)[0], tree.copies_of(u).len() as u32)).collect();
         tree
     }
 
@@ -118,12 +123,16 @@ impl KdTree {
             Node::Leaf { start, end } => {
                 for at in start..end {
                     let d = squared(self.point(at), search.query);
-                    let copies = self.copies_of(self.order[at as usize]);
-                    // equal distances: the lower indices come first, the rest cannot get in
-                    for &index in copies.iter().take(search.k) {
-                        insert(search.best, search.k, (d, index));
+                    let (first, count) = self.firsts[at as usize];
+                    if count == 1 {
+                        insert(search.best, search.k, (d, first));
+                    } else {
+                        // equal distances: the lower indices come first, the rest cannot get in
+                        for &index in self.copies_of(self.order[at as usize]).iter().take(search.k) {
+                            insert(search.best, search.k, (d, index));
+                        }
                     }
-                    search.left = search.left.saturating_sub(copies.len());
+                    search.left = search.left.saturating_sub(count as usize);
                 }
             }
             Node::Split { axis, value, left, right } => {
