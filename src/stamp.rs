@@ -184,6 +184,11 @@ pub struct Scattered {
 /// Reproducible from `seed`.
 pub fn scatter(volume: &mut Volume, mesh: &Mesh, params: &Scatter, seed: u64) -> Result<Scattered> {
     check_scatter(volume, params)?;
+    if flat(mesh) {
+        return Err(Error::invalid(
+            "the seed mesh encloses no volume (a flat or open mesh); a seed must be a closed surface",
+        ));
+    }
     let capsule = bounding_capsule(mesh);
     let mut rng = Pcg64::seed_from_u64(seed);
     let mut out = Scattered { placed: Vec::new(), rejected: 0, too_small: 0 };
@@ -439,6 +444,18 @@ pub fn blur(volume: &mut Volume, at: Vec3, radius: f32, strength: f32) -> Result
             }
         }
     }
+    if changed == 0 && strength > 0.0 {
+        return Err(Error::invalid(format!(
+            "the blur sphere at ({}, {}, {}) with radius {radius} holds no voxel's centre (voxel i's centre is at \
+             i + 0.5): a larger radius, or a centre such as ({}, {}, {}), blurs some",
+            at.x,
+            at.y,
+            at.z,
+            at.x.floor() + 0.5,
+            at.y.floor() + 0.5,
+            at.z.floor() + 0.5
+        )));
+    }
     Ok(changed)
 }
 
@@ -501,6 +518,8 @@ mod tests {
         assert!(scatter(&mut v, &seed, &wide, 1).unwrap_err().to_string().contains("region box"));
         assert!(blur(&mut v, Vec3::splat(4.0), 1.0e9, 1.0).unwrap_err().to_string().contains("0.1 to 64"));
         assert!(blur(&mut v, Vec3::new(f32::NAN, 0.0, 0.0), 2.0, 1.0).unwrap_err().to_string().contains("centre"));
+        let between = blur(&mut v, Vec3::splat(4.0), 0.5, 1.0).unwrap_err().to_string();
+        assert!(between.contains("holds no voxel's centre") && between.contains("(4.5, 4.5, 4.5)"), "{between}");
         assert_eq!(v, grey());
     }
 
@@ -523,6 +542,8 @@ mod tests {
         let flat = Mesh::new(vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![[0, 1, 2]]).unwrap();
         let none = stamp(&mut v, &flat, &placed(Vec3::splat(4.0), 3.0), [0.0; 3]).unwrap_err();
         assert!(none.to_string().contains("encloses no volume"), "{none}");
+        let none = scatter(&mut v, &flat, &Scatter { scale: (3.0, 3.0), ..tiny }, 1).unwrap_err();
+        assert!(none.to_string().contains("encloses no volume"), "scattered: {none}");
         let small = stamp(&mut v, &seed, &placed(Vec3::splat(4.0), 0.001), [0.0; 3]).unwrap_err();
         assert!(small.to_string().contains("smaller than a voxel"), "a closed seed at the least scale: {small}");
     }

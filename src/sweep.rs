@@ -137,16 +137,8 @@ fn check(image: &Image2d, params: &Sweep) -> Result<()> {
             "the depth axis {d} is the sweep axis; depth must run along one of the cross-section's axes"
         )));
     }
-    if let Some(relief) = &params.displacement
-        && (relief.width(), relief.height()) != (image.width(), image.height())
-    {
-        return Err(Error::invalid(format!(
-            "the displacement image is {}x{} but the cross-section is {}x{}; they must be the same size",
-            relief.width(),
-            relief.height(),
-            image.width(),
-            image.height()
-        )));
+    if let Some(relief) = &params.displacement {
+        check_relief(image, relief)?;
     }
     if params.skin.is_some() && params.depth_axis.is_none() {
         return Err(Error::invalid("a skin needs a depth axis: it covers the depth-0 face"));
@@ -155,6 +147,7 @@ fn check(image: &Image2d, params: &Sweep) -> Result<()> {
         within("noise amplitude", noise.amplitude, AMPLITUDE)?;
         within("noise frequency", noise.frequency, FREQUENCY)?;
         within("noise jitter", noise.jitter, JITTER)?;
+        check_frequency("noise", noise)?;
     }
     if let Some(skin) = &params.skin {
         within("skin width", skin.width, SKIN_WIDTH)?;
@@ -163,6 +156,34 @@ fn check(image: &Image2d, params: &Sweep) -> Result<()> {
     }
     if let Some([x, y, c]) = image.first_non_finite() {
         return Err(Error::invalid(format!("cross-section pixel ({x}, {y}) channel {c} is not finite")));
+    }
+    Ok(())
+}
+
+/// Whether a displacement image `relief` suits the cross-section `image` (the same size).
+/// The error is about the displacement image, so a caller can name its file.
+pub fn check_relief(image: &Image2d, relief: &Image2d) -> Result<()> {
+    if (relief.width(), relief.height()) != (image.width(), image.height()) {
+        return Err(Error::invalid(format!(
+            "the displacement image is {}x{} but the cross-section is {}x{}; they must be the same size",
+            relief.width(),
+            relief.height(),
+            image.width(),
+            image.height()
+        )));
+    }
+    Ok(())
+}
+
+/// A noise that moves or jitters anything needs a frequency above 0: at 0 every voxel
+/// reads the same point of the noise, which is 0 there.
+pub fn check_frequency(label: &str, noise: &Noise) -> Result<()> {
+    if noise.frequency == 0.0 && (noise.amplitude > 0.0 || noise.jitter > 0.0) {
+        return Err(Error::invalid(format!(
+            "{label} frequency 0 gives every voxel the same noise, which moves and jitters nothing; allowed: above 0 \
+             to {} (cells across the longest side), or amplitude and jitter 0",
+            FREQUENCY.1
+        )));
     }
     Ok(())
 }
@@ -206,10 +227,16 @@ fn colour_positions(image: &Image2d) -> Result<Vec<usize>> {
     Ok(list)
 }
 
-/// Noise lattice coordinates of voxel `p`: `frequency` cells across the longest side.
+/// A shift of the noise lattice against the voxels: gradient noise is 0 at its lattice
+/// points, and a frequency with as many cells (or half as many) as the longest side has
+/// voxels would put every voxel centre on one and move nothing. A whole number of cells
+/// still tiles (the shift moves the whole periodic field).
+const LATTICE_SHIFT: Vec3 = Vec3::new(0.37, 0.61, 0.13);
+
+/// Noise lattice coordinates of voxel `p`'s centre: `frequency` cells across the longest side.
 fn cell(p: [usize; 3], dims: [usize; 3], frequency: f32) -> Vec3 {
     let longest = *dims.iter().max().unwrap_or(&1) as f32;
-    Vec3::new(p[0] as f32, p[1] as f32, p[2] as f32) * (frequency / longest)
+    (Vec3::new(p[0] as f32, p[1] as f32, p[2] as f32) + 0.5) * (frequency / longest) + LATTICE_SHIFT
 }
 
 fn period(frequency: f32) -> [i64; 3] {
@@ -371,6 +398,21 @@ mod tests {
         assert_eq!(a, b);
         assert_ne!(a.data(), c.data());
         assert_ne!(a.data(), sweep(&rows(), &plain(8), 1).unwrap().data());
+    }
+
+    /// As many noise cells as the longest side has voxels (10 here), or half as many for the
+    /// jitter (which runs at twice the frequency), still move and jitter every sweep:
+    /// sampled on the lattice, gradient noise would be 0 at every voxel.
+    #[test]
+    fn noise_at_the_voxels_own_frequency_moves_and_jitters() {
+        let plain_volume = sweep(&rows(), &plain(8), 1).unwrap();
+        let moved = Sweep { noise: Some(Noise { amplitude: 2.0, frequency: 10.0, jitter: 0.0 }), ..plain(8) };
+        assert_ne!(sweep(&rows(), &moved, 1).unwrap().data(), plain_volume.data());
+        let jittered = Sweep { noise: Some(Noise { amplitude: 0.0, frequency: 5.0, jitter: 0.2 }), ..plain(8) };
+        assert_ne!(sweep(&rows(), &jittered, 1).unwrap().data(), plain_volume.data());
+        let still = Sweep { noise: Some(Noise { amplitude: 2.0, frequency: 0.0, jitter: 0.0 }), ..plain(8) };
+        let e = sweep(&rows(), &still, 1).unwrap_err().to_string();
+        assert!(e.contains("noise frequency 0") && e.contains("above 0"), "{e}");
     }
 
     #[test]

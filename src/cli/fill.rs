@@ -445,9 +445,9 @@ pub(super) fn within_models(flag: &str, scale: f32, loaded: &[Loaded]) -> Result
     let size = lo.distance(hi);
     if scale.abs() > size {
         return Err(Error::usage(format!(
-            "{flag} {scale} moves the surface up to {:.3} model units, more than the models' size ({size:.3}, the \
-             diagonal of their box); allowed: -{size:.3} to {size:.3} (a relief is a few hundredths of it, e.g. 0.08)",
-            scale.abs() * 0.5
+            "{flag} {scale} is larger than the models' size ({size:.3}, the diagonal of their box); allowed: -{size:.3} \
+             to {size:.3} (a scale moves the surface up to half its value; a relief is a few hundredths of the size, \
+             e.g. 0.08)"
         )));
     }
     Ok(())
@@ -592,9 +592,12 @@ fn carried_channels(list: &str, shared: &[Channel]) -> Result<Vec<Channel>> {
         let c = shared.iter().find(|c| c.name() == name).ok_or_else(|| {
             let allowed: Vec<&str> = shared.iter().map(Channel::name).collect();
             let allowed = if allowed.is_empty() { "none".to_string() } else { allowed.join(", ") + " or none" };
-            usage(Error::invalid(format!(
-                "--carry {name}: not a channel every exemplar the models use has; allowed: {allowed}"
-            )))
+            let why = if ["R", "G", "B", "A"].contains(&name) {
+                "R, G, B and A are always baked; --carry adds other channels"
+            } else {
+                "not a channel every exemplar the models use has"
+            };
+            usage(Error::invalid(format!("--carry {name}: {why}; allowed: {allowed}")))
         })?;
         if !out.contains(c) {
             out.push(c.clone());
@@ -877,6 +880,18 @@ pub fn run_render(args: &RenderArgs) -> Result<()> {
         rendering.slices,
         size = args.size
     );
+    if rendering.opacity.iter().all(|o| *o < 0.5 / 255.0) {
+        let reason = if args.opacity == 0.0 {
+            "--opacity 0 makes them clear"
+        } else if args.cutaway.is_some() {
+            "the cut-away keeps no part of them in view"
+        } else if settings.levels != (0.0, 1.0) {
+            "--levels leave none of their material dense"
+        } else {
+            "their material lets all the light through"
+        };
+        tell!("warning: the picture shows the background alone: {reason}");
+    }
     Ok(())
 }
 

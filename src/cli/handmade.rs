@@ -74,6 +74,11 @@ pub fn sweep_params(args: &SweepArgs) -> Result<Sweep> {
 fn sweep_values(args: &SweepArgs) -> Result<(Axis, Option<Axis>, Option<sweep::Noise>)> {
     let axis: Axis = args.axis.parse()?;
     let depth_axis = args.depth_axis.as_deref().map(str::parse::<Axis>).transpose()?;
+    if depth_axis == Some(axis) {
+        return Err(Error::invalid(format!(
+            "--depth-axis {axis} is the sweep's --axis; depth must run along one of the cross-section's axes"
+        )));
+    }
     parse::within("--length", args.length, 1, MAX_LENGTH)?;
     parse::within("--skin-width", args.skin_width, SKIN_WIDTH.0, SKIN_WIDTH.1)?;
     parse::within("--skin-noise", args.skin_noise, SKIN_WIDTH.0, SKIN_WIDTH.1)?;
@@ -99,6 +104,9 @@ pub fn run_sweep(args: &SweepArgs) -> Result<()> {
     let image = io::read_image(&args.image)?;
     if let (Some(skin), Some(path)) = (&params.skin, skin_file) {
         sweep::check_skin(&image, skin).map_err(|e| e.in_file(path))?;
+    }
+    if let (Some(relief), Some(path)) = (&params.displacement, args.displacement.as_deref()) {
+        sweep::check_relief(&image, relief).map_err(|e| e.in_file(path))?;
     }
     let (dims, channels) = sweep::swept_shape(&image, &params);
     crate::volume::check_size(dims, channels.len(), io::budget_from_env()?)?;

@@ -1,6 +1,7 @@
 //! `solidtex web`: volumes, filled models or a skin as one self-contained HTML page with an
 //! interactive 3D view (see docs/viewer.md).
 
+use super::commands::usage;
 use super::fill::{Loaded, load_models};
 use crate::error::{Error, Result};
 use crate::fill::LstModel;
@@ -11,6 +12,9 @@ use crate::volume::Volume;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+/// Largest page for filled models when `--max-mb` is not given, in megabytes.
+const MAX_MB: usize = 8;
+
 /// The arguments of `solidtex web`.
 #[derive(Debug, clap::Args)]
 pub struct WebArgs {
@@ -20,12 +24,13 @@ pub struct WebArgs {
     #[arg(required = true)]
     pub inputs: Vec<PathBuf>,
     /// Voxels along the longest side of the 3D texture baked from filled models, 16 to 256
-    /// (lowered until the page fits --max-mb).
-    #[arg(long, default_value_t = web::FILL_RES)]
-    pub res: usize,
-    /// Largest page for filled models, in megabytes (1 to 64).
-    #[arg(long, default_value_t = 8)]
-    pub max_mb: usize,
+    /// (lowered until the page fits --max-mb) [default: 128]. Only for filled models.
+    #[arg(long)]
+    pub res: Option<usize>,
+    /// Largest page for filled models, in megabytes (1 to 64) [default: 8]. Only for filled
+    /// models.
+    #[arg(long)]
+    pub max_mb: Option<usize>,
     /// The page's title (default: the inputs' names).
     #[arg(long)]
     pub title: Option<String>,
@@ -43,16 +48,25 @@ enum Kind {
 
 /// Run `solidtex web`.
 pub fn run(args: &WebArgs) -> Result<()> {
-    io::values::within("--res", args.res, 16, MAX_SIDE).map_err(super::commands::usage)?;
-    io::values::within("--max-mb", args.max_mb, 1, 64).map_err(super::commands::usage)?;
+    let res = io::values::within("--res", args.res.unwrap_or(web::FILL_RES), 16, MAX_SIDE).map_err(usage)?;
+    let max_mb = io::values::within("--max-mb", args.max_mb.unwrap_or(MAX_MB), 1, 64).map_err(usage)?;
     let inputs: Vec<&Path> = args.inputs.iter().map(PathBuf::as_path).collect();
+    let kind = kind(&inputs)?;
+    if let (Kind::Volumes | Kind::Skin, Some(flag)) =
+        (&kind, [("--res", args.res), ("--max-mb", args.max_mb)].into_iter().find_map(|(f, v)| v.map(|_| f)))
+    {
+        return Err(Error::usage(format!(
+            "{flag} sets the bake of filled models (.lst); volumes and skins are shown as they are (up to \
+             {MAX_SIDE} voxels per side)"
+        )));
+    }
     super::guided::not_taken_by("web", &inputs, " and open the volume: `solidtex web solid.exr -o page.html`")?;
     io::guard::file_output(&args.output, &inputs, &["html", "htm"], "an HTML page")?;
     let title = args.title.clone().unwrap_or_else(|| names(&inputs).join(", "));
     let started = Instant::now();
-    let (page, what) = match kind(&inputs)? {
+    let (page, what) = match kind {
         Kind::Volumes => volumes(&inputs, &title)?,
-        Kind::Models => models(args, &title)?,
+        Kind::Models => models(args, &title, res, max_mb)?,
         Kind::Skin => skin(inputs[0], &title)?,
     };
     io::write_bytes(&args.output, page.as_bytes())?;
@@ -125,10 +139,9 @@ fn volumes(inputs: &[&Path], title: &str) -> Result<(String, String)> {
 }
 
 /// Filled models: baked at `--res`, lowered until the page fits `--max-mb`.
-fn models(args: &WebArgs, title: &str) -> Result<(String, String)> {
+fn models(args: &WebArgs, title: &str, mut res: usize, max_mb: usize) -> Result<(String, String)> {
     let loaded = load_models(&args.inputs, &args.output)?;
-    let cap = args.max_mb * 1_000_000;
-    let mut res = args.res;
+    let cap = max_mb * 1_000_000;
     loop {
         let (page, dims) = models_at(&loaded, &args.inputs, title, res)?;
         if page.len() <= cap {

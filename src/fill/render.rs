@@ -605,6 +605,14 @@ pub fn bake_grid(models: &[(&LstModel, &Textures)], res: usize) -> (Vec3, f32) {
     (lo, (hi - lo).max_element() / res as f32)
 }
 
+/// Voxels along each axis of a box of `extent` with `res` along its longest side: exactly
+/// `res` there (the extent over one voxel's side can round just past it), enough to cover
+/// each other side.
+fn bake_dims(extent: Vec3, res: usize) -> [usize; 3] {
+    let longest = (extent.max_element() as f64).max(f64::MIN_POSITIVE);
+    extent.to_array().map(|e| ((e as f64 / longest * res as f64) * (1.0 - 1e-6)).ceil().clamp(1.0, res as f64) as usize)
+}
+
 /// Samples models into a volume of `res` voxels along the longest side of their box: R, G,
 /// B, then the `carried` channels, then A (1 inside; every channel 0 outside); a stack of
 /// axis-aligned cuts. The volume records its place in model space (voxel (0, 0, 0)'s
@@ -622,8 +630,7 @@ pub fn bake(models: &[(&LstModel, &Textures)], carried: &[Carried], res: usize, 
         )));
     }
     let (lo, step) = bake_grid(models, res);
-    let hi = bounds(models).1;
-    let dims = ((hi - lo) / step).ceil().as_uvec3().max(glam::UVec3::ONE).to_array().map(|d| d as usize);
+    let dims = bake_dims(bounds(models).1 - lo, res);
     let channels: Vec<Channel> = [Channel::R, Channel::G, Channel::B]
         .into_iter()
         .chain(carried.iter().map(|c| c.channel.clone()))
@@ -665,6 +672,22 @@ pub fn bake(models: &[(&LstModel, &Textures)], carried: &[Carried], res: usize, 
 
 #[cfg(test)]
 mod tests {
+
+    /// `--res N` gives N voxels along the longest side whatever the box (one voxel's side
+    /// times N rounds past the box for many), and the other sides cover the box.
+    #[test]
+    fn a_bake_has_res_voxels_along_its_longest_side() {
+        for extent in [Vec3::new(2.0654, 1.3326, 1.3326), Vec3::new(0.731, 2.449, 0.9), Vec3::new(1.0, 1.0, 1.0)] {
+            for res in 2..=512 {
+                let dims = bake_dims(extent, res);
+                let step = extent.max_element() / res as f32;
+                assert_eq!(*dims.iter().max().unwrap(), res, "{extent} at {res}: {dims:?}");
+                for a in 0..3 {
+                    assert!(dims[a] as f32 * step >= extent[a] * (1.0 - 1e-5), "{extent} at {res}: {dims:?}");
+                }
+            }
+        }
+    }
     use super::*;
 
     /// A 32x32 cut of a gentle ramp (a step of 0.01 between neighbours), two patches split

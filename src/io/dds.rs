@@ -121,7 +121,12 @@ fn parse(bytes: &[u8], budget: u64) -> Result<Volume> {
             )));
         }
     };
-    let dims = [dds.get_width(), dds.get_height(), dds.get_depth().max(1)].map(|d| d as usize);
+    if dds.header.depth == Some(0) {
+        return Err(Error::invalid(
+            "the header marks a volume (its depth flag is set) of depth 0; a volume has at least 1 slice",
+        ));
+    }
+    let dims = [dds.get_width(), dds.get_height(), dds.get_depth()].map(|d| d as usize);
     let sample = match format {
         DdsFormat::Rgba8 => 1,
         DdsFormat::Rgba16F => 2,
@@ -207,5 +212,15 @@ mod tests {
         for cut in 0..148 {
             assert!(parse(&bytes[..cut], u64::MAX).is_err());
         }
+    }
+
+    /// A depth of 0 with the depth flag set is refused, not read as one slice of the data.
+    #[test]
+    fn a_volume_header_of_depth_zero_is_refused() {
+        let mut bytes = to_bytes(&sample(), DdsFormat::Rgba8).unwrap();
+        // the depth field: after the magic, the header's size, flags, height and width
+        bytes[24..28].copy_from_slice(&0u32.to_le_bytes());
+        let err = parse(&bytes, u64::MAX).unwrap_err().to_string();
+        assert!(err.contains("depth 0"), "{err}");
     }
 }

@@ -823,11 +823,13 @@ fn sweep_spec(raw: &RawExemplar, folder: &Path) -> Result<SweepSpec> {
 /// Sweep noise with each part in its range; `label` names the option or field.
 pub fn noise(label: &str, amplitude: f32, frequency: f32, jitter: f32) -> Result<Noise> {
     use crate::sweep::{AMPLITUDE, FREQUENCY, JITTER};
-    Ok(Noise {
+    let noise = Noise {
         amplitude: values::within(&format!("{label} amplitude"), amplitude, AMPLITUDE.0, AMPLITUDE.1)?,
         frequency: values::within(&format!("{label} frequency"), frequency, FREQUENCY.0, FREQUENCY.1)?,
         jitter: values::within(&format!("{label} jitter"), jitter, JITTER.0, JITTER.1)?,
-    })
+    };
+    crate::sweep::check_frequency(label, &noise)?;
+    Ok(noise)
 }
 
 fn synth_spec(raw: &RawExemplar, folder: &Path) -> Result<SynthSpec> {

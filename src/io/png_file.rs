@@ -200,10 +200,21 @@ pub fn read_stack(path: &Path, budget: u64) -> Result<Volume> {
     };
     let channels = channels_for(described.channels, first.channels, &files[0])?;
     let dims = [first.width, first.height, files.len()];
+    if let Some(named) = described.dims.filter(|d| *d != dims) {
+        return Err(Error::file(
+            path,
+            format!(
+                "its slices say the volume is {}x{}x{}, but the folder holds {} slice(s) of {}x{}: a slice is missing or \
+                 a file was added",
+                named[0], named[1], named[2], dims[2], dims[0], dims[1]
+            ),
+        ));
+    }
     crate::volume::check_size(dims, channels.len(), budget).map_err(|e| e.in_file(path))?;
     let mut data = Vec::with_capacity(dims.iter().product::<usize>() * channels.len());
-    for file in &files {
-        let slice = if file == &files[0] { first_samples(&first) } else { decode(file, budget)? };
+    for (z, file) in files.iter().enumerate() {
+        let slice = if z == 0 { first_samples(&first) } else { decode(file, budget)? };
+        check_slice_index(file, if z == 0 { &first.text } else { &slice.text }, z)?;
         if (slice.width, slice.height, slice.channels) != (first.width, first.height, first.channels) {
             return Err(Error::file(
                 file,
@@ -216,6 +227,22 @@ pub fn read_stack(path: &Path, budget: u64) -> Result<Volume> {
         data.extend_from_slice(&slice.samples);
     }
     Ok(Volume::from_data(dims, channels, data)?.with_meta(described.meta).with_model_grid(described.model_grid))
+}
+
+/// A slice solidtex wrote names its own index: it must be the file's place in name order.
+fn check_slice_index(file: &Path, text: &Option<String>, z: usize) -> Result<()> {
+    let lines = text.as_deref().map(fields::from_lines).unwrap_or_default();
+    match lines.iter().find(|(key, _)| key == "slice") {
+        Some((_, index)) if index.trim() != z.to_string() => Err(Error::file(
+            file,
+            format!(
+                "this slice says it is slice {}, but it is slice {z} in name order: a slice before it is missing or a \
+                 file was added",
+                index.trim()
+            ),
+        )),
+        _ => Ok(()),
+    }
 }
 
 fn first_samples(first: &Decoded) -> Decoded {

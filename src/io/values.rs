@@ -92,7 +92,7 @@ pub fn rotation(option: &str, text: &str) -> Result<Quat> {
     within(&format!("{option} angle"), v[3], -360.0, 360.0)?;
     let axis = Vec3::new(v[0], v[1], v[2]);
     let axis =
-        axis.try_normalize().ok_or_else(|| Error::invalid(format!("{option} {text:?}: the axis has zero length")))?;
+        axis.try_normalize().ok_or_else(|| Error::invalid(format!("{option} {text:?}: the axis is too short to give a direction (zero, or under about 1e-19 in every component)")))?;
     Ok(Quat::from_axis_angle(axis, v[3].to_radians()))
 }
 

@@ -462,6 +462,7 @@ fn a_translucent_render_shows_the_seeds_inside_the_kiwi() {
     // the exemplars have no density channel: uniform, and the message says why
     let (plain, said) = render("plain.png", &[]);
     assert!(said.contains("density uniform") && said.contains("Density or A"), "{said}");
+    assert!(!said.contains("background alone"), "{said}");
     let img = image::open(&plain).unwrap().to_rgb8();
     let centre = img.get_pixel(64, 64).0;
     assert!(centre[1] > centre[0] && centre[1] > centre[2], "green flesh seen through: {centre:?}");
@@ -471,8 +472,13 @@ fn a_translucent_render_shows_the_seeds_inside_the_kiwi() {
     let (seeds, _) = render("seeds.png", &[&light[..], &["--levels", "0.7,0.85"]].concat());
     let specks = darker_than(&seeds, 200);
     assert!(specks > 100, "seeds seen through the fruit: {specks} dark pixels");
-    let (none, _) = render("none.png", &[&light[..], &["--levels", "0.97,1"]].concat());
+    let (none, said) = render("none.png", &[&light[..], &["--levels", "0.97,1"]].concat());
     assert_eq!(darker_than(&none, 200), 0, "nothing is that dense");
+    assert!(said.contains("background alone: --levels leave none"), "{said}");
+    let (clear, said) = render("clear.png", &["--opacity", "0"]);
+    assert!(said.contains("background alone: --opacity 0"), "{said}");
+    assert_eq!(pixel(&clear, 64, 64), pixel(&clear, 1, 1), "a clear fruit shows the background");
+
     // cut away the half toward the camera (looking down -z): the pale core shows on the face
     let (cut, _) = render("cut.png", &["--yaw", "0", "--pitch", "0", "--opacity", "0.95", "--cutaway", "0,0,0,0,0,1"]);
     let core = pixel(&cut, 64, 64);
@@ -610,7 +616,10 @@ fn displacement_mapping_raises_the_bark_into_furrows() {
     let bad = at(d, "bad.png");
     let run = solidtex(&["view", &at(d, "kiwi.lst"), "--displacement", "0.1", "-o", &bad]);
     assert_fails(&run, &["kiwi.exr", "Displacement"]);
-    assert_usage(&solidtex(&["view", &model, "--displacement", "5000", "-o", &bad]), &["--displacement"]);
+    assert_usage(
+        &solidtex(&["view", &model, "--displacement", "50", "-o", &bad]),
+        &["--displacement 50 is larger than the models' size", "allowed"],
+    );
     // a stroke cut across the log: its face shows the relief at the rim, only when displaced
     let across = ["cut", &model, "--stroke", "0,-1,1.5;0,1,1.5", "--extrude", "1,0,0", "--keep", "0,0,0.5"];
     let view = ["--yaw", "40", "--pitch", "30", "--size", "160"];

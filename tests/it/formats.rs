@@ -146,6 +146,23 @@ fn png_stack_round_trip_is_within_one_step() {
     assert_eq!(crate::support::listing(&folder), names);
 }
 
+/// A stack solidtex wrote knows its depth and each slice its index: a slice taken away or
+/// a file added is refused, naming what is wrong, not read as a thinner or thicker volume.
+#[test]
+fn a_png_stack_missing_a_slice_or_holding_an_extra_one_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let v = with_meta(random_volume([6, 5, 4], Channel::rgb(), 41));
+    let folder = dir.path().join("slices");
+    write_volume(&folder, &v).unwrap();
+    std::fs::copy(folder.join("z0001.png"), folder.join("z0099.png")).unwrap();
+    let e = read_volume(&folder, BUDGET).unwrap_err().to_string();
+    assert!(e.contains("6x5x4") && e.contains("5 slice(s)") && e.contains("a file was added"), "{e}");
+    std::fs::remove_file(folder.join("z0099.png")).unwrap();
+    std::fs::rename(folder.join("z0001.png"), folder.join("z0009.png")).unwrap();
+    let e = read_volume(&folder, BUDGET).unwrap_err().to_string();
+    assert!(e.contains("z0002.png") && e.contains("says it is slice 2") && e.contains("slice 1 in name order"), "{e}");
+}
+
 #[test]
 fn a_foreign_png_stack_reads_with_default_roles() {
     let dir = tempfile::tempdir().unwrap();

@@ -178,7 +178,10 @@ fn hand_made_bad_input_is_refused() {
     assert!(solidtex(&["draw", "seed", "-o", &seed]).status.success());
     let out = at(dir.path(), "out.exr");
     assert_usage(&solidtex(&["sweep", &section, "--length", "0", "-o", &out]), &["length 0"]);
-    assert_fails(&solidtex(&["sweep", &section, "--length", "8", "--depth-axis", "x", "-o", &out]), &["sweep axis"]);
+    assert_usage(
+        &solidtex(&["sweep", &section, "--length", "8", "--depth-axis", "x", "-o", &out]),
+        &["--depth-axis x", "sweep's --axis"],
+    );
     assert_usage(&solidtex(&["sweep", &section, "--length", "8", "--noise", "1", "-o", &out]), &["--noise \"1\""]);
     let vol = at(dir.path(), "v.exr");
     assert!(solidtex(&["sweep", &section, "--length", "8", "-o", &vol]).status.success());

@@ -93,6 +93,10 @@ fn a_volume_page_draws_the_slices_of_solidtex_slice_and_answers_the_mouse() {
     let run = solidtex(&["web", &volume, "-o", &page]);
     assert!(run.status.success(), "{}", stderr(&run));
     assert!(page_size(&page) <= 2_000_000, "a 64³ exemplar's page is {} bytes", page_size(&page));
+    // --res and --max-mb set a bake of filled models: a volume's page refuses them
+    let other = at(d, "other.html");
+    assert_usage(&solidtex(&["web", &volume, "--res", "64", "-o", &other]), &["--res", "filled models"]);
+    assert!(!Path::new(&other).exists());
     let plan = json!({ "snapshots": [[0, 0], [0, 40], [1, 63], [2, 17]], "drag": 2, "fps": 20 });
     let Some(report) = opened(&page, plan) else { return };
     snapshots_match(&report, &volume, d);
