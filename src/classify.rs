@@ -70,11 +70,21 @@ pub struct Classification {
     pub nearest: Vec<Nearest>,
     /// Gradient energy over variance, per axis x, y, z.
     pub gradient_energy: [f64; 3],
-    /// Within-slice variance share, per axis x, y, z.
+    /// Within-slice variance share, per axis x, y, z (`within_slice_share` in JSON).
+    #[serde(rename = "within_slice_share")]
     pub layering: [f64; 3],
+    /// The share of the variance the slices' means hold, per axis x, y, z: one minus
+    /// [`Classification::layering`], the figure a depth axis is read from.
+    pub slice_means_share: [f64; 3],
     /// Per axis x, y, z, the variogram at [`LAGS`]: within the depth axis' slices for the
-    /// two axes in them when there is a depth axis, else over the whole volume.
+    /// two axes in them when there is a depth axis, else over the whole volume. A lag
+    /// longer than a quarter of its axis is not measured and repeats the last one measured.
+    #[serde(skip)]
     pub variogram: Variograms,
+    /// [`Classification::variogram`] without the lags not measured: what `classify` prints,
+    /// and its JSON's `variogram` (null where not measured).
+    #[serde(rename = "variogram")]
+    pub variogram_measured: [[Option<f64>; LAGS.len()]; 3],
     /// Anything a reader should know (constant volume, clamping).
     pub notes: Vec<String>,
 }
@@ -113,7 +123,10 @@ pub fn classify(volume: &Volume) -> Result<Classification> {
     let layered = Layered::of(layering, volume.depth_axis());
     let whole = variograms(&lum, d);
     let sliced = layered.axes().first().map(|&k| (k, in_slices(&lum, d, k)));
-    Ok(decide(energy, layering, &layered, whole, sliced))
+    let mut out = decide(energy, layering, &layered, whole, sliced);
+    out.variogram_measured =
+        std::array::from_fn(|k| std::array::from_fn(|l| measured(l, d[k]).then_some(out.variogram[k][l])));
+    Ok(out)
 }
 
 fn constant() -> Classification {
@@ -127,7 +140,9 @@ fn constant() -> Classification {
         nearest: vec![Nearest { texture_type: TextureType::T0, score: 1.0 }],
         gradient_energy: [0.0; 3],
         layering: [1.0; 3],
+        slice_means_share: [0.0; 3],
         variogram: [[0.0; LAGS.len()]; 3],
+        variogram_measured: [[None; LAGS.len()]; 3],
         notes: vec!["the volume is constant: every cut looks the same, so it is type 0".to_string()],
     }
 }
@@ -220,7 +235,9 @@ fn decide(
         nearest,
         gradient_energy: energy,
         layering,
+        slice_means_share: layering.map(|w| 1.0 - w),
         variogram: sliced.map_or(whole, |(_, v)| v),
+        variogram_measured: [[None; LAGS.len()]; 3],
         notes,
     }
 }
@@ -362,12 +379,18 @@ fn scores(layered: &Layered, grouping: &Grouping, around: Option<&Around>) -> Ve
 /// (not wrapping), over their variance: near 0 where the pattern runs on along the axis,
 /// near 1 where it has changed. A lag longer than half the side is left at the last
 /// measured one.
+/// Whether lag `LAGS[l]` is measured along an axis of `side` voxels: the first always, the
+/// others up to a quarter of the side.
+fn measured(l: usize, side: usize) -> bool {
+    l == 0 || LAGS[l] * 4 <= side
+}
+
 fn variograms(values: &[f64], d: [usize; 3]) -> Variograms {
     let var = variance(values).max(1e-12);
     std::array::from_fn(|k| {
         let mut out = [0.0; LAGS.len()];
         for (l, &h) in LAGS.iter().enumerate() {
-            out[l] = if h * 4 <= d[k] || l == 0 { lagged(values, d, k, h) / (2.0 * var) } else { out[l - 1] };
+            out[l] = if measured(l, d[k]) { lagged(values, d, k, h) / (2.0 * var) } else { out[l - 1] };
         }
         out
     })
@@ -426,7 +449,7 @@ fn in_slices(values: &[f64], d: [usize; 3], depth: usize) -> Variograms {
     let floor = 1e-6 * slice_var.iter().sum::<f64>() / d[depth] as f64;
     for k in (0..3).filter(|k| *k != depth) {
         for (l, &h) in LAGS.iter().enumerate() {
-            if h * 4 > d[k] && l > 0 {
+            if !measured(l, d[k]) {
                 out[k][l] = out[k][l - 1];
                 continue;
             }

@@ -24,6 +24,9 @@ use serde::Serialize;
 
 /// Neighbourhood side of the measurements.
 pub const N: usize = 8;
+/// The least exemplar side `quality` measures: the slice energy's neighbourhoods and a pixel
+/// of margin each side (the sharpness and line figures need less).
+pub const LEAST_EXEMPLAR: usize = N + 2;
 /// The smallest cut, in voxels each way, the per-axis figures are measured on: the slice
 /// energy's N x N neighbourhood (on a smaller cut it wraps onto itself), which also holds
 /// the line measures' 5x5 element and the gradients' 3x3 stencil.
@@ -317,13 +320,11 @@ struct Measure<'a> {
 
 impl<'a> Measure<'a> {
     fn new(image: &Image2d, volume: &Volume, picks: &'a [usize], clamp_z: bool) -> Result<Measure<'a>> {
-        if image.width() < N + 2 || image.height() < N + 2 {
+        if image.width() < LEAST_EXEMPLAR || image.height() < LEAST_EXEMPLAR {
             return Err(Error::invalid(format!(
-                "the exemplar is {}x{}; measuring needs at least {}x{}",
+                "the exemplar is {}x{}; measuring needs at least {LEAST_EXEMPLAR}x{LEAST_EXEMPLAR}",
                 image.width(),
-                image.height(),
-                N + 2,
-                N + 2
+                image.height()
             )));
         }
         let weights = vec![1.0; image.channel_count()];
@@ -516,23 +517,18 @@ fn layered_quality(volume: &Volume, best: &[Vec<(usize, u32)>; 3]) -> Result<Lay
         .channel_index(&Channel::Depth)
         .ok_or_else(|| Error::invalid("a layered volume needs a Depth channel"))?;
     let [dx, dy, dz] = volume.dims();
-    let mut error = 0.0;
-    let mut means = Vec::with_capacity(dz);
-    for z in 0..dz {
-        let ideal = if dz > 1 { z as f64 / (dz - 1) as f64 } else { 0.5 };
-        let mut sum = 0.0;
-        for y in 0..dy {
-            for x in 0..dx {
-                let d = volume.get(x, y, z, depth) as f64;
-                sum += d;
-                error += (d - ideal).abs();
-            }
-        }
-        means.push(sum / (dx * dy) as f64);
-    }
+    let means: Vec<f64> = (0..dz)
+        .map(|z| {
+            let sum: f64 = (0..dy)
+                .flat_map(|y| (0..dx).map(move |x| (x, y)))
+                .map(|(x, y)| volume.get(x, y, z, depth) as f64)
+                .sum();
+            sum / (dx * dy) as f64
+        })
+        .collect();
     let same = best[0].iter().zip(&best[1]).filter(|(a, b)| a.1 == b.1).count();
     Ok(LayeredQuality {
-        depth_error: error / volume.voxel_count() as f64,
+        depth_error: crate::synth::depth_error(volume).unwrap_or(0.0),
         depth_monotonic: means.windows(2).all(|w| w[1] >= w[0]),
         depth_largest_drop: means.windows(2).map(|w| w[0] - w[1]).fold(0.0, f64::max),
         sweeping_index: same as f64 / best[0].len().max(1) as f64,

@@ -53,11 +53,12 @@ pub fn run(args: &QualityArgs) -> Result<()> {
     others.check_channels((exemplar, &ex), (ey.as_ref(), ez.as_ref()))?;
     let given = [(exemplar.as_path(), Some(&ex)), (others.ey.as_deref().unwrap_or(exemplar), ey.as_ref())];
     for (path, image) in given.into_iter().chain([(others.ez.as_deref().unwrap_or(exemplar), ez.as_ref())]) {
-        if let Some(image) = image.filter(|i| i.width() < 3 || i.height() < 3) {
+        let least = crate::quality::LEAST_EXEMPLAR;
+        if let Some(image) = image.filter(|i| i.width() < least || i.height() < least) {
             return Err(crate::Error::file(
                 path,
                 format!(
-                    "is {}x{} pixels (as loaded); measuring sharpness needs an exemplar of at least 3x3 pixels",
+                    "is {}x{} pixels (as loaded); measuring needs an exemplar of at least {least}x{least} pixels",
                     image.width(),
                     image.height()
                 ),

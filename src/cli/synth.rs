@@ -194,6 +194,10 @@ impl Progress for Bar {
             });
         }
     }
+
+    fn warn(&self, message: &str) {
+        self.bar.suspend(|| tell!("warning: {message}"));
+    }
 }
 
 /// Check every number of `solidtex synth` against its range (usage errors).
@@ -214,10 +218,34 @@ fn check_values(args: &SynthArgs) -> Result<[usize; 3]> {
         within("--pca-dims", args.pca_dims, SynthParams::PCA_DIMS.0, SynthParams::PCA_DIMS.1)?;
         within("--pca-variance", args.pca_variance, SynthParams::PCA_VARIANCE.0, SynthParams::PCA_VARIANCE.1)?;
         within("--depth-weight", args.depth_weight, LayeredParams::DEPTH_WEIGHT.0, LayeredParams::DEPTH_WEIGHT.1)?;
-        Ok(())
+        options_agree(args)
     };
     checks().map_err(usage)?;
     Ok(size)
+}
+
+/// Options that belong together: `--ey`/`--ez` give a homogeneous solid's other
+/// cross-sections (a layered solid is made from its one exemplar), and `--start`,
+/// `--no-anti-sweeping` and `--depth-weight` belong to the blend core.
+fn options_agree(args: &SynthArgs) -> Result<()> {
+    let given = |name: &'static str, on: bool| on.then_some(name);
+    if args.layered
+        && let Some(flag) = given("--ey", args.others.ey.is_some()).or(given("--ez", args.others.ez.is_some()))
+    {
+        return Err(Error::invalid(format!(
+            "{flag} gives a homogeneous solid's other cross-section; --layered makes the solid from its one exemplar, \
+             whose rows are the layers"
+        )));
+    }
+    let blend_only = given("--start", args.start.is_some())
+        .or(given("--no-anti-sweeping", args.no_anti_sweeping))
+        .or(given("--depth-weight", args.depth_weight != 1.0));
+    if let (Some("coordinates"), Some(flag)) = (args.core.as_deref(), blend_only) {
+        return Err(Error::invalid(format!(
+            "{flag} belongs to the blend core; --core coordinates cannot take it (leave out --core or give --core blend)"
+        )));
+    }
+    Ok(())
 }
 
 /// The core `args` ask for: named, or by default the coordinate core for a layered solid

@@ -21,7 +21,7 @@ pub fn classify(file: &Path, json: bool) -> Result<()> {
         let [a, b] = [&c.nearest[0], &c.nearest[1]].map(|n| format!("{} ({:.2})", n.texture_type, n.score));
         say!("  nearest     {a}, {b}: the measurements sit near a threshold; look at the cuts");
     }
-    let [lx, ly, lz] = c.layering.map(|w| 1.0 - w);
+    let [lx, ly, lz] = c.slice_means_share;
     say!(
         "  slice means' share of the variance  x {lx:.3}  y {ly:.3}  z {lz:.3}   (a depth axis: >= {} and {}x the others)",
         crate::classify::MIN_BETWEEN,
@@ -30,8 +30,8 @@ pub fn classify(file: &Path, json: bool) -> Result<()> {
     let lags = crate::classify::LAGS.map(|l| l.to_string()).join(", ");
     let within = if c.depth_axis.is_some() { ", within the depth slices" } else { "" };
     say!("  variogram at lags {lags}{within}   (axes alike within a factor 1.8 at every lag)");
-    for (axis, v) in ["x", "y", "z"].iter().zip(&c.variogram) {
-        say!("    {axis}  {}", v.map(|g| format!("{g:.3}")).join("  "));
+    for (axis, v) in ["x", "y", "z"].iter().zip(&c.variogram_measured) {
+        say!("    {axis}  {}", v.map(|g| g.map_or_else(|| "    -".to_string(), |g| format!("{g:.3}"))).join("  "));
     }
     if let Some(declared) = volume.meta.texture_type.filter(|d| *d != t) {
         say!("  note        the file declares type {declared}");

@@ -508,6 +508,8 @@ pub enum Takers {
     Synth,
     /// `synth-layered` only.
     Layered,
+    /// `synth` only (a homogeneous solid's other cross-sections).
+    Homogeneous,
     /// `sweep` only.
     Sweep,
     /// `load` only.
@@ -524,6 +526,7 @@ impl Takers {
             Takers::All => true,
             Takers::Synth => synth,
             Takers::Layered => recipe == "synth-layered",
+            Takers::Homogeneous => recipe == "synth",
             Takers::Sweep => recipe == "sweep",
             Takers::Load => recipe == "load",
             Takers::Sized => synth || recipe.starts_with("procedural:"),
@@ -577,8 +580,8 @@ pub fn field_rules() -> Vec<FieldRule> {
         rule("image", Takers::Sweep, true, image.clone(), "\"\""),
         rule("levels", Takers::Synth, false, format!("{} to {}", levels.0, levels.1), "3"),
         rule("max_exemplar", Takers::Synth, false, format!("{} to {} pixels", side.0, side.1), "128"),
-        rule("ey", Takers::Synth, false, format!("{image} (the cut across y)"), "\"\""),
-        rule("ez", Takers::Synth, false, format!("{image} (the cut across z)"), "\"\""),
+        rule("ey", Takers::Homogeneous, false, format!("{image} (the cut across y)"), "\"\""),
+        rule("ez", Takers::Homogeneous, false, format!("{image} (the cut across z)"), "\"\""),
         rule("depth_image", Takers::Layered, false, format!("{image}, grey: each pixel's depth"), "\"\""),
         rule("length", Takers::Sweep, true, format!("1 to {MAX_SIDE} voxels along the axis"), "64"),
         rule("axis", Takers::Sweep, true, axis.clone(), "\"z\""),
@@ -701,8 +704,10 @@ fn validate(raw: RawExemplar, folder: &Path) -> Result<Entry> {
         other => match other.strip_prefix("procedural:") {
             Some(r) => Source::Procedural(r.parse::<Recipe>().map_err(|e| Error::invalid(format!("recipe: {e}")))?),
             None => {
+                let procedural: Vec<String> = Recipe::ALL.iter().map(|r| format!("procedural:{}", r.name())).collect();
                 return Err(Error::invalid(format!(
-                    "recipe = {other:?} is unknown; allowed: procedural:marble, procedural:strata, procedural:wood, sweep, synth, synth-layered, load"
+                    "recipe = {other:?} is unknown; allowed: {}, sweep, synth, synth-layered, load",
+                    procedural.join(", ")
                 )));
             }
         },
@@ -795,6 +800,14 @@ fn sweep_spec(raw: &RawExemplar, folder: &Path) -> Result<SweepSpec> {
         .map(str::parse::<Axis>)
         .transpose()
         .map_err(|e| Error::invalid(format!("depth_axis: {e}")))?;
+    if depth_axis == Some(axis) {
+        return Err(Error::invalid(format!(
+            "depth_axis = \"{axis}\" is the sweep's axis; depth must run along one of the cross-section's axes"
+        )));
+    }
+    if raw.skin.is_some() && depth_axis.is_none() {
+        return Err(Error::invalid("skin needs depth_axis: a skin covers the face where depth is 0"));
+    }
     let noise = match raw.noise.as_deref() {
         None => None,
         Some([a, f]) => Some(noise("noise", *a, *f, 0.0)?),

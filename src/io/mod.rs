@@ -465,13 +465,25 @@ fn refuse_volume(path: &Path, bytes: &[u8]) -> Result<()> {
         [0x89, b'P', b'N', b'G', ..] => png_file::volume_dims(bytes),
         _ => None,
     };
+    let kind = if bytes.starts_with(&[0x76, 0x2f, 0x31, 0x01]) { "exr" } else { "png" };
+    let named = path.extension().is_some_and(|e| e.eq_ignore_ascii_case(kind));
+    let slice = |file: &str| format!("`solidtex slice {file} --axis z -o slice.png`");
+    let advice = if named {
+        format!("give one of its slices instead ({})", slice(&path.display().to_string()))
+    } else {
+        let renamed = path.with_extension(kind);
+        format!(
+            "it is a .{kind} file under another extension: renamed to {}, {} gives one of its slices",
+            renamed.display(),
+            slice(&renamed.display().to_string())
+        )
+    };
     match dims {
         Some([x, y, z]) => Err(Error::file(
             path,
             format!(
                 "this is a solidtex volume ({x}x{y}x{z} voxels, stored as a flipbook of its slices), not a 2D \
-                 image; give one of its slices instead (`solidtex slice {} --axis z -o slice.png`)",
-                path.display()
+                 image; {advice}"
             ),
         )),
         None => Ok(()),

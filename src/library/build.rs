@@ -93,7 +93,10 @@ pub fn select(request: &Request) -> Result<Vec<Entry>> {
         let text = io::read_text(&request.manifest, "manifest")?;
         let (valid, _) = manifest::parse_plan_lenient(&text, folder);
         let mut chosen = Vec::new();
-        for name in &request.only {
+        for (k, name) in request.only.iter().enumerate() {
+            if request.only[..k].contains(name) {
+                continue;
+            }
             match valid.iter().find(|e| &e.name == name) {
                 Some(entry) => {
                     let lines = manifest::Lines { manifest: Some(request.manifest.clone()), ..entry.lines.clone() };
@@ -186,12 +189,16 @@ fn build_holding(
     let folder = manifest_folder(&request.manifest);
     let budget = io::budget_from_env()?;
     let refs: Vec<&Entry> = entries.iter().collect();
+    let written = written_paths(entries, output);
     let mut outcomes: Vec<Outcome> = Vec::new();
     for batch in batches(&refs, budget) {
         let done: Vec<Outcome> = batch
             .par_iter()
             .map(|entry| {
-                let outcome = build_one(entry, folder, (output, &ledger), request.force, observer);
+                let outcome = match reads_no_output(entry, &written) {
+                    Ok(()) => build_one(entry, folder, (output, &ledger), request.force, observer),
+                    Err(e) => Outcome::Failed(entry.name.clone(), e.to_string()),
+                };
                 observer.finished(&outcome);
                 outcome
             })
@@ -285,6 +292,35 @@ fn build_one(entry: &Entry, folder: &Path, output: (&Path, &Ledger), force: bool
         Err(Error::Cancelled) => Outcome::Cancelled(entry.name.clone()),
         Err(e) => Outcome::Failed(entry.name.clone(), e.to_string()),
     }
+}
+
+/// Every path a build of `entries` into `output` writes (files, and the folders of masks and
+/// slice exports), with the entry that writes it.
+fn written_paths<'a>(entries: &'a [Entry], output: &Path) -> Vec<(&'a str, PathBuf)> {
+    entries.iter().flat_map(|e| files::outputs(e).into_iter().map(|f| (e.name.as_str(), output.join(f)))).collect()
+}
+
+/// Refuse an entry that reads a file it writes itself (or one inside a folder it writes): the
+/// build would replace what it reads, and the entry would change on every build. (An entry
+/// may read another entry's volume: its key follows that file, so it is rebuilt when the
+/// other changes.)
+fn reads_no_output(entry: &Entry, written: &[(&str, PathBuf)]) -> Result<()> {
+    let own: Vec<&(&str, PathBuf)> = written.iter().filter(|(writer, _)| *writer == entry.name).collect();
+    for (field, input) in cache::input_files(entry) {
+        let clash = own.iter().find(|(_, out)| {
+            io::guard::same_file(&input, out) || input.parent().is_some_and(|folder| io::guard::same_file(folder, out))
+        });
+        if let Some((writer, out)) = clash {
+            return Err(Error::invalid(format!(
+                "{field} = {:?} is {} this entry writes ({}) as '{writer}'; solidtex never writes over its own inputs: \
+                 read a copy kept outside the output folder",
+                input.display().to_string(),
+                if input.parent().is_some_and(|f| io::guard::same_file(f, out)) { "inside a folder" } else { "a file" },
+                out.display()
+            )));
+        }
+    }
+    Ok(())
 }
 
 /// Run `work`, turning a panic into an error that says what it was.

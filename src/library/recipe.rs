@@ -113,12 +113,25 @@ fn synthesized(spec: &SynthSpec, size: [usize; 3], seed: u64, none: &dyn Progres
         }
         synth::synthesize(synth::Exemplars { x: &ex, y: ey.as_ref(), z: ez.as_ref() }, &params, seed, none)
     };
-    let mut volume = volume.map_err(|e| e.in_file(&spec.image))?;
+    let mut volume = volume.map_err(|e| exemplar_error(spec, lines, e))?;
     if let Some(side) = spec.max_exemplar {
         // `quality` shrinks the photos alike when it is not told otherwise
         volume.meta.set(crate::volume::MAX_EXEMPLAR_KEY, side.to_string());
     }
     Ok(volume)
+}
+
+/// A synthesis error, given the manifest line and field of the exemplar it is about (Ey's or
+/// Ez's when it names one, where Ez defaults to Ey and Ey to the image) and its file.
+fn exemplar_error(spec: &SynthSpec, lines: &Lines, error: Error) -> Error {
+    let ey = spec.ey.as_deref().map(|p| ("ey", p));
+    let (field, path) = match &error {
+        Error::Exemplar { which: 1, .. } => ey,
+        Error::Exemplar { which: 2, .. } => spec.ez.as_deref().map(|p| ("ez", p)).or(ey),
+        _ => None,
+    }
+    .unwrap_or(("image", &spec.image));
+    lines.error(field, error.in_file(path))
 }
 
 /// The at-a-glance quality of a synthesized entry's volume against its photos (read again,

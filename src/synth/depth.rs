@@ -9,6 +9,23 @@ pub fn slice_depth(z: usize, slices: usize) -> f32 {
     if slices > 1 { z as f32 / (slices - 1) as f32 } else { 0.5 }
 }
 
+/// The mean distance of a layered volume's Depth channel from each z-slice's ideal depth
+/// ([`slice_depth`]); `None` without a Depth channel.
+pub fn depth_error(volume: &crate::volume::Volume) -> Option<f64> {
+    let depth = volume.channel_index(&crate::volume::Channel::Depth)?;
+    let [dx, dy, dz] = volume.dims();
+    let mut error = 0.0;
+    for z in 0..dz {
+        let ideal = slice_depth(z, dz) as f64;
+        for y in 0..dy {
+            for x in 0..dx {
+                error += (volume.get(x, y, z, depth) as f64 - ideal).abs();
+            }
+        }
+    }
+    Some(error / volume.voxel_count().max(1) as f64)
+}
+
 /// `(depth, pixel)` pairs sorted by depth, ties by pixel index (so results are deterministic).
 pub fn sorted_by_depth(mut order: Vec<(f32, u32)>) -> Vec<(f32, u32)> {
     order.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));

@@ -290,6 +290,12 @@ fn a_volume_is_not_taken_for_a_photo() {
         assert_fails(&solidtex(&["noise", &volume, "--size", "8", "-o", &at(d, "n.exr")]), &[name, "not a 2D"]);
         assert_eq!(listing(d), before, "{name}: files left behind");
     }
+    // an EXR volume under a .png name: the advice renames it first (a slice of fake.png would
+    // be read as a PNG)
+    std::fs::copy(d.join("v.exr"), d.join("fake.png")).unwrap();
+    let run = solidtex(&["synth", &at(d, "fake.png"), "--size", "8", "--levels", "1", "-o", &at(d, "s.exr")]);
+    assert_fails(&run, &["fake.png", "a .exr file under another extension", "fake.exr --axis z"]);
+    std::fs::remove_file(d.join("fake.png")).unwrap();
     let slice = at(d, "slice.png");
     assert!(solidtex(&["slice", &at(d, "v.exr"), "--axis", "z", "-o", &slice]).status.success());
     assert_eq!(read_image(Path::new(&slice)).unwrap().width(), 8, "a slice reads as a picture");
@@ -338,8 +344,14 @@ fn errors_about_the_other_exemplars_name_their_files() {
     let vol = at(d, "v.exr");
     assert!(solidtex(&["make", "marble", "--size", "16", "-o", &vol]).status.success());
     let run = solidtex(&["quality", &vol, "--exemplar", &thin]);
-    assert_fails(&run, &["at least 3x3 pixels"]);
+    assert_fails(&run, &["at least 10x10 pixels"]);
     starts(&run, &thin);
+    // one least size, said the first time and of the exemplar, whatever the exemplar's size
+    let small = at(d, "small.png");
+    image::RgbImage::from_pixel(5, 5, image::Rgb([90, 60, 30])).save(&small).unwrap();
+    let run = solidtex(&["quality", &vol, "--exemplar", &small]);
+    assert_fails(&run, &["5x5 pixels", "at least 10x10 pixels"]);
+    starts(&run, &small);
     assert!(!d.join("s.exr").exists() && !d.join("n.exr").exists());
 }
 

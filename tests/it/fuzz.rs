@@ -417,7 +417,7 @@ fn manifest_seeds(_: &Path) -> Vec<Files> {
              color = \"#ff8000\"\n\n[[exemplar.steps]]\nscatter = \"seed.obj\"\ncount = 5\n\
              region = \"box:0,0,0,8,8,8\"\nscale = \"1..2\"\ncolor = \"0.1,0.2,0.3\"\nseed = 4\n\n\
              [[exemplar]]\nname = \"grown\"\nrecipe = \"synth-layered\"\nimage = \"a.png\"\n\
-             depth_image = \"d.png\"\ney = \"b.png\"\nsize = 16\nlevels = 2\nmax_exemplar = 64\n\n\
+             depth_image = \"d.png\"\nsize = 16\nlevels = 2\nmax_exemplar = 64\n\n\
              [[exemplar]]\nname = \"loaded\"\nrecipe = \"load\"\nvolume = \"v.exr\"\n",
         ),
     ]

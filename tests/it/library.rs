@@ -76,6 +76,32 @@ fn a_failing_exemplar_does_not_stop_the_others() {
     assert!(stderr(&unknown).contains("--only \"zz\" is not in the manifest; it has a, b, c"), "{}", stderr(&unknown));
 }
 
+/// An entry that reads what it writes itself fails without touching it: otherwise each
+/// build would blur the blurred volume again and replace its input.
+#[test]
+fn an_entry_reading_its_own_output_is_refused_and_the_file_kept() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let manifest = at(d, "lib.toml");
+    let out = at(d, "out");
+    std::fs::write(&manifest, "[[exemplar]]\nname = \"z\"\nrecipe = \"procedural:marble\"\nsize = 8\n").unwrap();
+    assert!(solidtex(&["build", &manifest, "-o", &out]).status.success());
+    let before = std::fs::read(d.join("out/z.exr")).unwrap();
+    let blurred = "[[exemplar]]\nname = \"z\"\nrecipe = \"load\"\nvolume = \"out/z.exr\"\n\n  [[exemplar.steps]]\n  \
+                   blur = \"4,4,4\"\n  radius = 4\n  strength = 1\n";
+    std::fs::write(&manifest, blurred).unwrap();
+    for _ in 0..2 {
+        let run = solidtex(&["build", &manifest, "-o", &out]);
+        let err = stderr(&run);
+        assert_eq!(run.status.code(), Some(1), "{err}");
+        assert!(
+            err.contains("volume = \"") && err.contains("as 'z'") && err.contains("outside the output folder"),
+            "{err}"
+        );
+        assert_eq!(std::fs::read(d.join("out/z.exr")).unwrap(), before, "the input is kept");
+    }
+}
+
 #[test]
 fn three_shards_merged_equal_one_build() {
     let dir = tempfile::tempdir().unwrap();
@@ -155,7 +181,7 @@ fn shard_arguments_are_checked_and_taken_from_the_scheduler() {
 #[test]
 fn each_invalid_manifest_gets_its_own_clear_message() {
     let cases = [
-        ("unknown-recipe.toml", vec!["line 2: entry 1 (a)", "recipe = \"weave\"", "allowed"]),
+        ("unknown-recipe.toml", vec!["line 2: entry 1 (a)", "recipe = \"weave\"", "allowed", "procedural:channels"]),
         ("unknown-mask.toml", vec!["line 2: entry 1 (a)", "masks: \"blob\"", "allowed: splotch, layered"]),
         ("unknown-step.toml", vec!["unknown field `smudge`", "line"]),
         ("wrong-type.toml", vec!["entry 1 (a)", "type", "\"3-a\"", "allowed: 0, 1-a"]),
@@ -164,6 +190,7 @@ fn each_invalid_manifest_gets_its_own_clear_message() {
         ("duplicate-id.toml", vec!["line 6: entry 2: name = \"a\" is used twice"]),
         ("bad-size.toml", vec!["size = [8, 8]", "one number or three"]),
         ("wrong-value-type.toml", vec!["size", "line 5"]),
+        ("layered-with-ey.toml", vec!["line 6: ey does not apply to recipe \"synth-layered\""]),
     ];
     let folder = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/manifests/invalid");
     let dir = tempfile::tempdir().unwrap();

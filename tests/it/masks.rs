@@ -15,9 +15,16 @@ fn classify_reports_type_axes_and_measurements() {
     let json: serde_json::Value = serde_json::from_slice(&run.stdout).unwrap();
     assert_eq!(json["texture_type"], "1-b");
     assert_eq!(json["depth_axis"], "z");
-    assert!(json["layering"][2].as_f64().unwrap() < 0.45);
+    assert!(json["within_slice_share"][2].as_f64().unwrap() < 0.45);
+    // the JSON carries the figure the text prints: the slice means' share, large along depth
+    let means = json["slice_means_share"][2].as_f64().unwrap();
     let text = String::from_utf8(solidtex(&["classify", &strata]).stdout).unwrap();
+    assert!(means > 0.55 && text.contains(&format!("z {means:.3}")), "{means} against {text}");
     assert!(text.contains("1-b (anisotropy 1, variation 1)") && text.contains("depth axis  z"), "{text}");
+    // 24 voxels a side: lag 8 is over a quarter of it, not measured, printed as "-" and null
+    assert!(json["variogram"][0][3].is_null() && json["variogram"][0][2].is_f64(), "{json}");
+    let x_row = text.lines().find(|l| l.trim_start().starts_with("x  ")).unwrap();
+    assert!(x_row.trim_end().ends_with('-'), "{text}");
 }
 
 #[test]

@@ -83,6 +83,35 @@ fn layered_depth_rises_along_z() {
     assert_eq!(v.meta.texture_type, Some(solidtex::TextureType::T1b));
 }
 
+/// Progress that keeps the warnings.
+#[derive(Default)]
+struct Warnings(std::sync::Mutex<Vec<String>>);
+
+impl solidtex::progress::Progress for Warnings {
+    fn update(&self, _stage: &str, _fraction: f32) {}
+
+    fn warn(&self, message: &str) {
+        self.0.lock().unwrap().push(message.to_string());
+    }
+}
+
+/// The blend core loses the layers' depths in a shallow solid (3 levels, 6 voxels deep):
+/// the synthesis says so, with the figure; a deep enough one says nothing.
+#[test]
+fn a_layered_solid_whose_depth_strays_is_warned_about() {
+    let ex = bands();
+    let blend = |z: usize| {
+        let params = SynthParams { size: [12, 12, z], levels: 3, core: solidtex::synth::Core::Blend, ..small([1; 3]) };
+        let warnings = Warnings::default();
+        let v = synthesize_layered(&ex, None, &params, &LayeredParams::default(), 1, &warnings).unwrap();
+        (solidtex::synth::depth_error(&v).unwrap(), warnings.0.into_inner().unwrap())
+    };
+    let (error, said) = blend(6);
+    assert!(error > 0.08 && said.iter().any(|w| w.contains("stray from their depths")), "{error}: {said:?}");
+    let (error, said) = blend(40);
+    assert!(error < 0.08 && said.is_empty(), "{error}: {said:?}");
+}
+
 /// Mean over rows (or z-slices) of the standard deviation of channel 0 inside the row.
 fn within_layer_spread(rows: impl Iterator<Item = Vec<f32>>) -> f32 {
     let spreads: Vec<f32> = rows
