@@ -54,7 +54,10 @@ pub fn spectral_noise(exemplars: [Option<&Image2d>; 3], dims: [usize; 3], seed: 
         let pixel = pixel_order[rank * pixels / voxels];
         data[voxel * channels..(voxel + 1) * channels].copy_from_slice(&pool[pixel * channels..(pixel + 1) * channels]);
     }
-    Volume::from_data(dims, first.channels().to_vec(), data)
+    let mut meta = crate::volume::Meta { texture_type: Some(crate::TextureType::T0), ..Default::default() };
+    meta.set("recipe", "noise");
+    meta.set("seed", seed.to_string());
+    Ok(Volume::from_data(dims, first.channels().to_vec(), data)?.with_meta(meta))
 }
 
 /// The indices of `values` from the smallest to the largest (ties by index).

@@ -322,9 +322,10 @@ pub struct DrawArgs {
     /// to stamp), a closed shape to fill (fruit, pipe, log, block or vase), or cake (a folder of
     /// layer meshes and their fill specs).
     pub what: String,
-    /// Image size WxH, each side 2 to 4096 (columns around the object, rows from the outside in).
-    #[arg(long, default_value = "64x64")]
-    pub size: String,
+    /// Image size WxH, each side 2 to 4096 (columns around the object, rows from the outside
+    /// in) [default: 64x64]. Only for images: meshes come at their own size.
+    #[arg(long)]
+    pub size: Option<String>,
     /// Seed for the noise.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -401,10 +402,17 @@ fn draw_size(text: &str) -> Result<(usize, usize)> {
 
 /// Run `solidtex draw`.
 pub fn run_draw(args: &DrawArgs) -> Result<()> {
+    let mesh_wanted = args.what == "seed" || args.what == "bubble" || crate::mesh::shapes::named(&args.what).is_some();
+    if let (true, Some(size)) = (mesh_wanted || args.what == "cake", &args.size) {
+        return Err(Error::usage(format!(
+            "--size {size} sets an image's size; {} is a mesh, drawn at its own size (scale it where it is used, e.g. \
+             stamp --scale)",
+            args.what
+        )));
+    }
     if args.what == "cake" {
         return draw_cake(args);
     }
-    let mesh_wanted = args.what == "seed" || args.what == "bubble" || crate::mesh::shapes::named(&args.what).is_some();
     if mesh_wanted {
         io::guard::file_output(&args.output, &[], &["obj", "stl", "ply"], "a mesh")?;
     }
@@ -431,7 +439,7 @@ pub fn run_draw(args: &DrawArgs) -> Result<()> {
             meshes.collect::<Vec<_>>().join(", ")
         )));
     }
-    let (w, h) = draw_size(&args.size).map_err(usage)?;
+    let (w, h) = draw_size(args.size.as_deref().unwrap_or("64x64")).map_err(usage)?;
     let image = crate::sections::draw(&args.what, w, h, args.seed).map_err(usage)?;
     io::guard::png_output(&args.output, &[])?;
     io::write_image(&args.output, &image)?;

@@ -11,7 +11,7 @@ pub struct QualityArgs {
     /// The volume to measure.
     pub volume: PathBuf,
     /// The exemplar it was made from (Ex, or the layered exemplar).
-    #[arg(long, required_unless_present = "labels")]
+    #[arg(long, required_unless_present_any = ["labels", "truth"])]
     pub exemplar: Option<PathBuf>,
     /// Measure a label volume instead (a few phases in the first channel): per phase its
     /// share, two-point probability S2 and lineal path per axis, and interface per voxel.
@@ -19,7 +19,7 @@ pub struct QualityArgs {
     pub labels: bool,
     /// With --labels: the 3D label volume the volume should match (its values are snapped
     /// to the truth's labels first); prints each phase's figures as volume over truth.
-    #[arg(long, requires = "labels")]
+    #[arg(long)]
     pub truth: Option<PathBuf>,
     /// Exit with status 1 when any figure is outside its band (docs/synthesis.md,
     /// "Checking a volume"), naming each; with --labels it needs --truth.
@@ -40,6 +40,11 @@ pub struct QualityArgs {
 /// Run `solidtex quality`.
 pub fn run(args: &QualityArgs) -> Result<()> {
     args.others.check()?;
+    if args.truth.is_some() && !args.labels {
+        return Err(crate::Error::usage(
+            "--truth compares label volumes: give --labels with it (quality VOLUME --labels --truth TRUTH)",
+        ));
+    }
     if args.check && args.labels && args.truth.is_none() {
         return Err(crate::Error::usage(
             "--check with --labels needs --truth TRUTH: without a truth no figure has a band",

@@ -469,7 +469,7 @@ pub(crate) fn syntax_error(text: &str, error: &toml::de::Error, what: &str, quot
 /// words (`must be a whole number, 0 or more, got -5`).
 fn plain(message: &str) -> String {
     if message.contains("untagged enum RawSize") {
-        return "size must be one number or three, e.g. 64 or [64, 64, 32]".into();
+        return format!("size must be one whole number or three, each 1 to {MAX_SIDE}, e.g. 64 or [64, 64, 32]");
     }
     const WANTS: [(&str, &str); 7] = [
         ("expected usize", "a whole number, 0 or more"),
@@ -776,7 +776,9 @@ fn dims_of(size: &RawSize) -> Result<[usize; 3]> {
         RawSize::Cube(n) => [*n; 3],
         RawSize::Dims(v) if v.len() == 3 => [v[0], v[1], v[2]],
         RawSize::Dims(v) => {
-            return Err(Error::invalid(format!("size = {v:?} must be one number or three, e.g. 64 or [64, 64, 32]")));
+            return Err(Error::invalid(format!(
+                "size = {v:?} must be one whole number or three, each 1 to {MAX_SIDE}, e.g. 64 or [64, 64, 32]"
+            )));
         }
     };
     if dims.iter().any(|d| *d == 0 || *d > MAX_SIDE) {
@@ -1102,8 +1104,8 @@ mod tests {
         let base = "[[exemplar]]\nname = \"s\"\nrecipe = \"procedural:marble\"\n";
         for (field, says) in [
             ("size = 8\nseed = -5", "seed must be a whole number, 0 or more, got -5"),
-            ("size = -5", "size must be one number or three"),
-            ("size = \"big\"", "size must be one number or three"),
+            ("size = -5", "size must be one whole number or three, each 1 to 512"),
+            ("size = \"big\"", "size must be one whole number or three"),
             ("size = 8\nmask_falloff = \"x\"", "must be a number, got string \"x\""),
         ] {
             let err = parse_plan(&format!("{base}{field}\n"), Path::new(".")).unwrap_err().to_string();

@@ -467,6 +467,9 @@ fn not_the_current_folder(output: &Path) -> Result<()> {
             "is the current folder (or holds it); build into a folder of its own, e.g. -o out",
         ));
     }
+    if std::fs::symlink_metadata(output).is_ok_and(|m| m.is_file()) {
+        return Err(Error::file(output, "is a file, not a folder; build writes a library into a folder, e.g. -o out"));
+    }
     Ok(())
 }
 

@@ -176,6 +176,9 @@ fn hand_made_bad_input_is_refused() {
     let (section, seed) = (at(dir.path(), "kiwi.png"), at(dir.path(), "seed.obj"));
     assert!(solidtex(&["draw", "kiwi", "--size", "16x16", "-o", &section]).status.success());
     assert!(solidtex(&["draw", "seed", "-o", &seed]).status.success());
+    let other = at(dir.path(), "other.obj");
+    assert_usage(&solidtex(&["draw", "seed", "--size", "8x8", "-o", &other]), &["--size 8x8", "seed is a mesh"]);
+    assert!(!dir.path().join("other.obj").exists());
     let out = at(dir.path(), "out.exr");
     assert_usage(&solidtex(&["sweep", &section, "--length", "0", "-o", &out]), &["length 0"]);
     assert_usage(

@@ -171,6 +171,13 @@ fn shard_arguments_are_checked_and_taken_from_the_scheduler() {
         &["JOB_COMPLETION_INDEX=7", "below N = 2"],
     );
     assert!(!Path::new(&out).exists(), "nothing built");
+    // a file as the output folder is refused by name, and left as it is
+    let file = at(dir.path(), "section.png");
+    let before = std::fs::read(&file).unwrap();
+    let run = solidtex(&["build", &manifest, "-o", &file]);
+    assert_eq!(run.status.code(), Some(1), "{}", stderr(&run));
+    assert!(stderr(&run).contains("section.png: is a file, not a folder"), "{}", stderr(&run));
+    assert_eq!(std::fs::read(&file).unwrap(), before);
     let run = crate::support::solidtex_env(
         &["build", &manifest, "-o", &out, "--shard", "auto/2"],
         &[("SLURM_ARRAY_TASK_ID", "1")],
@@ -188,7 +195,7 @@ fn each_invalid_manifest_gets_its_own_clear_message() {
         ("size-out-of-range.toml", vec!["size = [4096, 4096, 4096]", "1..=512"]),
         ("missing-input.toml", vec!["FAILED a: ", "line 5, field \"image\": ", "no-such-image.png"]),
         ("duplicate-id.toml", vec!["line 6: entry 2: name = \"a\" is used twice"]),
-        ("bad-size.toml", vec!["size = [8, 8]", "one number or three"]),
+        ("bad-size.toml", vec!["size = [8, 8]", "one whole number or three, each 1 to 512"]),
         ("wrong-value-type.toml", vec!["size", "line 5"]),
         ("layered-with-ey.toml", vec!["line 6: ey does not apply to recipe \"synth-layered\""]),
     ];

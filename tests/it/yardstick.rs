@@ -153,6 +153,7 @@ fn quality_check_passes_the_truth_and_names_what_the_noise_fails() {
     let named = stderr(&check);
     assert!(named.contains("line pieces ratio") || named.contains("line top-3 share ratio"), "{named}");
     assert_usage(&solidtex(&["quality", &n, "--labels", "--check"]), &["--check", "--truth"]);
+    assert_usage(&solidtex(&["quality", &n, "--truth", &t]), &["--truth compares label volumes", "--labels"]);
 }
 
 /// `slice --plane` cuts a volume obliquely: a plane with normal z through the middle is
