@@ -672,6 +672,7 @@ pub fn bake(models: &[(&LstModel, &Textures)], carried: &[Carried], res: usize, 
 
 #[cfg(test)]
 mod tests {
+    use super::*;
 
     /// `--res N` gives N voxels along the longest side whatever the box (one voxel's side
     /// times N rounds past the box for many), and the other sides cover the box.
@@ -688,7 +689,6 @@ mod tests {
             }
         }
     }
-    use super::*;
 
     /// A 32x32 cut of a gentle ramp (a step of 0.01 between neighbours), two patches split
     /// at x = 16, with `jump` added to the right patch.

@@ -189,13 +189,12 @@ fn build_holding(
     let folder = manifest_folder(&request.manifest);
     let budget = io::budget_from_env()?;
     let refs: Vec<&Entry> = entries.iter().collect();
-    let written = written_paths(entries, output);
     let mut outcomes: Vec<Outcome> = Vec::new();
     for batch in batches(&refs, budget) {
         let done: Vec<Outcome> = batch
             .par_iter()
             .map(|entry| {
-                let outcome = match reads_no_output(entry, &written) {
+                let outcome = match reads_no_output(entry, output) {
                     Ok(()) => build_one(entry, folder, (output, &ledger), request.force, observer),
                     Err(e) => Outcome::Failed(entry.name.clone(), e.to_string()),
                 };
@@ -294,28 +293,20 @@ fn build_one(entry: &Entry, folder: &Path, output: (&Path, &Ledger), force: bool
     }
 }
 
-/// Every path a build of `entries` into `output` writes (files, and the folders of masks and
-/// slice exports), with the entry that writes it.
-fn written_paths<'a>(entries: &'a [Entry], output: &Path) -> Vec<(&'a str, PathBuf)> {
-    entries.iter().flat_map(|e| files::outputs(e).into_iter().map(|f| (e.name.as_str(), output.join(f)))).collect()
-}
-
 /// Refuse an entry that reads a file it writes itself (or one inside a folder it writes): the
 /// build would replace what it reads, and the entry would change on every build. (An entry
 /// may read another entry's volume: its key follows that file, so it is rebuilt when the
 /// other changes.)
-fn reads_no_output(entry: &Entry, written: &[(&str, PathBuf)]) -> Result<()> {
-    let own: Vec<&(&str, PathBuf)> = written.iter().filter(|(writer, _)| *writer == entry.name).collect();
+fn reads_no_output(entry: &Entry, output: &Path) -> Result<()> {
+    let written: Vec<PathBuf> = files::outputs(entry).into_iter().map(|f| output.join(f)).collect();
     for (field, input) in cache::input_files(entry) {
-        let clash = own.iter().find(|(_, out)| {
-            io::guard::same_file(&input, out) || input.parent().is_some_and(|folder| io::guard::same_file(folder, out))
-        });
-        if let Some((writer, out)) = clash {
+        let inside = |out: &PathBuf| input.parent().is_some_and(|folder| io::guard::same_file(folder, out));
+        if let Some(out) = written.iter().find(|out| io::guard::same_file(&input, out) || inside(out)) {
             return Err(Error::invalid(format!(
-                "{field} = {:?} is {} this entry writes ({}) as '{writer}'; solidtex never writes over its own inputs: \
-                 read a copy kept outside the output folder",
+                "{field} = {:?} is {} this entry writes ({}); solidtex never writes over its own inputs: read a copy \
+                 kept outside the output folder",
                 input.display().to_string(),
-                if input.parent().is_some_and(|f| io::guard::same_file(f, out)) { "inside a folder" } else { "a file" },
+                if inside(out) { "inside a folder" } else { "a file" },
                 out.display()
             )));
         }

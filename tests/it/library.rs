@@ -95,7 +95,9 @@ fn an_entry_reading_its_own_output_is_refused_and_the_file_kept() {
         let err = stderr(&run);
         assert_eq!(run.status.code(), Some(1), "{err}");
         assert!(
-            err.contains("volume = \"") && err.contains("as 'z'") && err.contains("outside the output folder"),
+            err.contains("volume = \"")
+                && err.contains("is a file this entry writes")
+                && err.contains("outside the output folder"),
             "{err}"
         );
         assert_eq!(std::fs::read(d.join("out/z.exr")).unwrap(), before, "the input is kept");
