@@ -61,6 +61,9 @@ impl Ledger {
                 // them where the ledger knows its files
                 let known = |file: &str, hash: &str| matches!(marks.get(&format!("{name}/{file}")), Some(Mark::Hash(h)) if hash.starts_with(h.as_str()));
                 atomic::upgrade_list(&path, known)?;
+                // a folder holding a file solidtex may not replace fails the entry now,
+                // before any of its files are made
+                atomic::writable_folder(&path)?;
                 continue;
             }
             let ours = match marks.get(name) {

@@ -104,6 +104,31 @@ fn an_entry_reading_its_own_output_is_refused_and_the_file_kept() {
     }
 }
 
+/// A folder output holding a person's file fails its entry before the entry writes
+/// anything: the volume of the earlier build stays as it was.
+#[test]
+fn a_folder_output_holding_a_users_file_fails_its_entry_before_any_file_is_written() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (manifest, out) = (at(d, "lib.toml"), at(d, "out"));
+    let entry = |seed: u32| {
+        format!(
+            "[[exemplar]]\nname = \"a\"\nrecipe = \"procedural:marble\"\nsize = 8\nseed = {seed}\nexports = [\"slices\"]\n"
+        )
+    };
+    std::fs::write(&manifest, entry(1)).unwrap();
+    assert!(solidtex(&["build", &manifest, "-o", &out]).status.success());
+    let before = std::fs::read(d.join("out/a.exr")).unwrap();
+    std::fs::write(d.join("out/a_slices/notes.txt"), "mine").unwrap();
+    std::fs::write(&manifest, entry(2)).unwrap();
+    let run = solidtex(&["build", &manifest, "-o", &out]);
+    let err = stderr(&run);
+    assert_eq!(run.status.code(), Some(1), "{err}");
+    assert!(err.contains("a_slices") && err.contains("notes.txt"), "{err}");
+    assert_eq!(std::fs::read(d.join("out/a.exr")).unwrap(), before, "nothing of the entry was written");
+    assert_eq!(std::fs::read_to_string(d.join("out/a_slices/notes.txt")).unwrap(), "mine");
+}
+
 #[test]
 fn three_shards_merged_equal_one_build() {
     let dir = tempfile::tempdir().unwrap();
