@@ -221,15 +221,22 @@ fn labels(args: &QualityArgs, volume: &crate::Volume) -> Result<()> {
 fn label_table(stats: &crate::labels::LabelStats) -> String {
     let [x, y, z] = stats.dims;
     let mut out = format!("label volume {x}x{y}x{z}: {} phase(s)\n", stats.phases.len());
+    if stats.tiles > 1 {
+        let [a, b, c] = stats.tile;
+        out += &format!(
+            "measured in {} tiles of {a}x{b}x{c} (the other volume's size: pieces are cut where a box ends), pooled\n",
+            stats.tiles
+        );
+    }
     let length = |c: Option<f64>| c.map_or_else(|| "-".to_string(), |c| format!("{c:.1}"));
     for p in &stats.phases {
         out += &format!(
-            "phase {}: share {:.4}, pieces {:.1} per 100k voxels ({} of 1-2 voxels), correlation length x {} y {} z {}, \
+            "phase {}: share {:.4}, pieces {:.1} per 100k voxels ({:.1} of 1-2 voxels), correlation length x {} y {} z {}, \
              interface {:.4} per voxel (x {:.4}, y {:.4}, z {:.4})\n",
             p.label,
             p.share,
             p.pieces_per_100k,
-            p.specks,
+            p.specks_per_100k,
             length(p.correlation_length[0]),
             length(p.correlation_length[1]),
             length(p.correlation_length[2]),
@@ -253,21 +260,23 @@ fn label_table(stats: &crate::labels::LabelStats) -> String {
 }
 
 fn ratio_table(ratios: &[crate::labels::PhaseAgainstTruth]) -> String {
-    use crate::labels::{CORRELATION_BAND as C, PIECES_BAND as P, SHARE_BAND as S};
+    use crate::labels::{CORRELATION_BAND as C, MOST_EXTRA_SPECKS as M, PIECES_BAND as P, SHARE_BAND as S};
     let mut out = format!(
-        "volume over truth (bands: share {}-{}, pieces {}-{}, correlation length {}-{})\n  phase      share  pieces  length x     y     z\n",
+        "volume over truth (bands: share {}-{}, pieces {}-{}, correlation length {}-{}; specks: pieces of 1-2 voxels \
+         per 100k, volume minus truth, at most {M})\n  phase      share  pieces  length x     y     z   specks\n",
         S.0, S.1, P.0, P.1, C.0, C.1
     );
     let length = |c: Option<f64>| c.map_or_else(|| "    -".to_string(), |c| format!("{c:>5.2}"));
     for r in ratios {
         out += &format!(
-            "  {:<8} {:>7.2} {:>7.2}    {} {} {}\n",
+            "  {:<8} {:>7.2} {:>7.2}    {} {} {} {:>+7.1}\n",
             r.label,
             r.share_ratio,
             r.pieces_ratio,
             length(r.correlation_ratio[0]),
             length(r.correlation_ratio[1]),
-            length(r.correlation_ratio[2])
+            length(r.correlation_ratio[2]),
+            r.extra_specks_per_100k
         );
     }
     out

@@ -18,10 +18,10 @@ fn coordinates(size: [usize; 3]) -> SynthParams {
 }
 
 /// The channels truth's central slices at 128 px into a 64³ solid by each core: the
-/// coordinate core's voxels are all truth labels, and its phases come in on average at
-/// most 2.5 times the truth's pieces per voxel (0.8, 1.9 and 2.4 measured; without the
-/// colour balance 2.9, 3.0 and 10.1; the blend: 22, 74 and 93), each at most a quarter of
-/// the blend's.
+/// coordinate core's voxels are all truth labels, and its phases come in at most twice
+/// the truth's pieces per voxel, on average at most 1.3 times (0.32, 1.18 and 1.11
+/// measured against the truth's 64³ tiles; the blend: 18, 55 and 30), each at most a
+/// quarter of the blend's.
 #[test]
 fn labels_stay_labels_and_keep_far_fewer_pieces_than_the_blend() {
     let truth = generate(Recipe::Channels, [128; 3], 3).unwrap();
@@ -38,7 +38,7 @@ fn labels_stay_labels_and_keep_far_fewer_pieces_than_the_blend() {
     };
     let (ours, theirs) = (pieces(&coords), pieces(&blend));
     let mean = ours.iter().sum::<f64>() / ours.len() as f64;
-    assert!(mean <= 2.5, "pieces over the truth's: {ours:?}");
+    assert!(mean <= 1.3 && ours.iter().all(|r| *r <= 2.0), "pieces over the truth's: {ours:?}");
     for (o, t) in ours.iter().zip(&theirs) {
         assert!(*o <= 0.25 * t, "pieces over the truth's: coordinates {ours:?}, blend {theirs:?}");
     }
