@@ -44,6 +44,9 @@ pub const PIECES_BAND: (f64, f64) = (0.7, 1.3);
 pub const CORRELATION_BAND: (f64, f64) = (0.7, 1.3);
 /// Against a truth: the band of the share ratio.
 pub const SHARE_BAND: (f64, f64) = (0.8, 1.25);
+/// Against a truth: the fewest voxels along each axis of both volumes (as the per-axis
+/// figures of `quality` need cuts of at least 8 x 8).
+pub const LEAST_SIDE: usize = 8;
 /// Against a truth: the most pieces of 1 or 2 voxels per 100,000 voxels the volume may
 /// hold beyond the truth's.
 pub const MOST_EXTRA_SPECKS: f64 = 1.0;
@@ -180,8 +183,21 @@ impl TruthComparison {
 pub fn against_truth(volume: &Volume, truth: &Volume) -> Result<TruthComparison> {
     let truth_labels = first_channel(truth);
     let distinct = distinct_labels(&truth_labels, truth.channels()[0].name())?;
+    if distinct.len() < 2 {
+        return Err(Error::invalid(format!(
+            "the truth holds one label ({}): a truth to compare with has at least two phases",
+            distinct.first().copied().unwrap_or_default()
+        )));
+    }
     let (v, t) = (volume.dims(), truth.dims());
     let tile = [0, 1, 2].map(|a| v[a].min(t[a]));
+    if tile.iter().any(|side| *side < LEAST_SIDE) {
+        return Err(Error::invalid(format!(
+            "the volume is {}x{}x{} and the truth {}x{}x{}: comparing them needs at least {LEAST_SIDE} voxels \
+             along each axis of both",
+            v[0], v[1], v[2], t[0], t[1], t[2]
+        )));
+    }
     let truth_stats = measure_in_tiles(&truth_labels, t, tile, &distinct);
     let snapped: Vec<f32> = first_channel(volume).iter().map(|v| nearest(*v, &distinct)).collect();
     let volume_stats = measure_in_tiles(&snapped, v, tile, &distinct);
@@ -521,14 +537,14 @@ mod tests {
     /// has many times the truth's pieces and a shorter correlation.
     #[test]
     fn a_volume_is_snapped_to_the_truths_labels_and_compared() {
-        let truth = labels([6, 5, 16], |_, _, z| ((z / 4) % 2) as f32);
-        let blended = labels([6, 5, 16], |x, _, z| ((z / 4) % 2) as f32 * 0.9 + 0.05 * (x % 2) as f32);
+        let truth = labels([8, 8, 16], |_, _, z| ((z / 4) % 2) as f32);
+        let blended = labels([8, 8, 16], |x, _, z| ((z / 4) % 2) as f32 * 0.9 + 0.05 * (x % 2) as f32);
         let same = against_truth(&blended, &truth).unwrap();
         for r in &same.ratios {
             assert_eq!((r.share_ratio, r.pieces_ratio), (1.0, 1.0), "{r:?}");
             assert_eq!(r.correlation_ratio[2], Some(1.0));
         }
-        let specks = labels([6, 5, 16], |x, y, z| ((x + y + z) % 2) as f32);
+        let specks = labels([8, 8, 16], |x, y, z| ((x + y + z) % 2) as f32);
         let bad = against_truth(&specks, &truth).unwrap();
         assert!(bad.ratios[0].pieces_ratio > 50.0, "{:?}", bad.ratios[0]);
         assert!(bad.ratios[0].correlation_ratio[2].unwrap() < 0.5, "{:?}", bad.ratios[0]);
@@ -558,6 +574,19 @@ mod tests {
         let bad = against_truth(&specked, &truth).unwrap();
         assert!((bad.ratios[1].extra_specks_per_100k - 3e5 / 4096.0).abs() < 1e-9, "{:?}", bad.ratios[1]);
         assert!(bad.outside_bands().iter().any(|o| o.contains("pieces of 1-2 voxels")), "{:?}", bad.outside_bands());
+    }
+
+    /// A truth of one label, or volumes too small to measure, are refused, naming why.
+    #[test]
+    fn a_truth_of_one_phase_or_a_tiny_box_is_refused() {
+        let truth = labels([16; 3], |x, _, _| (x / 4 % 2) as f32);
+        let flat = labels([16; 3], |_, _, _| 0.5);
+        let error = against_truth(&truth, &flat).unwrap_err().to_string();
+        assert!(error.contains("one label (0.5)") && error.contains("at least two phases"), "{error}");
+        let tiny = labels([16, 16, 4], |x, _, _| (x / 4 % 2) as f32);
+        let error = against_truth(&tiny, &truth).unwrap_err().to_string();
+        assert!(error.contains("16x16x4") && error.contains("at least 8 voxels"), "{error}");
+        assert!(against_truth(&truth, &truth).is_ok());
     }
 
     /// Counting pairs with shifted rows of bits gives the plain sum of products, also on

@@ -231,6 +231,19 @@ fn windowed_length(image: &Grey, (width, height): (usize, usize)) -> f64 {
 /// The 1/e autocorrelation length in pixels, averaged over the two directions; a flat
 /// image has no features and gets the image's own size.
 fn length(image: &Grey) -> f64 {
+    let [along_rows, along_columns] = lengths(image);
+    (along_rows + along_columns) / 2.0
+}
+
+/// The 1/e autocorrelation length in pixels of `image`'s grey (every channel standardized,
+/// averaged) along its rows (x) and along its columns (y).
+pub fn axis_lengths(image: &Image2d) -> [f64; 2] {
+    let picks: Vec<usize> = (0..image.channel_count()).collect();
+    lengths(&Standard::of(image).grey(image, &picks))
+}
+
+/// [`length`] along x and along y; a flat image gets its own width and height.
+fn lengths(image: &Grey) -> [f64; 2] {
     let m = mean(&image.values);
     let centred: Vec<f64> = image.values.iter().map(|v| v - m).collect();
     let energy: f64 = centred.iter().map(|v| v * v).sum();
@@ -248,7 +261,7 @@ fn length(image: &Grey) -> f64 {
         }
         size as f64
     };
-    (along((1, 0), image.width) + along((0, 1), image.height)) / 2.0
+    [along((1, 0), image.width), along((0, 1), image.height)]
 }
 
 /// Sum over pixels of value(p) x value(p + offset), for the pairs inside the image.

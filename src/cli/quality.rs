@@ -45,6 +45,18 @@ pub fn run(args: &QualityArgs) -> Result<()> {
             "--truth compares label volumes: give --labels with it (quality VOLUME --labels --truth TRUTH)",
         ));
     }
+    let exemplar_options = [
+        ("--ey", args.others.ey.is_some()),
+        ("--ez", args.others.ez.is_some()),
+        ("--max-exemplar", args.others.max_exemplar.is_some()),
+        ("--layered", args.layered),
+    ];
+    if let Some((name, _)) = exemplar_options.iter().find(|(_, given)| args.labels && *given) {
+        return Err(crate::Error::usage(format!(
+            "{name} belongs to measuring against exemplars; --labels measures the volume's phases (against --truth \
+             TRUTH), reading no exemplar"
+        )));
+    }
     if args.check && args.labels && args.truth.is_none() {
         return Err(crate::Error::usage(
             "--check with --labels needs --truth TRUTH: without a truth no figure has a band",

@@ -359,5 +359,12 @@ pub fn run(args: &SynthArgs) -> Result<()> {
     super::write_volume(&args.output, &volume)?;
     let [x, y, z] = volume.dims();
     tell!("wrote {} ({x}x{y}x{z}) in {:.2} s", args.output.display(), started.elapsed().as_secs_f64());
+    if let Some(axis) = volume.meta.get(synth::finer::FINER_KEY) {
+        tell!(
+            "  {axis} was synthesized twice as finely: the exemplars' features along it are at most {} of their \
+             length along the other axes",
+            synth::finer::THIN
+        );
+    }
     Ok(())
 }

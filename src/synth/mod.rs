@@ -24,6 +24,7 @@ mod direction;
 mod driver;
 pub mod edges;
 pub(crate) mod exemplar;
+pub mod finer;
 mod grid;
 pub(crate) mod knn;
 pub mod occupancy;
@@ -68,7 +69,7 @@ pub fn synthesize(ex: Exemplars, params: &SynthParams, seed: u64, progress: &dyn
     let ez = ex.z.unwrap_or(ey);
     let images = [ex.x, ey, ez];
     check_exemplars(&images, &["Ex", "Ey", "Ez"], params)?;
-    let (data, patches) = if blends(params) {
+    let data = if blends(params) {
         let weights = vec![1.0; ex.x.channel_count()];
         let start = start_samples(params, ex.x.channels(), false)?;
         let job = Job {
@@ -78,7 +79,7 @@ pub fn synthesize(ex: Exemplars, params: &SynthParams, seed: u64, progress: &dyn
             anti_sweeping: false,
             start: start.as_deref(),
         };
-        (driver::run(&job, params, seed, progress)?, None)
+        whole::Whole { samples: driver::run(&job, params, seed, progress)?, patches: None, finer: None }
     } else {
         whole::synthesize(images, false, params, seed, progress)?
     };
@@ -87,7 +88,7 @@ pub fn synthesize(ex: Exemplars, params: &SynthParams, seed: u64, progress: &dyn
         (_, None) => TextureType::T1a,
         _ => TextureType::T2a,
     };
-    finish(params, ex.x.channels().to_vec(), data, patches, kind, "synth", seed)
+    finish(params, ex.x.channels().to_vec(), data, kind, "synth", seed)
 }
 
 /// Synthesize a layered (type 1-b) solid texture from one exemplar parallel to the
@@ -104,7 +105,7 @@ pub fn synthesize_layered(
 ) -> Result<Volume> {
     check_exemplars(&[exemplar], &["exemplar"], params)?;
     let with_depth = add_depth(exemplar, depth)?;
-    let (data, patches) = if blends(params) {
+    let data = if blends(params) {
         let mut weights = vec![1.0; exemplar.channel_count()];
         weights.push(layered.depth_weight);
         let start = start_samples(params, exemplar.channels(), true)?;
@@ -115,12 +116,11 @@ pub fn synthesize_layered(
             anti_sweeping: layered.anti_sweeping,
             start: start.as_deref(),
         };
-        (driver::run(&job, params, seed, progress)?, None)
+        whole::Whole { samples: driver::run(&job, params, seed, progress)?, patches: None, finer: None }
     } else {
         whole::synthesize([&with_depth; 3], true, params, seed, progress)?
     };
-    let volume =
-        finish(params, with_depth.channels().to_vec(), data, patches, TextureType::T1b, "synth-layered", seed)?;
+    let volume = finish(params, with_depth.channels().to_vec(), data, TextureType::T1b, "synth-layered", seed)?;
     if let Some(error) = depth::depth_error(&volume).filter(|e| *e > DEPTH_STRAYS) {
         progress.warn(&format!(
             "the layers stray from their depths (the Depth channel is {error:.2} from each slice's depth on average, \
@@ -144,8 +144,7 @@ fn blends(params: &SynthParams) -> bool {
 fn finish(
     params: &SynthParams,
     channels: Vec<Channel>,
-    data: Vec<f32>,
-    patches: Option<patches::Patches>,
+    solid: whole::Whole,
     kind: TextureType,
     recipe: &str,
     seed: u64,
@@ -155,11 +154,14 @@ fn finish(
     meta.set("seed", seed.to_string());
     meta.set("levels", params.levels.to_string());
     meta.set("core", if blends(params) { Core::Blend } else { Core::Coordinates }.to_string());
-    if let Some(p) = patches {
+    if let Some(p) = solid.patches {
         meta.set(patches::COHERENT_PAIRS_KEY, format!("{:.4}", p.coherent_pairs));
         meta.set(patches::LARGEST_KEY, format!("{:.4}", p.largest));
     }
-    Ok(Volume::from_data(params.size, channels, data)?.with_meta(meta))
+    if let Some(k) = solid.finer {
+        meta.set(finer::FINER_KEY, ["x", "y", "z"][k]);
+    }
+    Ok(Volume::from_data(params.size, channels, solid.samples)?.with_meta(meta))
 }
 
 /// The start volume's samples with the exemplar's `channels` (layered: plus a Depth

@@ -19,6 +19,7 @@
 
 use super::coords::{self, Exemplars, Options, Setup};
 use super::edges::with_edge_distance;
+use super::finer;
 use super::params::SynthParams;
 use super::patches::Patches;
 use super::region::Mask;
@@ -66,8 +67,42 @@ pub fn options(params: &SynthParams, layered: bool) -> Options {
 
 /// Synthesize `params.size` voxels from `images` (orthogonal to x, y, z; layered: rows
 /// along z, a Depth channel last): the samples, x fastest, with the images' channels, and
-/// how coherently they copy the images ([`super::patches`]).
+/// how coherently they copy the images ([`super::patches`]). A homogeneous solid whose
+/// exemplars agree on a thin axis is synthesized twice as finely along it ([`finer`]).
 pub fn synthesize(
+    images: [&Image2d; 3],
+    layered: bool,
+    params: &SynthParams,
+    seed: u64,
+    progress: &dyn Progress,
+) -> Result<Whole> {
+    let finer =
+        (!layered).then(|| finer::thin_axis(images)).flatten().filter(|&k| params.size[k] * 2 <= finer::MOST_SIDE);
+    let Some(k) = finer else {
+        let (samples, patches) = at_sampling(images, layered, params, seed, progress)?;
+        return Ok(Whole { samples, patches, finer: None });
+    };
+    let [x, y, z] = finer::stretched(images, k)?;
+    let mut size = params.size;
+    size[k] *= 2;
+    let (samples, patches) = at_sampling([&x, &y, &z], false, &SynthParams { size, ..params.clone() }, seed, progress)?;
+    let channels = samples.len() / size.iter().product::<usize>();
+    Ok(Whole { samples: finer::even_slices(&samples, size, channels, k), patches, finer: Some(k) })
+}
+
+/// A solid from [`synthesize`]: its samples (x fastest), how coherently they copy the
+/// exemplars, and the axis synthesized at twice the sampling ([`finer`]), if any.
+pub struct Whole {
+    /// The voxels' samples, x fastest.
+    pub samples: Vec<f32>,
+    /// The patch figures ([`super::patches`]; of the finer solid where an axis was finer).
+    pub patches: Option<Patches>,
+    /// The axis synthesized at twice the sampling.
+    pub finer: Option<usize>,
+}
+
+/// [`synthesize`] at the grid's own sampling.
+fn at_sampling(
     images: [&Image2d; 3],
     layered: bool,
     params: &SynthParams,

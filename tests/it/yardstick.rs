@@ -97,10 +97,10 @@ fn noise_with_the_brick_photos_spectrum_and_colours_fails() {
 /// The targets for synthesis from a truth's central slices, measured against the truth:
 /// every label and line band. The blend core misses them (docs/synthesis.md, "Baseline"),
 /// and so does the coordinate core so far ("The coordinate core": the foam's stones are
-/// mottled, the channels' correlation along z is too long); `cargo test -- --ignored`
-/// runs this.
+/// mottled; the channels' matrix lies in layers too thick along z and both it and the
+/// rims come in fewer pieces than the truth's); `cargo test -- --ignored` runs this.
 #[test]
-#[ignore = "the targets of the coordinate core; it still misses the foam's label pieces and the channels' z correlation"]
+#[ignore = "the targets of the coordinate core; it still misses the foam's label pieces (its stones mottled) and some of the channels' label bands"]
 fn synthesis_from_the_truths_slices_keeps_their_pieces() {
     for (recipe, seed) in TRUTHS {
         let truth = generate(recipe, [SIDE; 3], seed).unwrap();
@@ -117,7 +117,7 @@ fn synthesis_from_the_truths_slices_keeps_their_pieces() {
 }
 
 /// `quality --check` exits 0 on the truth and 1 on the noise, naming the figures outside
-/// their bands; with `--labels` it needs `--truth`.
+/// their bands; with `--labels` it needs `--truth` and reads no exemplar options.
 #[test]
 fn quality_check_passes_the_truth_and_names_what_the_noise_fails() {
     let dir = tempfile::tempdir().unwrap();
@@ -154,6 +154,10 @@ fn quality_check_passes_the_truth_and_names_what_the_noise_fails() {
     assert!(named.contains("line pieces ratio") || named.contains("line top-3 share ratio"), "{named}");
     assert_usage(&solidtex(&["quality", &n, "--labels", "--check"]), &["--check", "--truth"]);
     assert_usage(&solidtex(&["quality", &n, "--truth", &t]), &["--truth compares label volumes", "--labels"]);
+    for extra in [["--ey", "missing.png"], ["--max-exemplar", "8"]] {
+        let ignored = solidtex(&["quality", &n, "--labels", "--truth", &t, extra[0], extra[1]]);
+        assert_usage(&ignored, &[extra[0], "--labels measures the volume's phases"]);
+    }
 }
 
 /// `slice --plane` cuts a volume obliquely: a plane with normal z through the middle is
