@@ -21,9 +21,10 @@ pub struct ExportArgs {
     /// pixels of a 512x512 `view` from the default camera (0 with --atlas).
     #[arg(long, allow_hyphen_values = true)]
     pub edge: Option<f32>,
-    /// Edges sharper than this many degrees keep two normals (as in `view`), 0 to 180.
-    #[arg(long, default_value_t = DEFAULT_CREASE)]
-    pub crease: f32,
+    /// Edges sharper than this many degrees keep two normals (as in `view`), 0 to 180
+    /// (default 60; filled models).
+    #[arg(long)]
+    pub crease: Option<f32>,
     /// The displaced surface, as `view --displacement SCALE` shows it: moved along its
     /// normal by SCALE x (the exemplars' Displacement channel - 0.5), in model units.
     #[arg(long, allow_hyphen_values = true)]
@@ -43,7 +44,9 @@ const DEFAULT_VIEW: (usize, f32) = (512, 2.0);
 /// Run `solidtex export`.
 pub fn run(args: &ExportArgs) -> Result<()> {
     let checks = || -> Result<()> {
-        io::values::within("--crease", args.crease, 0.0, 180.0)?;
+        if let Some(crease) = args.crease {
+            io::values::within("--crease", crease, 0.0, 180.0)?;
+        }
         if let Some(edge) = args.edge.filter(|e| !(e.is_finite() && *e >= 0.0)) {
             return Err(Error::invalid(format!(
                 "--edge {edge} is out of range; allowed: 0 (the input surface's triangles) or a positive length in model units"
@@ -140,7 +143,7 @@ fn options(args: &ExportArgs, loaded: &[Loaded]) -> Result<Options> {
             "--edge {edge}: splitting the surface(s) that fine gives more than {most} triangles; give a longer edge"
         )));
     }
-    Ok(Options { edge, crease: args.crease, atlas: args.atlas })
+    Ok(Options { edge, crease: args.crease.unwrap_or(DEFAULT_CREASE), atlas: args.atlas })
 }
 
 /// The file name without its extension.
@@ -174,9 +177,9 @@ fn provenance(args: &ExportArgs, loaded: &[Loaded], meshes: &[Exported], options
 
 /// `solidtex export SKIN.ply`: the skin's mesh and vertex colours as they are.
 fn export_skin(args: &ExportArgs, path: &Path) -> Result<()> {
-    if args.displacement.is_some() || args.atlas.is_some() || args.edge.is_some() {
+    if args.displacement.is_some() || args.atlas.is_some() || args.edge.is_some() || args.crease.is_some() {
         return Err(Error::usage(format!(
-            "{}: a skin is exported as it is; --edge, --displacement and --atlas apply to filled models (.lst)",
+            "{}: a skin is exported as it is; --edge, --crease, --displacement and --atlas apply to filled models (.lst)",
             path.display()
         )));
     }

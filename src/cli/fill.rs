@@ -154,9 +154,10 @@ pub struct ViewArgs {
     /// Picture size in pixels, 8 to 4096.
     #[arg(long, default_value_t = 512)]
     pub size: usize,
-    /// Edges sharper than this many degrees stay sharp in the smooth shading, 0 to 180.
-    #[arg(long, default_value_t = crate::fill::view::DEFAULT_CREASE)]
-    pub crease: f32,
+    /// Edges sharper than this many degrees stay sharp in the smooth shading, 0 to 180
+    /// (default 60; filled and guided models).
+    #[arg(long)]
+    pub crease: Option<f32>,
     /// One normal per triangle of the input surface instead of smooth shading (shows its facets).
     #[arg(long)]
     pub flat: bool,
@@ -828,6 +829,11 @@ pub fn run_render(args: &RenderArgs) -> Result<()> {
     let loaded = match guided_model(&args.models)? {
         Some(model) => {
             super::guided::check_picture_of_model(model, &args.output)?;
+            if let Some((path, coloured)) = &skin {
+                // the guided solid takes long to make: the skin is checked against its mesh first
+                let mesh = io::mesh_file::read_mesh(&io::guided_model::read(model)?.mesh)?;
+                skin_near(path, &coloured.mesh, mesh.bounds(), None)?;
+            }
             vec![guided_loaded(model)?]
         }
         None => load_models(&args.models, &args.output)?,
@@ -994,9 +1000,9 @@ impl SkinInput {
 
 /// `solidtex view SKIN.ply`: the skin alone, as `solidtex surface` wrote it.
 fn view_skin(args: &ViewArgs, path: &Path) -> Result<()> {
-    if args.skin.is_some() || args.displacement.is_some() || args.flat {
+    if args.skin.is_some() || args.displacement.is_some() || args.flat || args.crease.is_some() {
         return Err(Error::usage(format!(
-            "{}: a skin is drawn as it is; --skin, --displacement and --flat apply to filled models (.lst)",
+            "{}: a skin is drawn as it is; --skin, --displacement, --flat and --crease apply to filled models (.lst)",
             path.display()
         )));
     }
@@ -1019,7 +1025,16 @@ fn skin_reach(
     models: &[(&LstModel, &Textures)],
     displacement: Option<f32>,
 ) -> Result<f32> {
-    let (lo, hi) = render::bounds(models);
+    skin_near(path, skin, render::bounds(models), displacement)
+}
+
+/// [`skin_reach`] against the box `(lo, hi)` of the models.
+fn skin_near(
+    path: &Path,
+    skin: &crate::mesh::Mesh,
+    (lo, hi): (glam::Vec3, glam::Vec3),
+    displacement: Option<f32>,
+) -> Result<f32> {
     let within = 0.03 * lo.distance(hi) + displacement.map_or(0.0, |d| d.abs() * crate::fill::view::MIDLEVEL);
     let (slo, shi) = skin.bounds();
     let apart = (slo - lo).abs().max((shi - hi).abs()).max_element();
@@ -1039,7 +1054,9 @@ pub fn run_view(args: &ViewArgs) -> Result<()> {
     let checks = || -> Result<()> {
         io::values::within("--size", args.size, 8, MAX_PICTURE)?;
         args.camera.checked()?;
-        io::values::within("--crease", args.crease, 0.0, 180.0)?;
+        if let Some(crease) = args.crease {
+            io::values::within("--crease", crease, 0.0, 180.0)?;
+        }
         if let Some(scale) = args.displacement {
             io::values::within("--displacement", scale, -1000.0, 1000.0)?;
         }
@@ -1054,7 +1071,11 @@ pub fn run_view(args: &ViewArgs) -> Result<()> {
                 model.display()
             ))));
         }
-        let shading = if args.flat { Shading::Flat } else { Shading::Smooth { crease: args.crease } };
+        let shading = if args.flat {
+            Shading::Flat
+        } else {
+            Shading::Smooth { crease: args.crease.unwrap_or(crate::fill::view::DEFAULT_CREASE) }
+        };
         let view = crate::fill::view::View { camera: (args.camera.yaw, args.camera.pitch), size: args.size, shading };
         return super::guided::from_model(model, super::guided::Action::View(view), args.size, &args.output);
     }
@@ -1073,7 +1094,11 @@ pub fn run_view(args: &ViewArgs) -> Result<()> {
     let skin = args.skin.as_deref().map(SkinInput::file).transpose()?;
     let loaded = load_models(&args.models, &args.output)?;
     let started = Instant::now();
-    let shading = if args.flat { Shading::Flat } else { Shading::Smooth { crease: args.crease } };
+    let shading = if args.flat {
+        Shading::Flat
+    } else {
+        Shading::Smooth { crease: args.crease.unwrap_or(crate::fill::view::DEFAULT_CREASE) }
+    };
     let camera = (args.camera.yaw, args.camera.pitch);
     if let Some(scale) = args.displacement {
         within_models("--displacement", scale, &loaded)?;

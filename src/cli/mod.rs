@@ -256,10 +256,10 @@ pub enum Command {
         /// Compare with this snapshot (exit 1 with the differences when they differ).
         #[arg(long)]
         check: Option<PathBuf>,
-        /// Allowed difference of statistics and thumbnail values, 0 to 1000000 (0: the content
-        /// hash must match).
-        #[arg(long, default_value_t = 0.0)]
-        tolerance: f64,
+        /// With --check: allowed difference of statistics and thumbnail values, 0 to 1000000
+        /// (default 0: the content hash must match).
+        #[arg(long)]
+        tolerance: Option<f64>,
     },
     /// List the seven LST texture types: levels, tiling, tensor field, filling, examples.
     Types,

@@ -6,7 +6,11 @@ use crate::io;
 use std::path::Path;
 
 /// Run `solidtex snapshot VOLUME (-o NAME.snap | --check NAME.snap [--tolerance T])`.
-pub fn run(volume: &Path, output: Option<&Path>, check: Option<&Path>, tolerance: f64) -> Result<()> {
+pub fn run(volume: &Path, output: Option<&Path>, check: Option<&Path>, tolerance: Option<f64>) -> Result<()> {
+    if tolerance.is_some() && check.is_none() {
+        return Err(Error::usage("--tolerance belongs to --check NAME.snap (a comparison); -o writes a snapshot"));
+    }
+    let tolerance = tolerance.unwrap_or(0.0);
     io::values::within("--tolerance", tolerance, 0.0, 1.0e6).map_err(usage)?;
     if let Some(out) = output {
         io::guard::file_output(out, &[volume], &["snap"], "a text snapshot")?;

@@ -141,6 +141,8 @@ fn validate(raw: RawSpec, folder: &Path) -> Result<FillSpec> {
     positive("scale", raw.scale)?;
     let falloff = raw.mask_falloff.map(|f| values::falloff("mask_falloff =", f)).transpose()?;
     let here = |p: Option<&String>, default: &str| p.map_or_else(|| default.into(), |p| folder.join(p));
+    let band = raw.region_band.unwrap_or(DEFAULT_REGION_BAND);
+    let regions = regions(raw.region)?;
     Ok(FillSpec {
         exemplar: raw.exemplar,
         library: here(raw.library.as_ref(), "exemplars/library.toml"),
@@ -155,8 +157,8 @@ fn validate(raw: RawSpec, folder: &Path) -> Result<FillSpec> {
         depth: depth(raw.depth)?,
         scales: scales(&raw.scale_at)?,
         pastes: raw.paste.into_iter().enumerate().map(|(i, p)| paste(i, p)).collect::<Result<_>>()?,
-        region_band: region_band(raw.region_band.unwrap_or(DEFAULT_REGION_BAND), &raw.region)?,
-        regions: regions(raw.region)?,
+        region_band: region_band(band, &regions)?,
+        regions,
     })
 }
 
@@ -193,8 +195,8 @@ fn regions(raw: Vec<RawRegion>) -> Result<Vec<RegionSpec>> {
 }
 
 /// The band regions blend across: 0 (a sharp border) to 0.5, and no wider than the
-/// narrowest region.
-fn region_band(band: f32, raw: &[RawRegion]) -> Result<f32> {
+/// narrowest region (the regions checked first).
+fn region_band(band: f32, raw: &[RegionSpec]) -> Result<f32> {
     if !(0.0..=0.5).contains(&band) {
         return Err(Error::invalid(format!(
             "region_band = {band} must be a depth width from 0 (a sharp border) to 0.5"
@@ -481,6 +483,10 @@ mod tests {
                 "wider than region[0]",
             ),
             ("exemplar = \"a\"\nregion_band = 0.7", "region_band = 0.7"),
+            (
+                "exemplar = \"a\"\nregion_band = 0\n[[region]]\nexemplar = \"b\"\ndepth = [1, 0]",
+                "line 5: region[0].depth = [1, 0] must be two depths",
+            ),
         ];
         for (text, want) in cases {
             let e = parse_fill_spec(text, Path::new(".")).unwrap_err().to_string();

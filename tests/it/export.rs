@@ -239,6 +239,7 @@ fn several_models_a_relief_and_a_skin_export_and_bad_input_is_refused() {
     assert_usage(&solidtex(&["export", &kiwi, "--atlas", "10", "-o", &bad]), &["--atlas"]);
     assert_usage(&solidtex(&["export", &kiwi, "--atlas", "64", "--edge", "0.02", "-o", &bad]), &["atlas"]);
     assert_usage(&solidtex(&["export", &skin, "--edge", "0.1", "-o", &bad]), &["skin"]);
+    assert_usage(&solidtex(&["export", &skin, "--crease", "10", "-o", &bad]), &["skin", "--crease"]);
     assert_usage(&solidtex(&["export", &skin, &kiwi, "-o", &bad]), &["skin.ply", "a skin (.ply) is exported alone"]);
     assert_usage(&solidtex(&["export", &kiwi, "-o", &at(d, "kiwi.png")]), &[".glb"]);
     let before = std::fs::read(&kiwi).unwrap();

@@ -863,9 +863,9 @@ fn a_guided_model_keeps_a_backslash_in_a_file_name() {
     assert!(run.status.success(), "{}", stderr(&run));
 }
 
-/// A skin that cannot be read stops `render` of a guided model before anything of the
-/// model is read or synthesized; `web` and `export` refuse a guided model and say to bake
-/// it first.
+/// A skin that cannot be read, or was grown on another mesh, stops `render` of a guided
+/// model before anything of the model is synthesized; `web` and `export` refuse a guided
+/// model and say to bake it first.
 #[test]
 fn a_guided_model_is_checked_before_synthesis_and_refused_where_not_taken() {
     let dir = tempfile::tempdir().unwrap();
@@ -876,6 +876,13 @@ fn a_guided_model_is_checked_before_synthesis_and_refused_where_not_taken() {
     let model = at(d, "g.guided");
     let base = ["guided", &fruit, "--spec", &spec, "--exemplar", &ex, "--max-exemplar", "64", "--res", "24"];
     assert!(solidtex(&[&base[..], &["-o", &model]].concat()).status.success());
+    let (log, skin) = (at(d, "log.obj"), at(d, "log.ply"));
+    assert!(solidtex(&["draw", "log", "-o", &log]).status.success());
+    let grown = solidtex(&["surface", &log, "--exemplar", &ex, "--points", "500", "-o", &skin]);
+    assert!(grown.status.success(), "{}", stderr(&grown));
+    let run = solidtex(&["render", &model, "--skin", &skin, "-o", &at(d, "r.png")]);
+    crate::support::assert_fails(&run, &["log.ply", "the skin spans"]);
+    assert!(!stderr(&run).contains("synthesized"), "the skin is checked first: {}", stderr(&run));
     // with its exemplar gone the model cannot be synthesized: the missing skin is named first
     std::fs::remove_file(&ex).unwrap();
     let run = solidtex(&["render", &model, "--skin", &at(d, "missing.ply"), "-o", &at(d, "r.png")]);

@@ -34,6 +34,10 @@ fn the_snapshot_command_writes_checks_and_names_differences() {
     let loose = solidtex(&["snapshot", &b, "--check", &snap, "--tolerance", "0.9"]);
     assert!(loose.status.success(), "{}", stderr(&loose));
     crate::support::assert_usage(&solidtex(&["snapshot", &a]), &["either -o NAME.snap", "--check NAME.snap"]);
+    let other = at(dir.path(), "other.snap");
+    let ignored = solidtex(&["snapshot", &a, "-o", &other, "--tolerance", "5"]);
+    crate::support::assert_usage(&ignored, &["--tolerance belongs to --check"]);
+    assert!(!std::path::Path::new(&other).exists(), "nothing written");
 }
 
 /// A snapshot file keeps its figures rounded (stats to 6 decimals, thumbnails to 4): the

@@ -207,6 +207,8 @@ fn a_filled_model_is_viewed_with_its_skin() {
     let run = solidtex(&["view", &model, &skin, "-o", &at(d, "both.png")]);
     crate::support::assert_usage(&run, &["skin.ply", "viewed alone"]);
     assert!(!d.join("both.png").exists());
+    let run = solidtex(&["view", &skin, "--crease", "0", "-o", &at(d, "crease.png")]);
+    crate::support::assert_usage(&run, &["skin.ply", "--crease"]);
 }
 
 /// The skin gets the points asked within 8 %, also from a coarse input (the shared sphere's
