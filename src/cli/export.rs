@@ -111,6 +111,7 @@ pub fn run(args: &ExportArgs) -> Result<()> {
     gltf::write_glb(&args.output, &parts, extras)?;
     let triangles: usize = meshes.iter().map(|m| m.triangles.len()).sum();
     let vertices: usize = meshes.iter().map(|m| m.positions.len()).sum();
+    let unsplit = triangles == loaded.iter().map(|l| l.model.surface.triangles.len()).sum::<usize>();
     tell!(
         "wrote {} in {:.0} ms: {} mesh(es), {triangles} triangles, {vertices} vertices{}",
         args.output.display(),
@@ -119,7 +120,13 @@ pub fn run(args: &ExportArgs) -> Result<()> {
         match options.atlas {
             Some(side) => format!(", a {side}x{side} atlas"),
             None if options.edge == 0.0 => ", vertex colours, the input surface's own triangles".to_string(),
-            None => format!(", vertex colours, edges about {:.4} model units", options.edge),
+            None if unsplit => {
+                format!(
+                    ", vertex colours, the input surface's own triangles (none longer than --edge {})",
+                    options.edge
+                )
+            }
+            None => format!(", vertex colours, edges about {} model units", crate::surface::four_digits(options.edge)),
         }
     );
     Ok(())

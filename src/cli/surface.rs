@@ -36,6 +36,11 @@ pub struct SurfaceArgs {
     pub output: PathBuf,
 }
 
+/// Most exemplar pixels a model may span along its box's diagonal at the `--texel` given:
+/// past it the photo's features are far smaller than the points (500,000 points on a
+/// sphere are about 400 apart across it).
+const MOST_PIXELS_ACROSS: f32 = 1.0e6;
+
 /// Run `solidtex surface`.
 pub fn run(args: &SurfaceArgs) -> Result<()> {
     let (lo, hi) = (*surface::POINTS.start(), *surface::POINTS.end());
@@ -46,11 +51,21 @@ pub fn run(args: &SurfaceArgs) -> Result<()> {
     check_output(&args.output, &[&args.mesh, &args.exemplar])?;
     let mesh = mesh_file::read_mesh(&args.mesh)?;
     let (lo, hi) = mesh.bounds();
-    if let Some(texel) = args.texel.filter(|t| *t > lo.distance(hi)) {
+    let across = lo.distance(hi);
+    if let Some(texel) = args.texel.filter(|t| *t > across) {
         return Err(Error::usage(format!(
-            "--texel {texel}: one exemplar pixel would cover all of {} ({:.4} units across); give at most that",
+            "--texel {texel}: one exemplar pixel would cover all of {} ({} units across); give at most that",
             args.mesh.display(),
-            lo.distance(hi)
+            surface::four_digits(across)
+        )));
+    }
+    if let Some(texel) = args.texel.filter(|t| *t < across * MOST_PIXELS_ACROSS.recip()) {
+        return Err(Error::usage(format!(
+            "--texel {texel:e}: {} ({} units across) would be over {MOST_PIXELS_ACROSS} exemplar pixels across; \
+             give at least {}",
+            args.mesh.display(),
+            surface::four_digits(across),
+            surface::four_digits(across / MOST_PIXELS_ACROSS)
         )));
     }
     let guide = guide(args, &mesh)?;
@@ -68,13 +83,13 @@ pub fn run(args: &SurfaceArgs) -> Result<()> {
     let hist = surface::histogram_distances(&skin.colours, &exemplar)?;
     let mesh_note = if mesh.boundary_edges() > 0 { " (open: its borders stay)" } else { "" };
     tell!(
-        "wrote {}: {} points, {} triangles{mesh_note}, spacing {:.4}, {:.4} units per exemplar pixel, {} level{}, in \
+        "wrote {}: {} points, {} triangles{mesh_note}, spacing {}, {} units per exemplar pixel, {} level{}, in \
          {seconds:.2} s",
         args.output.display(),
         skin.mesh.vertices.len(),
         skin.mesh.triangles.len(),
-        skin.spacing,
-        skin.texel,
+        surface::four_digits(skin.spacing),
+        surface::four_digits(skin.texel),
         skin.levels,
         if skin.levels == 1 { "" } else { "s" }
     );

@@ -60,9 +60,31 @@ pub fn outside_folder(output: &Path, kept: &Path, what: &str) -> Result<()> {
     ))
 }
 
+/// Extensions of the files solidtex reads or writes: a name that is one of them after a dot
+/// and nothing else (`.png`) is taken for a forgotten name, not a hidden file.
+const KNOWN_EXTENSIONS: [&str; 17] = [
+    "exr", "nrrd", "vol", "png", "vdb", "dds", "snap", "ply", "obj", "stl", "lst", "json", "glb", "html", "guided",
+    "toml", "txt",
+];
+
+/// Refuse an output named by an extension alone (`-o .png`, `convert v.exr .exr`): the
+/// system reads it as a hidden file (or folder) without an extension (exit code 2).
+pub fn named(output: &Path) -> Result<()> {
+    let name = output.file_name().map(|n| n.to_string_lossy().to_ascii_lowercase()).unwrap_or_default();
+    let bare = name.strip_prefix('.').filter(|rest| KNOWN_EXTENSIONS.contains(rest));
+    if bare.is_none() || output.to_string_lossy().ends_with('/') {
+        return Ok(());
+    }
+    Err(Error::usage(format!(
+        "{}: the name is an extension alone; give the file a name, like out{name}",
+        output.display()
+    )))
+}
+
 /// Refuse an output whose extension is none of `allowed` (lower case, no dot); `what` names
 /// what the command writes, e.g. "a PNG picture" (exit code 2).
 pub fn extension(output: &Path, allowed: &[&str], what: &str) -> Result<()> {
+    named(output)?;
     let ext = output.extension().map(|e| e.to_string_lossy().to_ascii_lowercase());
     if ext.as_deref().is_some_and(|e| allowed.contains(&e)) {
         return Ok(());
@@ -183,6 +205,20 @@ mod tests {
         }
         assert!(!is_sealed(text.as_bytes()), "the placeholder is no seal");
         assert!(!is_sealed(b"rows: 4\n"));
+    }
+
+    /// `-o .png` or `.exr` is a forgotten name: refused, naming an example; a hidden file
+    /// with a name (`.cut.png`), a folder (`.exr/`) and other hidden names pass.
+    #[test]
+    fn an_extension_alone_is_no_name() {
+        for bad in [".png", "out/.EXR", ".glb"] {
+            let error = named(Path::new(bad)).unwrap_err().to_string();
+            assert!(error.contains("an extension alone") && error.contains("like out."), "{bad}: {error}");
+            assert!(png_output(Path::new(bad), &[]).is_err());
+        }
+        for good in [".cut.png", ".exr/", ".cache", "cut.png", "slices"] {
+            assert!(named(Path::new(good)).is_ok(), "{good}");
+        }
     }
 
     #[test]

@@ -195,6 +195,7 @@ pub fn read_volume(path: &Path, budget: u64) -> Result<Volume> {
 /// ([`guard`]); a folder output is one solidtex may write ([`atomic::writable_folder`]) and
 /// holds none of the inputs.
 pub fn check_output(output: &Path, inputs: &[&Path]) -> Result<()> {
+    guard::named(output)?;
     // an output the command line names in no format solidtex writes: a usage error
     let format = Format::of(output).map_err(|e| Error::usage(e.to_string()))?;
     if format != Format::PngStack {

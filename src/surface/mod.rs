@@ -126,7 +126,8 @@ pub fn scale_note(scale: &Scale) -> Option<String> {
     let mut ways = Vec::new();
     let per_point = scale.texel / scale.spacing;
     if per_point > 1.05 {
-        ways.push(format!("--texel {:.4} (one point per pixel) shows {per_point:.1} times as much", scale.spacing));
+        let texel = four_digits(scale.spacing);
+        ways.push(format!("--texel {texel} (one point per pixel) shows {per_point:.1} times as much"));
     }
     let more_points = scale.points < *POINTS.end();
     match (scale.texel_given, more_points) {
@@ -145,6 +146,16 @@ pub fn scale_note(scale: &Scale) -> Option<String> {
         "the model is about {pixels:.0} exemplar pixels across, the photo {}: its features look large on the model{how}",
         scale.photo_side
     ))
+}
+
+/// A length with four significant digits, however small (a model in millimetres or in
+/// kilometres): `0.0008123`, `1.235`, `1235`.
+pub fn four_digits(value: f32) -> String {
+    if value == 0.0 || !value.is_finite() {
+        return format!("{value}");
+    }
+    let decimals = (3 - value.abs().log10().floor() as i32).clamp(0, 40) as usize;
+    format!("{value:.decimals$}")
 }
 
 /// Refuses an exemplar smaller than [`MIN_EXEMPLAR`] on a side.
@@ -323,6 +334,15 @@ impl<'a> SkinLookup<'a> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Lengths keep four significant digits at any scale, so advice never reads 0.0000.
+    #[test]
+    fn lengths_keep_four_digits() {
+        assert_eq!(four_digits(0.000_812_34), "0.0008123");
+        assert_eq!(four_digits(1.23456), "1.235");
+        assert_eq!(four_digits(1234.5), "1234");
+        assert_eq!(four_digits(3e-9), "0.000000003000");
+    }
 
     #[test]
     fn a_model_showing_little_of_its_photo_is_told_how_to_show_more() {

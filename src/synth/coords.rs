@@ -277,19 +277,8 @@ impl Exemplars {
             let shrink = |s: usize| (1..options.levels).fold(s, |s, _| s.div_ceil(2));
             let (w, h) = (shrink(image.width()), shrink(image.height()));
             if w < smallest || h < smallest {
-                return Err(Error::exemplar(
-                    a,
-                    format!(
-                        "{} is {}x{} pixels; at {} levels its coarsest level is {w}x{h}, smaller than the {m}x{m} a \
-                     {n}x{n} neighbourhood needs; use fewer levels or a larger exemplar",
-                        names[a],
-                        image.width(),
-                        image.height(),
-                        options.levels,
-                        m = smallest,
-                        n = smallest - 2
-                    ),
-                ));
+                let why = super::too_small(names[a], image, options.levels, [w, h], smallest - 2);
+                return Err(Error::exemplar(a, why));
             }
             let (coarse, finest) = (weights(image, options.coarse_depth_share), weights(image, DEPTH_SHARE));
             let pyramid = crate::synth::image_pyramid(image, options.levels)?;

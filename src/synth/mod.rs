@@ -253,17 +253,27 @@ fn check_exemplars(images: &[&Image2d], names: &[&str], params: &SynthParams) ->
         let (w, h) = (shrink(image.width()), shrink(image.height()));
         let need = params.neighbourhood + 2;
         if w < need || h < need {
-            return Err(fault(format!(
-                "{name} is {}x{} pixels; at {} levels its coarsest level is {w}x{h}, smaller than the {need}x{need} \
-                 that a {n}x{n} neighbourhood needs; use fewer levels or a larger exemplar",
-                image.width(),
-                image.height(),
-                params.levels,
-                n = params.neighbourhood
-            )));
+            return Err(fault(too_small(name, image, params.levels, [w, h], params.neighbourhood)));
         }
     }
     Ok(())
+}
+
+/// Why exemplar `name` is too small for `levels` levels of `n` x `n` neighbourhoods, its
+/// coarsest level being `coarsest` pixels, and what to do.
+pub(crate) fn too_small(name: &str, image: &Image2d, levels: usize, [w, h]: [usize; 2], n: usize) -> String {
+    let (need, size) = (n + 2, format!("{}x{}", image.width(), image.height()));
+    if levels > 1 {
+        format!(
+            "{name} is {size} pixels; at {levels} levels its coarsest level is {w}x{h}, smaller than the \
+             {need}x{need} that neighbourhoods of {n}x{n} pixels need; use fewer levels or a larger exemplar"
+        )
+    } else {
+        format!(
+            "{name} is {size} pixels, smaller than the {need}x{need} that neighbourhoods of {n}x{n} pixels need; \
+             give an exemplar of at least {need}x{need} pixels"
+        )
+    }
 }
 
 /// The exemplar with a Depth channel appended (from `depth`, else the row coordinate).
@@ -298,4 +308,26 @@ fn add_depth(exemplar: &Image2d, depth: Option<&Image2d>) -> Result<Image2d> {
         }
     }
     Image2d::from_data(w, h, channels, data)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// An exemplar too small for its levels gets the way out that exists: fewer levels, or
+    /// at one level the least size.
+    #[test]
+    fn a_small_exemplar_is_told_what_size_it_needs() {
+        let tiny = Image2d::from_data(4, 4, Channel::grey(), vec![0.5; 16]).unwrap();
+        let one = too_small("Ex", &tiny, 1, [4, 4], 5);
+        assert_eq!(
+            one,
+            "Ex is 4x4 pixels, smaller than the 7x7 that neighbourhoods of 5x5 pixels need; give an exemplar of at least 7x7 pixels"
+        );
+        let three = too_small("Ex", &tiny, 3, [1, 1], 5);
+        assert!(three.contains("at 3 levels its coarsest level is 1x1") && three.contains("fewer levels"), "{three}");
+        let params = SynthParams { levels: 1, ..SynthParams::default() };
+        let error = synthesize(Exemplars { x: &tiny, y: None, z: None }, &params, 1, &crate::progress::NoProgress);
+        assert!(error.unwrap_err().to_string().contains("give an exemplar of at least"));
+    }
 }

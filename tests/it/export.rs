@@ -211,6 +211,8 @@ fn several_models_a_relief_and_a_skin_export_and_bad_input_is_refused() {
     let kept = at(d, "kept.glb");
     let run = solidtex(&["export", &kiwi, "--edge", "0", "-o", &kept]);
     assert!(run.status.success() && stderr(&run).contains("the input surface's own triangles"), "{}", stderr(&run));
+    let run = solidtex(&["export", &kiwi, "--edge", "1e30", "-o", &kept]);
+    assert!(stderr(&run).contains("own triangles (none longer than --edge"), "{}", stderr(&run));
     // the relief moves the log's vertices along their normals by at most half the scale
     let (flat, raised) = (at(d, "flat.glb"), at(d, "raised.glb"));
     assert!(solidtex(&["export", &log, "--edge", "0.05", "-o", &flat]).status.success());

@@ -134,6 +134,7 @@ fn the_surface_command_writes_a_coloured_ply_and_refuses_bad_input() {
         (["--points", "50"], "--points 50 is out of range; allowed: 100 to 500000"),
         (["--texel", "-1"], "--texel -1 must be a length greater than 0"),
         (["--texel", "1e30"], "one exemplar pixel would cover all of"),
+        (["--texel", "1e-30"], "over 1000000 exemplar pixels across; give at least"),
         (["--direction", "0,0,0"], "--direction 0,0,0 must be a non-zero vector"),
     ] {
         let run = solidtex(&[&["surface", &mesh, "--exemplar", photo], &args[..], &["-o", &out]].concat());
