@@ -110,9 +110,9 @@ pub fn run(args: &FieldArgs) -> Result<()> {
         g.frames,
         g.solve_ms
     );
-    let turns = field_turns(&g, &view)?;
+    let turns = field_turns(&g, (point, normal))?;
     tell!(
-        "  as `guided --res {TURN_RES}` reads it, the frames turn by at most {:.1}° between neighbouring pixels of the cut; \
+        "  as `guided --res {TURN_RES}` reads it, the frames turn by at most {:.1}° between neighbouring voxels of the cut; \
          {} of {} pairs by more than {TURN_LIMIT}° (pairs within two voxels of a depth axis, or of its ridge past its ends, left out)",
         turns.largest,
         turns.over,
@@ -125,11 +125,17 @@ pub fn run(args: &FieldArgs) -> Result<()> {
 const TURN_RES: usize = 256;
 const TURN_LIMIT: f32 = 30.0;
 
-/// How sharply the field, sampled as `guided --res 256` samples it, turns across `view`'s
-/// pixels inside the model, away from the spec's depth axes.
-fn field_turns(g: &Guide, view: &View) -> Result<crate::guided::field::Turns> {
+/// How sharply the field, sampled as `guided --res 256` samples it, turns between
+/// neighbouring voxels of the cut through `plane` (point, normal) inside the model, away
+/// from the spec's depth axes: the cut sampled at one point per voxel, whatever the
+/// picture's size.
+fn field_turns(g: &Guide, (point, normal): (Vec3, Vec3)) -> Result<crate::guided::field::Turns> {
     let domain = Domain::around(g.surface.bounds(), TURN_RES)?;
     let frames = solid::frames_over(&g.tets, &g.field, &domain, &g.depth, &g.axes)?;
+    let framed = View::framing(g.surface.bounds(), point, normal, 8)?;
+    let side = framed.right.length() * framed.width as f32;
+    let per_voxel = ((side / domain.voxel).ceil() as usize).clamp(8, 8192);
+    let view = &View::framing(g.surface.bounds(), point, normal, per_voxel)?;
     let inside = crate::fill::render::field_cut(&g.tets, &vec![0.0; g.tets.vertices.len()], view);
     let to_grid = |p: Vec3| (p - domain.origin) / domain.voxel - 0.5;
     let points: Vec<Option<Vec3>> = (0..view.width * view.height)
