@@ -314,11 +314,17 @@ pub fn model_input(model: &Path, field: &str, file: &Path, base: &Path) -> Resul
     if file.is_file() {
         return Ok(());
     }
+    let named: PathBuf = match file.strip_prefix(base) {
+        Ok(inside) if inside.as_os_str().is_empty() => PathBuf::from("."),
+        Ok(inside) => inside.components().collect(),
+        Err(_) => file.components().collect(),
+    };
+    let what = if file.is_dir() { "is a folder, not a file," } else { "no such file" };
     Err(Error::file(
         model,
         format!(
-            "{field} = {}: no such file in {} (paths in a model are relative to the model's folder)",
-            file.strip_prefix(base).unwrap_or(file).display(),
+            "{field} = {:?}: {what} in {} (paths in a model are relative to the model's folder)",
+            named.display().to_string(),
             base.display()
         ),
     ))
@@ -521,6 +527,17 @@ fn check_image_memory(path: &Path, bytes: &[u8], budget: u64) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A model's missing input is named as the model gives it; a folder is said to be one.
+    #[test]
+    fn a_models_input_is_named_as_given() {
+        let dir = tempfile::tempdir().unwrap();
+        let (base, model) = (dir.path(), dir.path().join("m.guided"));
+        let missing = model_input(&model, "exemplar", &base.join("a.png"), base).unwrap_err().to_string();
+        assert!(missing.contains("exemplar = \"a.png\": no such file in"), "{missing}");
+        let folder = model_input(&model, "exemplar", &base.join("."), base).unwrap_err().to_string();
+        assert!(folder.contains("exemplar = \".\": is a folder, not a file,"), "{folder}");
+    }
 
     #[test]
     fn paths_are_written_relative_to_a_folder() {
