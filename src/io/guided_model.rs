@@ -199,7 +199,7 @@ mod tests {
         let e = edited("res = 256", "res = -5");
         assert!(e.contains("edited.guided: line ") && e.contains("(res = -5)") && e.contains("whole number"), "{e}");
         let e = edited("../fruit.obj", "../nope.obj");
-        assert!(e.contains("edited.guided: mesh = ") && e.contains("nope.obj: no such file"), "{e}");
+        assert!(e.contains("edited.guided: mesh = ") && e.contains("nope.obj\": no such file"), "{e}");
     }
 
     /// Whether two paths name one place, `..` and `.` resolved by their text.

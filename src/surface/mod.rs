@@ -148,14 +148,15 @@ pub fn scale_note(scale: &Scale) -> Option<String> {
     ))
 }
 
-/// A length with four significant digits, however small (a model in millimetres or in
-/// kilometres): `0.0008123`, `1.235`, `1235`.
+/// A length with four significant digits at most, however small (a model in millimetres
+/// or in kilometres): `0.0008123`, `1.235`, `1235`, `0.025`.
 pub fn four_digits(value: f32) -> String {
     if value == 0.0 || !value.is_finite() {
         return format!("{value}");
     }
     let decimals = (3 - value.abs().log10().floor() as i32).clamp(0, 40) as usize;
-    format!("{value:.decimals$}")
+    let text = format!("{value:.decimals$}");
+    if text.contains('.') { text.trim_end_matches('0').trim_end_matches('.').to_string() } else { text }
 }
 
 /// Refuses an exemplar smaller than [`MIN_EXEMPLAR`] on a side.
@@ -341,7 +342,8 @@ mod tests {
         assert_eq!(four_digits(0.000_812_34), "0.0008123");
         assert_eq!(four_digits(1.23456), "1.235");
         assert_eq!(four_digits(1234.5), "1234");
-        assert_eq!(four_digits(3e-9), "0.000000003000");
+        assert_eq!(four_digits(3e-9), "0.000000003");
+        assert_eq!(four_digits(0.025), "0.025");
     }
 
     #[test]
@@ -351,13 +353,13 @@ mod tests {
             Scale { across: 2.0, texel: 0.05, texel_given: false, spacing: 0.025, points: 20_000, photo_side: 512 };
         let note = scale_note(&default).expect("a note");
         assert!(note.contains("about 40 exemplar pixels across, the photo 512"), "{note}");
-        assert!(note.contains("--texel 0.0250 (one point per pixel) shows 2.0 times as much"), "{note}");
+        assert!(note.contains("--texel 0.025 (one point per pixel) shows 2.0 times as much"), "{note}");
         assert!(note.contains("more --points (up to 500000)") && note.contains("a photo shrunk"), "{note}");
         // a texel given: points alone change nothing, and at a point per pixel no smaller
         // texel is offered; at the most points none are offered; a 16-px photo is not shrunk
         let given = Scale { texel_given: true, ..default };
         let note = scale_note(&given).unwrap();
-        assert!(!note.contains("more --points (up to") && note.contains("--texel 0.0250"), "{note}");
+        assert!(!note.contains("more --points (up to") && note.contains("--texel 0.025 "), "{note}");
         let fine = Scale { texel: 0.01, texel_given: true, ..default };
         let note = scale_note(&Scale { across: 1.0, ..fine }).unwrap();
         assert!(

@@ -45,7 +45,7 @@ fn the_field_of_a_kiwi_spec_follows_its_stroke_on_a_cut() {
     );
     let run = solidtex(&["field", &fruit, "--spec", &straight, "--size", "96", "-o", &at(d, "straight.png")]);
     assert!(run.status.success(), "{}", stderr(&run));
-    assert!(stderr(&run).contains("at most 0.0° between neighbouring pixels of the cut; 0 of "), "{}", stderr(&run));
+    assert!(stderr(&run).contains("at most 0.0° between neighbouring voxels of the cut; 0 of "), "{}", stderr(&run));
 
     let bare = crate::fill::spec(d, "bare.toml", "exemplar = \"kiwi\"\n");
     let run = solidtex(&["field", &fruit, "--spec", &bare, "-o", &at(d, "bare.png")]);
