@@ -69,7 +69,7 @@ pub fn synthesize(ex: Exemplars, params: &SynthParams, seed: u64, progress: &dyn
     let ez = ex.z.unwrap_or(ey);
     let images = [ex.x, ey, ez];
     check_exemplars(&images, &["Ex", "Ey", "Ez"], params)?;
-    let data = if blends(params) {
+    let solid = if blends(params) {
         let weights = vec![1.0; ex.x.channel_count()];
         let start = start_samples(params, ex.x.channels(), false)?;
         let job = Job {
@@ -88,7 +88,7 @@ pub fn synthesize(ex: Exemplars, params: &SynthParams, seed: u64, progress: &dyn
         (_, None) => TextureType::T1a,
         _ => TextureType::T2a,
     };
-    finish(params, ex.x.channels().to_vec(), data, kind, "synth", seed)
+    finish(params, ex.x.channels().to_vec(), solid, kind, "synth", seed)
 }
 
 /// Synthesize a layered (type 1-b) solid texture from one exemplar parallel to the
@@ -105,7 +105,7 @@ pub fn synthesize_layered(
 ) -> Result<Volume> {
     check_exemplars(&[exemplar], &["exemplar"], params)?;
     let with_depth = add_depth(exemplar, depth)?;
-    let data = if blends(params) {
+    let solid = if blends(params) {
         let mut weights = vec![1.0; exemplar.channel_count()];
         weights.push(layered.depth_weight);
         let start = start_samples(params, exemplar.channels(), true)?;
@@ -120,7 +120,7 @@ pub fn synthesize_layered(
     } else {
         whole::synthesize([&with_depth; 3], true, params, seed, progress)?
     };
-    let volume = finish(params, with_depth.channels().to_vec(), data, TextureType::T1b, "synth-layered", seed)?;
+    let volume = finish(params, with_depth.channels().to_vec(), solid, TextureType::T1b, "synth-layered", seed)?;
     if let Some(error) = depth::depth_error(&volume).filter(|e| *e > DEPTH_STRAYS) {
         progress.warn(&format!(
             "the layers stray from their depths (the Depth channel is {error:.2} from each slice's depth on average, \
@@ -259,8 +259,8 @@ fn check_exemplars(images: &[&Image2d], names: &[&str], params: &SynthParams) ->
     Ok(())
 }
 
-/// Why exemplar `name` is too small for `levels` levels of `n` x `n` neighbourhoods, its
-/// coarsest level being `coarsest` pixels, and what to do.
+/// Why exemplar `name` (`image`) is too small for `levels` levels of `n` x `n`
+/// neighbourhoods, its coarsest level being `w` x `h` pixels, and what to do.
 pub(crate) fn too_small(name: &str, image: &Image2d, levels: usize, [w, h]: [usize; 2], n: usize) -> String {
     let (need, size) = (n + 2, format!("{}x{}", image.width(), image.height()));
     if levels > 1 {
