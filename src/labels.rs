@@ -31,6 +31,7 @@ use crate::error::{Error, Result};
 use crate::sharpness::ratio;
 use crate::volume::Volume;
 use serde::Serialize;
+use std::borrow::Cow;
 
 /// Most phases a label volume may have.
 pub const MAX_PHASES: usize = 16;
@@ -271,10 +272,11 @@ fn measure_in_tiles(labels: &[f32], dims: [usize; 3], tile: [usize; 3], distinct
     LabelStats { dims, tile, tiles, lags, phases }
 }
 
-/// The `tile`-sized box of `labels` (`dims` voxels) whose lowest corner is `corner`.
-fn crop(labels: &[f32], dims: [usize; 3], corner: [usize; 3], tile: [usize; 3]) -> Vec<f32> {
+/// The `tile`-sized box of `labels` (`dims` voxels) whose lowest corner is `corner`
+/// (`labels` itself, uncopied, when the box is the whole volume).
+fn crop(labels: &[f32], dims: [usize; 3], corner: [usize; 3], tile: [usize; 3]) -> Cow<'_, [f32]> {
     if tile == dims {
-        return labels.to_vec();
+        return Cow::Borrowed(labels);
     }
     let mut out = Vec::with_capacity(tile.iter().product());
     for z in corner[2]..corner[2] + tile[2] {
@@ -283,7 +285,7 @@ fn crop(labels: &[f32], dims: [usize; 3], corner: [usize; 3], tile: [usize; 3]) 
             out.extend_from_slice(&labels[start..start + tile[0]]);
         }
     }
-    out
+    Cow::Owned(out)
 }
 
 /// `sum` plus `one`, figure by figure (the same phase in another tile of the same size).
