@@ -373,7 +373,7 @@ impl Graph {
                 let q = read(self.slots[i]);
                 let [dx, dy] = self.offsets_px[i].map(|v| v.round() as i64);
                 let source = ex.clamped_slot(i64::from(q[0]) - dx, i64::from(q[1]) - dy);
-                for (k, &similar) in ex.coherence_of(source).iter().enumerate() {
+                for (k, similar) in ex.coherence_of(source).enumerate() {
                     let candidate = prepared_pixel(ex, ex.centres[similar as usize]);
                     if tried.contains(&candidate) {
                         continue;

@@ -15,6 +15,7 @@ use crate::noise::mix64;
 use crate::volume::Image2d;
 use rayon::prelude::*;
 use std::sync::OnceLock;
+use std::sync::atomic::{AtomicU32, Ordering};
 
 /// Most neighbourhood vectors used to fit the PCA basis (evenly strided).
 const PCA_SAMPLES: usize = 4096;
@@ -87,8 +88,7 @@ impl Prepared {
         if opt.k > 0 {
             let low = prepared.pca.dims.min(TREE_DIMS);
             let tree = KdTree::build(prepared.projected.packed(low), low);
-            let sets = (0..prepared.centres.len()).map(|_| OnceLock::new()).collect();
-            prepared.coherence = Coherence { tree, low, sets };
+            prepared.coherence = Coherence::new(tree, low, prepared.centres.len(), opt.k);
         }
         prepared
     }
@@ -113,7 +113,7 @@ impl Prepared {
             centre_xy,
             pca: Pca { input: 0, dims: 0, mean: vec![], basis: vec![], explained: 0.0 },
             projected: LineRows::new(&[], 1),
-            coherence: Coherence { tree: KdTree::build(Vec::new(), 0), low: 0, sets: Vec::new() },
+            coherence: Coherence::new(KdTree::build(Vec::new(), 0), 0, 0, 0),
             k: opt.k,
             lookup: KdTree::build(Vec::new(), 0),
         }
@@ -182,11 +182,15 @@ impl Prepared {
     /// spatial neighbours would add nothing new). Found on first use: a large photo's
     /// search visits a fraction of its centres, and a set is the same whichever thread
     /// asks first.
-    pub fn coherence_of(&self, slot: usize) -> &[u32] {
-        self.coherence.sets[slot].get_or_init(|| self.coherence_set(slot))
+    pub fn coherence_of(&self, slot: usize) -> impl Iterator<Item = u32> + '_ {
+        let set = &self.coherence.sets[slot * self.k..(slot + 1) * self.k];
+        self.coherence.found[slot].get_or_init(|| {
+            set.iter().zip(self.coherence_set(slot)).for_each(|(at, c)| at.store(c, Ordering::Relaxed));
+        });
+        set.iter().map(|c| c.load(Ordering::Relaxed))
     }
 
-    fn coherence_set(&self, slot: usize) -> Box<[u32]> {
+    fn coherence_set(&self, slot: usize) -> Vec<u32> {
         let Coherence { tree, low, .. } = &self.coherence;
         let k = self.k;
         let away = (self.n / 2).max(2) as i64;
@@ -204,17 +208,35 @@ impl Prepared {
         });
         let mut set: Vec<u32> = std::iter::once(slot as u32).chain(others).take(k).collect();
         set.resize(k, slot as u32);
-        set.into_boxed_slice()
+        set
     }
 }
 
 /// The k-coherence sets of an exemplar level: the kd-tree over the leading
-/// [`TREE_DIMS`] projected components that finds them, and each centre's set once found.
-#[derive(Debug, Clone)]
+/// [`TREE_DIMS`] projected components that finds them, and each centre's set once found,
+/// all sets in one array (`k` per centre, read in place by the search's hot loop).
+#[derive(Debug)]
 struct Coherence {
     tree: KdTree,
     low: usize,
-    sets: Vec<OnceLock<Box<[u32]>>>,
+    found: Vec<OnceLock<()>>,
+    sets: Vec<AtomicU32>,
+}
+
+impl Coherence {
+    fn new(tree: KdTree, low: usize, centres: usize, k: usize) -> Coherence {
+        let sets = (0..centres * k).map(|_| AtomicU32::new(0)).collect();
+        Coherence { tree, low, found: vec![OnceLock::new(); centres], sets }
+    }
+}
+
+impl Clone for Coherence {
+    fn clone(&self) -> Coherence {
+        // the marks first: a set marked found was stored before its mark
+        let found = self.found.clone();
+        let sets = self.sets.iter().map(|c| AtomicU32::new(c.load(Ordering::Relaxed))).collect();
+        Coherence { tree: self.tree.clone(), low: self.low, found, sets }
+    }
 }
 
 /// Rows of equal length laid out on 64-byte cache lines: a row of up to 16 values lies

@@ -98,12 +98,8 @@ fn transfer_channels(data: &mut [f32], channels: usize, exemplar: &[f32], which:
     for c in which {
         let mut target: Vec<f32> = exemplar.iter().skip(c).step_by(channels).copied().collect();
         target.sort_by(f32::total_cmp);
-        // One u64 per sample, value order in the high half and index in the low half:
-        // sorting plain integers is several times faster than sorting with a comparator.
-        let mut order: Vec<u64> =
-            (0..count).map(|i| (u64::from(ordered_bits(data[i * channels + c])) << 32) | i as u64).collect();
-        order.par_sort_unstable();
-        for (rank, &key) in order.iter().enumerate() {
+        let keys = (0..count).map(|i| ordered_bits(data[i * channels + c]));
+        for (rank, &key) in sorted_by_key(keys).iter().enumerate() {
             let q = ((rank as f64 + 0.5) / count as f64 * targets as f64) as usize;
             data[(key as u32) as usize * channels + c] = target[q.min(targets - 1)];
         }
@@ -180,6 +176,38 @@ fn rotation(n: usize, round: u64) -> Vec<Vec<f32>> {
 fn ordered_bits(v: f32) -> u32 {
     let b = v.to_bits();
     if b >> 31 == 1 { !b } else { b | 0x8000_0000 }
+}
+
+/// Bits per digit of [`sorted_by_key`]: three passes cover a 32-bit key, and a pass's
+/// counts (2,048) stay in the first-level cache.
+const DIGIT: u32 = 11;
+
+/// The samples as `key << 32 | index` (index = position in `keys`), in increasing order:
+/// by key, ties by index. A least-significant-digit radix sort of the keys, stable, so
+/// samples of one key keep their index order: the order `sort_unstable` gives the packed
+/// values, at a few passes over the samples instead of a comparison sort.
+fn sorted_by_key(keys: impl ExactSizeIterator<Item = u32>) -> Vec<u64> {
+    let mut order: Vec<u64> = keys.enumerate().map(|(i, k)| (u64::from(k) << 32) | i as u64).collect();
+    let mut spare = vec![0u64; order.len()];
+    for shift in (32..64).step_by(DIGIT as usize) {
+        let digit = |v: u64| ((v >> shift) & ((1 << DIGIT) - 1)) as usize;
+        let mut starts = vec![0usize; 1 << DIGIT];
+        order.iter().for_each(|&v| starts[digit(v)] += 1);
+        if starts.contains(&order.len()) {
+            continue;
+        }
+        let mut next = 0;
+        for s in starts.iter_mut() {
+            (*s, next) = (next, next + *s);
+        }
+        for &v in &order {
+            let d = digit(v);
+            spare[starts[d]] = v;
+            starts[d] += 1;
+        }
+        std::mem::swap(&mut order, &mut spare);
+    }
+    order
 }
 
 /// Layered histogram transfer: every z-slice's colour channels take the histogram of the
@@ -319,6 +347,27 @@ impl<'a> PlaneView<'a> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The radix order is the comparison sort's order of the packed samples, ties (many
+    /// equal keys) by index, keys spanning every digit.
+    #[test]
+    fn the_radix_order_is_the_sorted_order() {
+        let mut state = 7u64;
+        let mut next = || {
+            state = crate::noise::mix64(state);
+            state
+        };
+        for spread in [4u64, 1 << 12, 1 << 32] {
+            let keys: Vec<u32> = (0..5000).map(|_| (next() % spread) as u32).collect();
+            let mut want: Vec<u64> = keys.iter().enumerate().map(|(i, &k)| (u64::from(k) << 32) | i as u64).collect();
+            want.sort_unstable();
+            assert_eq!(sorted_by_key(keys.iter().copied()), want, "keys below {spread}");
+        }
+        let floats = [0.5f32, -0.0, 0.0, -1.0, f32::NAN, 0.25, 1.0, -f32::NAN, 0.5];
+        let order = sorted_by_key(floats.iter().map(|&v| ordered_bits(v)));
+        let ranked: Vec<usize> = order.iter().map(|&v| (v as u32) as usize).collect();
+        assert_eq!(ranked, [7, 3, 1, 2, 5, 0, 8, 6, 4]);
+    }
     use crate::synth::exemplar::PrepareOptions;
     use crate::volume::{Channel, Image2d};
 

@@ -197,7 +197,7 @@ fn best_two(grid: &Grid, cx: &Context, v: [usize; 3], query: &[f32], seen: &mut 
         let py = (p / width) as i64;
         let px = p as i64 - py * width as i64;
         let slot = ex.clamped_slot(px - da, py - db);
-        for &c in ex.coherence_of(slot) {
+        for c in ex.coherence_of(slot) {
             consider(ex, query, &mut seen, c as usize, &mut top);
         }
     }
