@@ -30,12 +30,24 @@ pub fn same_file(a: &Path, b: &Path) -> bool {
     }
 }
 
-/// Refuse an output that is one of the command's inputs (exit code 2).
+/// Refuse an output that is one of the command's inputs, or lies inside an input that is a
+/// folder (a stack of slices, whose files are all read) (exit code 2).
 pub fn not_an_input(output: &Path, inputs: &[&Path]) -> Result<()> {
-    match inputs.iter().find(|input| same_file(output, input)) {
-        Some(input) => Err(Error::usage(format!(
+    if let Some(input) = inputs.iter().find(|input| same_file(output, input)) {
+        return Err(Error::usage(format!(
             "{}: is the input {} of this command; solidtex never writes over its own inputs (name another output \
              file)",
+            output.display(),
+            input.display()
+        )));
+    }
+    let absolute = super::resolved(output);
+    let inside =
+        |folder: &Path| folder.is_dir() && absolute.ancestors().skip(1).any(|above| same_file(above, folder));
+    match inputs.iter().find(|input| inside(input)) {
+        Some(input) => Err(Error::usage(format!(
+            "{}: is inside the folder {}, an input of this command (its slices are read as one volume); solidtex \
+             never writes into its own inputs (name an output outside it)",
             output.display(),
             input.display()
         ))),

@@ -68,6 +68,41 @@ fn an_output_naming_an_input_is_refused_and_nothing_changes() {
     assert_usage(&solidtex(&["cut", &d("w.lst"), "-o", &d("w.lst")]), &["w.lst", ".png"]);
 }
 
+/// A stack of PNG slices read as a volume is an input as a whole: an output naming one of
+/// its slices, or a new file inside its folder (which would read as one more slice), is
+/// refused (exit 2) before any work, and no slice changes.
+#[test]
+fn an_output_inside_an_input_stack_of_slices_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = |n: &str| at(dir.path(), n);
+    write_volume(&dir.path().join("v.exr"), &random_volume([6, 6, 4], Channel::rgb(), 3)).unwrap();
+    let run = solidtex(&["convert", &d("v.exr"), &d("st")]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let stack = dir.path().join("st");
+    let before = contents(&stack);
+    let slice = at(&stack, "z0002.png");
+    let new = at(&stack, "extra.png");
+    std::os::unix::fs::symlink(&stack, dir.path().join("link")).unwrap();
+    let through_link = d("link/z0001.png");
+    let st = d("st");
+    let st = st.as_str();
+    let runs: Vec<Vec<&str>> = vec![
+        vec!["convert", st, &slice],
+        vec!["convert", st, &new],
+        vec!["convert", st, &through_link],
+        vec!["sheet", st, "-o", &slice],
+        vec!["slice", st, "--axis", "z", "--index", "1", "-o", &slice],
+    ];
+    for args in &runs {
+        let out = solidtex(args);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {}", stderr(&out));
+        assert!(stderr(&out).contains("an input of this command"), "{args:?}: {}", stderr(&out));
+        assert_eq!(contents(&stack), before, "{args:?} changed the stack");
+    }
+    let run = solidtex(&["convert", st, &d("copy.exr")]);
+    assert!(run.status.success(), "an output beside the stack is fine: {}", stderr(&run));
+}
+
 /// The editors keep editing a volume in place, as the README's tour runs them.
 #[test]
 fn the_editors_still_write_over_the_volume_they_edit() {
