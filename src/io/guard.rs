@@ -42,8 +42,7 @@ pub fn not_an_input(output: &Path, inputs: &[&Path]) -> Result<()> {
         )));
     }
     let absolute = super::resolved(output);
-    let inside =
-        |folder: &Path| folder.is_dir() && absolute.ancestors().skip(1).any(|above| same_file(above, folder));
+    let inside = |folder: &Path| folder.is_dir() && absolute.ancestors().skip(1).any(|above| same_file(above, folder));
     match inputs.iter().find(|input| inside(input)) {
         Some(input) => Err(Error::usage(format!(
             "{}: is inside the folder {}, an input of this command (its slices are read as one volume); solidtex \

@@ -63,8 +63,26 @@ pub struct Exemplars<'a> {
     pub z: Option<&'a Image2d>,
 }
 
+impl Exemplars<'_> {
+    /// The same exemplars with a cross-section that repeats the one it defaults to (the same
+    /// picture read from two files, or one file named twice) left out: one image named for
+    /// every plane is the isotropic case, whatever the command line said.
+    fn without_repeats(self) -> Self {
+        let y = self.y.filter(|y| !same_image(y, self.x));
+        let z = self.z.filter(|z| !same_image(z, y.unwrap_or(self.x)));
+        Exemplars { x: self.x, y, z }
+    }
+}
+
+/// Whether two images hold the same pixels (bit for bit, at the same size and channels).
+fn same_image(a: &Image2d, b: &Image2d) -> bool {
+    let size = |i: &Image2d| (i.width(), i.height(), i.channels().to_vec());
+    std::ptr::eq(a, b) || size(a) == size(b) && a.data().iter().zip(b.data()).all(|(p, q)| p.to_bits() == q.to_bits())
+}
+
 /// Synthesize a homogeneous solid texture.
 pub fn synthesize(ex: Exemplars, params: &SynthParams, seed: u64, progress: &dyn Progress) -> Result<Volume> {
+    let ex = ex.without_repeats();
     let ey = ex.y.unwrap_or(ex.x);
     let ez = ex.z.unwrap_or(ey);
     let images = [ex.x, ey, ez];

@@ -2,7 +2,7 @@
 //! core"): labels stay labels and keep far fewer pieces than the blend; outputs are
 //! bit-identical on any thread count.
 
-use crate::support::{assert_usage, solidtex};
+use crate::support::{assert_usage, at, solidtex, stderr};
 use solidtex::labels;
 use solidtex::procedural::{Recipe, generate};
 use solidtex::progress::NoProgress;
@@ -171,4 +171,29 @@ fn a_coordinate_solid_records_its_coherent_patches_and_quality_checks_them() {
     assert!(!checked.status.success());
     let said = crate::support::stderr(&checked);
     assert!(said.contains("largest coherent patch 0.500 of the exemplar's area (allowed at most 0.25)"), "{said}");
+}
+
+/// One picture named for every plane (from two files, or one file named three times) is the
+/// isotropic case: the same solid as the picture alone, of type 0, never synthesized more
+/// finely along an axis (the brick photo's rows and columns differ enough that the planes
+/// taken as three exemplars would make x finer).
+#[test]
+fn one_picture_named_for_every_plane_is_the_picture_alone() {
+    let dir = tempfile::tempdir().unwrap();
+    let brick = concat!(env!("CARGO_MANIFEST_DIR"), "/exemplars/brick_photo.png");
+    let copy = at(dir.path(), "copy.png");
+    std::fs::copy(brick, &copy).unwrap();
+    let synth = |name: &str, planes: &[&str]| {
+        let out = at(dir.path(), name);
+        let mut args = vec!["synth", brick, "--core", "coordinates", "--max-exemplar", "64", "--size", "16"];
+        args.extend_from_slice(planes);
+        args.extend(["-o", &out]);
+        let run = solidtex(&args);
+        assert!(run.status.success(), "{}", stderr(&run));
+        assert!(!stderr(&run).contains("finely"), "{planes:?}: {}", stderr(&run));
+        std::fs::read(&out).unwrap()
+    };
+    let alone = synth("alone.exr", &[]);
+    assert_eq!(synth("three.exr", &["--ey", brick, "--ez", brick]), alone);
+    assert_eq!(synth("copy.exr", &["--ey", &copy]), alone);
 }
