@@ -268,7 +268,11 @@ fn depth(raw: Option<RawDepth>) -> Result<DepthSpec> {
         if line.is_empty() {
             return Err(Error::invalid(format!("{field} is empty; give one point or a polyline")));
         }
-        axes.push(line.iter().map(|p| point(&field, *p)).collect::<Result<Vec<_>>>()?);
+        let mut line = line.iter().map(|p| point(&field, *p)).collect::<Result<Vec<_>>>()?;
+        // a point repeated in a row adds no segment (and a segment without length has no
+        // direction to carry on along past the axis' end)
+        line.dedup();
+        axes.push(line);
     }
     let mut points = Vec::new();
     for (i, p) in raw.points.iter().enumerate() {
@@ -458,6 +462,20 @@ mod tests {
         assert_eq!(s.library, Path::new("exemplars/library.toml"));
         assert!(s.depth.surface && s.depth.axes[0].len() == 2 && s.depth.faces[0].crease == 30.0);
         assert_eq!(s.pastes[0].exemplar, "marble");
+    }
+
+    /// An axis point repeated in a row is read once: the same polyline, the same ends.
+    #[test]
+    fn a_repeated_axis_point_is_read_once() {
+        let read = |axis: &str| {
+            parse_fill_spec(&format!("exemplar = \"a\"\n[depth]\naxis = [{axis}]\n"), Path::new("."))
+                .unwrap()
+                .depth
+                .axes
+        };
+        let plain = read("[[-0.5, 0, 0], [0.5, 0, 0]]");
+        assert_eq!(read("[[-0.5, 0, 0], [-0.5, 0, 0], [0.5, 0, 0], [0.5, 0, 0]]"), plain);
+        assert_eq!(read("[[0, 0, 0], [0, 0, 0]]"), vec![vec![Vec3::ZERO]]);
     }
 
     #[test]
