@@ -1,6 +1,6 @@
 //! `solidtex quality`: slice energy, histogram distance and layered measures of a volume.
 
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::io;
 use crate::quality::{self, Report};
 use std::path::PathBuf;
@@ -219,6 +219,20 @@ fn labels(args: &QualityArgs, volume: &crate::Volume) -> Result<()> {
         return Ok(());
     };
     let truth = io::read_volume(truth_path, io::budget_from_env()?)?;
+    for (path, dims) in [(&args.volume, volume.dims()), (truth_path, truth.dims())] {
+        if dims.iter().any(|side| *side < crate::labels::LEAST_SIDE) {
+            return Err(Error::file(
+                path,
+                format!(
+                    "is {}x{}x{} voxels: comparing label volumes needs at least {} voxels along each axis of both",
+                    dims[0],
+                    dims[1],
+                    dims[2],
+                    crate::labels::LEAST_SIDE
+                ),
+            ));
+        }
+    }
     let comparison = crate::labels::against_truth(volume, &truth).map_err(|e| e.in_file(truth_path))?;
     if args.json {
         say!("{}", serde_json::to_string_pretty(&comparison).expect("statistics always serialize"));
@@ -236,7 +250,8 @@ fn label_table(stats: &crate::labels::LabelStats) -> String {
     if stats.tiles > 1 {
         let [a, b, c] = stats.tile;
         out += &format!(
-            "measured in {} tiles of {a}x{b}x{c} (the other volume's size: pieces are cut where a box ends), pooled\n",
+            "measured in {} tiles of {a}x{b}x{c} (the smaller of the two volumes' sides on each axis: pieces are cut \
+             where a box ends), pooled\n",
             stats.tiles
         );
     }

@@ -3,7 +3,7 @@
 //! right numbers but no shapes (random-phase noise with the spectrum and exact colours, a
 //! blur, a flat and a shuffled volume) fail, on the truths and on the brick photo.
 
-use crate::support::{assert_usage, at, solidtex, stderr};
+use crate::support::{assert_fails, assert_usage, at, solidtex, stderr};
 use solidtex::controls;
 use solidtex::labels;
 use solidtex::lines::{self, Lines};
@@ -158,6 +158,12 @@ fn quality_check_passes_the_truth_and_names_what_the_noise_fails() {
         let ignored = solidtex(&["quality", &n, "--labels", "--truth", &t, extra[0], extra[1]]);
         assert_usage(&ignored, &[extra[0], "--labels measures the volume's phases"]);
     }
+    // a volume too small to compare is named, not the truth
+    let tiny = at(dir.path(), "tiny.exr");
+    solidtex::io::write_volume(std::path::Path::new(&tiny), &generate(Recipe::Channels, [7; 3], 1).unwrap()).unwrap();
+    let small = solidtex(&["quality", &tiny, "--labels", "--truth", &t]);
+    assert_fails(&small, &["tiny.exr: is 7x7x7 voxels", "at least 8 voxels"]);
+    assert!(!stderr(&small).contains("truth.exr"), "{}", stderr(&small));
 }
 
 /// `slice --plane` cuts a volume obliquely: a plane with normal z through the middle is
