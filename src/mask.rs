@@ -64,7 +64,8 @@ pub const SIZE: (usize, usize) = (6, 512);
 /// Alpha at or above this counts as opaque.
 const OPAQUE: f32 = 0.999;
 
-fn check(size: usize, falloff: f32) -> Result<()> {
+/// Refuses a mask side outside [`SIZE`] or a fall-off outside (0, 0.5).
+pub fn check(size: usize, falloff: f32) -> Result<()> {
     let (lo, hi) = SIZE;
     if !(lo..=hi).contains(&size) {
         return Err(Error::invalid(format!("mask size {size} is out of range; allowed {lo} to {hi} voxels")));

@@ -59,7 +59,7 @@ impl MaskRef {
             || Error::invalid(format!("mask reference '{text}' is not 'file PATH', 'splotch ...' or 'layered ...'"));
         let words: Vec<&str> = text.split(' ').collect();
         let num = |i: usize| words.get(i).ok_or_else(bad);
-        match words[0] {
+        let mask = match words[0] {
             "file" => text.strip_prefix("file ").map(|p| MaskRef::File(p.to_string())).ok_or_else(bad),
             "splotch" => Ok(MaskRef::Splotch {
                 size: num(1)?.parse().map_err(|_| bad())?,
@@ -74,7 +74,15 @@ impl MaskRef {
                 seed: num(5)?.parse().map_err(|_| bad())?,
             }),
             _ => Err(bad()),
+        }?;
+        match mask {
+            MaskRef::Splotch { size, falloff, .. } | MaskRef::Layered { size, falloff, .. } => {
+                crate::mask::check(size, falloff)
+                    .map_err(|e| Error::invalid(format!("mask reference '{text}': {e}")))?
+            }
+            MaskRef::File(_) => {}
         }
+        Ok(mask)
     }
 
     /// The mask volume for a recipe (files are loaded by `io`).
@@ -306,6 +314,13 @@ mod tests {
         }
         for text in ["file", "splotch 32", "layered", ""] {
             assert!(MaskRef::parse(text).unwrap_err().to_string().contains("mask reference"), "{text}");
+        }
+        // a recipe out of range is refused where it is read (a model file's mask), not later
+        for (text, says) in
+            [("splotch 100000 0.075 0", "allowed 6 to 512"), ("layered outer z 32 0.7 1", "fall-off 0.7")]
+        {
+            let error = MaskRef::parse(text).unwrap_err().to_string();
+            assert!(error.contains(text) && error.contains(says), "{error}");
         }
     }
 }
