@@ -102,8 +102,13 @@ impl Snapshot {
             let numbers = |skip: usize| rest.split_whitespace().skip(skip).map(number).collect::<Result<Vec<f64>>>();
             match key {
                 "dims" => {
-                    snap.dims =
-                        numbers(0)?.iter().map(|v| *v as usize).collect::<Vec<_>>().try_into().map_err(|_| bad())?
+                    let dims = numbers(0)?;
+                    if dims.len() != 3 || dims.iter().any(|d| *d < 1.0 || d.fract() != 0.0) {
+                        return Err(Error::invalid(format!(
+                            "snapshot dims line '{rest}' must be three whole numbers of at least 1 (voxels along x, y, z)"
+                        )));
+                    }
+                    snap.dims = [0, 1, 2].map(|a| dims[a] as usize);
                 }
                 "channels" => snap.channels = rest.split(',').map(str::to_string).collect(),
                 "type" => snap.texture_type = (rest != "-").then(|| rest.to_string()),
@@ -289,6 +294,12 @@ mod tests {
         }
         let thumb_cut = &text[..text.len() - 8];
         assert!(Snapshot::parse(thumb_cut).unwrap_err().to_string().contains("thumb line 3 has 63 values"));
+        // a dims line that is there but wrong is named as wrong, not as missing
+        for dims in ["0 0 0", "6 5", "6 5 4.5"] {
+            let damaged = text.replacen("dims 6 5 4", &format!("dims {dims}"), 1);
+            let err = Snapshot::parse(&damaged).unwrap_err().to_string();
+            assert!(err.contains(&format!("dims line '{dims}'")) && err.contains("at least 1"), "{err}");
+        }
     }
 
     #[test]

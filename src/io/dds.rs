@@ -132,8 +132,14 @@ fn parse(bytes: &[u8], budget: u64) -> Result<Volume> {
         DdsFormat::Rgba16F => 2,
         DdsFormat::Rgba32F => 4,
     };
+    if dims.contains(&0) {
+        return Err(Error::invalid(format!(
+            "the header says {}x{}x{} voxels; every side must be at least 1",
+            dims[0], dims[1], dims[2]
+        )));
+    }
     let need = dims.iter().try_fold(4 * sample, |acc: usize, d| acc.checked_mul(*d));
-    if need.is_none_or(|n| n > dds.data.len()) || dims.contains(&0) {
+    if need.is_none_or(|n| n > dds.data.len()) {
         return Err(Error::invalid(format!(
             "the header says {}x{}x{} voxels, which the {} bytes of data cannot hold",
             dims[0],
@@ -222,5 +228,10 @@ mod tests {
         bytes[24..28].copy_from_slice(&0u32.to_le_bytes());
         let err = parse(&bytes, u64::MAX).unwrap_err().to_string();
         assert!(err.contains("depth 0"), "{err}");
+        // a height of 0 is named as a side of 0, not as data too short
+        let mut bytes = to_bytes(&sample(), DdsFormat::Rgba8).unwrap();
+        bytes[12..16].copy_from_slice(&0u32.to_le_bytes());
+        let err = parse(&bytes, u64::MAX).unwrap_err().to_string();
+        assert!(err.contains("x0x") && err.contains("every side must be at least 1"), "{err}");
     }
 }
