@@ -101,23 +101,28 @@ fn remove_written(base: &Path, relative: &Path) -> Result<()> {
 }
 
 /// Discard the new build: the kept files and record go back, the files only the new build
-/// wrote are removed, and the copy goes.
+/// wrote are removed, and the copy goes. A file of the new build that is not as solidtex
+/// wrote it (a person edited it, or put their own file at its name) stops the discard
+/// before anything changes.
 pub fn restore(output: &Path, name: &str) -> Result<()> {
     let old = record(output, name)
         .ok_or_else(|| Error::invalid(format!("no previous build of {name} is kept in {}", output.display())))?;
     let kept = folder(output, name);
-    for file in old.files.iter().filter(|f| listed(&f.path)) {
-        copy(&kept.join(&file.path), &output.join(&file.path))?;
+    let back: Vec<String> = old.files.iter().filter(|f| listed(&f.path)).map(|f| f.path.clone()).collect();
+    let only_new: Vec<String> = cache::read_record(output, name)
+        .map(|new| new.files.into_iter().map(|f| f.path).filter(|p| listed(p) && !back.contains(p)).collect())
+        .unwrap_or_default();
+    let ledger = super::build::open_ledger(output)?;
+    let touched: Vec<String> = back.iter().chain(&only_new).cloned().collect();
+    ledger.claim(&touched)?;
+    for path in &back {
+        copy(&kept.join(path), &output.join(path))?;
     }
-    if let Some(new) = cache::read_record(output, name) {
-        let only_new = new.files.iter().filter(|f| listed(&f.path) && !old.files.iter().any(|o| o.path == f.path));
-        for file in only_new {
-            remove_written(output, Path::new(&file.path))?;
-        }
+    for path in &only_new {
+        remove_written(output, Path::new(path))?;
     }
     cache::write_record(output, &old)?;
-    let paths: Vec<String> = old.files.iter().map(|f| f.path.clone()).collect();
-    super::build::open_ledger(output)?.record(&paths)?;
+    ledger.record(&touched)?;
     drop_kept(output, name)
 }
 
@@ -168,6 +173,18 @@ mod tests {
         assert_eq!(std::fs::read(out.join(".cache/m.json")).unwrap(), json);
         assert!(!out.join("m.mask.exr").exists() && !folder(&out, "m").exists());
         assert!(restore(&out, "m").unwrap_err().to_string().contains("no previous build of m"));
+        // a file of the new build a person changed stops the discard before anything changes
+        keep(&out, "m").unwrap();
+        build_with(&manifest, &out, &second);
+        let rebuilt = std::fs::read(out.join("m.exr")).unwrap();
+        std::fs::write(out.join("m.mask.exr"), b"my own mask").unwrap();
+        let error = restore(&out, "m").unwrap_err().to_string();
+        assert!(error.contains("m.mask.exr") && error.contains("changed since"), "{error}");
+        assert_eq!(std::fs::read(out.join("m.mask.exr")).unwrap(), b"my own mask");
+        assert_eq!(std::fs::read(out.join("m.exr")).unwrap(), rebuilt, "the new build stays as it was");
+        std::fs::remove_file(out.join("m.mask.exr")).unwrap();
+        restore(&out, "m").unwrap();
+        assert_eq!(std::fs::read(out.join("m.exr")).unwrap(), volume);
         keep(&out, "m").unwrap();
         std::fs::write(folder(&out, "m").join("notes.txt"), b"mine").unwrap();
         drop_kept(&out, "m").unwrap();
