@@ -402,13 +402,17 @@ fn build_entry(
 /// Make entry `entry`'s volume and write its files into `output` (unless cancelled first).
 fn make_and_write(entry: &Entry, output: &Path, progress: &EntryProgress) -> Result<crate::volume::Volume> {
     let volume = recipe::make_with(entry, progress)?;
+    // everything that can fail is made before the first file is written: a failed entry
+    // leaves its earlier build as it was
+    let masks = recipe::masks(entry, &volume)?;
+    let page = io::web::preview_page(&entry.name, &volume)?;
     if progress.cancelled() {
         return Err(Error::Cancelled);
     }
     io::write_volume(&files::volume(output, &entry.name), &volume)?;
     io::write_rgb8(&output.join(files::sheet(&entry.name)), &crate::render::sheet(&volume, &entry.name))?;
-    io::write_bytes(&output.join(files::view(&entry.name)), io::web::preview_page(&entry.name, &volume)?.as_bytes())?;
-    recipe::extras(entry, &volume, output)?;
+    io::write_bytes(&output.join(files::view(&entry.name)), page.as_bytes())?;
+    recipe::write_extras(entry, &volume, &masks, output)?;
     Ok(volume)
 }
 

@@ -158,33 +158,49 @@ pub fn photos(spec: &SynthSpec) -> Result<[crate::volume::Image2d; 3]> {
     Ok([ex, ey, ez])
 }
 
-/// Masks and extra formats beside the volume.
-pub fn extras(entry: &Entry, volume: &Volume, output: &Path) -> Result<()> {
+/// An entry's masks, made before any of its files is written (a mask that cannot be made
+/// fails the entry with the earlier build's files as they were).
+pub struct Masks {
+    splotch: Option<Volume>,
+    layers: Option<Vec<(crate::mask::Layer, Volume)>>,
+}
+
+/// Make the masks `entry` asks for, at the size of its `volume`.
+pub fn masks(entry: &Entry, volume: &Volume) -> Result<Masks> {
+    let size = *volume.dims().iter().max().expect("three dims");
+    let mut out = Masks { splotch: None, layers: None };
+    for kind in &entry.masks {
+        match kind {
+            MaskKind::Splotch => out.splotch = Some(crate::mask::splotch(size, entry.mask_falloff, entry.seed)?),
+            MaskKind::Layered => {
+                let depth = depth_axis(entry);
+                let layers = crate::mask::Layer::ALL
+                    .iter()
+                    .map(|l| Ok((*l, crate::mask::layered(size, entry.mask_falloff, entry.seed, *l, depth)?)))
+                    .collect::<Result<_>>()?;
+                out.layers = Some(layers);
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// Write the extra formats and the `masks` beside the volume.
+pub fn write_extras(entry: &Entry, volume: &Volume, masks: &Masks, output: &Path) -> Result<()> {
     let name = &entry.name;
     for export in &entry.exports {
         io::write_volume(&files::export(output, name, export), volume)?;
     }
-    let size = *volume.dims().iter().max().expect("three dims");
-    for kind in &entry.masks {
-        match kind {
-            MaskKind::Splotch => {
-                let m = crate::mask::splotch(size, entry.mask_falloff, entry.seed)?;
-                io::write_volume(&files::splotch_mask(output, name), &m)?;
+    if let Some(m) = &masks.splotch {
+        io::write_volume(&files::splotch_mask(output, name), m)?;
+    }
+    if let Some(layers) = &masks.layers {
+        io::write_folder(&files::layer_folder(output, name), |dir| {
+            for (l, m) in layers {
+                io::write_volume(&dir.join(files::layer_file(*l)), m)?;
             }
-            MaskKind::Layered => {
-                let depth = depth_axis(entry);
-                let layers: Vec<(crate::mask::Layer, Volume)> = crate::mask::Layer::ALL
-                    .iter()
-                    .map(|l| Ok((*l, crate::mask::layered(size, entry.mask_falloff, entry.seed, *l, depth)?)))
-                    .collect::<Result<_>>()?;
-                io::write_folder(&files::layer_folder(output, name), |dir| {
-                    for (l, m) in &layers {
-                        io::write_volume(&dir.join(files::layer_file(*l)), m)?;
-                    }
-                    Ok(())
-                })?;
-            }
-        }
+            Ok(())
+        })?;
     }
     Ok(())
 }

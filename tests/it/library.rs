@@ -590,6 +590,38 @@ fn a_failed_entry_shows_its_kept_earlier_build_in_the_report() {
     assert!(row.contains("failed") && !row.contains("c.sheet.png"), "{md}");
 }
 
+/// An entry whose mask cannot be made fails before any of its files is written: its earlier
+/// build's volume, sheet, view page and mask stay as they were, as the report says; a first
+/// build that fails so leaves none of its files.
+#[test]
+fn an_entry_whose_mask_fails_leaves_its_earlier_build_whole() {
+    let dir = tempfile::tempdir().unwrap();
+    let manifest = dir.path().join("m.toml");
+    let entry = |seed: u32, falloff: f32| {
+        format!(
+            "[[exemplar]]\nname = \"k\"\nrecipe = \"procedural:marble\"\nsize = 16\nseed = {seed}\nmasks = \
+             [\"splotch\"]\nmask_falloff = {falloff}\n"
+        )
+    };
+    std::fs::write(&manifest, entry(1, 0.1)).unwrap();
+    let out = at(dir.path(), "out");
+    let m = manifest.to_string_lossy().into_owned();
+    assert!(solidtex(&["build", &m, "-o", &out]).status.success());
+    let names = ["k.exr", "k.sheet.png", "k.view.html", "k.mask.exr"];
+    let read = |folder: &str| names.map(|n| std::fs::read(dir.path().join(folder).join(n)).ok());
+    let before = read("out");
+    std::fs::write(&manifest, entry(2, 0.49)).unwrap();
+    let failed = solidtex(&["build", &m, "-o", &out]);
+    assert_eq!(failed.status.code(), Some(1), "{}", stderr(&failed));
+    assert!(stderr(&failed).contains("opaque nowhere"), "{}", stderr(&failed));
+    assert_eq!(read("out"), before, "the earlier build's files stay as they were");
+    let md = std::fs::read_to_string(dir.path().join("out/report.md")).unwrap();
+    assert!(md.contains("(earlier build kept)"), "{md}");
+    let fresh = at(dir.path(), "fresh");
+    assert!(!solidtex(&["build", &m, "-o", &fresh]).status.success());
+    assert_eq!(read("fresh"), [None, None, None, None], "a failed first build writes none of its files");
+}
+
 /// A declared type the classifier does not read is flagged in the report (fill and guided go
 /// by the declared one); an entry whose types agree gets no such warning.
 #[test]
