@@ -425,12 +425,16 @@ pub fn merge(request: &Request, folders: &[PathBuf]) -> Result<Vec<Outcome>> {
     let _lock = lock_output(output)?;
     let ledger = open_ledger(output)?;
     ledger.claim(&REPORTS.map(String::from))?;
+    let manifest_folder = manifest_folder(&request.manifest);
     let mut outcomes = Vec::new();
     for entry in &entries {
         let name = &entry.name;
-        let Some(folder) = folders.iter().find(|f| f.join(files::record(name)).exists()) else {
-            outcomes.push(Outcome::Failed(name.clone(), "built by none of the merged folders".to_string()));
-            continue;
+        let folder = match merged_from(entry, manifest_folder, folders)? {
+            Ok(folder) => folder,
+            Err(why) => {
+                outcomes.push(Outcome::Failed(name.clone(), why));
+                continue;
+            }
         };
         let mut names = files::outputs(entry);
         ledger.claim(&names)?;
@@ -445,6 +449,30 @@ pub fn merge(request: &Request, folders: &[PathBuf]) -> Result<Vec<Outcome>> {
     }
     write_report(output, &ledger, &outcomes.iter().map(Row::Now).collect::<Vec<_>>())?;
     Ok(outcomes)
+}
+
+/// The first of `folders` holding `entry`'s build up to date with the manifest (its recipe,
+/// inputs and solidtex version) with every output file as recorded, or why none does (an
+/// older build, a file changed or missing): merged, a stale copy would pass for fresh.
+fn merged_from<'a>(
+    entry: &Entry,
+    manifest_folder: &Path,
+    folders: &'a [PathBuf],
+) -> Result<std::result::Result<&'a PathBuf, String>> {
+    let key = cache::key(entry, manifest_folder)?;
+    let mut stale = None;
+    for folder in folders {
+        match cache::freshness_against(entry, &key, folder) {
+            Freshness::UpToDate(_) => return Ok(Ok(folder)),
+            Freshness::Stale(_, why) => {
+                stale.get_or_insert_with(|| {
+                    format!("the build in {} is out of date ({why}): build it again", folder.display())
+                });
+            }
+            Freshness::NotBuilt => {}
+        }
+    }
+    Ok(Err(stale.unwrap_or_else(|| "built by none of the merged folders".to_string())))
 }
 
 /// The shard an exemplar belongs to among `n`: a stable hash of its name.

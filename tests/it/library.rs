@@ -175,6 +175,24 @@ fn three_shards_merged_equal_one_build() {
     let failed = err.matches("FAILED ").count();
     assert!(failed >= 1 && err.matches("built by none of the merged folders").count() == failed, "{err}");
     assert!(err.contains(&format!("{failed} failed")), "{err}");
+    // a shard's build of an entry the manifest changed since, or missing one of its files, is
+    // not merged as up to date: that entry fails, saying why, and none of its files is copied
+    let shard_of = |name: &str| shards.iter().find(|s| Path::new(s).join(format!("{name}.exr")).exists()).unwrap();
+    std::fs::remove_file(Path::new(shard_of("b")).join("b.view.html")).unwrap();
+    let text = std::fs::read_to_string(&manifest).unwrap();
+    std::fs::write(&manifest, text.replacen("seed = 1", "seed = 4", 1)).unwrap();
+    let stale = at(dir.path(), "stale");
+    let mut args = vec!["build", &manifest, "-o", &stale, "--merge"];
+    args.extend(shards.iter().map(String::as_str));
+    let run = solidtex(&args);
+    let err = stderr(&run);
+    assert_eq!(run.status.code(), Some(1), "{err}");
+    assert!(err.contains("FAILED a") && err.contains("out of date (the recipe changed)"), "{err}");
+    assert!(err.contains("FAILED b") && err.contains("b.view.html"), "{err}");
+    for file in ["a.exr", "b.exr", "b.sheet.png"] {
+        assert!(!dir.path().join("stale").join(file).exists(), "{file} copied");
+    }
+    assert!(dir.path().join("stale/c.exr").is_file(), "the entry up to date is merged");
 }
 
 #[test]
