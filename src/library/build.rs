@@ -135,6 +135,7 @@ pub fn manifest_folder(manifest: &Path) -> &Path {
 /// report and returns one outcome per entry, in order.
 pub fn build(request: &Request, entries: &[Entry], observer: &dyn Observer) -> Result<Vec<Outcome>> {
     not_the_current_folder(&request.output)?;
+    not_inside_an_input(&request.output, entries)?;
     let lock = lock_output(&request.output)?;
     build_holding(request, entries, observer, lock, Reports::Required)
 }
@@ -160,6 +161,7 @@ pub fn build_when_free(
     (wait, waiting): (Duration, &dyn Fn()),
 ) -> Result<Vec<Outcome>> {
     not_the_current_folder(&request.output)?;
+    not_inside_an_input(&request.output, entries)?;
     let lock = lock_waiting(&request.output, wait, waiting)?;
     build_holding(request, entries, observer, lock, Reports::IfOurs)
 }
@@ -314,6 +316,25 @@ fn reads_no_output(entry: &Entry, output: &Path) -> Result<()> {
     Ok(())
 }
 
+/// Refuse an output folder that is, or lies inside, a folder an entry reads (a stack of
+/// slices): the build's reports and cache would land among the slices.
+fn not_inside_an_input(output: &Path, entries: &[Entry]) -> Result<()> {
+    for entry in entries {
+        for (field, input) in cache::input_files(entry).into_iter().filter(|(_, input)| input.is_dir()) {
+            io::guard::not_an_input(&output.join("report.md"), &[&input]).map_err(|_| {
+                Error::usage(format!(
+                    "-o {}: is inside the folder {field} = {:?} of exemplar {}, an input of this build; solidtex \
+                     never writes into its own inputs (build into another folder)",
+                    output.display(),
+                    input.display().to_string(),
+                    entry.name
+                ))
+            })?;
+        }
+    }
+    Ok(())
+}
+
 /// Run `work`, turning a panic into an error that says what it was.
 pub fn caught<T>(work: impl FnOnce() -> Result<T>) -> Result<T> {
     std::panic::catch_unwind(std::panic::AssertUnwindSafe(work)).unwrap_or_else(|panic| {
@@ -422,6 +443,7 @@ pub fn merge(request: &Request, folders: &[PathBuf]) -> Result<Vec<Outcome>> {
     let entries = manifest::read_plan(&request.manifest)?.entries;
     let output = request.output.as_path();
     not_the_current_folder(output)?;
+    not_inside_an_input(output, &entries)?;
     let _lock = lock_output(output)?;
     let ledger = open_ledger(output)?;
     ledger.claim(&REPORTS.map(String::from))?;

@@ -96,11 +96,29 @@ pub fn key(entry: &Entry, folder: &Path) -> Result<Key> {
     hasher.update(recipe.as_bytes());
     let mut inputs = Vec::new();
     for (field, input) in input_files(entry) {
-        let bytes = io::atomic::read_bytes(&input).map_err(|e| entry.lines.error(&field, e))?;
+        let bytes = input_content(&input).map_err(|e| entry.lines.error(&field, e))?;
         hasher.update(&bytes);
         inputs.push(Written { path: shown(&input, folder), bytes: bytes.len() as u64, hash: short_hash(&bytes) });
     }
     Ok(Key { key: short(hasher.finalize()), recipe: short(blake3::hash(recipe.as_bytes())), inputs })
+}
+
+/// What a key hashes of an input: a file's content; a folder's (a stack of slices read as
+/// one volume) files' names and content hashes, in name order.
+fn input_content(path: &Path) -> Result<Vec<u8>> {
+    if !path.is_dir() {
+        return io::atomic::read_bytes(path);
+    }
+    let listed = std::fs::read_dir(path).map_err(|e| crate::error::Error::io(path, e))?;
+    let mut files: Vec<PathBuf> = listed.filter_map(|e| e.ok().map(|e| e.path())).filter(|p| p.is_file()).collect();
+    files.sort();
+    let mut out = Vec::new();
+    for file in files {
+        out.extend_from_slice(file.file_name().unwrap_or_default().as_encoded_bytes());
+        out.push(0);
+        out.extend_from_slice(blake3::hash(&io::atomic::read_bytes(&file)?).as_bytes());
+    }
+    Ok(out)
 }
 
 /// Whether `entry`'s build in `output` is up to date, and if not, why.

@@ -608,6 +608,39 @@ fn a_failed_entry_shows_its_kept_earlier_build_in_the_report() {
     assert!(row.contains("failed") && !row.contains("c.sheet.png"), "{md}");
 }
 
+/// `recipe = "load"` reads a stack of PNG slices as it reads any volume: built, then cached,
+/// then rebuilt when a slice changes; an output folder that is the stack (or inside it) is
+/// refused before anything is written there.
+#[test]
+fn a_loaded_stack_of_slices_is_built_and_never_written_into() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let volume = at(d, "m.exr");
+    assert!(solidtex(&["make", "marble", "--size", "12", "-o", &volume]).status.success());
+    assert!(solidtex(&["convert", &volume, &at(d, "stack")]).status.success());
+    let manifest = at(d, "lib.toml");
+    std::fs::write(&manifest, "[[exemplar]]\nname = \"k\"\nrecipe = \"load\"\nvolume = \"stack\"\n").unwrap();
+    let stack: Vec<(String, Vec<u8>)> = crate::support::listing(&d.join("stack"))
+        .into_iter()
+        .map(|n| (n.clone(), std::fs::read(d.join("stack").join(n)).unwrap()))
+        .collect();
+    for inside in ["stack", "stack/out"] {
+        let run = solidtex(&["build", &manifest, "-o", &at(d, inside)]);
+        crate::support::assert_usage(&run, &["is inside the folder volume", "exemplar k"]);
+    }
+    let now: Vec<String> = crate::support::listing(&d.join("stack"));
+    assert_eq!(now, stack.iter().map(|(n, _)| n.clone()).collect::<Vec<_>>(), "nothing written into the stack");
+    let out = at(d, "out");
+    let first = solidtex(&["build", &manifest, "-o", &out]);
+    assert!(stderr(&first).contains("1 built"), "{}", stderr(&first));
+    let again = solidtex(&["build", &manifest, "-o", &out]);
+    assert!(stderr(&again).contains("1 cached"), "{}", stderr(&again));
+    assert!(solidtex(&["make", "marble", "--size", "12", "--seed", "2", "-o", &volume]).status.success());
+    assert!(solidtex(&["convert", &volume, &at(d, "stack")]).status.success(), "the stack is solidtex's");
+    let changed = solidtex(&["build", &manifest, "-o", &out]);
+    assert!(stderr(&changed).contains("1 built"), "a changed slice rebuilds: {}", stderr(&changed));
+}
+
 /// An entry whose mask cannot be made fails before any of its files is written: its earlier
 /// build's volume, sheet, view page and mask stay as they were, as the report says; a first
 /// build that fails so leaves none of its files.
