@@ -229,7 +229,7 @@ fn remove_stale_folder(path: &Path) -> std::io::Result<()> {
     let listed = listed_files(path);
     for entry in fs::read_dir(path)?.filter_map(|e| e.ok()) {
         let name = entry.file_name().to_string_lossy().into_owned();
-        if name != FOLDER_LIST && why_foreign(path, &name, &listed).is_none() {
+        if name != FOLDER_LIST && why_foreign(path, &name, &listed, true).is_none() {
             fs::remove_file(entry.path())?;
         }
     }
@@ -424,7 +424,7 @@ pub fn writable_folder(path: &Path) -> Result<Option<Vec<String>>> {
     let foreign: Vec<(&String, &str)> = names
         .iter()
         .filter(|n| *n != FOLDER_LIST)
-        .filter_map(|n| why_foreign(path, n, &listed).map(|w| (n, w)))
+        .filter_map(|n| why_foreign(path, n, &listed, names.iter().any(|n| n == FOLDER_LIST)).map(|w| (n, w)))
         .collect();
     if let Some((first, why)) = foreign.first() {
         return Err(Error::file(
@@ -460,9 +460,12 @@ fn folder_names(path: &Path) -> Result<Vec<String>> {
 }
 
 /// Why the file `name` of the folder `path` is not solidtex's to replace, given the list
-/// of what it wrote there (`None`: it is).
-fn why_foreign(path: &Path, name: &str, listed: &[(String, Option<String>)]) -> Option<&'static str> {
+/// of what it wrote there, if the folder has one (`None`: it is).
+fn why_foreign(path: &Path, name: &str, listed: &[(String, Option<String>)], has_list: bool) -> Option<&'static str> {
     match listed.iter().find(|(n, _)| n == name) {
+        // a file another command put into solidtex's folder (a fill's model beside the
+        // drawn meshes) is solidtex's, but not this folder's
+        None if has_list => Some("is not among the files solidtex wrote as this folder"),
         None => Some("solidtex did not write"),
         Some((_, None)) => Some("an older solidtex listed without a content hash, so a change cannot be told"),
         Some((_, Some(hash))) if file_hash(&path.join(name)).as_deref() == Some(hash) => None,
@@ -659,6 +662,25 @@ pub fn canonical(path: &Path) -> Option<PathBuf> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A file of another's in a folder solidtex wrote is named as not this folder's (it may
+    /// be solidtex's own, written by another command); in a folder without solidtex's list,
+    /// as a file solidtex did not write. Either way the folder is left as it was.
+    #[test]
+    fn a_file_added_to_a_written_folder_is_named_as_not_the_folders() {
+        let dir = tempfile::tempdir().unwrap();
+        let ours = dir.path().join("ours");
+        write_folder(&ours, |d| write_bytes(&d.join("a.obj"), b"mesh")).unwrap();
+        fs::write(ours.join("a.lst"), b"model").unwrap();
+        let error = write_folder(&ours, |d| write_bytes(&d.join("a.obj"), b"mesh 2")).unwrap_err().to_string();
+        assert!(error.contains("\"a.lst\", which is not among the files solidtex wrote as this folder"), "{error}");
+        assert_eq!(fs::read(ours.join("a.obj")).unwrap(), b"mesh");
+        let theirs = dir.path().join("theirs");
+        fs::create_dir(&theirs).unwrap();
+        fs::write(theirs.join("notes.txt"), b"mine").unwrap();
+        let error = write_folder(&theirs, |d| write_bytes(&d.join("a.obj"), b"mesh")).unwrap_err().to_string();
+        assert!(error.contains("\"notes.txt\", which solidtex did not write"), "{error}");
+    }
 
     /// The clean-up of an interrupted build matches the names solidtex gives its
     /// temporaries and nothing a user could plausibly name alike.

@@ -471,6 +471,12 @@ fn plain(message: &str) -> String {
     if message.contains("untagged enum RawSize") {
         return format!("size must be one whole number or three, each 1 to {MAX_SIDE}, e.g. 64 or [64, 64, 32]");
     }
+    if message.contains("as i128") {
+        // the TOML reader's own words for an integer past 64 bits
+        return "is a whole number too large to read (past 64 bits); every number a manifest holds is far \
+                smaller (a size is 1 to 512)"
+            .to_string();
+    }
     const WANTS: [(&str, &str); 7] = [
         ("expected usize", "a whole number, 0 or more"),
         ("expected u64", "a whole number, 0 or more"),
@@ -782,7 +788,11 @@ fn dims_of(size: &RawSize) -> Result<[usize; 3]> {
         }
     };
     if dims.iter().any(|d| *d == 0 || *d > MAX_SIDE) {
-        return Err(Error::invalid(format!("size = {dims:?} is out of range; each side must be 1..={MAX_SIDE}")));
+        let written = match size {
+            RawSize::Cube(n) => n.to_string(),
+            RawSize::Dims(v) => format!("{v:?}"),
+        };
+        return Err(Error::invalid(format!("size = {written} is out of range; each side must be 1..={MAX_SIDE}")));
     }
     Ok(dims)
 }
@@ -989,6 +999,15 @@ mod tests {
                 .to_string()
                 .contains("line 6: max_exemplar = 0 is out of range; allowed: 8 to 4096")
         );
+        // a size is quoted as written; a number past 64 bits is named as such
+        let marble =
+            |size: &str| format!("[[exemplar]]\nname = \"m\"\nrecipe = \"procedural:marble\"\nsize = {size}\n");
+        let err = plan(&marble("99999")).unwrap_err().to_string();
+        assert!(err.contains("size = 99999 is out of range; each side must be 1..=512"), "{err}");
+        let err = plan(&marble("[8, 0, 8]")).unwrap_err().to_string();
+        assert!(err.contains("size = [8, 0, 8] is out of range"), "{err}");
+        let err = plan(&marble("99999999999999999999")).unwrap_err().to_string();
+        assert!(err.contains("too large to read") && err.contains("1 to 512"), "{err}");
     }
 
     #[test]
