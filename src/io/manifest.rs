@@ -359,13 +359,18 @@ fn plan_of(text: &str, folder: &Path, quote: bool) -> Result<Plan> {
 /// Like [`parse_plan`], but keeps going past bad entries: the valid entries, and one
 /// message per bad one (or one for the whole text when it is not valid TOML).
 pub fn parse_plan_lenient(text: &str, folder: &Path) -> (Vec<Entry>, Vec<String>) {
-    let raw: RawManifest = match toml::from_str(text) {
-        Ok(raw) => raw,
-        Err(e) => return (Vec::new(), vec![syntax_error(text, &e, "manifest", true).to_string()]),
+    let (raw, mut errors) = match toml::from_str::<RawManifest>(text) {
+        Ok(raw) => (raw.exemplar.into_iter().map(Some).collect(), Vec::new()),
+        Err(e) => match each_entry(text) {
+            Some(each) => each,
+            None => return (Vec::new(), vec![syntax_error(text, &e, "manifest", true).to_string()]),
+        },
     };
     let document = toml_edit::Document::parse(text).ok();
-    let (mut entries, mut errors): (Vec<Entry>, Vec<String>) = (Vec::new(), Vec::new());
-    for (i, e) in raw.exemplar.into_iter().enumerate() {
+    let mut entries: Vec<Entry> = Vec::new();
+    let read_errors = std::mem::take(&mut errors);
+    for (i, e) in raw.into_iter().enumerate() {
+        let Some(e) = e else { continue };
         let name = e.name.clone();
         let line = entry_line(text, i);
         match validate(e, folder) {
@@ -375,7 +380,43 @@ pub fn parse_plan_lenient(text: &str, folder: &Path) -> (Vec<Entry>, Vec<String>
             Err(err) => errors.push(entry_error(text, i, &name, &err)),
         }
     }
+    // every mistake in the manifest's order (a message without a line first)
+    errors.extend(read_errors);
+    let line = |e: &String| e.strip_prefix("line ").and_then(|r| r.split(':').next()?.parse::<usize>().ok());
+    errors.sort_by_key(|e| line(e).unwrap_or(0));
     (entries, errors)
+}
+
+/// A manifest that is good TOML but whose entries do not all read, read entry by entry: each
+/// entry that reads (`None` for one that does not), and a message per entry that does not
+/// and per unknown top-level key. `None` when the text is not a TOML table.
+#[allow(clippy::type_complexity)]
+fn each_entry(text: &str) -> Option<(Vec<Option<RawExemplar>>, Vec<String>)> {
+    let table: toml::Table = toml::from_str(text).ok()?;
+    let mut errors: Vec<String> = table
+        .keys()
+        .filter(|k| *k != "exemplar")
+        .map(|k| format!("unknown top-level key {k:?}; a manifest holds [[exemplar]] tables only"))
+        .collect();
+    let list = match table.get("exemplar") {
+        Some(toml::Value::Array(list)) => list.clone(),
+        Some(_) => {
+            errors.push("exemplar must be a list of [[exemplar]] tables".to_string());
+            Vec::new()
+        }
+        None => Vec::new(),
+    };
+    let mut raw = Vec::new();
+    for (i, value) in list.into_iter().enumerate() {
+        match value.try_into::<RawExemplar>() {
+            Ok(entry) => raw.push(Some(entry)),
+            Err(e) => {
+                errors.push(format!("line {}: entry {}: {}", entry_line(text, i), i + 1, plain(e.message().trim())));
+                raw.push(None);
+            }
+        }
+    }
+    Some((raw, errors))
 }
 
 /// The line (from 1) of the `i`-th `[[exemplar]]` header.
@@ -956,6 +997,20 @@ mod tests {
         assert!(errors[1].contains("line 11") && errors[1].contains("used twice"), "{errors:?}");
         let (none, broken) = parse_plan_lenient("[[exemplar]\n", Path::new("."));
         assert!(none.is_empty() && broken[0].contains("invalid manifest"));
+        // an entry that does not read (no name, a field of the wrong type) takes only itself
+        // down; every mistake is listed, in the manifest's order
+        let marble = "[[exemplar]]\nname = \"a\"\nrecipe = \"procedural:marble\"\nsize = 8\n";
+        let nameless = "[[exemplar]]\nrecipe = \"procedural:wood\"\nsize = 8\n";
+        let lava = "[[exemplar]]\nname = \"z\"\nrecipe = \"procedural:lava\"\nsize = 99999\n";
+        let typed = "[[exemplar]]\nname = \"t\"\nrecipe = \"procedural:wood\"\nsize = \"big\"\n";
+        let strata = "[[exemplar]]\nname = \"s\"\nrecipe = \"procedural:strata\"\nsize = 8\n";
+        let text = [marble, lava, nameless, typed, strata].join("\n");
+        let (entries, errors) = parse_plan_lenient(&text, Path::new("."));
+        assert_eq!(entries.iter().map(|e| e.name.as_str()).collect::<Vec<_>>(), ["a", "s"]);
+        assert_eq!(errors.len(), 3, "{errors:?}");
+        assert!(errors[0].starts_with("line 6: entry 2 (z)"), "{errors:?}");
+        assert!(errors[1].starts_with("line 11: entry 3: missing field `name`"), "{errors:?}");
+        assert!(errors[2].starts_with("line 15: entry 4: ") && errors[2].contains("size"), "{errors:?}");
     }
 
     #[test]

@@ -181,10 +181,14 @@ pub fn delete(text: &str, name: &str) -> Result<String, String> {
         .get_mut("exemplar")
         .and_then(Item::as_array_of_tables_mut)
         .ok_or("the manifest has no [[exemplar]] entries")?;
-    let index = list
-        .iter()
-        .position(|t| t.get("name").and_then(Item::as_str) == Some(name))
-        .ok_or_else(|| format!("no exemplar named {name:?} in the manifest"))?;
+    let named = |t: &toml_edit::Table| t.get("name").and_then(Item::as_str) == Some(name);
+    let index = list.iter().position(named).ok_or_else(|| format!("no exemplar named {name:?} in the manifest"))?;
+    if list.iter().filter(|t| named(t)).count() > 1 {
+        // an undo finds the entry by name, and could not tell which one to put back
+        return Err(format!(
+            "the manifest has more than one exemplar named {name:?}; rename one in a text editor first, then delete"
+        ));
+    }
     let removed = list.remove(index);
     if index == 0
         && let Some(next) = list.get_mut(0)
@@ -663,6 +667,9 @@ mod tests {
         assert!(without_a.starts_with("# the library\n\n[[exemplar]]\nname = \"b\""), "{without_a}");
         assert!(delete(TEXT, "zz").unwrap_err().contains("zz"));
         assert!(duplicate(TEXT, "zz").unwrap_err().contains("zz"));
+        // a name two entries share is not deleted: an undo could not tell which to restore
+        let twice = format!("{TEXT}\n[[exemplar]]\nname = \"a\"\nrecipe = \"procedural:wood\"\nsize = 8\n");
+        assert!(delete(&twice, "a").unwrap_err().contains("more than one exemplar named \"a\""));
     }
 
     #[test]

@@ -246,8 +246,8 @@ fn manifest_errors(frame: &mut Frame, model: &Model, area: Rect) -> Rect {
     } else {
         String::new()
     };
-    let rest =
-        if model.items.is_empty() { "fix the file, then Ctrl-R reads it again" } else { "the other exemplars work" };
+    let working = model.items.iter().any(|i| !matches!(i.state, BuildState::Broken(_)));
+    let rest = if working { "the other exemplars work" } else { "fix the file, then Ctrl-R reads it again" };
     let title = format!(" the manifest has {} error(s) ({more}{rest}) ", model.errors.len());
     let box_ = Block::default().borders(Borders::ALL).title(fitted(&title, errors.width));
     let paragraph = Paragraph::new(text).wrap(ratatui::widgets::Wrap { trim: false }).scroll((scroll, 0));
@@ -807,6 +807,11 @@ mod tests {
         let (text, _) = screen(&m2, 80, 24);
         assert!(text.contains("size is missing") && text.contains("the manifest has 1 error(s)"), "{text}");
         assert!(text.contains("kiwi") && text.contains("marble"), "the valid exemplars stay listed: {text}");
+        // when every listed entry is broken, none is said to work
+        let mut m4 = Model { errors: m2.errors.clone(), ..model() };
+        m4.items.iter_mut().for_each(|i| i.state = BuildState::Broken("size is missing".into()));
+        let (text, _) = screen(&m4, 80, 24);
+        assert!(text.contains("fix the file") && !text.contains("the other exemplars work"), "{text}");
         let many = (1..=12).map(|i| format!("lib.toml: line {i}: exemplar[{i}] (e{i}): size is missing")).collect();
         let mut m3 = Model { errors: many, ..model() };
         let (text, _) = screen(&m3, 80, 24);
