@@ -544,9 +544,16 @@ pub fn saved(model: &mut Model, result: Result<String, String>) {
             if merged {
                 onto(editor, &written, written.clone());
             }
-            editor.saved = written;
             let (name, valid) = (editor.name.clone(), editor.error.is_none());
+            // the row shows the size the manifest now asks for
+            let folder = model.manifest.parent().unwrap_or(Path::new("."));
+            let (entries, _) = crate::io::manifest::parse_plan_lenient(&written, folder);
+            let asked = entries.iter().find(|e| e.name == name).and_then(|e| e.dims);
+            editor.saved = written;
             super::update::mark_changed(model, &name, valid);
+            for item in model.items.iter_mut().filter(|i| i.name == name && asked.is_some()) {
+                item.size = asked;
+            }
             let kept = if merged { " with the file's other changes kept" } else { "" };
             model.status = format!("saved{kept}; b on the library builds {name} as it is now");
         }
@@ -874,6 +881,9 @@ mod tests {
         assert_eq!(update(&mut m, Message::Save), vec![save]);
         update(&mut m, Message::Saved(Ok(edited)));
         assert!(m.status.starts_with("saved"));
+        let name = editor(&m).name.clone();
+        let row = m.items.iter().find(|i| i.name == name).unwrap();
+        assert_eq!(row.size, Some([32; 3]), "the list shows the size just saved");
         let stale = std::sync::Arc::new(crate::Volume::new([2; 3], crate::Channel::rgb()).unwrap());
         update(&mut m, Message::Previewed(1, Ok(stale.clone()), Vec::new()));
         assert!(editor(&m).preview.is_none(), "an old generation is dropped");
