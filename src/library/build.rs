@@ -451,7 +451,7 @@ pub fn merge(request: &Request, folders: &[PathBuf]) -> Result<Vec<Outcome>> {
     let mut outcomes = Vec::new();
     for entry in &entries {
         let name = &entry.name;
-        let folder = match merged_from(entry, manifest_folder, folders)? {
+        let folder = match merged_from(entry, manifest_folder, folders) {
             Ok(folder) => folder,
             Err(why) => {
                 outcomes.push(Outcome::Failed(name.clone(), why));
@@ -475,17 +475,19 @@ pub fn merge(request: &Request, folders: &[PathBuf]) -> Result<Vec<Outcome>> {
 
 /// The first of `folders` holding `entry`'s build up to date with the manifest (its recipe,
 /// inputs and solidtex version) with every output file as recorded, or why none does (an
-/// older build, a file changed or missing): merged, a stale copy would pass for fresh.
+/// older build, a file changed or missing, an input that cannot be read here): merged, a
+/// stale copy would pass for fresh.
 fn merged_from<'a>(
     entry: &Entry,
     manifest_folder: &Path,
     folders: &'a [PathBuf],
-) -> Result<std::result::Result<&'a PathBuf, String>> {
-    let key = cache::key(entry, manifest_folder)?;
+) -> std::result::Result<&'a PathBuf, String> {
+    let key = cache::key(entry, manifest_folder)
+        .map_err(|e| format!("its inputs cannot be read to check the merged builds against: {e}"))?;
     let mut stale = None;
     for folder in folders {
         match cache::freshness_against(entry, &key, folder) {
-            Freshness::UpToDate(_) => return Ok(Ok(folder)),
+            Freshness::UpToDate(_) => return Ok(folder),
             Freshness::Stale(_, why) => {
                 stale.get_or_insert_with(|| {
                     format!("the build in {} is out of date ({why}): build it again", folder.display())
@@ -494,7 +496,7 @@ fn merged_from<'a>(
             Freshness::NotBuilt => {}
         }
     }
-    Ok(Err(stale.unwrap_or_else(|| "built by none of the merged folders".to_string())))
+    Err(stale.unwrap_or_else(|| "built by none of the merged folders".to_string()))
 }
 
 /// The shard an exemplar belongs to among `n`: a stable hash of its name.
