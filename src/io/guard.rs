@@ -41,9 +41,7 @@ pub fn not_an_input(output: &Path, inputs: &[&Path]) -> Result<()> {
             input.display()
         )));
     }
-    let absolute = super::resolved(output);
-    let inside = |folder: &Path| folder.is_dir() && absolute.ancestors().skip(1).any(|above| same_file(above, folder));
-    match inputs.iter().find(|input| inside(input)) {
+    match inputs.iter().find(|input| inside_folder(output, input)) {
         Some(input) => Err(Error::usage(format!(
             "{}: is inside the folder {}, an input of this command (its slices are read as one volume); solidtex \
              never writes into its own inputs (name an output outside it)",
@@ -52,6 +50,12 @@ pub fn not_an_input(output: &Path, inputs: &[&Path]) -> Result<()> {
         ))),
         None => Ok(()),
     }
+}
+
+/// Whether `path` lies inside the existing folder `folder` (at any depth, through links
+/// too: each folder above `path` is compared with `folder` as a file).
+pub fn inside_folder(path: &Path, folder: &Path) -> bool {
+    folder.is_dir() && super::resolved(path).ancestors().skip(1).any(|above| same_file(above, folder))
 }
 
 /// Refuse an `output` that is the folder `kept`, where solidtex keeps `what`, or lies

@@ -321,15 +321,15 @@ fn reads_no_output(entry: &Entry, output: &Path) -> Result<()> {
 fn not_inside_an_input(output: &Path, entries: &[Entry]) -> Result<()> {
     for entry in entries {
         for (field, input) in cache::input_files(entry).into_iter().filter(|(_, input)| input.is_dir()) {
-            io::guard::not_an_input(&output.join("report.md"), &[&input]).map_err(|_| {
-                Error::usage(format!(
+            if io::guard::same_file(output, &input) || io::guard::inside_folder(output, &input) {
+                return Err(Error::usage(format!(
                     "-o {}: is inside the folder {field} = {:?} of exemplar {}, an input of this build; solidtex \
                      never writes into its own inputs (build into another folder)",
                     output.display(),
                     input.display().to_string(),
                     entry.name
-                ))
-            })?;
+                )));
+            }
         }
     }
     Ok(())

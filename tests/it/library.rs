@@ -671,6 +671,20 @@ fn an_entry_whose_mask_fails_leaves_its_earlier_build_whole() {
     let fresh = at(dir.path(), "fresh");
     assert!(!solidtex(&["build", &m, "-o", &fresh]).status.success());
     assert_eq!(read("fresh"), [None, None, None, None], "a failed first build writes none of its files");
+    // a person's file at the mask's name stops the entry and stays as it was
+    std::fs::write(&manifest, entry(1, 0.1)).unwrap();
+    let theirs = dir.path().join("theirs");
+    std::fs::create_dir(&theirs).unwrap();
+    std::fs::write(theirs.join("k.mask.exr"), b"my mask").unwrap();
+    let run = solidtex(&["build", &m, "-o", &at(dir.path(), "theirs")]);
+    assert_eq!(run.status.code(), Some(1), "{}", stderr(&run));
+    assert!(
+        stderr(&run).contains("k.mask.exr") && stderr(&run).contains("not written by solidtex"),
+        "{}",
+        stderr(&run)
+    );
+    assert_eq!(std::fs::read(theirs.join("k.mask.exr")).unwrap(), b"my mask");
+    assert!(!theirs.join("k.exr").exists(), "the entry is not built");
 }
 
 /// A declared type the classifier does not read is flagged in the report (fill and guided go
